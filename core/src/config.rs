@@ -1,0 +1,263 @@
+//! Parameters (the paper's Table I) and storage capacities.
+//!
+//! Where this crate follows the reference `kiss-icp` 1.3.0 rather than the paper's text:
+//! - the Geman-McClure scale is `kernel_scale * sigma` with `kernel_scale = 1` (the paper writes
+//!   `kappa = sigma / 3`, Eq. (10)); set `kernel_scale = 1/3` for the paper's value;
+//! - the adaptive threshold starts with `initial_threshold^2` as one sample of Eq. (6);
+//! - ICP stops on `|dx| < convergence_criterion` *or* after `max_iterations` (the paper has no
+//!   cap; the reference's default cap is 500);
+//! - deskewing moves every point to the end of the sweep, so poses are end-of-sweep poses.
+
+use crate::error::ConfigError;
+use crate::scalar::Real;
+
+/// Pipeline parameters. [`Config::new`] gives the reference defaults for a maximum range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config<T> {
+    /// `r_max`: points farther than this are dropped and voxels farther than this from the
+    /// current pose are pruned from the local map.
+    pub max_range: T,
+    /// Points closer than this are dropped (the sensor's blind zone, the vehicle itself).
+    pub min_range: T,
+    /// `v`: local map voxel size; the paper's default is `0.01 r_max`.
+    pub voxel_size: T,
+    /// `alpha`: the map-merge cloud uses voxels of `alpha v` (paper: 0.5).
+    pub alpha: T,
+    /// `beta`: the registration cloud uses voxels of `beta v` (paper: 1.5).
+    pub beta: T,
+    /// `N_max`: points per map voxel (paper: 20, at most 255 here).
+    pub max_points_per_voxel: u32,
+    /// `tau_0`: the threshold's seed sample (paper: 2 m).
+    pub initial_threshold: T,
+    /// `delta_min`: model deviations at or below this do not update the threshold (0.1 m).
+    pub min_motion_threshold: T,
+    /// `gamma`: ICP stops when the norm of the correction twist is below this (1e-4).
+    pub convergence_criterion: T,
+    /// ICP iteration cap (reference default 500); reaching it is reported in the status.
+    pub max_iterations: u32,
+    /// Deskew scans that carry per-point timestamps (Eq. (4)).
+    pub deskew: bool,
+    /// Geman-McClure scale as a multiple of `sigma` (reference: 1, paper: 1/3).
+    pub kernel_scale: T,
+    /// Correspondences farther than `max_correspondence_factor * sigma` are rejected (3).
+    pub max_correspondence_factor: T,
+    /// A frame is flagged degenerate when the weakest direction of the point-to-plane
+    /// information (from map voxel normals) carries less than this fraction of the strongest.
+    pub degeneracy_ratio: T,
+}
+
+impl<T: Real> Config<T> {
+    /// The reference defaults for a sensor with range `max_range` (voxel size `r_max / 100`).
+    pub fn new(max_range: T) -> Self {
+        Self {
+            max_range,
+            min_range: T::zero(),
+            voxel_size: max_range / T::of(100.0),
+            alpha: T::of(0.5),
+            beta: T::of(1.5),
+            max_points_per_voxel: 20,
+            initial_threshold: T::of(2.0),
+            min_motion_threshold: T::of(0.1),
+            convergence_criterion: T::of(1e-4),
+            max_iterations: 500,
+            deskew: true,
+            kernel_scale: T::one(),
+            max_correspondence_factor: T::of(3.0),
+            degeneracy_ratio: T::of(0.02),
+        }
+    }
+
+    /// Checks that every parameter is finite and in its domain.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let pos = |x: T| x.is_finite() && x > T::zero();
+        if !(pos(self.max_range) && self.min_range.is_finite() && self.min_range >= T::zero()) {
+            return Err(ConfigError::Range);
+        }
+        if self.min_range >= self.max_range {
+            return Err(ConfigError::Range);
+        }
+        if !pos(self.voxel_size) || !pos(self.alpha) || !pos(self.beta) {
+            return Err(ConfigError::VoxelSize);
+        }
+        if self.max_points_per_voxel == 0 || self.max_points_per_voxel > 255 {
+            return Err(ConfigError::PointsPerVoxel);
+        }
+        let nonneg = |x: T| x.is_finite() && x >= T::zero();
+        if !pos(self.initial_threshold)
+            || !nonneg(self.min_motion_threshold)
+            || !pos(self.kernel_scale)
+            || !pos(self.max_correspondence_factor)
+            || !nonneg(self.degeneracy_ratio)
+        {
+            return Err(ConfigError::Threshold);
+        }
+        if !nonneg(self.convergence_criterion) || self.max_iterations == 0 {
+            return Err(ConfigError::Iterations);
+        }
+        Ok(())
+    }
+}
+
+/// Fixed capacities of every buffer. Nothing grows at run time; each full buffer has a rule
+/// (see [`crate::report::Dropped`]) and the frame report counts what it dropped.
+///
+/// Sizing rules (measured high-water marks are in BENCHMARKS.md):
+/// - `scan_points`: points the sensor delivers per sweep (HDL-64E about 125k, OS1-128 262k).
+///   Points past this index are ignored (truncation keeps the first `scan_points`).
+/// - `merge_points`: occupied `alpha v` voxels of one scan. Roughly the scan's visible surface
+///   area over `(alpha v)^2`; KITTI at `v = 1 m` uses about 20k.
+/// - `source_points`: occupied `beta v` voxels, about a fifth of `merge_points`.
+/// - `map_voxels`: occupied `v` voxels within `r_max` of the sensor: the surface area of the
+///   scene inside the range sphere over `v^2`; about 16k on KITTI at 100 m and 1 m voxels.
+/// - `map_points`: points in those voxels, at most `N_max` each; KITTI averages 5-8 per voxel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Capacities {
+    /// Input points considered per scan.
+    pub scan_points: usize,
+    /// Points in the map-merge cloud (`alpha v` downsampling).
+    pub merge_points: usize,
+    /// Points in the registration cloud (`beta v` downsampling).
+    pub source_points: usize,
+    /// Voxels in the local map.
+    pub map_voxels: usize,
+    /// Points in the local map (all voxels together).
+    pub map_points: usize,
+}
+
+/// Points per map block; a voxel owns a chain of blocks, so memory follows the points a voxel
+/// really holds instead of reserving `N_max` for each one.
+pub const BLOCK: usize = 4;
+/// Source points per registration chunk: the unit of parallel work and of the fixed reduction
+/// order (chunk sums are added in chunk order whatever the thread count).
+pub const CHUNK: usize = 64;
+/// Scalars in one chunk's partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`)
+/// + correspondence count + sum of squared residuals.
+pub const SYSTEM_LEN: usize = 29;
+
+/// Where each buffer sits in the arena, in `u64` words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Slots of the downsampling grid (power of two, load <= 3/4).
+    pub grid_slots: usize,
+    /// Slots of the map's voxel table (power of two, load <= 3/4).
+    pub map_slots: usize,
+    /// Blocks in the map's point pool.
+    pub map_blocks: usize,
+    /// Registration chunks.
+    pub chunks: usize,
+    /// Words per region, in carve order: merge, source, scratch, systems, map keys, map heads,
+    /// map counts, block points, block links.
+    pub words: [usize; 9],
+}
+
+const fn words_for(bytes: usize) -> usize {
+    bytes.div_ceil(8)
+}
+
+const fn pow2_at_least(n: usize) -> usize {
+    let mut p = 1;
+    while p < n {
+        p *= 2;
+    }
+    p
+}
+
+const fn max(a: usize, b: usize) -> usize {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+impl Capacities {
+    /// Full scale, KITTI-like (HDL-64E or OS1-64/128 at `r_max` 100 m, 1 m voxels): margins of
+    /// about 2x over the high-water marks measured on kitti-mini and 500-frame simulated runs.
+    pub const FULL_SCALE: Self = Self {
+        scan_points: 262_144,
+        merge_points: 49_152,
+        source_points: 12_288,
+        map_voxels: 36_864,
+        map_points: 262_144,
+    };
+
+    /// Microcontroller scale (a few MiB): `r_max` about 50 m, 1 m voxels, f32 and quantised
+    /// map points.
+    pub const SMALL: Self = Self {
+        scan_points: 131_072,
+        merge_points: 12_288,
+        source_points: 3_072,
+        map_voxels: 8_192,
+        map_points: 49_152,
+    };
+
+    /// Buffer layout for scalar size `t_size` and stored map point size `stored_size` (bytes).
+    pub const fn layout(&self, t_size: usize, stored_size: usize) -> Layout {
+        let point = 3 * t_size;
+        let grid_slots = pow2_at_least((self.merge_points * 4).div_ceil(3));
+        // Scratch serves the dedup grid (key 12 B + index 4 B per slot), then the bucket-order
+        // reconstruction (hash u32 + two u64 sort keys + permutation u32 per kept point).
+        let scratch = max(grid_slots * 16, self.merge_points * 24);
+        let map_slots = pow2_at_least((self.map_voxels * 4).div_ceil(3));
+        let map_blocks = self.map_points.div_ceil(BLOCK);
+        let chunks = self.source_points.div_ceil(CHUNK);
+        Layout {
+            grid_slots,
+            map_slots,
+            map_blocks,
+            chunks,
+            words: [
+                words_for(self.merge_points * point),
+                words_for(self.source_points * point),
+                words_for(scratch),
+                words_for(chunks * SYSTEM_LEN * t_size),
+                words_for(map_slots * 12),
+                words_for(map_slots * 4),
+                words_for(map_slots),
+                words_for(map_blocks * BLOCK * stored_size),
+                words_for(map_blocks * 4),
+            ],
+        }
+    }
+
+    /// `u64` words the arena must hold for scalar `T` and map point codec `P`.
+    pub const fn arena_words<T, P: crate::local_map::PointCodec<T>>(&self) -> usize
+    where
+        T: Real,
+    {
+        let l = self.layout(core::mem::size_of::<T>(), core::mem::size_of::<P::Stored>());
+        let mut total = 0;
+        let mut i = 0;
+        while i < l.words.len() {
+            total += l.words[i];
+            i += 1;
+        }
+        total
+    }
+
+    /// Bytes of the map alone (voxel table and point pool), for comparison with the
+    /// reference's local map.
+    pub const fn map_bytes(&self, stored_size: usize) -> usize {
+        let l = self.layout(8, stored_size);
+        (l.words[4] + l.words[5] + l.words[6] + l.words[7] + l.words[8]) * 8
+    }
+
+    /// Checks that every capacity is usable.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let ok = self.scan_points > 0
+            && self.merge_points > 0
+            && self.source_points > 0
+            && self.map_voxels > 0
+            && self.map_points > 0
+            && self.merge_points < (1 << 30)
+            && self.map_points / BLOCK < (1 << 30)
+            && self.scan_points <= u32::MAX as usize;
+        if ok {
+            Ok(())
+        } else {
+            Err(ConfigError::Capacity)
+        }
+    }
+}

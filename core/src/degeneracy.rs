@@ -1,0 +1,134 @@
+//! Registration diagnostics: is the scene constraining every direction of the pose?
+//!
+//! Point-to-point ICP cannot see its own degeneracy: the translation block of its normal
+//! equations is `sum(w) I` whatever the geometry, so a featureless corridor looks as well
+//! conditioned as a city street. We look at the map instead. For a fixed subsample of the
+//! registered points, the voxel of each point's nearest map point is classified by the
+//! eigenvalues of its covariance as a plane (it constrains motion along its normal `n`), a line
+//! (constrains the two directions across it) or a volume (constrains all three). The summed
+//! information `sum M_i` (translation) and `sum [s_i]x^T M_i [s_i]x` (rotation about the
+//! sensor) then shows weak directions; the frame's observability is the smaller of the two
+//! blocks' smallest-to-largest eigenvalue ratios.
+
+use crate::lie::hat;
+use crate::local_map::{LocalMap, PointCodec};
+use crate::scalar::Real;
+use crate::Point;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+
+/// Most points sampled per frame; the sample is every k-th point, so it is deterministic.
+pub const SAMPLES: usize = 256;
+
+/// Observability ratio in `[0, 1]` of the registered `points` (world frame) seen from
+/// `origin`, or `None` if no sample had a structured voxel nearby.
+pub fn observability<T: Real, P: PointCodec<T>>(
+    map: &LocalMap<'_, T, P>,
+    points: &[[T; 3]],
+    origin: &Point<T>,
+    max_distance: T,
+) -> Option<T> {
+    let step = points.len().div_ceil(SAMPLES).max(1);
+    let mut info_t = Matrix3::zeros();
+    let mut info_r = Matrix3::zeros();
+    let mut used = 0;
+    for p in points.iter().step_by(step) {
+        let s = Point::from(*p);
+        let Some((q, _)) = map.closest_neighbor(&s, max_distance) else {
+            continue;
+        };
+        let Some((n, cov)) = map.voxel_covariance(&q) else {
+            continue;
+        };
+        if n < 3 {
+            continue;
+        }
+        let Some(m) = shape_information(&cov) else {
+            continue;
+        };
+        let arm = hat(&(s - origin));
+        info_t += m;
+        info_r += arm.transpose() * m * arm;
+        used += 1;
+    }
+    if used == 0 {
+        return None;
+    }
+    Some(ratio(&info_t).min(ratio(&info_r)))
+}
+
+/// Information `M` (trace 1) a voxel of covariance `cov` gives a point matched in it.
+fn shape_information<T: Real>(cov: &Matrix3<T>) -> Option<Matrix3<T>> {
+    let eig = SymmetricEigen::new(*cov);
+    let mut idx = [0usize, 1, 2];
+    idx.sort_unstable_by(|&a, &b| {
+        eig.eigenvalues[a]
+            .partial_cmp(&eig.eigenvalues[b])
+            .unwrap_or(core::cmp::Ordering::Equal)
+    });
+    let l = [
+        eig.eigenvalues[idx[0]].max(T::zero()),
+        eig.eigenvalues[idx[1]].max(T::zero()),
+        eig.eigenvalues[idx[2]].max(T::zero()),
+    ];
+    if l[2] <= T::zero() || !l[2].is_finite() {
+        return None;
+    }
+    let tenth = T::of(0.1);
+    let col = |i: usize| -> Vector3<T> { eig.eigenvectors.column(idx[i]).into_owned() };
+    let m = if l[1] < tenth * l[2] {
+        let d = col(2);
+        (Matrix3::identity() - d * d.transpose()) * T::of(0.5)
+    } else if l[0] < tenth * l[1] {
+        let n = col(0);
+        n * n.transpose()
+    } else {
+        Matrix3::identity() * T::of(1.0 / 3.0)
+    };
+    Some(m)
+}
+
+/// Smallest over largest eigenvalue of a symmetric positive semi-definite matrix.
+fn ratio<T: Real>(m: &Matrix3<T>) -> T {
+    let ev = m.symmetric_eigenvalues();
+    let (mut lo, mut hi) = (ev[0], ev[0]);
+    for &e in ev.iter() {
+        lo = lo.min(e);
+        hi = hi.max(e);
+    }
+    if hi > T::zero() {
+        (lo / hi).max(T::zero())
+    } else {
+        T::zero()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shapes_are_classified_by_their_covariance() {
+        // A plane z = 0: information only along z.
+        let plane = Matrix3::from_diagonal(&Vector3::new(0.1f64, 0.08, 1e-6));
+        let m = shape_information(&plane).unwrap();
+        assert!((m[(2, 2)] - 1.0).abs() < 1e-9 && m[(0, 0)].abs() < 1e-9);
+        // A line along x: information across it only.
+        let line = Matrix3::from_diagonal(&Vector3::new(0.1f64, 1e-6, 1e-6));
+        let m = shape_information(&line).unwrap();
+        assert!(m[(0, 0)].abs() < 1e-9 && (m[(1, 1)] - 0.5).abs() < 1e-9);
+        // A blob: isotropic.
+        let blob = Matrix3::from_diagonal(&Vector3::new(0.1f64, 0.09, 0.08));
+        assert!((shape_information(&blob).unwrap() - Matrix3::identity() / 3.0).amax() < 1e-12);
+    }
+
+    #[test]
+    fn ratio_is_zero_for_a_missing_direction() {
+        assert_eq!(
+            ratio(&Matrix3::from_diagonal(&Vector3::new(1.0f64, 2.0, 0.0))),
+            0.0
+        );
+        assert!(
+            (ratio(&Matrix3::from_diagonal(&Vector3::new(1.0f64, 4.0, 2.0))) - 0.25).abs() < 1e-12
+        );
+    }
+}
