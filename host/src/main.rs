@@ -1,5 +1,8 @@
-//! `kiss-odom`: the command-line tool around the no_std core (filled in by the host issue).
+//! `kiss-odom`: the command-line tool. All logic lives in the library so that the workspace
+//! tests drive the same code path in-process.
 
 fn main() {
-    println!("kiss-odom {}", env!("CARGO_PKG_VERSION"));
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let code = kiss_odom::cli::main_with(args, &mut std::io::stderr());
+    std::process::exit(code);
 }

@@ -1,0 +1,69 @@
+//! The `kiss-odom` command line: argument parsing and dispatch to one module per command.
+
+use clap::{Parser, Subcommand};
+use std::ffi::OsString;
+use std::io::Write;
+
+/// KISS-ICP LiDAR odometry on recorded data, on top of a bounded no_std core.
+#[derive(Debug, Parser)]
+#[command(name = "kiss-odom", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run odometry on a recording and write poses, metrics and a plot.
+    Run(crate::run::RunArgs),
+    /// Score an estimated trajectory against ground truth (KITTI 3x4 files).
+    Eval(crate::metrics::EvalArgs),
+    /// Generate a LiDAR dataset with exact ground truth by ray casting a synthetic scene.
+    Simulate(crate::simulate::SimulateArgs),
+}
+
+/// Parses `args` (program name first), runs the command and returns the exit status. Errors are
+/// printed to `err` as one line naming the file and the reason; nothing here panics on bad
+/// input.
+pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
+    let cli = match Cli::try_parse_from(args) {
+        Ok(c) => c,
+        Err(e) => {
+            // --help and --version exit 0; usage errors exit 1 like every other error.
+            let code = if e.use_stderr() { 1 } else { 0 };
+            let _ = if e.use_stderr() {
+                write!(err, "{e}")
+            } else {
+                print!("{e}");
+                Ok(())
+            };
+            return code;
+        }
+    };
+    let result = match cli.command {
+        Command::Run(a) => crate::run::execute(&a, err),
+        Command::Eval(a) => crate::metrics::execute(&a),
+        Command::Simulate(a) => crate::simulate::execute(&a),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            let _ = writeln!(err, "error: {}", one_line(&e));
+            1
+        }
+    }
+}
+
+/// An error and its causes on one line: `outer: inner: innermost`.
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut s = String::new();
+    for (i, cause) in e.chain().enumerate() {
+        if i > 0 {
+            s.push_str(": ");
+        }
+        s.push_str(&cause.to_string().replace('\n', " "));
+    }
+    s
+}

@@ -1,0 +1,10 @@
+//! The std side of kiss-odom: file formats, the `kiss-odom` command, metrics, plots, the LiDAR
+//! simulator and the cross-check against the reference. The odometry itself is
+//! `kiss-odom-core`; this crate is glue and file formats around it.
+
+pub mod cli;
+pub mod io;
+pub mod metrics;
+pub mod plot;
+pub mod run;
+pub mod simulate;

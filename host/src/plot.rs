@@ -1,0 +1,1 @@
+//! Trajectory plots (being written).
