@@ -7,6 +7,21 @@
 
 use nalgebra::RealField;
 
+/// `floor(x) as i32` without a call to `floor` (baseline x86-64 and Cortex-M have no rounding
+/// instruction): truncation toward zero, minus one for negative non-integers. Exact inside the
+/// `i32` range; outside it the cast saturates exactly like `floor(x) as i32`, and NaN gives 0.
+macro_rules! floor_to_i32 {
+    ($x:expr, $t:ty) => {{
+        let x: $t = $x;
+        let i = x as i32;
+        if (i as $t) > x {
+            i.saturating_sub(1)
+        } else {
+            i
+        }
+    }};
+}
+
 /// A floating-point scalar the pipeline can run on: `f32` or `f64`.
 pub trait Real:
     RealField + Copy + Default + bytemuck::Pod + core::fmt::Debug + Send + Sync + 'static
@@ -57,7 +72,7 @@ impl Real for f64 {
     }
     #[inline]
     fn floor_i32(self) -> i32 {
-        libm::floor(self) as i32
+        floor_to_i32!(self, f64)
     }
 }
 
@@ -89,7 +104,7 @@ impl Real for f32 {
     }
     #[inline]
     fn floor_i32(self) -> i32 {
-        libm::floorf(self) as i32
+        floor_to_i32!(self, f32)
     }
 }
 
@@ -167,6 +182,47 @@ mod tests {
             ] {
                 assert_eq!(sqrt_lt(a2, b), a2.sqrt() < b, "a2={a2:e} b={b:e}");
             }
+        }
+    }
+
+    #[test]
+    fn floor_i32_equals_libm_floor_then_cast() {
+        // A log-spaced sweep over both signs from 1e-7 to 3e9 (past the i32 range), each value
+        // with its neighbours: integers, halves and one ulp either side.
+        let mut checked = 0;
+        for e in -70..=95 {
+            let m = 10f64.powf(e as f64 / 10.0);
+            for base in [
+                m,
+                -m,
+                m.round(),
+                -m.round(),
+                m.round() + 0.5,
+                -m.round() - 0.5,
+            ] {
+                for x in [
+                    base,
+                    f64::from_bits(base.to_bits() + 1),
+                    f64::from_bits(base.to_bits().saturating_sub(1)),
+                ] {
+                    assert_eq!(x.floor_i32(), libm::floor(x) as i32, "{x:e}");
+                    let y = x as f32;
+                    assert_eq!(y.floor_i32(), libm::floorf(y) as i32, "{y:e}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 2900);
+        for x in [
+            -0.0,
+            0.0,
+            -1e-300,
+            2147483647.5,
+            -2147483648.5,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ] {
+            assert_eq!(x.floor_i32(), libm::floor(x) as i32, "{x:e}");
         }
     }
 
