@@ -1,13 +1,80 @@
-//! Opening a dataset path with a given format (being written).
+//! Opening a dataset path: which reader a `--format` (or `auto`) picks.
+//!
+//! `auto` picks KITTI only for the benchmark layout ([`is_kitti_layout`]), because KITTI scans
+//! get a correction no other data should get; bag and MCAP files are recognised by extension;
+//! anything else is the generic layout with the frame format its files show. An explicit
+//! format always wins.
 
-use super::{Dataset, Format, OpenOptions};
+use super::{generic, is_kitti_layout, kitti, Dataset, Format, OpenOptions};
 use anyhow::{bail, Result};
 use std::path::Path;
 
-/// Opens `path` as `format` (`Auto` picks KITTI or the generic layout).
-pub fn open(path: &Path, format: Format, _opts: &OpenOptions) -> Result<Dataset> {
-    bail!(
-        "{}: reading {format:?} is not implemented yet",
-        path.display()
-    )
+/// The format `auto` resolves to for `path`, without reading any frame.
+pub fn detect(path: &Path) -> Result<Format> {
+    if !path.exists() {
+        bail!("{}: no such file or folder", path.display());
+    }
+    if path.is_file() {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        return match ext.to_ascii_lowercase().as_str() {
+            "bag" => Ok(Format::Bag),
+            "mcap" => Ok(Format::Mcap),
+            _ => bail!(
+                "{}: cannot tell the format of this file (give a folder, a .bag or a .mcap)",
+                path.display()
+            ),
+        };
+    }
+    if is_kitti_layout(path) {
+        return Ok(Format::Kitti);
+    }
+    match generic::detect_format(path)? {
+        Some(format) => Ok(format),
+        None => bail!(
+            "{}: no frames (*.bin, *.ply or *.pcd) found",
+            generic::frames_dir(path).display()
+        ),
+    }
+}
+
+/// Opens `path` as `format` (`Auto` picks one, see the module doc).
+pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> {
+    let format = match format {
+        Format::Auto => detect(path)?,
+        explicit => explicit,
+    };
+    match format {
+        Format::Kitti => kitti::open(path),
+        Format::Bin | Format::Ply | Format::Pcd => generic::open(path, Some(format)),
+        Format::Bag => super::rosbag::open(path, opts),
+        Format::Mcap => super::mcap::open(path, opts),
+        Format::Auto => bail!("{}: format detection failed", path.display()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_recognises_containers_by_extension_and_kitti_by_calib() {
+        let dir = tempfile::tempdir().unwrap();
+        let bag = dir.path().join("run.BAG");
+        let mcap = dir.path().join("run.mcap");
+        std::fs::write(&bag, []).unwrap();
+        std::fs::write(&mcap, []).unwrap();
+        assert_eq!(detect(&bag).unwrap(), Format::Bag);
+        assert_eq!(detect(&mcap).unwrap(), Format::Mcap);
+        assert!(detect(&dir.path().join("missing")).is_err());
+
+        let seq = dir.path().join("seq");
+        std::fs::create_dir_all(seq.join("velodyne")).unwrap();
+        std::fs::write(seq.join("velodyne/000000.bin"), [0u8; 16]).unwrap();
+        assert_eq!(detect(&seq).unwrap(), Format::Bin);
+        std::fs::write(seq.join("calib.txt"), "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
+        assert_eq!(detect(&seq).unwrap(), Format::Kitti);
+        // Per-point timestamps mark a generic layout even next to a calib file.
+        std::fs::create_dir(seq.join("timestamps")).unwrap();
+        assert_eq!(detect(&seq).unwrap(), Format::Bin);
+    }
 }

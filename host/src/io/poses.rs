@@ -1,1 +1,304 @@
-//! (being written)
+//! Trajectory files: KITTI (`r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz` per line) and TUM
+//! (`timestamp tx ty tz qx qy qz qw` per line).
+//!
+//! Ground truth comes in through these readers and estimates go out through the writers, so both
+//! directions are exact for `f64`: values are written in the shortest form that parses back to
+//! the same bits. Rotations read from text are only orthonormal to the printed precision (KITTI
+//! ground truth has seven digits); they are projected onto SO(3) when an [`Isometry3`] is built.
+
+use anyhow::{bail, Context, Result};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
+};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One KITTI line: the top 3x4 block of a homogeneous transform, row-major.
+pub type Rows = [f64; 12];
+
+/// A pose with its time, as in a TUM file.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimedPose {
+    /// Seconds (any offset).
+    pub time: f64,
+    /// Sensor pose in the world frame.
+    pub pose: Isometry3<f64>,
+}
+
+/// How far (max abs entry) a rotation block read from text may be from its projection onto
+/// SO(3) before it is rejected as not a rotation. Seven printed digits give about 1e-7.
+const MAX_ROTATION_DEFECT: f64 = 1e-2;
+
+/// The 4x4 homogeneous matrix of `rows`, exactly as written.
+pub fn matrix_from_rows(rows: &Rows) -> Matrix4<f64> {
+    let mut m = Matrix4::identity();
+    for r in 0..3 {
+        for c in 0..4 {
+            m[(r, c)] = rows[4 * r + c];
+        }
+    }
+    m
+}
+
+/// The top 3x4 block of `m`, row-major.
+pub fn rows_from_matrix(m: &Matrix4<f64>) -> Rows {
+    let mut rows = [0.0; 12];
+    for r in 0..3 {
+        for c in 0..4 {
+            rows[4 * r + c] = m[(r, c)];
+        }
+    }
+    rows
+}
+
+/// The rigid transform closest to `m`: the rotation block is projected onto SO(3) with
+/// [`Rotation3::from_matrix`] (nearest rotation in the Frobenius sense), the translation is kept
+/// as is. Fails when the block is not within [`MAX_ROTATION_DEFECT`] of a rotation (a
+/// reflection, a scale, a non-finite entry).
+pub fn isometry_from_matrix(m: &Matrix4<f64>) -> Result<Isometry3<f64>> {
+    if m.iter().any(|v| !v.is_finite()) {
+        bail!("pose has a non-finite entry");
+    }
+    let block: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
+    let rotation = Rotation3::from_matrix(&block);
+    let defect = (rotation.matrix() - block).amax();
+    if defect > MAX_ROTATION_DEFECT {
+        bail!("rotation block is not a rotation (off by {defect:.3e})");
+    }
+    let translation = Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]);
+    Ok(Isometry3::from_parts(
+        translation,
+        UnitQuaternion::from_rotation_matrix(&rotation),
+    ))
+}
+
+/// [`isometry_from_matrix`] of a KITTI line.
+pub fn isometry_from_rows(rows: &Rows) -> Result<Isometry3<f64>> {
+    isometry_from_matrix(&matrix_from_rows(rows))
+}
+
+/// The KITTI line of `pose`.
+pub fn rows_from_isometry(pose: &Isometry3<f64>) -> Rows {
+    rows_from_matrix(&pose.to_homogeneous())
+}
+
+/// Parses KITTI text; `name` is used in errors (`name:line: reason`). Blank lines and lines
+/// starting with `#` are ignored.
+pub fn parse_kitti_rows(text: &str, name: &str) -> Result<Vec<Rows>> {
+    Ok(numbered_kitti_rows(text, name)?
+        .into_iter()
+        .map(|(_, rows)| rows)
+        .collect())
+}
+
+/// Reads a KITTI pose file as written (no re-orthonormalisation).
+pub fn read_kitti_matrices(path: &Path) -> Result<Vec<Matrix4<f64>>> {
+    let rows = parse_kitti_rows(&read_text(path)?, &path.display().to_string())?;
+    Ok(rows.iter().map(matrix_from_rows).collect())
+}
+
+/// Reads a KITTI pose file into rigid transforms (see [`isometry_from_matrix`]).
+pub fn read_kitti(path: &Path) -> Result<Vec<Isometry3<f64>>> {
+    let name = path.display().to_string();
+    numbered_kitti_rows(&read_text(path)?, &name)?
+        .iter()
+        .map(|(number, rows)| isometry_from_rows(rows).with_context(|| format!("{name}:{number}")))
+        .collect()
+}
+
+fn numbered_kitti_rows(text: &str, name: &str) -> Result<Vec<(usize, Rows)>> {
+    data_lines(text, name)
+        .map(|(number, values)| {
+            let values = values?;
+            let rows: Rows = values.as_slice().try_into().map_err(|_| {
+                anyhow::anyhow!(
+                    "{name}:{number}: expected 12 numbers, found {}",
+                    values.len()
+                )
+            })?;
+            Ok((number, rows))
+        })
+        .collect()
+}
+
+/// KITTI text of `poses`, one line each.
+pub fn format_kitti(poses: &[Isometry3<f64>]) -> String {
+    let mut out = String::new();
+    for pose in poses {
+        let rows = rows_from_isometry(pose);
+        let line: Vec<String> = rows.iter().map(|v| format!("{v:e}")).collect();
+        let _ = writeln!(out, "{}", line.join(" "));
+    }
+    out
+}
+
+/// Writes `poses` as a KITTI file. Numbers are written in the shortest scientific form that
+/// parses back to the same `f64`.
+pub fn write_kitti(path: &Path, poses: &[Isometry3<f64>]) -> Result<()> {
+    std::fs::write(path, format_kitti(poses)).with_context(|| format!("{}", path.display()))
+}
+
+/// Parses TUM text; `name` is used in errors. The quaternion is normalised.
+pub fn parse_tum(text: &str, name: &str) -> Result<Vec<TimedPose>> {
+    let mut out = Vec::new();
+    for (number, values) in data_lines(text, name) {
+        let values = values?;
+        let [time, tx, ty, tz, qx, qy, qz, qw]: [f64; 8] =
+            values.as_slice().try_into().map_err(|_| {
+                anyhow::anyhow!(
+                    "{name}:{number}: expected 8 numbers, found {}",
+                    values.len()
+                )
+            })?;
+        let q = Quaternion::new(qw, qx, qy, qz);
+        let Some(rotation) = UnitQuaternion::try_new(q, 1e-6) else {
+            bail!("{name}:{number}: quaternion has zero norm");
+        };
+        let pose = Isometry3::from_parts(Vector3::new(tx, ty, tz).into(), rotation);
+        out.push(TimedPose { time, pose });
+    }
+    Ok(out)
+}
+
+/// Reads a TUM trajectory file.
+pub fn read_tum(path: &Path) -> Result<Vec<TimedPose>> {
+    parse_tum(&read_text(path)?, &path.display().to_string())
+}
+
+/// TUM text of `poses`, one line each.
+pub fn format_tum(poses: &[TimedPose]) -> String {
+    let mut out = String::new();
+    for p in poses {
+        let t = p.pose.translation.vector;
+        let q = p.pose.rotation.coords; // i, j, k, w
+        let _ = writeln!(
+            out,
+            "{} {:e} {:e} {:e} {:e} {:e} {:e} {:e}",
+            p.time, t.x, t.y, t.z, q[0], q[1], q[2], q[3]
+        );
+    }
+    out
+}
+
+/// Writes `poses` as a TUM file (shortest round-trip numbers).
+pub fn write_tum(path: &Path, poses: &[TimedPose]) -> Result<()> {
+    std::fs::write(path, format_tum(poses)).with_context(|| format!("{}", path.display()))
+}
+
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))
+}
+
+/// The numbers on each data line with its 1-based line number; a token that is not a finite
+/// number is an error naming the line.
+fn data_lines<'a>(
+    text: &'a str,
+    name: &'a str,
+) -> impl Iterator<Item = (usize, Result<Vec<f64>>)> + 'a {
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| (i + 1, line.trim()))
+        .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'))
+        .map(move |(number, line)| {
+            let values = line
+                .split_whitespace()
+                .map(|token| match token.parse::<f64>() {
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(anyhow::anyhow!(
+                        "{name}:{number}: {token:?} is not a finite number"
+                    )),
+                })
+                .collect();
+            (number, values)
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_poses() -> Vec<Isometry3<f64>> {
+        (0..5)
+            .map(|i| {
+                let f = i as f64;
+                Isometry3::new(
+                    Vector3::new(1.0 + f * 0.1, -2.5 * f, 1e-9 * f),
+                    Vector3::new(0.01 * f, -0.3 * f, 0.7 + f),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn kitti_text_round_trips_every_bit() {
+        let poses = sample_poses();
+        let text = format_kitti(&poses);
+        let rows = parse_kitti_rows(&text, "mem").unwrap();
+        for (pose, row) in poses.iter().zip(&rows) {
+            assert_eq!(*row, rows_from_isometry(pose));
+        }
+    }
+
+    #[test]
+    fn tum_text_round_trips_every_bit() {
+        let poses: Vec<TimedPose> = sample_poses()
+            .into_iter()
+            .enumerate()
+            .map(|(i, pose)| TimedPose {
+                time: 1317384506.4 + i as f64 * 0.1,
+                pose,
+            })
+            .collect();
+        let back = parse_tum(&format_tum(&poses), "mem").unwrap();
+        for (a, b) in poses.iter().zip(&back) {
+            assert_eq!(a.time, b.time);
+            assert_eq!(a.pose.translation, b.pose.translation);
+            // Normalising an already unit quaternion may move the last bit.
+            assert!(a.pose.rotation.angle_to(&b.pose.rotation) < 1e-15);
+        }
+    }
+
+    #[test]
+    fn seven_digit_rotation_is_projected_onto_so3() {
+        // A KITTI ground-truth line: orthonormal only to the printed precision.
+        let text = "0.9990498 -0.00164978 0.04355194 0.05154656 0.001760423 0.9999953 \
+                    -0.002502237 -0.02424883 -0.0435476 0.002576529 0.999048 1.000725";
+        let rows = parse_kitti_rows(text, "mem").unwrap()[0];
+        let pose = isometry_from_rows(&rows).unwrap();
+        let r = pose.rotation.to_rotation_matrix().into_inner();
+        assert!((r.transpose() * r - Matrix3::identity()).amax() < 1e-14);
+        assert!((r.determinant() - 1.0).abs() < 1e-14);
+        // Close to what was written, translation untouched.
+        let written = matrix_from_rows(&rows);
+        assert!((r - written.fixed_view::<3, 3>(0, 0)).amax() < 1e-6);
+        assert_eq!(
+            pose.translation.vector,
+            Vector3::new(0.05154656, -0.02424883, 1.000725)
+        );
+    }
+
+    #[test]
+    fn parse_errors_name_file_and_line() {
+        let text = "1 0 0 0 0 1 0 0 0 0 1 0\n\n1 0 0 0 0 1 0 0 0 0 1\n";
+        let e = parse_kitti_rows(text, "gt.txt").unwrap_err().to_string();
+        assert!(e.starts_with("gt.txt:3:"), "{e}");
+        let e = parse_kitti_rows("1 0 0 x 0 1 0 0 0 0 1 0", "gt.txt")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("gt.txt:1") && e.contains("\"x\""), "{e}");
+        let e = parse_tum("# t x y z qx qy qz qw\n0 0 0 0 0 0 0 0\n", "traj.tum")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("traj.tum:2:"), "{e}");
+    }
+
+    #[test]
+    fn reflections_and_nan_are_not_poses() {
+        let mirror = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0];
+        assert!(isometry_from_rows(&mirror).is_err());
+        let mut nan = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        nan[3] = f64::NAN;
+        assert!(isometry_from_rows(&nan).is_err());
+        assert!(parse_kitti_rows("1 0 0 inf 0 1 0 0 0 0 1 0", "f").is_err());
+    }
+}
