@@ -1,1 +1,792 @@
-//! (being written)
+//! ROS 2 MCAP files carrying `sensor_msgs/msg/PointCloud2`.
+//!
+//! The container is read with the `mcap` crate's sans-io readers fed from a buffered file, so
+//! neither the file nor a whole chunk of it has to fit in memory: the summary at the end of the
+//! file says which topics exist and how many messages each holds, then a linear reader streams
+//! the data section record by record. The message body is CDR; it is parsed here into a
+//! [`PointCloud2`] view and decoded by [`pointcloud2`].
+
+use super::pointcloud2::{self, PointCloud2, PointField, Stamp};
+use super::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
+use anyhow::{anyhow, bail, Context, Result};
+use mcap::records::Record;
+use mcap::sans_io::{
+    LinearReadEvent, LinearReader, LinearReaderOptions, SummaryReadEvent, SummaryReader,
+    SummaryReaderOptions,
+};
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::Path;
+
+/// Schema name of the messages this reader decodes.
+pub const POINTCLOUD2_SCHEMA: &str = "sensor_msgs/msg/PointCloud2";
+
+/// Message encoding of ROS 2 messages.
+pub const CDR_ENCODING: &str = "cdr";
+
+/// Largest record accepted. A corrupt length would otherwise size a buffer; no point cloud
+/// comes near this.
+const RECORD_LIMIT: usize = 1 << 30;
+
+/// Opens an MCAP file and streams the PointCloud2 messages of `opts.topic`, or of the only
+/// PointCloud2 topic in the file.
+pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
+    let label = path.display().to_string();
+    let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
+    let len = file
+        .metadata()
+        .with_context(|| format!("{label}: cannot stat"))?
+        .len();
+    let mut magic = [0u8; 8];
+    if file.read_exact(&mut magic).is_err() || magic != mcap::MAGIC {
+        bail!("{label}: not an MCAP file (no MCAP magic at the start)");
+    }
+    let mut input = BufReader::with_capacity(1 << 16, file);
+    let catalog = match read_summary(&mut input, len) {
+        Ok(Some(catalog)) if !catalog.channels.is_empty() => catalog,
+        // No summary (cut short, or written without one): learn the channels by reading once.
+        _ => {
+            input
+                .seek(SeekFrom::Start(0))
+                .with_context(|| format!("{label}: cannot read"))?;
+            scan(&mut input)
+        }
+    };
+
+    let topics: Vec<(String, String)> = catalog
+        .channels
+        .values()
+        .map(|c| (c.topic.clone(), c.schema.clone()))
+        .collect();
+    let topic = pointcloud2::choose_topic(
+        &label,
+        &topics,
+        |s| s == POINTCLOUD2_SCHEMA,
+        POINTCLOUD2_SCHEMA,
+        opts.topic.as_deref(),
+    )
+    .map_err(|e| anyhow!(e))?;
+    let total = catalog.counts.as_ref().map(|counts| {
+        catalog
+            .channels
+            .iter()
+            .filter(|(_, c)| c.topic == topic)
+            .map(|(id, _)| counts.get(id).copied().unwrap_or(0) as usize)
+            .sum()
+    });
+    input
+        .seek(SeekFrom::Start(0))
+        .with_context(|| format!("{label}: cannot read"))?;
+    let source = McapSource {
+        file: label,
+        input,
+        reader: LinearReader::new_with_options(reader_options()),
+        topic,
+        schemas: HashMap::new(),
+        channels: HashMap::new(),
+        index: 0,
+        total,
+        note: catalog.note,
+        done: false,
+    };
+    Ok(Dataset {
+        frames: Box::new(source),
+        info: DatasetInfo {
+            format: Some(Format::Mcap),
+            ..DatasetInfo::default()
+        },
+    })
+}
+
+fn reader_options() -> LinearReaderOptions {
+    LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(RECORD_LIMIT)
+}
+
+/// A channel: its topic and schema name ("" without schema).
+#[derive(Clone, Debug)]
+struct ChannelInfo {
+    topic: String,
+    schema: String,
+}
+
+/// Channels known before streaming and how many messages each has, if known.
+#[derive(Debug, Default)]
+struct Catalog {
+    channels: HashMap<u16, ChannelInfo>,
+    counts: Option<HashMap<u16, u64>>,
+    /// Warning for the first frame.
+    note: Option<String>,
+}
+
+/// Reads the summary section; `Ok(None)` when the file has none.
+fn read_summary(input: &mut BufReader<File>, len: u64) -> mcap::McapResult<Option<Catalog>> {
+    let mut reader = SummaryReader::new_with_options(
+        SummaryReaderOptions::default()
+            .with_file_size(len)
+            .with_record_length_limit(RECORD_LIMIT),
+    );
+    while let Some(event) = reader.next_event() {
+        match event? {
+            SummaryReadEvent::ReadRequest(need) => {
+                let n = input.read(reader.insert(need))?;
+                reader.notify_read(n);
+            }
+            SummaryReadEvent::SeekRequest(to) => {
+                let pos = input.seek(to)?;
+                reader.notify_seeked(pos);
+            }
+        }
+    }
+    let Some(summary) = reader.finish() else {
+        return Ok(None);
+    };
+    let channels = summary
+        .channels
+        .iter()
+        .map(|(&id, c)| {
+            let info = ChannelInfo {
+                topic: c.topic.clone(),
+                schema: c
+                    .schema
+                    .as_ref()
+                    .map(|s| s.name.clone())
+                    .unwrap_or_default(),
+            };
+            (id, info)
+        })
+        .collect();
+    let counts = summary
+        .stats
+        .map(|s| s.channel_message_counts.into_iter().collect());
+    Ok(Some(Catalog {
+        channels,
+        counts,
+        note: None,
+    }))
+}
+
+/// Reads the whole data section once, counting messages per channel, up to the first error.
+fn scan(input: &mut BufReader<File>) -> Catalog {
+    let mut reader = LinearReader::new_with_options(reader_options());
+    let mut schemas: HashMap<u16, String> = HashMap::new();
+    let mut raw: HashMap<u16, (String, u16)> = HashMap::new();
+    let mut counts: HashMap<u16, u64> = HashMap::new();
+    while let Some(Ok(event)) = reader.next_event() {
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = input.read(reader.insert(need)).unwrap_or(0);
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data) {
+                Ok(Record::Schema { header, .. }) => {
+                    schemas.insert(header.id, header.name);
+                }
+                Ok(Record::Channel(c)) => {
+                    raw.insert(c.id, (c.topic, c.schema_id));
+                }
+                Ok(Record::Message { header, .. }) => {
+                    *counts.entry(header.channel_id).or_default() += 1;
+                }
+                Ok(_) => {}
+                Err(_) => break,
+            },
+        }
+    }
+    let channels = raw
+        .into_iter()
+        .map(|(id, (topic, schema_id))| {
+            let schema = schemas.get(&schema_id).cloned().unwrap_or_default();
+            (id, ChannelInfo { topic, schema })
+        })
+        .collect();
+    Catalog {
+        channels,
+        counts: Some(counts),
+        note: Some(
+            "MCAP file has no summary (cut short or not finished); its topics were found by scanning"
+                .into(),
+        ),
+    }
+}
+
+/// The frames of one topic of an open MCAP file.
+struct McapSource {
+    file: String,
+    input: BufReader<File>,
+    reader: LinearReader,
+    topic: String,
+    /// Schema names by id, as met in the data section.
+    schemas: HashMap<u16, String>,
+    /// Channels by id, as met in the data section: topic, schema id, message encoding.
+    channels: HashMap<u16, (String, u16, String)>,
+    index: usize,
+    total: Option<usize>,
+    note: Option<String>,
+    done: bool,
+}
+
+impl FrameSource for McapSource {
+    fn len_hint(&self) -> Option<usize> {
+        self.total
+    }
+
+    fn next_item(&mut self) -> Result<Option<Item>> {
+        if self.done {
+            return Ok(None);
+        }
+        loop {
+            let event = match self.reader.next_event() {
+                None => {
+                    self.done = true;
+                    return Ok(None);
+                }
+                Some(Err(e)) => {
+                    self.done = true;
+                    let hint = match e {
+                        mcap::McapError::UnexpectedEof => " (the file looks cut short)",
+                        _ => "",
+                    };
+                    bail!("{}: {e}{hint}", self.file);
+                }
+                Some(Ok(event)) => event,
+            };
+            match event {
+                LinearReadEvent::ReadRequest(need) => {
+                    let n = self.input.read(self.reader.insert(need));
+                    match n {
+                        Ok(n) => self.reader.notify_read(n),
+                        Err(e) => {
+                            self.done = true;
+                            bail!("{}: {e}", self.file);
+                        }
+                    }
+                }
+                LinearReadEvent::Record { opcode, data } => {
+                    let record = match mcap::parse_record(opcode, data) {
+                        Ok(r) => r,
+                        Err(e) => {
+                            self.done = true;
+                            bail!("{}: bad record (opcode {opcode:#04x}): {e}", self.file);
+                        }
+                    };
+                    match record {
+                        Record::Schema { header, .. } => {
+                            self.schemas.insert(header.id, header.name);
+                        }
+                        Record::Channel(c) => {
+                            self.channels
+                                .insert(c.id, (c.topic, c.schema_id, c.message_encoding));
+                        }
+                        Record::Message { header, data } => {
+                            let Some((topic, schema_id, encoding)) =
+                                self.channels.get(&header.channel_id)
+                            else {
+                                self.done = true;
+                                bail!(
+                                    "{}: message on channel {} before its channel record",
+                                    self.file,
+                                    header.channel_id
+                                );
+                            };
+                            if *topic != self.topic {
+                                continue;
+                            }
+                            let schema = self.schemas.get(schema_id).map_or("no schema", |s| s);
+                            if schema != POINTCLOUD2_SCHEMA || encoding != CDR_ENCODING {
+                                self.done = true;
+                                bail!(
+                                    "{}: message {} on {} is {schema} ({encoding}), not {POINTCLOUD2_SCHEMA} ({CDR_ENCODING})",
+                                    self.file,
+                                    self.index,
+                                    self.topic
+                                );
+                            }
+                            let mut item = pointcloud2::message_item(
+                                self.index,
+                                &self.file,
+                                &self.topic,
+                                parse_cdr(&data),
+                            );
+                            self.index += 1;
+                            if let (Item::Frame(f), Some(note)) = (&mut item, self.note.take()) {
+                                f.warnings.insert(0, note);
+                            }
+                            return Ok(Some(item));
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Cursor over a CDR (XCDR1) body; alignment is relative to the end of the 4-byte
+/// encapsulation header.
+struct Cdr<'a> {
+    buf: &'a [u8],
+    pos: usize,
+    big_endian: bool,
+}
+
+impl<'a> Cdr<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        let bytes = self
+            .pos
+            .checked_add(n)
+            .and_then(|end| self.buf.get(self.pos..end))
+            .ok_or_else(|| {
+                format!(
+                    "message ends inside {what} (needs {n} bytes at byte {} of {})",
+                    self.pos + 4,
+                    self.buf.len() + 4
+                )
+            })?;
+        self.pos += n;
+        Ok(bytes)
+    }
+
+    fn u8(&mut self, what: &str) -> Result<u8, String> {
+        Ok(self.take(1, what)?[0])
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        self.pos = self.pos.next_multiple_of(4);
+        let b = self.take(4, what)?;
+        let b = [b[0], b[1], b[2], b[3]];
+        Ok(if self.big_endian {
+            u32::from_be_bytes(b)
+        } else {
+            u32::from_le_bytes(b)
+        })
+    }
+
+    /// A CDR string: u32 length including the terminating NUL, then the bytes.
+    fn string(&mut self, what: &str) -> Result<String, String> {
+        let n = self.u32(what)? as usize;
+        let bytes = self.take(n, what)?;
+        let bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
+        Ok(String::from_utf8_lossy(bytes).into_owned())
+    }
+}
+
+/// Parses a CDR serialized `sensor_msgs/msg/PointCloud2` (with its encapsulation header).
+pub fn parse_cdr(body: &[u8]) -> Result<PointCloud2<'_>, String> {
+    let (header, buf) = body
+        .split_first_chunk::<4>()
+        .ok_or("message shorter than the CDR encapsulation header")?;
+    let big_endian = match header[..2] {
+        [0, 0] => true,
+        [0, 1] => false,
+        _ => {
+            return Err(format!(
+                "encapsulation {:02x}{:02x} is not plain CDR",
+                header[0], header[1]
+            ))
+        }
+    };
+    let mut r = Cdr {
+        buf,
+        pos: 0,
+        big_endian,
+    };
+    let sec = r.u32("header.stamp.sec")? as i32;
+    let nsec = r.u32("header.stamp.nanosec")?;
+    let frame_id = r.string("header.frame_id")?;
+    let height = r.u32("height")?;
+    let width = r.u32("width")?;
+    let n_fields = r.u32("fields")? as usize;
+    // Each field takes at least 13 bytes; a larger count is garbage, not an allocation size.
+    if n_fields > (buf.len() - r.pos) / 13 {
+        return Err(format!("{n_fields} fields cannot fit in the message"));
+    }
+    let mut fields = Vec::with_capacity(n_fields);
+    for _ in 0..n_fields {
+        fields.push(PointField {
+            name: r.string("fields.name")?,
+            offset: r.u32("fields.offset")?,
+            datatype: r.u8("fields.datatype")?,
+            count: r.u32("fields.count")?,
+        });
+    }
+    let is_bigendian = r.u8("is_bigendian")? != 0;
+    let point_step = r.u32("point_step")?;
+    let row_step = r.u32("row_step")?;
+    let data_len = r.u32("data")? as usize;
+    let data = r.take(data_len, "data")?;
+    let is_dense = r.u8("is_dense")? != 0;
+    // Serializers may pad the message to a multiple of 4 bytes; more is not this type.
+    if buf.len() - r.pos > 3 {
+        return Err(format!(
+            "{} bytes after the end of the message",
+            buf.len() - r.pos
+        ));
+    }
+    Ok(PointCloud2 {
+        stamp: Stamp {
+            sec: i64::from(sec),
+            nsec,
+        },
+        frame_id,
+        height,
+        width,
+        fields,
+        is_bigendian,
+        point_step,
+        row_step,
+        data,
+        is_dense,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::pointcloud2::fixture::{xyzt, xyzt_points, xyzt_times, RawCloud};
+    use mcap::records::MessageHeader;
+    use std::collections::BTreeMap;
+
+    /// CDR serialization of `c` written from the IDL: 4-byte encapsulation header, then every
+    /// primitive aligned to its size counted from the end of that header.
+    fn cdr_body(c: &RawCloud, big_endian: bool) -> Vec<u8> {
+        struct W {
+            b: Vec<u8>,
+            big: bool,
+        }
+        impl W {
+            fn u32(&mut self, v: u32) {
+                while (self.b.len() - 4) % 4 != 0 {
+                    self.b.push(0);
+                }
+                let bytes = if self.big {
+                    v.to_be_bytes()
+                } else {
+                    v.to_le_bytes()
+                };
+                self.b.extend_from_slice(&bytes);
+            }
+            fn string(&mut self, s: &str) {
+                self.u32(s.len() as u32 + 1);
+                self.b.extend_from_slice(s.as_bytes());
+                self.b.push(0);
+            }
+        }
+        let mut w = W {
+            b: vec![0, if big_endian { 0 } else { 1 }, 0, 0],
+            big: big_endian,
+        };
+        w.u32(c.sec);
+        w.u32(c.nsec);
+        w.string(&c.frame_id);
+        w.u32(c.height);
+        w.u32(c.width);
+        w.u32(c.fields.len() as u32);
+        for f in &c.fields {
+            w.string(&f.name);
+            w.u32(f.offset);
+            w.b.push(f.datatype);
+            w.u32(f.count);
+        }
+        w.b.push(u8::from(c.is_bigendian));
+        w.u32(c.point_step);
+        w.u32(c.row_step);
+        w.u32(c.data.len() as u32);
+        w.b.extend_from_slice(&c.data);
+        w.b.push(u8::from(c.is_dense));
+        w.b
+    }
+
+    const STRING_SCHEMA: &str = "std_msgs/msg/String";
+
+    /// Writes an MCAP file with the `mcap` crate: channels (topic, schema name), messages
+    /// (channel position, body), `chunk_size` None for one record per message outside chunks.
+    fn write_mcap(
+        channels: &[(&str, &str)],
+        msgs: &[(usize, Vec<u8>)],
+        chunk_size: Option<u64>,
+        compression: Option<mcap::Compression>,
+    ) -> Vec<u8> {
+        let mut w = mcap::WriteOptions::new()
+            .compression(compression)
+            .chunk_size(chunk_size)
+            .use_chunks(chunk_size.is_some())
+            .create(std::io::Cursor::new(Vec::new()))
+            .unwrap();
+        let ids: Vec<u16> = channels
+            .iter()
+            .map(|(topic, schema)| {
+                let sid = w.add_schema(schema, "ros2msg", b"# test").unwrap();
+                w.add_channel(sid, topic, CDR_ENCODING, &BTreeMap::new())
+                    .unwrap()
+            })
+            .collect();
+        for (seq, (ch, body)) in msgs.iter().enumerate() {
+            let header = MessageHeader {
+                channel_id: ids[*ch],
+                sequence: seq as u32,
+                log_time: seq as u64,
+                publish_time: seq as u64,
+            };
+            w.write_to_known_channel(&header, body).unwrap();
+        }
+        w.finish().unwrap();
+        w.into_inner().into_inner()
+    }
+
+    fn cloud_msg(k: u32) -> Vec<u8> {
+        cdr_body(&xyzt(k, 6), false)
+    }
+
+    fn string_msg() -> Vec<u8> {
+        vec![0, 1, 0, 0, 3, 0, 0, 0, b'h', b'i', 0]
+    }
+
+    fn save(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    fn open_mcap(path: &Path, topic: Option<&str>) -> Result<Dataset> {
+        open(
+            path,
+            &OpenOptions {
+                topic: topic.map(String::from),
+            },
+        )
+    }
+
+    fn drain(src: &mut dyn FrameSource) -> (Vec<Item>, Option<String>) {
+        let mut items = Vec::new();
+        loop {
+            match src.next_item() {
+                Ok(Some(item)) => items.push(item),
+                Ok(None) => return (items, None),
+                Err(e) => {
+                    assert!(
+                        src.next_item().unwrap().is_none(),
+                        "stream continues after Err"
+                    );
+                    return (items, Some(format!("{e:#}")));
+                }
+            }
+        }
+    }
+
+    fn frame(item: &Item) -> &crate::io::Frame {
+        match item {
+            Item::Frame(f) => f,
+            Item::Skipped { reason, .. } => panic!("unexpected skip: {reason}"),
+        }
+    }
+
+    fn assert_frame_k(f: &crate::io::Frame, index: usize, k: u32) {
+        assert_eq!(f.index, index);
+        assert_eq!(f.points, xyzt_points(k, 6), "points of frame {k}");
+        assert_eq!(f.stamps.as_deref(), Some(&xyzt_times(6)[..]));
+        assert_eq!(f.time, Some(f64::from(1_700_000_000 + k) + 0.25));
+        assert!(
+            f.name
+                .ends_with(&format!(":/points@{}.250000000", 1_700_000_000 + k)),
+            "{}",
+            f.name
+        );
+    }
+
+    fn mixed_messages() -> Vec<(usize, Vec<u8>)> {
+        (0..5u32)
+            .flat_map(|k| [(0, cloud_msg(k)), (1, string_msg())])
+            .collect()
+    }
+
+    #[test]
+    fn reads_every_cloud_of_the_only_pointcloud2_topic_chunked_or_not_compressed_or_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [("/points", POINTCLOUD2_SCHEMA), ("/chatter", STRING_SCHEMA)];
+        let layouts = [
+            (None, None),
+            (Some(300), None),
+            (Some(1 << 20), Some(mcap::Compression::Zstd)),
+            (Some(500), Some(mcap::Compression::Lz4)),
+        ];
+        for (chunk_size, compression) in layouts {
+            let bytes = write_mcap(&channels, &mixed_messages(), chunk_size, compression);
+            let p = save(&dir, "a.mcap", &bytes);
+            let mut ds = open_mcap(&p, None).unwrap();
+            assert_eq!(ds.info.format, Some(Format::Mcap));
+            assert_eq!(ds.frames.len_hint(), Some(5));
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(err, None);
+            assert_eq!(items.len(), 5, "{chunk_size:?} {compression:?}");
+            for (k, item) in items.iter().enumerate() {
+                let f = frame(item);
+                assert_frame_k(f, k, k as u32);
+                assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+            }
+        }
+    }
+
+    #[test]
+    fn big_endian_cdr_reads_the_same_values() {
+        let body = cdr_body(&xyzt(3, 6), true);
+        let le = cdr_body(&xyzt(3, 6), false);
+        assert_ne!(body, le);
+        assert_eq!(parse_cdr(&body).unwrap(), parse_cdr(&le).unwrap());
+        assert_eq!(
+            parse_cdr(&body).unwrap().stamp,
+            Stamp {
+                sec: 1_700_000_003,
+                nsec: 250_000_000
+            }
+        );
+    }
+
+    #[test]
+    fn file_cut_inside_a_message_yields_the_frames_before_then_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [("/points", POINTCLOUD2_SCHEMA), ("/chatter", STRING_SCHEMA)];
+        for chunk_size in [None, Some(400), Some(1 << 20)] {
+            let bytes = write_mcap(&channels, &mixed_messages(), chunk_size, None);
+            // Cut halfway through the body of cloud 3: clouds 0, 1, 2 are whole.
+            let body = cloud_msg(3);
+            let at = bytes
+                .windows(body.len())
+                .position(|w| w == body.as_slice())
+                .unwrap();
+            let p = save(&dir, "cut.mcap", &bytes[..at + body.len() / 2]);
+            let mut ds = open_mcap(&p, None).unwrap();
+            assert_eq!(ds.frames.len_hint(), Some(3), "{chunk_size:?}");
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(items.len(), 3, "{chunk_size:?}");
+            for (k, item) in items.iter().enumerate() {
+                assert_frame_k(frame(item), k, k as u32);
+            }
+            assert!(frame(&items[0]).warnings[0].contains("no summary"));
+            let err = err.expect("a cut file must end with an error");
+            assert!(
+                err.contains(&p.display().to_string()) && err.contains("cut short"),
+                "{err}"
+            );
+        }
+    }
+
+    #[test]
+    fn other_schema_on_the_chosen_topic_ends_the_stream_after_the_frames_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [("/points", POINTCLOUD2_SCHEMA), ("/points", STRING_SCHEMA)];
+        let msgs = vec![
+            (0, cloud_msg(0)),
+            (0, cloud_msg(1)),
+            (1, string_msg()),
+            (0, cloud_msg(2)),
+        ];
+        let p = save(
+            &dir,
+            "mixed.mcap",
+            &write_mcap(&channels, &msgs, Some(1 << 20), None),
+        );
+        let (items, err) = drain(open_mcap(&p, None).unwrap().frames.as_mut());
+        assert_eq!(items.len(), 2);
+        let err = err.unwrap();
+        assert!(
+            err.contains(STRING_SCHEMA) && err.contains(&p.display().to_string()),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn inconsistent_point_step_is_a_skipped_frame_and_the_stream_goes_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut bad = xyzt(1, 6);
+        bad.point_step = 12;
+        let msgs = vec![
+            (0, cloud_msg(0)),
+            (0, cdr_body(&bad, false)),
+            (0, cloud_msg(2)),
+        ];
+        let p = save(
+            &dir,
+            "step.mcap",
+            &write_mcap(&[("/points", POINTCLOUD2_SCHEMA)], &msgs, None, None),
+        );
+        let (items, err) = drain(open_mcap(&p, None).unwrap().frames.as_mut());
+        assert_eq!(err, None);
+        assert_eq!(items.len(), 3);
+        assert_frame_k(frame(&items[0]), 0, 0);
+        match &items[1] {
+            Item::Skipped { index, reason } => {
+                assert_eq!(*index, 1);
+                assert!(
+                    reason.contains(&p.display().to_string()) && reason.contains("point_step 12"),
+                    "{reason}"
+                );
+            }
+            other => panic!("expected a skip, got {other:?}"),
+        }
+        assert_frame_k(frame(&items[2]), 2, 2);
+    }
+
+    #[test]
+    fn several_cloud_topics_need_a_topic_and_the_chosen_one_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [
+            ("/b", POINTCLOUD2_SCHEMA),
+            ("/a", POINTCLOUD2_SCHEMA),
+            ("/chatter", STRING_SCHEMA),
+        ];
+        let msgs = vec![
+            (0, cloud_msg(0)),
+            (1, cloud_msg(1)),
+            (2, string_msg()),
+            (1, cloud_msg(2)),
+        ];
+        let p = save(
+            &dir,
+            "two.mcap",
+            &write_mcap(&channels, &msgs, Some(1 << 20), None),
+        );
+        let err = format!("{:#}", open_mcap(&p, None).err().unwrap());
+        assert!(err.contains("/a, /b") && err.contains("--topic"), "{err}");
+        let err = format!("{:#}", open_mcap(&p, Some("/chatter")).err().unwrap());
+        assert!(err.contains(STRING_SCHEMA), "{err}");
+        let mut ds = open_mcap(&p, Some("/a")).unwrap();
+        assert_eq!(ds.frames.len_hint(), Some(2));
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(err, None);
+        let xs: Vec<f64> = items.iter().map(|i| frame(i).points[0][0]).collect();
+        assert_eq!(xs, vec![1.0, 2.0], "only /a's clouds (frames 1 and 2)");
+    }
+
+    #[test]
+    fn cdr_body_cut_anywhere_or_with_other_encapsulation_is_an_error_not_a_panic() {
+        let body = cloud_msg(2);
+        for cut in 0..body.len() {
+            assert!(parse_cdr(&body[..cut]).is_err(), "cut at {cut}");
+        }
+        let mut padded = body.clone();
+        padded.extend_from_slice(&[0, 0, 0]);
+        assert!(
+            parse_cdr(&padded).is_ok(),
+            "up to 3 bytes of end padding are allowed"
+        );
+        padded.push(0);
+        assert!(parse_cdr(&padded).unwrap_err().contains("4 bytes after"));
+        let mut xcdr2 = body.clone();
+        xcdr2[1] = 0x07;
+        assert!(parse_cdr(&xcdr2).unwrap_err().contains("not plain CDR"));
+    }
+
+    #[test]
+    fn files_that_are_not_mcap_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = save(&dir, "x.mcap", b"#ROSBAG V2.0\n");
+        let err = format!("{:#}", open_mcap(&p, None).err().unwrap());
+        assert!(
+            err.contains("not an MCAP file") && err.contains(&p.display().to_string()),
+            "{err}"
+        );
+    }
+}

@@ -1,1 +1,1116 @@
-//! (being written)
+//! ROS 1 bags (format 2.0) carrying `sensor_msgs/PointCloud2`.
+//!
+//! The container (records, chunks, compression, index) is read with the `rosbag` crate; the
+//! message body, in the ROS 1 wire format, is parsed here into a [`PointCloud2`] view and decoded
+//! by [`pointcloud2`]. Chunks are decompressed one at a time when the stream reaches them, so a
+//! bag never has to fit in memory; the index (or, without one, a first scan) tells where the
+//! chunks are and how many frames each holds, which also makes [`FrameSource::seek`] cheap.
+
+use super::pointcloud2::{self, PointCloud2, PointField, Stamp};
+use super::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
+use anyhow::{anyhow, bail, Context, Result};
+use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
+use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::Path;
+
+/// Connection type of the messages this reader decodes.
+pub const POINTCLOUD2_TYPE: &str = "sensor_msgs/PointCloud2";
+
+/// MD5 of the `sensor_msgs/PointCloud2` definition; a connection with this type name but another
+/// sum was recorded from a different definition and cannot be parsed with this layout.
+pub const POINTCLOUD2_MD5: &str = "1158d486dd51d683ce2f1be655c3c181";
+
+const MAGIC: &[u8] = b"#ROSBAG V2.0\n";
+
+/// Opens a ROS 1 bag and streams the PointCloud2 messages of `opts.topic`, or of the only
+/// PointCloud2 topic in the bag.
+pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
+    let label = path.display().to_string();
+    let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
+    let len = file
+        .metadata()
+        .with_context(|| format!("{label}: cannot stat"))?
+        .len();
+    let header = read_bag_header(&mut file).map_err(|e| anyhow!("{label}: {e}"))?;
+
+    // rosbag 0.6 slices its map from the end of the header to `index_pos` and panics when that
+    // runs past the end of the file (a bag cut short) or backwards (0: a recording never
+    // closed). Such a bag is read from a temporary copy whose header says the chunk section
+    // runs to the end of the file; the copy costs one pass over the file, only for damaged bags.
+    let header_sane = header.index_pos >= header.start_pos && header.index_pos <= len;
+    let (bag, repaired, chunk_end) = if header_sane {
+        let bag = RosBag::new(path).with_context(|| format!("{label}: cannot read"))?;
+        (bag, None, header.index_pos)
+    } else {
+        let copy = repaired_copy(&mut file, &header, len)
+            .with_context(|| format!("{label}: cannot make a repaired temporary copy"))?;
+        let bag = RosBag::new(copy.path()).with_context(|| format!("{label}: cannot read"))?;
+        (bag, Some(copy), len)
+    };
+    let index = if header_sane {
+        read_index(&bag).ok()
+    } else {
+        None
+    };
+    let layout = match index {
+        Some(layout) => layout,
+        None => scan_chunks(&bag, &mut file, header.start_pos, chunk_end),
+    };
+
+    let topics: Vec<(String, String)> = layout
+        .conns
+        .values()
+        .map(|c| (c.topic.clone(), c.tp.clone()))
+        .collect();
+    let topic = pointcloud2::choose_topic(
+        &label,
+        &topics,
+        |t| t == POINTCLOUD2_TYPE,
+        POINTCLOUD2_TYPE,
+        opts.topic.as_deref(),
+    )
+    .map_err(|e| anyhow!(e))?;
+    let ours: HashMap<u32, ConnKind> = layout
+        .conns
+        .iter()
+        .filter(|(_, c)| c.topic == topic)
+        .map(|(&id, c)| (id, c.kind()))
+        .collect();
+    let chunks: Vec<(u64, usize)> = layout
+        .chunks
+        .iter()
+        .map(|c| {
+            let n = c
+                .counts
+                .iter()
+                .filter(|(id, _)| ours.contains_key(id))
+                .map(|(_, n)| *n as usize)
+                .sum();
+            (c.pos, n)
+        })
+        .collect();
+    let total = chunks.iter().map(|c| c.1).sum();
+    let note = (!layout.indexed).then(|| {
+        "bag has no usable index (cut short or not closed); its chunks were found by scanning"
+            .to_string()
+    });
+    let source = BagSource {
+        bag,
+        _repaired: repaired,
+        file: label,
+        topic,
+        ours,
+        chunks,
+        next_chunk: 0,
+        skip: 0,
+        pending: VecDeque::new(),
+        pending_err: None,
+        damage: layout.damage,
+        index: 0,
+        total,
+        note,
+        done: false,
+    };
+    Ok(Dataset {
+        frames: Box::new(source),
+        info: DatasetInfo {
+            format: Some(Format::Bag),
+            ..DatasetInfo::default()
+        },
+    })
+}
+
+/// What the bag header record says, plus where things are in the file.
+#[derive(Debug)]
+struct BagHeader {
+    index_pos: u64,
+    /// File offset of the 8-byte `index_pos` value.
+    index_pos_at: u64,
+    /// First byte after the header record: the chunk section.
+    start_pos: u64,
+}
+
+fn read_u32(r: &mut impl Read) -> std::io::Result<u32> {
+    let mut b = [0u8; 4];
+    r.read_exact(&mut b)?;
+    Ok(u32::from_le_bytes(b))
+}
+
+fn read_bag_header(file: &mut File) -> Result<BagHeader, String> {
+    let short = |_| "too short for a ROS bag".to_string();
+    let mut magic = [0u8; 13];
+    file.read_exact(&mut magic).map_err(short)?;
+    if magic != MAGIC {
+        return Err("not a ROS bag v2.0 (no `#ROSBAG V2.0` line)".into());
+    }
+    let header_len = read_u32(file).map_err(short)?;
+    if header_len > 1 << 20 {
+        return Err(format!("bag header claims {header_len} bytes"));
+    }
+    let mut fields = vec![0u8; header_len as usize];
+    file.read_exact(&mut fields).map_err(short)?;
+    let data_len = read_u32(file).map_err(short)?;
+    let mut index_pos = None;
+    let mut at = 0usize;
+    while at < fields.len() {
+        let flen = fields
+            .get(at..at + 4)
+            .and_then(|b| b.first_chunk::<4>())
+            .map(|b| u32::from_le_bytes(*b) as usize)
+            .ok_or("bag header field cut short")?;
+        let field = fields
+            .get(at + 4..at + 4 + flen)
+            .ok_or("bag header field cut short")?;
+        if let Some(value) = field.strip_prefix(b"index_pos=") {
+            let v: [u8; 8] = value.try_into().map_err(|_| "bad index_pos field")?;
+            let value_at = (MAGIC.len() + 4 + at + 4 + b"index_pos=".len()) as u64;
+            index_pos = Some((u64::from_le_bytes(v), value_at));
+        }
+        at += 4 + flen;
+    }
+    let (index_pos, index_pos_at) = index_pos.ok_or("bag header has no index_pos")?;
+    Ok(BagHeader {
+        index_pos,
+        index_pos_at,
+        start_pos: (MAGIC.len() + 4 + 4) as u64 + u64::from(header_len) + u64::from(data_len),
+    })
+}
+
+/// A temporary copy of the bag whose `index_pos` is the end of the file.
+fn repaired_copy(file: &mut File, header: &BagHeader, len: u64) -> Result<tempfile::NamedTempFile> {
+    let mut copy = tempfile::Builder::new()
+        .prefix("kiss-odom-bag-")
+        .suffix(".bag")
+        .tempfile()?;
+    file.seek(SeekFrom::Start(0))?;
+    std::io::copy(file, copy.as_file_mut())?;
+    copy.as_file_mut()
+        .seek(SeekFrom::Start(header.index_pos_at))?;
+    copy.as_file_mut().write_all(&len.to_le_bytes())?;
+    copy.as_file_mut().flush()?;
+    Ok(copy)
+}
+
+/// Offset just past the record starting at `pos` (header length, header, data length, data).
+fn record_end(file: &mut File, pos: u64) -> std::io::Result<u64> {
+    file.seek(SeekFrom::Start(pos))?;
+    let header_len = read_u32(file)?;
+    file.seek(SeekFrom::Start(pos + 4 + u64::from(header_len)))?;
+    let data_len = read_u32(file)?;
+    Ok(pos + 8 + u64::from(header_len) + u64::from(data_len))
+}
+
+/// A connection record: which topic and type its messages have.
+#[derive(Clone, Debug)]
+struct Conn {
+    topic: String,
+    tp: String,
+    md5: String,
+}
+
+impl Conn {
+    fn from_record(c: &rosbag::record_types::Connection<'_>) -> Self {
+        Conn {
+            topic: c.topic.to_string(),
+            tp: c.tp.to_string(),
+            md5: c.md5sum.iter().map(|b| format!("{b:02x}")).collect(),
+        }
+    }
+
+    fn kind(&self) -> ConnKind {
+        if self.tp != POINTCLOUD2_TYPE {
+            ConnKind::Wrong(self.tp.clone())
+        } else if self.md5 != POINTCLOUD2_MD5 {
+            ConnKind::Wrong(format!(
+                "{} with md5 {} (expected {POINTCLOUD2_MD5})",
+                self.tp, self.md5
+            ))
+        } else {
+            ConnKind::Cloud
+        }
+    }
+}
+
+/// Whether messages of a connection on the chosen topic can be decoded.
+#[derive(Clone, Debug)]
+enum ConnKind {
+    Cloud,
+    /// Another type (or another definition) published on the same topic.
+    Wrong(String),
+}
+
+/// Where a chunk is and how many messages of each connection it holds.
+#[derive(Debug)]
+struct ChunkPlan {
+    pos: u64,
+    counts: Vec<(u32, u32)>,
+}
+
+/// Everything found out about the bag before streaming.
+#[derive(Debug, Default)]
+struct Layout {
+    conns: BTreeMap<u32, Conn>,
+    chunks: Vec<ChunkPlan>,
+    /// Why the chunks after the last planned one cannot be read.
+    damage: Option<String>,
+    indexed: bool,
+}
+
+/// Reads connections and chunk positions from the index section; `Err` if it is incomplete.
+fn read_index(bag: &RosBag) -> Result<Layout, String> {
+    let mut layout = Layout {
+        indexed: true,
+        ..Layout::default()
+    };
+    for record in bag.index_records() {
+        match record.map_err(|e| e.to_string())? {
+            IndexRecord::Connection(c) => {
+                layout.conns.insert(c.id, Conn::from_record(&c));
+            }
+            IndexRecord::ChunkInfo(info) => {
+                let counts = info.entries().map(|e| (e.conn_id, e.count)).collect();
+                layout.chunks.push(ChunkPlan {
+                    pos: info.chunk_pos,
+                    counts,
+                });
+            }
+            IndexRecord::IndexData(_) => {}
+        }
+    }
+    if layout.chunks.len() != bag.get_chunk_count() as usize
+        || layout.conns.len() != bag.get_conn_count() as usize
+    {
+        return Err("index does not list every chunk and connection".into());
+    }
+    layout.chunks.sort_by_key(|c| c.pos);
+    Ok(layout)
+}
+
+/// Walks the chunk section from `start` to `end` record by record, decompressing each chunk once
+/// to learn its connections and message counts; stops at the first unreadable record.
+fn scan_chunks(bag: &RosBag, file: &mut File, start: u64, end: u64) -> Layout {
+    let mut layout = Layout::default();
+    let mut pos = start;
+    while pos < end {
+        let mut records = bag.chunk_records();
+        let record = match records.seek(pos) {
+            Ok(()) => records.next(),
+            Err(e) => Some(Err(e)),
+        };
+        match record {
+            None => break,
+            Some(Err(e)) => {
+                layout.damage = Some(format!(
+                    "cannot read the record at byte {pos} ({e}); the bag ends at byte {end} and looks cut short"
+                ));
+                break;
+            }
+            Some(Ok(ChunkRecord::IndexData(_))) => {}
+            Some(Ok(ChunkRecord::Chunk(chunk))) => {
+                let mut counts: BTreeMap<u32, u32> = BTreeMap::new();
+                let mut inner_error = None;
+                for m in chunk.messages() {
+                    match m {
+                        Ok(MessageRecord::Connection(c)) => {
+                            layout
+                                .conns
+                                .entry(c.id)
+                                .or_insert_with(|| Conn::from_record(&c));
+                        }
+                        Ok(MessageRecord::MessageData(m)) => {
+                            *counts.entry(m.conn_id).or_default() += 1;
+                        }
+                        Err(e) => {
+                            inner_error = Some(format!("chunk at byte {pos}: {e}"));
+                            break;
+                        }
+                    }
+                }
+                layout.chunks.push(ChunkPlan {
+                    pos,
+                    counts: counts.into_iter().collect(),
+                });
+                if inner_error.is_some() {
+                    layout.damage = inner_error;
+                    break;
+                }
+            }
+        }
+        match record_end(file, pos) {
+            Ok(next) if next > pos => pos = next,
+            _ => {
+                layout.damage = Some(format!("cannot find the record after byte {pos}"));
+                break;
+            }
+        }
+    }
+    layout
+}
+
+/// The frames of one topic of an open bag.
+struct BagSource {
+    bag: RosBag,
+    /// Keeps the repaired copy alive while `bag` maps it (declared after `bag`: dropped later).
+    _repaired: Option<tempfile::NamedTempFile>,
+    file: String,
+    topic: String,
+    /// Connections on the chosen topic.
+    ours: HashMap<u32, ConnKind>,
+    /// Chunk positions in file order and how many messages of `ours` each holds.
+    chunks: Vec<(u64, usize)>,
+    next_chunk: usize,
+    /// Messages of `ours` to drop at the start of the next chunk (after a seek).
+    skip: usize,
+    /// Decoded items of the current chunk not yet handed out.
+    pending: VecDeque<Item>,
+    /// Error met in the current chunk, reported after `pending`.
+    pending_err: Option<String>,
+    /// Why the chunk section ends early, reported after the last chunk.
+    damage: Option<String>,
+    index: usize,
+    total: usize,
+    /// Warning for the first frame.
+    note: Option<String>,
+    done: bool,
+}
+
+impl BagSource {
+    /// Decompresses chunk `k` and decodes its messages on the chosen topic into `pending`.
+    fn load_chunk(&mut self, k: usize) {
+        let Some(&(pos, _)) = self.chunks.get(k) else {
+            return;
+        };
+        let mut records = self.bag.chunk_records();
+        let record = match records.seek(pos) {
+            Ok(()) => records.next(),
+            Err(e) => Some(Err(e)),
+        };
+        let chunk = match record {
+            Some(Ok(ChunkRecord::Chunk(chunk))) => chunk,
+            Some(Ok(ChunkRecord::IndexData(_))) | None => {
+                self.pending_err = Some(format!("no chunk at byte {pos} where the index says"));
+                return;
+            }
+            Some(Err(e)) => {
+                self.pending_err = Some(format!("cannot read the chunk at byte {pos}: {e}"));
+                return;
+            }
+        };
+        for m in chunk.messages() {
+            let m = match m {
+                Ok(MessageRecord::MessageData(m)) => m,
+                Ok(MessageRecord::Connection(_)) => continue,
+                Err(e) => {
+                    self.pending_err = Some(format!("chunk at byte {pos}: {e}"));
+                    return;
+                }
+            };
+            let Some(kind) = self.ours.get(&m.conn_id) else {
+                continue;
+            };
+            if self.skip > 0 {
+                self.skip -= 1;
+                continue;
+            }
+            if let ConnKind::Wrong(tp) = kind {
+                self.pending_err = Some(format!(
+                    "message {} on {} is {tp}, not {POINTCLOUD2_TYPE}",
+                    self.index, self.topic
+                ));
+                return;
+            }
+            let item =
+                pointcloud2::message_item(self.index, &self.file, &self.topic, parse_ros1(m.data));
+            self.pending.push_back(item);
+            self.index += 1;
+        }
+    }
+}
+
+impl FrameSource for BagSource {
+    fn len_hint(&self) -> Option<usize> {
+        Some(self.total)
+    }
+
+    fn next_item(&mut self) -> Result<Option<Item>> {
+        loop {
+            if let Some(mut item) = self.pending.pop_front() {
+                if let (Item::Frame(f), Some(note)) = (&mut item, self.note.take()) {
+                    f.warnings.insert(0, note);
+                }
+                return Ok(Some(item));
+            }
+            if self.done {
+                return Ok(None);
+            }
+            if let Some(e) = self.pending_err.take() {
+                self.done = true;
+                bail!("{}: {e}", self.file);
+            }
+            match self.chunks.get(self.next_chunk) {
+                Some(&(_, n)) => {
+                    let k = self.next_chunk;
+                    self.next_chunk += 1;
+                    if n > 0 {
+                        self.load_chunk(k);
+                    }
+                }
+                None => {
+                    self.done = true;
+                    if let Some(d) = &self.damage {
+                        bail!("{}: {d}", self.file);
+                    }
+                    return Ok(None);
+                }
+            }
+        }
+    }
+
+    fn seek(&mut self, index: usize) -> bool {
+        self.pending.clear();
+        self.pending_err = None;
+        self.done = false;
+        self.index = index;
+        self.skip = 0;
+        self.next_chunk = self.chunks.len();
+        let mut before = 0;
+        for (k, &(_, n)) in self.chunks.iter().enumerate() {
+            if index < before + n {
+                self.next_chunk = k;
+                self.skip = index - before;
+                break;
+            }
+            before += n;
+        }
+        true
+    }
+}
+
+/// Cursor over a ROS 1 serialized message: little-endian, u32-length-prefixed strings/arrays.
+struct Ros1<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Ros1<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        let bytes = self
+            .pos
+            .checked_add(n)
+            .and_then(|end| self.buf.get(self.pos..end))
+            .ok_or_else(|| {
+                format!(
+                    "message ends inside {what} (needs {n} bytes at byte {} of {})",
+                    self.pos,
+                    self.buf.len()
+                )
+            })?;
+        self.pos += n;
+        Ok(bytes)
+    }
+
+    fn u8(&mut self, what: &str) -> Result<u8, String> {
+        Ok(self.take(1, what)?[0])
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        let b = self.take(4, what)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    fn string(&mut self, what: &str) -> Result<String, String> {
+        let n = self.u32(what)? as usize;
+        Ok(String::from_utf8_lossy(self.take(n, what)?).into_owned())
+    }
+}
+
+/// Parses a ROS 1 serialized `sensor_msgs/PointCloud2`.
+pub fn parse_ros1(body: &[u8]) -> Result<PointCloud2<'_>, String> {
+    let mut r = Ros1 { buf: body, pos: 0 };
+    let _seq = r.u32("header.seq")?;
+    let sec = r.u32("header.stamp")?;
+    let nsec = r.u32("header.stamp")?;
+    let frame_id = r.string("header.frame_id")?;
+    let height = r.u32("height")?;
+    let width = r.u32("width")?;
+    let n_fields = r.u32("fields")? as usize;
+    // Each field takes at least 13 bytes; a larger count is garbage, not an allocation size.
+    if n_fields > (body.len() - r.pos) / 13 {
+        return Err(format!("{n_fields} fields cannot fit in the message"));
+    }
+    let mut fields = Vec::with_capacity(n_fields);
+    for _ in 0..n_fields {
+        fields.push(PointField {
+            name: r.string("fields.name")?,
+            offset: r.u32("fields.offset")?,
+            datatype: r.u8("fields.datatype")?,
+            count: r.u32("fields.count")?,
+        });
+    }
+    let is_bigendian = r.u8("is_bigendian")? != 0;
+    let point_step = r.u32("point_step")?;
+    let row_step = r.u32("row_step")?;
+    let data_len = r.u32("data")? as usize;
+    let data = r.take(data_len, "data")?;
+    let is_dense = r.u8("is_dense")? != 0;
+    if r.pos != body.len() {
+        return Err(format!(
+            "{} bytes after the end of the message",
+            body.len() - r.pos
+        ));
+    }
+    Ok(PointCloud2 {
+        stamp: Stamp {
+            sec: i64::from(sec),
+            nsec,
+        },
+        frame_id,
+        height,
+        width,
+        fields,
+        is_bigendian,
+        point_step,
+        row_step,
+        data,
+        is_dense,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::pointcloud2::fixture::{xyzt, xyzt_points, xyzt_times, RawCloud};
+    use std::collections::BTreeSet;
+
+    /// ROS 1 serialization of `c`, written field by field from the message definition.
+    fn ros1_body(c: &RawCloud) -> Vec<u8> {
+        let mut b = Vec::new();
+        let u32_ = |b: &mut Vec<u8>, v: u32| b.extend_from_slice(&v.to_le_bytes());
+        let str_ = |b: &mut Vec<u8>, s: &str| {
+            b.extend_from_slice(&(s.len() as u32).to_le_bytes());
+            b.extend_from_slice(s.as_bytes());
+        };
+        u32_(&mut b, 7); // seq
+        u32_(&mut b, c.sec);
+        u32_(&mut b, c.nsec);
+        str_(&mut b, &c.frame_id);
+        u32_(&mut b, c.height);
+        u32_(&mut b, c.width);
+        u32_(&mut b, c.fields.len() as u32);
+        for f in &c.fields {
+            str_(&mut b, &f.name);
+            u32_(&mut b, f.offset);
+            b.push(f.datatype);
+            u32_(&mut b, f.count);
+        }
+        b.push(u8::from(c.is_bigendian));
+        u32_(&mut b, c.point_step);
+        u32_(&mut b, c.row_step);
+        u32_(&mut b, c.data.len() as u32);
+        b.extend_from_slice(&c.data);
+        b.push(u8::from(c.is_dense));
+        b
+    }
+
+    /// A connection of a test bag.
+    struct TestConn {
+        topic: &'static str,
+        tp: &'static str,
+        md5: &'static str,
+    }
+
+    const CLOUD: (&str, &str) = (POINTCLOUD2_TYPE, POINTCLOUD2_MD5);
+    const STRING: (&str, &str) = ("std_msgs/String", "992ce8a1687cec8c8bd883ec73ca41d1");
+
+    fn conn(topic: &'static str, (tp, md5): (&'static str, &'static str)) -> TestConn {
+        TestConn { topic, tp, md5 }
+    }
+
+    fn record(out: &mut Vec<u8>, fields: &[(&str, &[u8])], data: &[u8]) {
+        let mut header = Vec::new();
+        for (name, value) in fields {
+            let len = (name.len() + 1 + value.len()) as u32;
+            header.extend_from_slice(&len.to_le_bytes());
+            header.extend_from_slice(name.as_bytes());
+            header.push(b'=');
+            header.extend_from_slice(value);
+        }
+        out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+        out.extend_from_slice(&header);
+        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        out.extend_from_slice(data);
+    }
+
+    fn time(ns: u64) -> [u8; 8] {
+        let mut t = [0u8; 8];
+        t[..4].copy_from_slice(&((ns / 1_000_000_000) as u32).to_le_bytes());
+        t[4..].copy_from_slice(&((ns % 1_000_000_000) as u32).to_le_bytes());
+        t
+    }
+
+    fn conn_record(out: &mut Vec<u8>, id: u32, c: &TestConn) {
+        let mut data = Vec::new();
+        record_fields(
+            &mut data,
+            &[
+                ("topic", c.topic.as_bytes()),
+                ("type", c.tp.as_bytes()),
+                ("md5sum", c.md5.as_bytes()),
+                ("message_definition", b"# test"),
+            ],
+        );
+        record(
+            out,
+            &[
+                ("op", &[7]),
+                ("conn", &id.to_le_bytes()),
+                ("topic", c.topic.as_bytes()),
+            ],
+            &data,
+        );
+    }
+
+    fn record_fields(out: &mut Vec<u8>, fields: &[(&str, &[u8])]) {
+        for (name, value) in fields {
+            let len = (name.len() + 1 + value.len()) as u32;
+            out.extend_from_slice(&len.to_le_bytes());
+            out.extend_from_slice(name.as_bytes());
+            out.push(b'=');
+            out.extend_from_slice(value);
+        }
+    }
+
+    /// Writes a bag v2.0 following http://wiki.ros.org/Bags/Format/2.0: uncompressed chunks of
+    /// `per_chunk` messages (connection record before a connection's first message), index data
+    /// after each chunk and, if `indexed`, the index section (connections, chunk infos).
+    /// Messages are (connection id = position in `conns`, receive time ns, body). Returns the
+    /// file and the offset of every chunk record.
+    fn write_bag(
+        conns: &[TestConn],
+        msgs: &[(u32, u64, Vec<u8>)],
+        per_chunk: usize,
+        indexed: bool,
+    ) -> (Vec<u8>, Vec<u64>) {
+        let header = |index_pos: u64, chunk_count: u32| {
+            let mut h = Vec::new();
+            record(
+                &mut h,
+                &[
+                    ("op", &[3]),
+                    ("index_pos", &index_pos.to_le_bytes()),
+                    ("conn_count", &(conns.len() as u32).to_le_bytes()),
+                    ("chunk_count", &chunk_count.to_le_bytes()),
+                ],
+                &[b' '; 64],
+            );
+            h
+        };
+        let base = (MAGIC.len() + header(0, 0).len()) as u64;
+        let mut section = Vec::new();
+        let mut chunk_pos = Vec::new();
+        let mut infos = Vec::new();
+        let mut seen = BTreeSet::new();
+        for group in msgs.chunks(per_chunk) {
+            let mut data = Vec::new();
+            let mut index: BTreeMap<u32, Vec<(u64, u32)>> = BTreeMap::new();
+            for (c, t, body) in group {
+                if seen.insert(*c) {
+                    conn_record(&mut data, *c, &conns[*c as usize]);
+                }
+                index.entry(*c).or_default().push((*t, data.len() as u32));
+                record(
+                    &mut data,
+                    &[
+                        ("op", &[2]),
+                        ("conn", &c.to_le_bytes()),
+                        ("time", &time(*t)),
+                    ],
+                    body,
+                );
+            }
+            let pos = base + section.len() as u64;
+            chunk_pos.push(pos);
+            record(
+                &mut section,
+                &[
+                    ("op", &[5]),
+                    ("compression", b"none"),
+                    ("size", &(data.len() as u32).to_le_bytes()),
+                ],
+                &data,
+            );
+            for (c, entries) in &index {
+                let mut d = Vec::new();
+                for (t, off) in entries {
+                    d.extend_from_slice(&time(*t));
+                    d.extend_from_slice(&off.to_le_bytes());
+                }
+                record(
+                    &mut section,
+                    &[
+                        ("op", &[4]),
+                        ("ver", &1u32.to_le_bytes()),
+                        ("conn", &c.to_le_bytes()),
+                        ("count", &(entries.len() as u32).to_le_bytes()),
+                    ],
+                    &d,
+                );
+            }
+            let (t0, t1) = (group[0].1, group[group.len() - 1].1);
+            infos.push((
+                pos,
+                t0,
+                t1,
+                index
+                    .iter()
+                    .map(|(c, e)| (*c, e.len() as u32))
+                    .collect::<Vec<_>>(),
+            ));
+        }
+        let index_pos = base + section.len() as u64;
+        let mut out = MAGIC.to_vec();
+        out.extend(header(
+            if indexed { index_pos } else { 0 },
+            infos.len() as u32,
+        ));
+        out.extend(section);
+        if indexed {
+            for (id, c) in conns.iter().enumerate() {
+                conn_record(&mut out, id as u32, c);
+            }
+            for (pos, t0, t1, counts) in &infos {
+                let mut d = Vec::new();
+                for (c, n) in counts {
+                    d.extend_from_slice(&c.to_le_bytes());
+                    d.extend_from_slice(&n.to_le_bytes());
+                }
+                record(
+                    &mut out,
+                    &[
+                        ("op", &[6]),
+                        ("ver", &1u32.to_le_bytes()),
+                        ("chunk_pos", &pos.to_le_bytes()),
+                        ("start_time", &time(*t0)),
+                        ("end_time", &time(*t1)),
+                        ("count", &(counts.len() as u32).to_le_bytes()),
+                    ],
+                    &d,
+                );
+            }
+        }
+        (out, chunk_pos)
+    }
+
+    /// Frame `k` of a test stream: 6 points of [`xyzt`], ROS 1 serialized.
+    fn cloud_msg(k: u32) -> Vec<u8> {
+        ros1_body(&xyzt(k, 6))
+    }
+
+    fn save(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    fn open_bag(path: &Path, topic: Option<&str>) -> Result<Dataset> {
+        open(
+            path,
+            &OpenOptions {
+                topic: topic.map(String::from),
+            },
+        )
+    }
+
+    /// Reads the stream to its end: the items, and the error that ended it, if any.
+    fn drain(src: &mut dyn FrameSource) -> (Vec<Item>, Option<String>) {
+        let mut items = Vec::new();
+        loop {
+            match src.next_item() {
+                Ok(Some(item)) => items.push(item),
+                Ok(None) => return (items, None),
+                Err(e) => {
+                    assert!(
+                        src.next_item().unwrap().is_none(),
+                        "stream continues after Err"
+                    );
+                    return (items, Some(format!("{e:#}")));
+                }
+            }
+        }
+    }
+
+    fn frame(item: &Item) -> &crate::io::Frame {
+        match item {
+            Item::Frame(f) => f,
+            Item::Skipped { reason, .. } => panic!("unexpected skip: {reason}"),
+        }
+    }
+
+    /// Checks that `f` is frame `k` of [`cloud_msg`] at stream position `index`.
+    fn assert_frame_k(f: &crate::io::Frame, index: usize, k: u32) {
+        assert_eq!(f.index, index);
+        assert_eq!(f.points, xyzt_points(k, 6), "points of frame {k}");
+        assert_eq!(f.stamps.as_deref(), Some(&xyzt_times(6)[..]));
+        assert_eq!(f.time, Some(f64::from(1_700_000_000 + k) + 0.25));
+        assert!(
+            f.name
+                .ends_with(&format!(":/points@{}.250000000", 1_700_000_000 + k)),
+            "{}",
+            f.name
+        );
+    }
+
+    /// Five clouds on /points interleaved with strings on /chatter, two messages per chunk.
+    fn mixed_messages() -> Vec<(u32, u64, Vec<u8>)> {
+        let mut msgs = Vec::new();
+        for k in 0..5u32 {
+            msgs.push((0, u64::from(k) * 100_000_000, cloud_msg(k)));
+            msgs.push((1, u64::from(k) * 100_000_000 + 1, b"\x02\0\0\0hi".to_vec()));
+        }
+        msgs
+    }
+
+    #[test]
+    fn reads_every_cloud_of_the_only_pointcloud2_topic_with_times_and_stamps() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD), conn("/chatter", STRING)];
+        for per_chunk in [1, 3, 100] {
+            let (bytes, _) = write_bag(&conns, &mixed_messages(), per_chunk, true);
+            let p = save(&dir, "a.bag", &bytes);
+            let mut ds = open_bag(&p, None).unwrap();
+            assert_eq!(ds.info.format, Some(Format::Bag));
+            assert_eq!(ds.frames.len_hint(), Some(5));
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(err, None);
+            assert_eq!(items.len(), 5);
+            for (k, item) in items.iter().enumerate() {
+                let f = frame(item);
+                assert_frame_k(f, k, k as u32);
+                assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+            }
+        }
+    }
+
+    #[test]
+    fn bag_without_index_is_scanned_and_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD), conn("/chatter", STRING)];
+        let (bytes, _) = write_bag(&conns, &mixed_messages(), 3, false);
+        let p = save(&dir, "open.bag", &bytes);
+        let mut ds = open_bag(&p, None).unwrap();
+        assert_eq!(ds.frames.len_hint(), Some(5));
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(err, None);
+        assert_eq!(items.len(), 5);
+        for (k, item) in items.iter().enumerate() {
+            assert_frame_k(frame(item), k, k as u32);
+        }
+        assert!(frame(&items[0]).warnings[0].contains("no usable index"));
+    }
+
+    #[test]
+    fn bag_cut_inside_a_chunk_yields_the_frames_before_then_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD)];
+        let msgs: Vec<_> = (0..6).map(|k| (0, u64::from(k), cloud_msg(k))).collect();
+        let (bytes, chunks) = write_bag(&conns, &msgs, 1, true);
+        // Cut 40 bytes into the fifth chunk: chunks 0..4 are whole.
+        let cut = chunks[4] as usize + 40;
+        let p = save(&dir, "cut.bag", &bytes[..cut]);
+        let mut ds = open_bag(&p, None).unwrap();
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(items.len(), 4);
+        for (k, item) in items.iter().enumerate() {
+            assert_frame_k(frame(item), k, k as u32);
+        }
+        let err = err.expect("a cut bag must end with an error");
+        assert!(err.contains(&p.display().to_string()), "{err}");
+        assert!(err.contains("cut short"), "{err}");
+    }
+
+    #[test]
+    fn bag_cut_inside_its_index_still_yields_every_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD)];
+        let msgs: Vec<_> = (0..4).map(|k| (0, u64::from(k), cloud_msg(k))).collect();
+        let (bytes, _) = write_bag(&conns, &msgs, 1, true);
+        let p = save(&dir, "cut_index.bag", &bytes[..bytes.len() - 10]);
+        let mut ds = open_bag(&p, None).unwrap();
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(err, None);
+        assert_eq!(items.len(), 4);
+        assert!(frame(&items[0]).warnings[0].contains("no usable index"));
+    }
+
+    #[test]
+    fn other_type_on_the_chosen_topic_ends_the_stream_after_the_frames_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD), conn("/points", STRING)];
+        let msgs = vec![
+            (0, 1, cloud_msg(0)),
+            (0, 2, cloud_msg(1)),
+            (1, 3, b"\x02\0\0\0hi".to_vec()),
+            (0, 4, cloud_msg(2)),
+        ];
+        let (bytes, _) = write_bag(&conns, &msgs, 2, true);
+        let p = save(&dir, "mixed.bag", &bytes);
+        let mut ds = open_bag(&p, None).unwrap();
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(items.len(), 2);
+        let err = err.unwrap();
+        assert!(
+            err.contains("std_msgs/String") && err.contains(&p.display().to_string()),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn pointcloud2_with_another_definition_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn(
+            "/points",
+            (POINTCLOUD2_TYPE, "00000000000000000000000000000000"),
+        )];
+        let (bytes, _) = write_bag(&conns, &[(0, 1, cloud_msg(0))], 1, true);
+        let p = save(&dir, "md5.bag", &bytes);
+        let (items, err) = drain(open_bag(&p, None).unwrap().frames.as_mut());
+        assert!(items.is_empty());
+        assert!(err.unwrap().contains("md5"));
+    }
+
+    #[test]
+    fn inconsistent_point_step_is_a_skipped_frame_and_the_stream_goes_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut bad = xyzt(1, 6);
+        bad.point_step = 12; // the `t` field at offset 12 no longer fits
+        let msgs = vec![
+            (0, 1, cloud_msg(0)),
+            (0, 2, ros1_body(&bad)),
+            (0, 3, cloud_msg(2)),
+        ];
+        let (bytes, _) = write_bag(&[conn("/points", CLOUD)], &msgs, 2, true);
+        let p = save(&dir, "step.bag", &bytes);
+        let (items, err) = drain(open_bag(&p, None).unwrap().frames.as_mut());
+        assert_eq!(err, None);
+        assert_eq!(items.len(), 3);
+        assert_frame_k(frame(&items[0]), 0, 0);
+        match &items[1] {
+            Item::Skipped { index, reason } => {
+                assert_eq!(*index, 1);
+                assert!(
+                    reason.contains(&p.display().to_string()) && reason.contains("/points"),
+                    "{reason}"
+                );
+                assert!(reason.contains("point_step 12"), "{reason}");
+            }
+            other => panic!("expected a skip, got {other:?}"),
+        }
+        assert_frame_k(frame(&items[2]), 2, 2);
+    }
+
+    #[test]
+    fn several_cloud_topics_need_a_topic_and_the_chosen_one_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [
+            conn("/b", CLOUD),
+            conn("/a", CLOUD),
+            conn("/chatter", STRING),
+        ];
+        let msgs = vec![
+            (0, 1, cloud_msg(0)),
+            (1, 2, cloud_msg(1)),
+            (2, 3, b"\0\0\0\0".to_vec()),
+            (1, 4, cloud_msg(2)),
+        ];
+        let (bytes, _) = write_bag(&conns, &msgs, 2, true);
+        let p = save(&dir, "two.bag", &bytes);
+        let err = format!("{:#}", open_bag(&p, None).err().unwrap());
+        assert!(err.contains("/a, /b") && err.contains("--topic"), "{err}");
+        let err = format!("{:#}", open_bag(&p, Some("/chatter")).err().unwrap());
+        assert!(err.contains("std_msgs/String"), "{err}");
+        let mut ds = open_bag(&p, Some("/a")).unwrap();
+        assert_eq!(ds.frames.len_hint(), Some(2));
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(err, None);
+        let ks: Vec<f64> = items.iter().map(|i| frame(i).points[0][0]).collect();
+        assert_eq!(ks, vec![1.0, 2.0], "only /a's clouds (frames 1 and 2)");
+    }
+
+    #[test]
+    fn bag_without_clouds_is_an_error_listing_its_topics() {
+        let dir = tempfile::tempdir().unwrap();
+        let (bytes, _) = write_bag(
+            &[conn("/chatter", STRING)],
+            &[(0, 1, b"\0\0\0\0".to_vec())],
+            1,
+            true,
+        );
+        let p = save(&dir, "none.bag", &bytes);
+        let err = format!("{:#}", open_bag(&p, None).err().unwrap());
+        assert!(
+            err.contains("no sensor_msgs/PointCloud2 topic") && err.contains("/chatter"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn seek_lands_on_the_frame_sequential_reading_gives() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD), conn("/chatter", STRING)];
+        let mut msgs = mixed_messages();
+        msgs.extend((5..7).map(|k| (0, 1_000_000_000 + u64::from(k), cloud_msg(k))));
+        for indexed in [true, false] {
+            let (bytes, _) = write_bag(&conns, &msgs, 3, indexed);
+            let p = save(&dir, "seek.bag", &bytes);
+            for target in [0, 1, 4, 6, 7, 9] {
+                let mut ds = open_bag(&p, None).unwrap();
+                assert!(ds.frames.seek(target));
+                let (items, err) = drain(ds.frames.as_mut());
+                assert_eq!(err, None);
+                assert_eq!(
+                    items.len(),
+                    7usize.saturating_sub(target),
+                    "seek to {target}"
+                );
+                for (j, item) in items.iter().enumerate() {
+                    assert_frame_k(frame(item), target + j, (target + j) as u32);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn ros1_body_cut_anywhere_or_padded_is_an_error_not_a_panic() {
+        let body = cloud_msg(3);
+        assert_eq!(parse_ros1(&body).unwrap().data, &xyzt(3, 6).data[..]);
+        for cut in 0..body.len() {
+            assert!(parse_ros1(&body[..cut]).is_err(), "cut at {cut}");
+        }
+        let mut long = body.clone();
+        long.push(0);
+        assert!(parse_ros1(&long).unwrap_err().contains("1 bytes after"));
+    }
+
+    #[test]
+    fn files_that_are_not_bags_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, bytes) in [
+            ("text.bag", &b"hello, world\n"[..]),
+            ("empty.bag", b""),
+            ("v12.bag", b"#ROSBAG V1.2\n\0\0\0\0"),
+        ] {
+            let p = save(&dir, name, bytes);
+            let err = format!("{:#}", open_bag(&p, None).err().unwrap());
+            assert!(err.contains(&p.display().to_string()), "{err}");
+        }
+        let err = format!(
+            "{:#}",
+            open_bag(&dir.path().join("missing.bag"), None)
+                .err()
+                .unwrap()
+        );
+        assert!(err.contains("cannot open"), "{err}");
+    }
+}
