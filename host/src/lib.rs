@@ -3,8 +3,10 @@
 //! `kiss-odom-core`; this crate is glue and file formats around it.
 
 pub mod cli;
+pub mod exec;
 pub mod io;
 pub mod metrics;
 pub mod plot;
 pub mod run;
+pub mod settings;
 pub mod simulate;

@@ -1,0 +1,292 @@
+//! Every parameter of a run, as TOML: defaults, then `--config FILE`, then command-line flags.
+//! The `config.toml` a run writes holds the values actually used and can be passed back with
+//! `--config` to repeat the run.
+
+use anyhow::{bail, Context, Result};
+use kiss_odom_core::{Capacities, Config, Real};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Scalar type the core runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Scalar {
+    /// Double precision: agrees with the reference to rounding.
+    F64,
+    /// Single precision: half the memory, what microcontrollers run.
+    F32,
+}
+
+/// How map points are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Storage {
+    /// Points as they are.
+    Exact,
+    /// 16-bit offsets inside the voxel (6 bytes a point).
+    Quantized,
+}
+
+/// Sensor data handling (the reference's `data` section).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Data {
+    /// `r_max` (m).
+    pub max_range: f64,
+    /// Minimum range (m).
+    pub min_range: f64,
+    /// Deskew scans with per-point timestamps.
+    pub deskew: bool,
+}
+
+/// Local map and downsampling (the reference's `mapping` section plus alpha/beta).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Mapping {
+    /// Voxel size `v` (m); omitted means `max_range / 100`.
+    pub voxel_size: Option<f64>,
+    /// `N_max`.
+    pub max_points_per_voxel: u32,
+    /// Merge-cloud voxel factor.
+    pub alpha: f64,
+    /// Registration-cloud voxel factor.
+    pub beta: f64,
+}
+
+/// Adaptive threshold.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Threshold {
+    /// `tau_0` (m).
+    pub initial_threshold: f64,
+    /// `delta_min` (m).
+    pub min_motion_th: f64,
+}
+
+/// ICP.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Registration {
+    /// Iteration cap.
+    pub max_num_iterations: u32,
+    /// `gamma`.
+    pub convergence_criterion: f64,
+    /// Geman-McClure scale as a multiple of sigma (reference 1, paper 1/3).
+    pub kernel_scale: f64,
+    /// Correspondence threshold as a multiple of sigma.
+    pub max_correspondence_factor: f64,
+    /// Observability ratio below which a frame is flagged degenerate.
+    pub degeneracy_ratio: f64,
+}
+
+/// Capacities of the core's buffers (see `kiss_odom_core::Capacities`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Caps {
+    /// Input points considered per scan.
+    pub scan_points: usize,
+    /// Merge cloud points.
+    pub merge_points: usize,
+    /// Registration cloud points.
+    pub source_points: usize,
+    /// Map voxels.
+    pub map_voxels: usize,
+    /// Map points.
+    pub map_points: usize,
+}
+
+/// How the core runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Runtime {
+    /// f64 or f32.
+    pub scalar: Scalar,
+    /// Map point storage.
+    pub map_storage: Storage,
+    /// Worker threads for the correspondence search (0 = all cores). Results do not depend on
+    /// it.
+    pub threads: usize,
+}
+
+/// All settings of a run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Settings {
+    /// Sensor data.
+    pub data: Data,
+    /// Map.
+    pub mapping: Mapping,
+    /// Threshold.
+    pub adaptive_threshold: Threshold,
+    /// ICP.
+    pub registration: Registration,
+    /// Buffers.
+    pub capacities: Caps,
+    /// Execution.
+    pub runtime: Runtime,
+}
+
+impl Default for Data {
+    fn default() -> Self {
+        Self {
+            max_range: 100.0,
+            min_range: 0.0,
+            deskew: true,
+        }
+    }
+}
+
+impl Default for Mapping {
+    fn default() -> Self {
+        Self {
+            voxel_size: None,
+            max_points_per_voxel: 20,
+            alpha: 0.5,
+            beta: 1.5,
+        }
+    }
+}
+
+impl Default for Threshold {
+    fn default() -> Self {
+        Self {
+            initial_threshold: 2.0,
+            min_motion_th: 0.1,
+        }
+    }
+}
+
+impl Default for Registration {
+    fn default() -> Self {
+        Self {
+            max_num_iterations: 500,
+            convergence_criterion: 1e-4,
+            kernel_scale: 1.0,
+            max_correspondence_factor: 3.0,
+            degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
+        }
+    }
+}
+
+impl Default for Caps {
+    fn default() -> Self {
+        Self::from(Capacities::FULL_SCALE)
+    }
+}
+
+impl From<Capacities> for Caps {
+    fn from(c: Capacities) -> Self {
+        Self {
+            scan_points: c.scan_points,
+            merge_points: c.merge_points,
+            source_points: c.source_points,
+            map_voxels: c.map_voxels,
+            map_points: c.map_points,
+        }
+    }
+}
+
+impl Default for Runtime {
+    fn default() -> Self {
+        Self {
+            scalar: Scalar::F64,
+            map_storage: Storage::Exact,
+            threads: 0,
+        }
+    }
+}
+
+impl Settings {
+    /// Reads a TOML file; unknown keys are errors (a typo must not silently fall back).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        toml::from_str(&text).with_context(|| format!("{}: invalid configuration", path.display()))
+    }
+
+    /// The TOML text of these settings, with the voxel size made explicit.
+    pub fn to_toml(&self) -> Result<String> {
+        let mut s = self.clone();
+        s.mapping.voxel_size = Some(self.voxel_size());
+        Ok(toml::to_string(&s)?)
+    }
+
+    /// `v`: explicit, or `max_range / 100` as in the paper.
+    pub fn voxel_size(&self) -> f64 {
+        self.mapping
+            .voxel_size
+            .unwrap_or(self.data.max_range / 100.0)
+    }
+
+    /// The core's configuration in scalar `T`; invalid values are errors naming the field.
+    pub fn core_config<T: Real>(&self) -> Result<Config<T>> {
+        let mut c = Config::<T>::new(T::of(self.data.max_range));
+        c.min_range = T::of(self.data.min_range);
+        c.voxel_size = T::of(self.voxel_size());
+        c.alpha = T::of(self.mapping.alpha);
+        c.beta = T::of(self.mapping.beta);
+        c.max_points_per_voxel = self.mapping.max_points_per_voxel;
+        c.initial_threshold = T::of(self.adaptive_threshold.initial_threshold);
+        c.min_motion_threshold = T::of(self.adaptive_threshold.min_motion_th);
+        c.convergence_criterion = T::of(self.registration.convergence_criterion);
+        c.max_iterations = self.registration.max_num_iterations;
+        c.deskew = self.data.deskew;
+        c.kernel_scale = T::of(self.registration.kernel_scale);
+        c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
+        c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
+        if let Err(e) = c.validate() {
+            bail!("invalid configuration: {e}");
+        }
+        Ok(c)
+    }
+
+    /// The core's capacities.
+    pub fn capacities(&self) -> Result<Capacities> {
+        let c = &self.capacities;
+        let caps = Capacities {
+            scan_points: c.scan_points,
+            merge_points: c.merge_points,
+            source_points: c.source_points,
+            map_voxels: c.map_voxels,
+            map_points: c.map_points,
+        };
+        if let Err(e) = caps.validate() {
+            bail!("invalid capacities: {e}");
+        }
+        Ok(caps)
+    }
+
+    /// Threads to use (0 resolved to the machine's parallelism).
+    pub fn threads(&self) -> usize {
+        match self.runtime.threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn written_settings_load_back_identical() {
+        let mut s = Settings::default();
+        s.data.max_range = 60.0;
+        s.runtime.scalar = Scalar::F32;
+        s.capacities.map_points = 12345;
+        let text = s.to_toml().unwrap();
+        let back: Settings = toml::from_str(&text).unwrap();
+        assert_eq!(back.voxel_size(), 0.6);
+        assert_eq!(back.data, s.data);
+        assert_eq!(back.runtime, s.runtime);
+        assert_eq!(back.capacities, s.capacities);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_refused() {
+        assert!(toml::from_str::<Settings>("[data]\nmax_rnage = 3.0\n").is_err());
+        let mut s = Settings::default();
+        s.data.min_range = 200.0;
+        assert!(s.core_config::<f64>().is_err());
+    }
+}
