@@ -22,6 +22,10 @@ pub enum Command {
     Eval(crate::metrics::EvalArgs),
     /// Generate a LiDAR dataset with exact ground truth by ray casting a synthetic scene.
     Simulate(crate::simulate::SimulateArgs),
+    /// Run kiss-odom and the reference kiss-icp 1.3.0 on the same frames and compare them.
+    Crosscheck(crate::crosscheck::CrosscheckArgs),
+    /// Time kiss-odom against the reference on preloaded frames.
+    Bench(crate::bench::BenchArgs),
 }
 
 /// Parses `args` (program name first), runs the command and returns the exit status. Errors are
@@ -46,6 +50,8 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
         Command::Run(a) => crate::run::execute(&a, err),
         Command::Eval(a) => crate::metrics::execute(&a),
         Command::Simulate(a) => crate::simulate::execute(&a),
+        Command::Crosscheck(a) => crate::crosscheck::execute(&a, err),
+        Command::Bench(a) => crate::bench::execute(&a, err),
     };
     match result {
         Ok(code) => code,

@@ -2,7 +2,9 @@
 //! simulator and the cross-check against the reference. The odometry itself is
 //! `kiss-odom-core`; this crate is glue and file formats around it.
 
+pub mod bench;
 pub mod cli;
+pub mod crosscheck;
 pub mod exec;
 pub mod io;
 pub mod metrics;
