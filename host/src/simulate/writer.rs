@@ -1,0 +1,205 @@
+//! Writes a simulated sequence in the generic layout:
+//!
+//! ```text
+//! DIR/velodyne/NNNNNN.bin    f32 LE x, y, z, intensity per point (sensor frame at capture time)
+//! DIR/timestamps/NNNNNN.bin  f64 LE capture time per point (s, sequence time)
+//! DIR/poses.txt              3x4 row-major end-of-sweep pose per frame, first one identity
+//! DIR/times.txt              end-of-sweep time per frame (s)
+//! DIR/sim.toml               the parameters used, for provenance
+//! ```
+//!
+//! Numbers in text files are written with Rust's shortest round-trip formatting, so parsing
+//! them gives back the exact `f64`. These writers are private to the simulator on purpose: the
+//! readers in `io/` are checked against them, not built from them.
+
+use super::sensor::Frame;
+use super::trajectory::PoseM;
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Files and folders the layout owns.
+const OWNED_FILES: [&str; 3] = ["poses.txt", "times.txt", "sim.toml"];
+const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
+
+/// Shortest text that parses back to exactly `x` (exponent form for very small or large).
+pub fn fmt_f64(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e16).contains(&a) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// One `poses.txt` line: the top 3x4 of the pose matrix, row-major.
+pub fn pose_line(pose: &PoseM) -> String {
+    let m = pose.to_homogeneous();
+    let mut s = String::with_capacity(12 * 24);
+    for r in 0..3 {
+        for c in 0..4 {
+            if r + c > 0 {
+                s.push(' ');
+            }
+            s.push_str(&fmt_f64(m[(r, c)]));
+        }
+    }
+    s
+}
+
+/// The name of frame `k`'s files: six digits, zero-padded (more digits past 999999).
+pub fn frame_name(k: u64) -> String {
+    format!("{k:06}.bin")
+}
+
+fn is_frame_name(name: &str) -> bool {
+    name.len() >= 10
+        && name.ends_with(".bin")
+        && name[..name.len() - 4].bytes().all(|b| b.is_ascii_digit())
+}
+
+/// Streams a dataset to a folder, frame by frame.
+pub struct DatasetWriter {
+    dir: PathBuf,
+    poses: BufWriter<File>,
+    times: BufWriter<File>,
+}
+
+impl DatasetWriter {
+    /// Prepares `dir` and writes `provenance` to `sim.toml`. A folder that already holds a
+    /// dataset is refused unless `overwrite`, which removes only the layout's own files (frame
+    /// files, poses, times, sim.toml) so that no stale frame survives a shorter run.
+    pub fn create(dir: &Path, overwrite: bool, provenance: &impl Serialize) -> Result<Self> {
+        let existing = OWNED_FILES
+            .iter()
+            .chain(OWNED_DIRS.iter())
+            .any(|n| dir.join(n).exists());
+        if existing {
+            if !overwrite {
+                bail!(
+                    "{} already holds a dataset; pass --overwrite to replace it",
+                    dir.display()
+                );
+            }
+            for name in OWNED_FILES {
+                let p = dir.join(name);
+                if p.is_file() {
+                    fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
+                }
+            }
+            for sub in OWNED_DIRS {
+                let d = dir.join(sub);
+                if !d.is_dir() {
+                    continue;
+                }
+                for entry in fs::read_dir(&d).with_context(|| format!("listing {}", d.display()))? {
+                    let entry = entry?;
+                    let name = entry.file_name();
+                    if name.to_str().is_some_and(is_frame_name) && entry.path().is_file() {
+                        fs::remove_file(entry.path())
+                            .with_context(|| format!("removing {}", entry.path().display()))?;
+                    }
+                }
+            }
+        }
+        for sub in OWNED_DIRS {
+            let d = dir.join(sub);
+            fs::create_dir_all(&d).with_context(|| format!("creating {}", d.display()))?;
+        }
+        let toml = toml::to_string(provenance).context("serialising sim.toml")?;
+        let header = "# Written by `kiss-odom simulate`: the parameters that generated this \
+                      dataset.\n# The same parameters (and kiss-odom version) give the same \
+                      bytes.\n\n";
+        let p = dir.join("sim.toml");
+        fs::write(&p, format!("{header}{toml}"))
+            .with_context(|| format!("writing {}", p.display()))?;
+        let open = |name: &str| -> Result<BufWriter<File>> {
+            let p = dir.join(name);
+            Ok(BufWriter::new(
+                File::create(&p).with_context(|| format!("creating {}", p.display()))?,
+            ))
+        };
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            poses: open("poses.txt")?,
+            times: open("times.txt")?,
+        })
+    }
+
+    /// Writes one frame's scan and stamps and appends its ground truth.
+    pub fn write_frame(&mut self, frame: &Frame, ground_truth: &PoseM) -> Result<()> {
+        let name = frame_name(frame.index);
+        let mut bytes = Vec::with_capacity(frame.points.len() * 16);
+        for p in &frame.points {
+            for v in p {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let p = self.dir.join("velodyne").join(&name);
+        fs::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
+        bytes.clear();
+        for t in &frame.stamps {
+            bytes.extend_from_slice(&t.to_le_bytes());
+        }
+        let p = self.dir.join("timestamps").join(&name);
+        fs::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
+        writeln!(self.poses, "{}", pose_line(ground_truth)).context("writing poses.txt")?;
+        writeln!(self.times, "{}", fmt_f64(frame.end_time)).context("writing times.txt")?;
+        Ok(())
+    }
+
+    /// Flushes the text files.
+    pub fn finish(mut self) -> Result<()> {
+        self.poses.flush().context("writing poses.txt")?;
+        self.times.flush().context("writing times.txt")?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Translation3, Vector3};
+
+    #[test]
+    fn numbers_round_trip_exactly_through_text() {
+        let mut rng = super::super::rng::Stream::from_key(3);
+        for _ in 0..10_000 {
+            let exp = rng.range(-30.0, 30.0);
+            let x = rng.normal() * libm::pow(10.0, exp);
+            let s = fmt_f64(x);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");
+        }
+        assert_eq!(fmt_f64(1.0), "1");
+        assert_eq!(fmt_f64(0.0), "0");
+        assert_eq!(fmt_f64(1e-20), "1e-20");
+    }
+
+    #[test]
+    fn identity_pose_line_is_short_and_exact() {
+        assert_eq!(pose_line(&PoseM::identity()), "1 0 0 0 0 1 0 0 0 0 1 0");
+        let p = PoseM::from_parts(
+            Translation3::new(1.5, -2.0, 0.25),
+            Rotation3::from_axis_angle(&Vector3::z_axis(), 0.3),
+        );
+        let v: Vec<f64> = pose_line(&p)
+            .split(' ')
+            .map(|s| s.parse().unwrap())
+            .collect();
+        let m = p.to_homogeneous();
+        for r in 0..3 {
+            for c in 0..4 {
+                assert_eq!(v[4 * r + c].to_bits(), m[(r, c)].to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn frame_names_are_six_digits() {
+        assert_eq!(frame_name(0), "000000.bin");
+        assert_eq!(frame_name(42), "000042.bin");
+        assert!(is_frame_name("000042.bin") && !is_frame_name("notes.bin"));
+    }
+}
