@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Runs the measurement cases and prints the table of RESULTS.md (markdown) on stdout.
+#
+#   embedded/measure.sh [case...]
+#
+# Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64
+# a53-full a53-small rv-small rv-small-f64 rv-full (default: all). Outputs go to embedded/target/measure/.
+# Frame times are ESTIMATES: instructions / (IPC x clock) with IPC = 1 on a 600 MHz Cortex-M7
+# (from the Cortex-M4F counts for an M7 whose FPU is single precision, from the m7 build for
+# one with the double-precision FPU) and a 1.2 GHz Cortex-A53 (from the AArch64 counts); see
+# RESULTS.md for why IPC 1 and how far off it may be.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+out="$here/target/measure"
+mkdir -p "$out"
+cases=("$@")
+[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 a53-full a53-small rv-small rv-small-f64 rv-full)
+
+spec() {
+  case "$1" in
+    m4-small) echo "thumbv7em:" ;;
+    m4-full) echo "thumbv7em:full" ;;
+    m4-full-f64) echo "thumbv7em:f64,exact,full" ;;
+    m4-baseline) echo "thumbv7em:baseline" ;;
+    m7-small) echo "m7:" ;;
+    m7-small-f64) echo "m7:f64" ;;
+    a53-full) echo "aarch64:f64,exact,full" ;;
+    a53-small) echo "aarch64:" ;;
+    rv-small) echo "riscv32:" ;;
+    rv-small-f64) echo "riscv32:f64" ;;
+    rv-full) echo "riscv32:f64,exact,full" ;;
+    *) echo "unknown case $1" >&2; exit 64 ;;
+  esac
+}
+
+for c in "${cases[@]}"; do
+  s="$(spec "$c")"
+  t0=$(date +%s)
+  KISS_FEATURES="${s#*:}" "$here/run.sh" "${s%%:*}" > "$out/$c.txt"
+  echo "$c: $(( $(date +%s) - t0 )) s" >&2
+done
+
+echo "| case | target | scalar, codec, capacities | points/frame | .text | .rodata (frames) | .bss + .psram | state bytes | stack high-water | insns frame 0 | insns/frame 1-4 (mean, max) | est. ms/frame M7 600 MHz | est. ms/frame A53 1.2 GHz |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+for c in "${cases[@]}"; do
+  [ "$c" = m4-baseline ] && continue
+  s="$(spec "$c")"
+  awk -v c="$c" -v t="${s%%:*}" '
+    /^size /{ for (i=2;i<=NF;i++) { split($i,kv,"="); sz[kv[1]]=kv[2] } }
+    /^config /{ for (i=2;i<=NF;i++) { split($i,kv,"="); cf[kv[1]]=kv[2] } }
+    /^frame /{ for (i=3;i<=NF;i++) { split($i,kv,"="); if (kv[1]=="points") { pts+=kv[2]; nf++ } } }
+    /^memory /{ for (i=2;i<=NF;i++) { split($i,kv,"="); if (kv[1]=="state_bytes") st=kv[2] } }
+    /^stack /{ split($2,kv,"="); sk=kv[2] }
+    /^cost /{ split($3,kv,"="); n=$2+0; if (n==0) f0=kv[2]; else { sum+=kv[2]; k++; if (kv[2]>mx) mx=kv[2] } }
+    END {
+      mean = k ? sum/k : 0
+      m7 = (t=="thumbv7em" || t=="m7") ? sprintf("%.0f", mean/600e6*1e3) : "-"
+      a53 = (t=="aarch64") ? sprintf("%.0f", mean/1.2e9*1e3) : "-"
+      printf "| %s | %s | %s, %s, %s | %d | %d | %d | %d | %d | %d | %.1f M | %.1f M, %.1f M | %s | %s |\n",
+        c, t, cf["scalar"], cf["codec"], cf["caps"], nf ? pts/nf : 0, sz["text"], sz["rodata"],
+        sz["bss"] + sz["psram"], st, sk, f0/1e6, mean/1e6, mx/1e6, m7, a53
+    }' "$out/$c.txt"
+done
+if [ -f "$out/m4-baseline.txt" ] && [ -f "$out/m4-small.txt" ]; then
+  b=$(awk -F'[= ]' '/^insns program_total/{print $3}' "$out/m4-baseline.txt")
+  f=$(awk -F'[= ]' '/^insns program_total/{print $3}' "$out/m4-small.txt")
+  m=$(awk -F'[= ]' '/^insns frames_total/{print $3}' "$out/m4-small.txt")
+  echo
+  echo "Cortex-M4F m4-small: program $f - baseline $b = $((f - b)) instructions for all frames;" \
+       "the per-frame marks add up to $m (the rest is printing the frame lines)."
+fi

@@ -1,0 +1,150 @@
+#!/usr/bin/env bash
+# Builds the bare-metal program for one target and runs it under QEMU; exits with the
+# program's status (124 if QEMU timed out, 96 if the build failed, 97 if an allocator linked).
+#
+#   embedded/run.sh <thumbv7em|m7|aarch64|riscv32|host> [cargo build args...]
+#
+# The target picks the default profile (KISS_FEATURES overrides it; extra args are added):
+#   thumbv7em  Cortex-M4F, mps2-an386    f32, Quantized, Capacities::SMALL       (features: none)
+#   m7         Cortex-M7 (double-precision FPU), mps2-an500, same profile; small profiles only
+#   aarch64    Cortex-A53, virt          f64, Exact,     Capacities::FULL_SCALE  (f64,exact,full)
+#   riscv32    RV32IMAC,   virt          f32, Quantized, Capacities::SMALL       (none; add --features f64)
+#   host       the host twin (same lines, no QEMU), for compare.sh
+# Examples:
+#   embedded/run.sh riscv32 --features f64
+#   KISS_FEATURES= embedded/run.sh aarch64          # the Cortex-M profile on the A53
+#   embedded/run.sh thumbv7em --features defmt      # defmt frames; decoded if defmt-print exists
+#
+# Before the program's output it prints `size` (llvm-size) and `alloc_symbols` (llvm-nm) lines
+# for the ELF; on Cortex-M it runs QEMU with plugin/insncount.c and appends `cost` lines per
+# frame and the program's total. Environment: KISS_QEMU_TIMEOUT (seconds), KISS_FEATURES,
+# KISS_TARGET_DIR (default: embedded/target/<target>), CARGO_TARGET_DIR
+# (host twin only; default embedded/target/host), DEFMT_LOG (default info).
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+cd "$here"
+
+usage() { sed -n '2,22p' "$0" >&2; exit 64; }
+[ $# -ge 1 ] || usage
+which="$1"
+shift
+
+case "$which" in
+  thumbv7em)
+    triple=thumbv7em-none-eabihf
+    default_features=""
+    timeout_s=120
+    # shellcheck disable=SC2054 # the commas belong to one -semihosting-config argument
+    qemu=(qemu-system-arm -machine mps2-an386 -nographic -monitor none -serial none
+          -semihosting-config enable=on,target=native)
+    ;;
+  m7)
+    # Cortex-M7 with double-precision FPU (FPv5-D16): same target, cortex-m7 codegen, on the
+    # AN500 board, which has the same code memory and SRAM but no PSRAM (small profiles only).
+    triple=thumbv7em-none-eabihf
+    default_features=""
+    timeout_s=120
+    export RUSTFLAGS="-C target-cpu=cortex-m7"
+    # shellcheck disable=SC2054
+    qemu=(qemu-system-arm -machine mps2-an500 -nographic -monitor none -serial none
+          -semihosting-config enable=on,target=native)
+    ;;
+  aarch64)
+    triple=aarch64-unknown-none
+    default_features="f64,exact,full"
+    timeout_s=120
+    qemu=(qemu-system-aarch64 -machine virt -cpu cortex-a53 -m 256M -nographic -monitor none
+          -serial none -nic none -semihosting -icount shift=0)
+    ;;
+  riscv32)
+    triple=riscv32imac-unknown-none-elf
+    default_features=""
+    timeout_s=600
+    qemu=(qemu-system-riscv32 -machine virt -bios none -m 256M -nographic -monitor none
+          -serial none -semihosting -icount shift=0)
+    ;;
+  host)
+    triple="$(rustc -vV | awk '/^host:/{print $2}')"
+    default_features=""
+    timeout_s=0
+    ;;
+  *) usage ;;
+esac
+features="${KISS_FEATURES-$default_features}"
+timeout_s="${KISS_QEMU_TIMEOUT:-$timeout_s}"
+
+# One target dir per run.sh target: cargo keeps each feature set's artifacts side by side in
+# it, so switching profiles re-links nothing, and the dependencies are built once per target.
+if [ -n "${KISS_TARGET_DIR:-}" ]; then
+  tdir="$KISS_TARGET_DIR"
+elif [ "$which" = host ]; then
+  tdir="${CARGO_TARGET_DIR:-$here/target/host}"
+else
+  tdir="$here/target/$which"
+fi
+args=(--release --target "$triple" --target-dir "$tdir")
+[ -n "$features" ] && args+=(--features "$features")
+export DEFMT_LOG="${DEFMT_LOG:-info}"
+# A failed build must not pass for the program's own status (cargo exits 101, like a panic).
+cargo build --quiet "${args[@]}" "$@" >&2 || { echo "error: build failed" >&2; exit 96; }
+elf="$tdir/$triple/release/kiss-odom-embedded"
+
+if [ "$which" = host ]; then
+  exec "$elf"
+fi
+
+tools="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | awk '/^host:/{print $2}')/bin"
+if [ -x "$tools/llvm-size" ]; then
+  "$tools/llvm-size" -A "$elf" | awk '
+    $1==".text"{t=$2} $1==".rodata"{r=$2} $1==".data"{d=$2} $1==".bss"{b=$2}
+    $1==".psram"{p=$2} $1==".stack"{s=$2}
+    END{printf "size text=%d rodata=%d data=%d bss=%d psram=%d stack_region=%d\n", t, r, d, b, p, s}'
+  # No heap: a global allocator would bring these symbols in.
+  n=$("$tools/llvm-nm" "$elf" | grep -cE '__rust_alloc|__rdl_alloc|__rg_alloc|__rust_no_alloc_shim|GlobalAlloc' || true)
+  echo "alloc_symbols $n"
+  if [ "$n" != 0 ]; then
+    echo "error: allocator symbols linked into $elf" >&2
+    exit 97
+  fi
+else
+  echo "size unavailable: rustup component add llvm-tools" >&2
+fi
+
+plugin_args=()
+log=""
+if [ "$which" = thumbv7em ] || [ "$which" = m7 ]; then
+  so="$here/target/plugin/libinsncount.so"
+  if [ ! -f "$so" ] || [ "$here/plugin/insncount.c" -nt "$so" ]; then
+    mkdir -p "$(dirname "$so")"
+    gcc -shared -fPIC -O2 -o "$so" "$here/plugin/insncount.c" || so=""
+  fi
+  if [ -n "$so" ] && [ -x "$tools/llvm-nm" ]; then
+    mark=$("$tools/llvm-nm" "$elf" | awk '$3=="kiss_frame_mark"{print $1}')
+    log="$(mktemp)"
+    plugin_args=(-plugin "$so,mark=0x${mark:-0}" -d plugin -D "$log")
+  fi
+fi
+
+status=0
+if [[ ",$features," == *",defmt,"* ]] || [[ " $* " == *defmt* ]]; then
+  raw="$tdir/$triple/release/output.defmt"
+  timeout "$timeout_s" "${qemu[@]}" "${plugin_args[@]}" -kernel "$elf" > "$raw" || status=$?
+  if command -v defmt-print >/dev/null; then
+    defmt-print -e "$elf" < "$raw" || true
+  else
+    echo "defmt frames in $raw ($(wc -c < "$raw") bytes); decode with: defmt-print -e $elf < $raw"
+  fi
+else
+  timeout "$timeout_s" "${qemu[@]}" "${plugin_args[@]}" -kernel "$elf" || status=$?
+fi
+[ "$status" = 124 ] && echo "error: QEMU timed out after ${timeout_s}s" >&2
+
+if [ -n "$log" ]; then
+  # Marks come in pairs around each frame's register_frame call.
+  awk '/^mark:/{m[n++]=$2} /^insns:/{t=$2}
+       END{for(i=0;i+1<n;i+=2) printf "cost %d insns=%.0f counter=qemu-plugin\n", i/2, m[i+1]-m[i];
+           if (n >= 2) { s=0; for(i=0;i+1<n;i+=2) s+=m[i+1]-m[i]; printf "insns frames_total=%.0f counter=qemu-plugin\n", s }
+           if (t != "") printf "insns program_total=%.0f counter=qemu-plugin\n", t}' "$log"
+  rm -f "$log"
+fi
+exit "$status"

@@ -1,0 +1,212 @@
+//! The workload: register the embedded frames with `kiss-odom-core` and print, for each frame,
+//! the pose (bit-exact) and the report, then the memory figures.
+//!
+//! The bare-metal builds and the host twin run this same code with the same features, so their
+//! `frame` and `pose` lines must agree character for character; `cost` and the summary lines
+//! carry the per-target measurements.
+
+use kiss_odom_core::{Capacities, Config, FrameReport, Odometry};
+
+/// Scalar of this build (`f64` feature; `f32` otherwise).
+#[cfg(feature = "f64")]
+pub type Scalar = f64;
+/// Scalar of this build (`f64` feature; `f32` otherwise).
+#[cfg(not(feature = "f64"))]
+pub type Scalar = f32;
+
+/// Map point codec of this build (`exact` feature; `Quantized` otherwise).
+#[cfg(feature = "exact")]
+pub type Codec = kiss_odom_core::Exact;
+/// Map point codec of this build (`exact` feature; `Quantized` otherwise).
+#[cfg(not(feature = "exact"))]
+pub type Codec = kiss_odom_core::Quantized;
+
+/// Capacities of this build (`full` feature: full scale; microcontroller scale otherwise).
+#[cfg(feature = "full")]
+pub const CAPS: Capacities = Capacities::FULL_SCALE;
+/// Capacities of this build (`full` feature: full scale; microcontroller scale otherwise).
+#[cfg(not(feature = "full"))]
+pub const CAPS: Capacities = Capacities::SMALL;
+
+/// Arena length in `u64` words, computed at compile time so the arena can be a `static`.
+pub const ARENA_WORDS: usize = CAPS.arena_words::<Scalar, Codec>();
+
+const SCALAR_NAME: &str = if core::mem::size_of::<Scalar>() == 8 {
+    "f64"
+} else {
+    "f32"
+};
+const CODEC_NAME: &str = if cfg!(feature = "exact") {
+    "exact"
+} else {
+    "quantized"
+};
+const CAPS_NAME: &str = if cfg!(feature = "full") {
+    "full_scale"
+} else {
+    "small"
+};
+
+/// Where one frame sits in the embedded point data.
+pub struct FrameInfo {
+    /// First point.
+    pub start: usize,
+    /// Points kept.
+    pub len: usize,
+    /// Points in the scan file.
+    pub raw: usize,
+    /// Points after the range crop.
+    pub cropped: usize,
+}
+
+/// What `build.rs` generated from kitti-mini.
+pub mod frames {
+    use super::FrameInfo;
+    include!(concat!(env!("OUT_DIR"), "/frames.rs"));
+}
+
+#[repr(C, align(8))]
+struct Aligned<B: ?Sized>(B);
+
+static BYTES: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/frames.bin")));
+
+/// The points of one embedded frame.
+pub fn points(f: &FrameInfo) -> &'static [[Scalar; 3]] {
+    let all: &'static [[Scalar; 3]] = bytemuck::cast_slice(&BYTES.0);
+    &all[f.start..f.start + f.len]
+}
+
+/// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
+/// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels).
+pub fn config() -> Config<Scalar> {
+    Config {
+        voxel_size: frames::VOXEL_SIZE as Scalar,
+        ..Config::new(frames::MAX_RANGE as Scalar)
+    }
+}
+
+/// Called right before and right after each `register_frame`: the Cortex-M instruction-count
+/// plugin prints its running count whenever this function's first instruction executes.
+#[no_mangle]
+#[inline(never)]
+pub extern "C" fn kiss_frame_mark() {
+    core::hint::black_box(());
+}
+
+/// Exit status of a frame that returned an error.
+pub const EXIT_FRAME_ERROR: i32 = 2;
+/// Exit status when the odometry could not be built.
+pub const EXIT_CONFIG_ERROR: i32 = 3;
+
+/// Runs every embedded frame; returns the exit status (0 on success).
+/// `insns` reads the target's retired-instruction counter, if it has one.
+pub fn run(arena: &mut [u64], insns: fn() -> Option<u64>, counter: &str) -> i32 {
+    let cfg = config();
+    out!(
+        "config scalar={} codec={} caps={} max_range={:e} voxel_size={:e} sequence={} first={} frames={} keep_every={}",
+        SCALAR_NAME,
+        CODEC_NAME,
+        CAPS_NAME,
+        cfg.max_range,
+        cfg.voxel_size,
+        frames::SEQUENCE,
+        frames::FIRST,
+        frames::FRAMES.len(),
+        frames::KEEP_EVERY
+    );
+    let mut odom = match Odometry::<Scalar, Codec>::new(cfg, CAPS, arena) {
+        Ok(o) => o,
+        Err(e) => {
+            out!("error Odometry::new: {}", e);
+            return EXIT_CONFIG_ERROR;
+        }
+    };
+    let mut total: Option<u64> = Some(0);
+    for (i, f) in frames::FRAMES.iter().enumerate() {
+        let pts = points(f);
+        out!(
+            "input {} raw={} cropped={} kept={}",
+            i,
+            f.raw,
+            f.cropped,
+            f.len
+        );
+        if cfg!(feature = "baseline") {
+            core::hint::black_box(pts);
+            total = None;
+            continue;
+        }
+        kiss_frame_mark();
+        let t0 = insns();
+        let result = odom.register_frame(pts, None);
+        let t1 = insns();
+        kiss_frame_mark();
+        let cost = t0.zip(t1).map(|(a, b)| b - a);
+        total = total.zip(cost).map(|(a, b)| a + b);
+        match result {
+            Ok(r) => emit_frame(i, f, &r, cost, counter),
+            Err(e) => {
+                out!("error frame {}: {}", i, e);
+                return EXIT_FRAME_ERROR;
+            }
+        }
+    }
+    let hw = odom.high_water();
+    out!(
+        "memory arena_words={} arena_bytes={} state_bytes={}",
+        ARENA_WORDS,
+        ARENA_WORDS * 8,
+        odom.state_bytes()
+    );
+    out!(
+        "high_water merge_points={}/{} source_points={}/{} map_voxels={}/{} map_point_slots={}/{}",
+        hw.merge_points,
+        CAPS.merge_points,
+        hw.source_points,
+        CAPS.source_points,
+        hw.map_voxels,
+        CAPS.map_voxels,
+        hw.map_point_slots,
+        CAPS.map_points
+    );
+    if let Some(t) = total {
+        out!("insns frames_total={} counter={}", t, counter);
+    }
+    0
+}
+
+/// Prints one frame: the report line, the pose line (see `lines`) and, where measured, the
+/// cost line.
+#[cfg(not(feature = "defmt"))]
+fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64>, counter: &str) {
+    out!("{}", crate::lines::FrameLine(i, f.len, r));
+    out!("{}", crate::lines::PoseLine(i, &r.pose));
+    if let Some(c) = cost {
+        out!("cost {} insns={} counter={}", i, c, counter);
+    }
+}
+
+/// defmt flavour of [`emit_frame`]: the same fields, binary-encoded (decode with
+/// `defmt-print -e ELF`).
+#[cfg(feature = "defmt")]
+fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64>, _counter: &str) {
+    defmt::info!(
+        "frame {=usize} status={} iterations={=u32} correspondences={=u32} points={=usize} merge={=u32} source={=u32} map_voxels={=u32} map_points={=u32} dropped={}",
+        i,
+        r.status,
+        r.iterations,
+        r.correspondences,
+        f.len,
+        r.merge_points,
+        r.source_points,
+        r.map_voxels,
+        r.map_points,
+        r.dropped
+    );
+    let m = r.pose.to_homogeneous();
+    let pose: [Scalar; 12] = core::array::from_fn(|k| m[(k / 4, k % 4)]);
+    defmt::info!("pose {=usize} {}", i, pose);
+    if let Some(c) = cost {
+        defmt::info!("cost {=usize} insns={=u64}", i, c);
+    }
+}
