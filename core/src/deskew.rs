@@ -44,6 +44,15 @@ impl TimeSpan {
             min = min.min(t);
             max = max.max(t);
         }
+        Self::new(min, max)
+    }
+
+    /// The span of a sweep from its first and last capture times, for scans that arrive in
+    /// pieces (the sensor driver knows the sweep's span before the last packet).
+    pub fn new(min: f64, max: f64) -> Result<Self, StampProblem> {
+        if !(min.is_finite() && max.is_finite()) {
+            return Err(StampProblem::NonFinite);
+        }
         if max - min <= 0.0 || !(max - min).is_finite() {
             return Err(StampProblem::Constant);
         }

@@ -55,22 +55,34 @@ impl<'a, T: Real> Dedup<'a, T> {
     /// A filter for voxels of size `voxel` writing into `out`; `scratch` must hold
     /// [`scratch_words_for`]`(out.len())` words. Returns `None` if it does not.
     pub fn new(out: &'a mut [[T; 3]], scratch: &'a mut [u64], voxel: T) -> Option<Self> {
+        let d = Self::resume(out, scratch, voxel, Downsampled::default())?;
+        d.vals.fill(EMPTY);
+        Some(d)
+    }
+
+    /// Continues a filter that was stopped with [`Self::finish`] after returning `so_far`, on
+    /// the same `out` and `scratch` (untouched in between): a scan can arrive in pieces.
+    pub fn resume(
+        out: &'a mut [[T; 3]],
+        scratch: &'a mut [u64],
+        voxel: T,
+        so_far: Downsampled,
+    ) -> Option<Self> {
         let slots = grid_slots_for(out.len());
-        if scratch.len() < scratch_words_for(out.len()) {
+        if scratch.len() < scratch_words_for(out.len()) || so_far.kept > out.len() {
             return None;
         }
         let (kw, vw) = scratch.split_at_mut(slots * 12 / 8);
         let keys = view::<VoxelKey>(kw, slots).ok()?;
         let vals = view::<u32>(vw, slots).ok()?;
-        vals.fill(EMPTY);
         Some(Self {
             keys,
             vals,
             mask: slots - 1,
             out,
             voxel,
-            kept: 0,
-            dropped: 0,
+            kept: so_far.kept,
+            dropped: so_far.dropped,
         })
     }
 

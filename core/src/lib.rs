@@ -43,7 +43,7 @@ mod testutil;
 pub use config::{Capacities, Config};
 pub use error::{ConfigError, FrameError};
 pub use local_map::{Exact, PointCodec, Quantized};
-pub use odometry::Odometry;
+pub use odometry::{FrameInput, Odometry};
 pub use registration::{Executor, Sequential};
 pub use report::{Dropped, FrameReport, HighWater, Status};
 pub use scalar::Real;

@@ -42,12 +42,24 @@ impl<T: Real> Preprocessor<T> {
         n_points: usize,
         relative_motion: &Pose<T>,
     ) -> Self {
-        let (deskewer, stamp_problem) = match (deskew, stamps) {
-            (true, Some(s)) => match TimeSpan::of(s, n_points) {
-                Ok(span) => (Some(Deskewer::new(relative_motion, span)), None),
-                Err(e) => (None, Some(e)),
-            },
-            _ => (None, None),
+        let span = match (deskew, stamps) {
+            (true, Some(s)) => Some(TimeSpan::of(s, n_points)),
+            _ => None,
+        };
+        Self::with_span(min_range, max_range, span, relative_motion)
+    }
+
+    /// Prepares a scan whose timestamps, if any, were checked to span `span`.
+    pub fn with_span(
+        min_range: T,
+        max_range: T,
+        span: Option<Result<TimeSpan, StampProblem>>,
+        relative_motion: &Pose<T>,
+    ) -> Self {
+        let (deskewer, stamp_problem) = match span {
+            Some(Ok(span)) => (Some(Deskewer::new(relative_motion, span)), None),
+            Some(Err(e)) => (None, Some(e)),
+            None => (None, None),
         };
         Self {
             min_range,
@@ -67,16 +79,17 @@ impl<T: Real> Preprocessor<T> {
         self.stamp_problem
     }
 
-    /// The preprocessed point `i` of the scan, or why it was dropped.
+    /// The preprocessed point, or why it was dropped. A point is deskewed when the scan is and
+    /// it has a finite `stamp`.
     #[inline]
-    pub fn point(&mut self, raw: &[T; 3], stamp: f64) -> Result<Point<T>, Drop> {
+    pub fn point(&mut self, raw: &[T; 3], stamp: Option<f64>) -> Result<Point<T>, Drop> {
         let p = Point::from(*raw);
         if !(raw[0].is_finite() && raw[1].is_finite() && raw[2].is_finite()) {
             return Err(Drop::NonFinite);
         }
-        let p = match self.deskewer.as_mut() {
-            Some(d) => d.apply(&p, stamp),
-            None => p,
+        let p = match (self.deskewer.as_mut(), stamp) {
+            (Some(d), Some(t)) if t.is_finite() => d.apply(&p, t),
+            _ => p,
         };
         let range = p.coords.norm();
         if range < self.max_range && range > self.min_range {
@@ -123,7 +136,7 @@ pub fn preprocess<T: Real>(
         ..Preprocessed::default()
     };
     for (i, raw) in points.iter().enumerate() {
-        let t = stamps.and_then(|s| s.get(i).copied()).unwrap_or(0.0);
+        let t = stamps.and_then(|s| s.get(i).copied());
         match pre.point(raw, t) {
             Ok(p) => {
                 if let Some(o) = out.get_mut(res.kept) {

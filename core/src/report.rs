@@ -7,7 +7,6 @@ use crate::Pose;
 
 /// Frame status: empty means ok; each set flag says how the frame was degraded.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Status(pub u16);
 
 impl Status {
@@ -54,6 +53,49 @@ impl Status {
         if on {
             self.0 |= flag;
         }
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for Status {
+    /// The flag names, as in `Display`.
+    fn format(&self, f: defmt::Formatter) {
+        if self.is_ok() {
+            defmt::write!(f, "ok");
+        }
+        let mut first = true;
+        for (bit, name) in Self::NAMES {
+            if self.has(bit) {
+                if !first {
+                    defmt::write!(f, "|");
+                }
+                defmt::write!(f, "{=str}", name);
+                first = false;
+            }
+        }
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl<T: Real> defmt::Format for FrameReport<T> {
+    /// One line: frame, status, ICP figures, position and map occupancy.
+    fn format(&self, f: defmt::Formatter) {
+        let t = self.pose.translation.vector;
+        defmt::write!(
+            f,
+            "frame {=u64} {} it={=u32} corr={=u32} sigma={=f64} t=({=f64}, {=f64}, {=f64}) map={=u32}/{=u32} dropped={}",
+            self.index,
+            self.status,
+            self.iterations,
+            self.correspondences,
+            self.sigma.wide(),
+            t.x.wide(),
+            t.y.wide(),
+            t.z.wide(),
+            self.map_voxels,
+            self.map_points,
+            self.dropped
+        );
     }
 }
 

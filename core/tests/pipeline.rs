@@ -239,3 +239,50 @@ fn a_short_arena_is_refused_not_overrun() {
     let r = Odometry::<f64, Exact>::new(Config::new(RANGE), caps, &mut arena);
     assert_eq!(r.err(), Some(kiss_odom_core::ConfigError::ArenaTooSmall));
 }
+
+#[test]
+fn a_scan_pushed_in_pieces_registers_to_the_same_bits_as_one_slice() {
+    let s = scans();
+    // Per-point times in an arbitrary unit and offset, so deskewing runs on every frame.
+    let stamps: Vec<Vec<f64>> = s
+        .iter()
+        .map(|f| (0..f.len()).map(|k| 1e6 + k as f64 * 0.37).collect())
+        .collect();
+    let caps = caps();
+    let mut a = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut b = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut whole = Odometry::<f64, Exact>::new(Config::new(RANGE), caps, &mut a).unwrap();
+    let mut parts = Odometry::<f64, Exact>::new(Config::new(RANGE), caps, &mut b).unwrap();
+    for (frame, t) in s.iter().zip(&stamps) {
+        let want = whole.register_frame(frame, Some(t)).unwrap();
+        let span = (t[0], t[t.len() - 1]);
+        let mut input = parts.begin_frame(Some(span));
+        for (pts, ts) in frame.chunks(1000).zip(t.chunks(1000)) {
+            input.push(pts, Some(ts));
+        }
+        let got = input.finish().unwrap();
+        assert!(got.deskewed && want.deskewed);
+        assert_eq!(got.pose, want.pose);
+        assert_eq!(
+            (got.merge_points, got.map_points),
+            (want.merge_points, want.map_points)
+        );
+    }
+}
+
+#[test]
+fn an_unfinished_frame_leaves_the_odometry_untouched() {
+    let s = scans();
+    let caps = caps();
+    let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut odom = Odometry::<f64, Exact>::new(Config::new(RANGE), caps, &mut arena).unwrap();
+    let want = run::<f64, Exact>(Config::new(RANGE), caps, &s);
+    for (i, frame) in s.iter().enumerate() {
+        // A partial scan pushed and then abandoned changes nothing.
+        {
+            let mut input = odom.begin_frame(None);
+            input.push(&frame[..frame.len() / 3], None);
+        }
+        assert_eq!(odom.register_frame(frame, None).unwrap().pose, want[i]);
+    }
+}
