@@ -11,6 +11,11 @@
 use crate::error::ConfigError;
 use crate::scalar::Real;
 
+/// Largest accepted `max_range` (m). The adaptive threshold squares distances of order
+/// `r_max` (Eq. (6)-(7)); beyond about 1e154 m that overflows f64 and sigma would stay
+/// infinite for good. No range sensor reaches a thousand kilometres, so this is the limit.
+pub const MAX_RANGE_LIMIT: f64 = 1.0e6;
+
 /// Pipeline parameters. [`Config::new`] gives the reference defaults for a maximum range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -71,7 +76,8 @@ impl<T: Real> Config<T> {
     /// Checks that every parameter is finite and in its domain.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let pos = |x: T| x.is_finite() && x > T::zero();
-        if !(pos(self.max_range) && self.min_range.is_finite() && self.min_range >= T::zero()) {
+        let in_range = pos(self.max_range) && self.max_range <= T::of(MAX_RANGE_LIMIT);
+        if !(in_range && self.min_range.is_finite() && self.min_range >= T::zero()) {
             return Err(ConfigError::Range);
         }
         if self.min_range >= self.max_range {
