@@ -54,6 +54,25 @@ threshold    _AdaptiveThreshold: sigma before the first and after every model de
                --deviations D [--initial-threshold 2] [--min-motion 0.1] [--max-range 100]
                --out OUT
 info         Versions of the reference and numpy, as JSON on stdout.
+batch        Several of the commands above in one process, in order (saves the interpreter and
+             import start-up of each): --commands FILE, a JSON list of argument lists, e.g.
+             [["downsample", "--points", "a.f64", "--voxel", "0.5", "--out", "b.f64"], ...].
+             The first command that builds a Preprocessor or Registration fixes the reference's
+             thread count for the whole batch (see Threads).
+bench        KissICP.register_frame timed on preloaded frames, for `kiss-odom bench`.
+               (--frames-dir DIR | --dataset DIR --format kitti|generic [--frames A:B]
+               [--bin-layout L]) [--max-range R] [--min-range R] [--voxel-size V]
+               [--deskew|--no-deskew] [--threads N] (--serve | [--repeats 3] --out results.json)
+             --frames-dir DIR holds frames already loaded by kiss-odom (see `load_frames_dir`),
+             so both implementations time the same bytes; --dataset loads as `pipeline` does.
+             Every run builds a fresh KissICP over the frames in memory and times only
+             register_frame; before it, the peak RSS counter is reset (Linux
+             /proc/self/clear_refs), so each run reports its own peak. A run with map stats also
+             counts the local map's voxels after every frame, outside the timed calls (the
+             reference allocates max_points_per_voxel points per voxel it creates).
+             --serve: one JSON line {"ready": ...} once the frames are loaded, then one JSON
+             request per input line ({"map_stats": bool, "poses": bool}) answered by one JSON
+             line (see `bench_run`), until end of input. kiss-odom uses it to alternate runs.
 
 File formats
 ------------
@@ -545,6 +564,142 @@ def versions() -> dict:
 
 
 # ----------------------------------------------------------------------------------------------
+# Benchmark
+
+
+def load_frames_dir(folder: Path):
+    """Frames written by `kiss-odom bench`: `frames.json` ({"frames": [{"name", "points",
+    "stamps"}]}) with the counts, `points.f64` (all points, x y z, little-endian f64) and
+    `stamps.f64` (all per-point times, concatenated), in frame order. Same tuples as
+    `load_frames`."""
+    index = json.loads((folder / "frames.json").read_text())["frames"]
+    points = np.fromfile(folder / "points.f64", dtype="<f8").reshape(-1, 3)
+    stamps = np.fromfile(folder / "stamps.f64", dtype="<f8")
+    out, p, t = [], 0, 0
+    for f in index:
+        n, m = int(f["points"]), int(f["stamps"])
+        out.append((f["name"], np.ascontiguousarray(points[p : p + n]), stamps[t : t + m].copy()))
+        p, t = p + n, t + m
+    if p != len(points) or t != len(stamps):
+        raise SystemExit(f"{folder}: frames.json does not match points.f64/stamps.f64")
+    return out
+
+
+def _proc_status_kib(field: str) -> int | None:
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith(field + ":"):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    return None
+
+
+def _reset_peak_rss() -> bool:
+    """Resets VmHWM to the current RSS (Linux >= 4.0); False where that is not possible."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+        return True
+    except OSError:
+        return False
+
+
+def map_voxels(local_map, voxel_size: float) -> tuple[int, int]:
+    """(occupied voxels, points) of a kiss_icp VoxelHashMap, from its point cloud."""
+    cloud = local_map.point_cloud().reshape(-1, 3)
+    if not len(cloud):
+        return 0, 0
+    keys = np.floor(cloud / voxel_size).astype(np.int64)
+    return int(len(np.unique(keys, axis=0))), int(len(cloud))
+
+
+def bench_run(frames, settings: dict, map_stats=False, poses=False) -> dict:
+    """One timed run of a fresh KissICP over preloaded frames.
+
+    Returns `seconds` (register_frame per frame), `rss_before_bytes` (RSS when the run starts,
+    frames loaded), `peak_rss_bytes` (peak during the run; null where it cannot be reset), and
+    with `map_stats` the peak map voxels and points plus the time the numpy -> std::vector
+    conversion of each input frame takes (`binding_seconds`, a lower bound of the Python
+    bindings' share of `seconds`); with `poses`, the 4x4 poses (row-major, 16 numbers each).
+    """
+    from kiss_icp.config import load_config
+    from kiss_icp.kiss_icp import KissICP
+
+    config = load_config(None)
+    config.data.max_range = float(settings["max_range"])
+    config.data.min_range = float(settings["min_range"])
+    config.data.deskew = bool(settings["deskew"])
+    voxel = settings["voxel_size"] or float(settings["max_range"]) / 100.0
+    config.mapping.voxel_size = float(voxel)
+    config.registration.max_num_threads = int(settings["threads"])
+    odom = KissICP(config)
+    reset = _reset_peak_rss()
+    rss_before = _proc_status_kib("VmRSS")
+    seconds, out_poses, peak_voxels, peak_points, binding = [], [], 0, 0, []
+    for _, points, stamps in frames:
+        t0 = time.perf_counter()
+        odom.register_frame(points, stamps)
+        seconds.append(time.perf_counter() - t0)
+        if poses:
+            out_poses.append(np.asarray(odom.last_pose).ravel().tolist())
+        if map_stats:
+            v, n = map_voxels(odom.local_map, voxel)
+            peak_voxels, peak_points = max(peak_voxels, v), max(peak_points, n)
+            t0 = time.perf_counter()
+            kp._Vector3dVector(points)
+            binding.append(time.perf_counter() - t0)
+    peak = _proc_status_kib("VmHWM") if reset else None
+    res = {
+        "seconds": seconds,
+        "rss_before_bytes": rss_before * 1024 if rss_before is not None else None,
+        "peak_rss_bytes": peak * 1024 if peak is not None else None,
+    }
+    if map_stats:
+        res["map_voxels_peak"] = peak_voxels
+        res["map_points_peak"] = peak_points
+        res["binding_seconds"] = binding
+    if poses:
+        res["poses"] = out_poses
+    return res
+
+
+def bench_frames(a):
+    if a.frames_dir is not None:
+        return load_frames_dir(a.frames_dir)
+    if a.dataset is None or a.format is None:
+        raise SystemExit("bench: give --frames-dir, or --dataset and --format")
+    return load_frames(a.dataset, a.format, parse_frames(a.frames), a.bin_layout)
+
+
+def bench_settings(a) -> dict:
+    return {
+        "max_range": a.max_range,
+        "min_range": a.min_range,
+        "voxel_size": a.voxel_size,
+        "deskew": a.deskew,
+        "threads": a.threads,
+    }
+
+
+def bench_serve(frames, settings: dict, inp=sys.stdin, out=sys.stdout) -> None:
+    """The line protocol of `bench --serve` (see the module docstring)."""
+    ready = {
+        "ready": True,
+        "frames": len(frames),
+        "points": int(sum(len(p) for _, p, _ in frames)),
+        "versions": versions(),
+        "settings": settings,
+    }
+    print(json.dumps(ready), file=out, flush=True)
+    for line in inp:
+        if not line.strip():
+            continue
+        req = json.loads(line)
+        res = bench_run(frames, settings, bool(req.get("map_stats")), bool(req.get("poses")))
+        print(json.dumps(res), file=out, flush=True)
+
+
+# ----------------------------------------------------------------------------------------------
 # Command line
 
 
@@ -659,6 +814,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True)
 
     sub.add_parser("info", help="versions, as JSON")
+
+    p = sub.add_parser("batch", help="several commands in one process")
+    p.add_argument("--commands", required=True, type=Path,
+                   help="JSON list of argument lists, run in order")  # fmt: skip
+
+    p = sub.add_parser("bench", help="timed register_frame runs on preloaded frames")
+    p.add_argument("--frames-dir", type=Path, help="frames written by kiss-odom bench")
+    p.add_argument("--dataset", type=Path)
+    p.add_argument("--format", choices=["kitti", "generic"])
+    p.add_argument("--frames", help="A:B, Python slice of the sorted frames (B exclusive)")
+    p.add_argument("--bin-layout", choices=sorted(BIN_LAYOUTS), default="f32x4")
+    p.add_argument("--max-range", type=float, default=100.0)
+    p.add_argument("--min-range", type=float, default=0.0)
+    p.add_argument("--voxel-size", type=float, default=None, help="default max_range / 100")
+    _add_deskew(p)
+    _add_threads(p)
+    p.add_argument("--serve", action="store_true", help="line protocol on stdin/stdout")
+    p.add_argument("--repeats", type=int, default=3, help="runs without --serve")
+    p.add_argument("--out", type=Path, help="results JSON without --serve")
     return ap
 
 
@@ -750,6 +924,25 @@ def main(argv=None) -> int:
         save_array(a.out, sig)
     elif a.command == "info":
         print(json.dumps(versions()))
+    elif a.command == "batch":
+        commands = json.loads(a.commands.read_text())
+        if not isinstance(commands, list) or not all(
+            isinstance(c, list) and c and c[0] != "batch" and all(isinstance(x, str) for x in c)
+            for c in commands
+        ):
+            raise SystemExit(f"{a.commands}: expected a JSON list of non-batch argument lists")
+        for argv in commands:
+            main(argv)
+    elif a.command == "bench":
+        frames = bench_frames(a)
+        settings = bench_settings(a)
+        if a.serve:
+            bench_serve(frames, settings)
+        else:
+            if a.out is None:
+                raise SystemExit("bench: give --out (or --serve)")
+            runs = [bench_run(frames, settings, map_stats=(r == 0)) for r in range(a.repeats)]
+            write_json(a.out, {"versions": versions(), "settings": settings, "runs": runs})
     return 0
 
 

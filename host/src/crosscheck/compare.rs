@@ -1,0 +1,267 @@
+//! How two outputs are compared: poses by translation distance and rotation angle, point lists
+//! position by position, point sets by their exact bits, and maps (whose points each side
+//! computes with its own rounding) by nearest matching.
+
+use kiss_odom_core::config::BLOCK;
+use kiss_odom_core::local_map::{LocalMap, MapBuffers};
+use kiss_odom_core::voxel::VoxelKey;
+use kiss_odom_core::{Config, Exact};
+use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion};
+use std::collections::{HashMap, HashSet};
+
+/// A 4x4 rigid matrix as a pose, converting the rotation block to a quaternion without
+/// re-projection (as Sophus does when the reference receives a matrix).
+pub fn pose_of(m: &Matrix4<f64>) -> Isometry3<f64> {
+    let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    Isometry3::from_parts(Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]), q)
+}
+
+/// (distance between the positions in m, angle of `a^-1 b`'s rotation in rad). The angle uses
+/// `atan2` of the skew part, which stays accurate for tiny angles where `acos` does not.
+pub fn pose_difference(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
+    let dt = (a.translation.vector - b.translation.vector).norm();
+    let r = a.rotation.to_rotation_matrix().into_inner().transpose()
+        * b.rotation.to_rotation_matrix().into_inner();
+    let s = nalgebra::Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    )
+    .norm()
+        / 2.0;
+    (dt, s.atan2((r.trace() - 1.0) / 2.0))
+}
+
+/// Largest distance between points at the same position of two lists of equal length.
+pub fn max_point_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The exact bits of a point, for set comparisons.
+pub fn bits(p: &[f64; 3]) -> [u64; 3] {
+    p.map(f64::to_bits)
+}
+
+/// Points in one set but not the other (exact bits).
+pub fn set_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> usize {
+    let sa: HashSet<[u64; 3]> = a.iter().map(bits).collect();
+    let sb: HashSet<[u64; 3]> = b.iter().map(bits).collect();
+    sa.symmetric_difference(&sb).count()
+}
+
+/// Positions at which two lists hold different points (the longer list's extra positions
+/// count as different).
+pub fn order_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> usize {
+    let common = a.iter().zip(b).filter(|(p, q)| bits(p) != bits(q)).count();
+    common + a.len().abs_diff(b.len())
+}
+
+/// Matches every point of `b` to a distinct point of `a` within `radius` (each side computed
+/// the same points with its own rounding) and returns the largest matched distance, or `None`
+/// when the counts differ or some point has no partner within `radius`.
+pub fn matched_distance(a: &[[f64; 3]], b: &[[f64; 3]], radius: f64) -> Option<f64> {
+    if a.len() != b.len() {
+        return None;
+    }
+    let cell = |p: &[f64; 3]| p.map(|c| (c / radius).floor() as i64);
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, p) in a.iter().enumerate() {
+        grid.entry(cell(p)).or_default().push(i);
+    }
+    let mut used = vec![false; a.len()];
+    let mut worst = 0.0f64;
+    for q in b {
+        let c = cell(q);
+        let mut best: Option<(usize, f64)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                        continue;
+                    };
+                    for &i in list {
+                        if used[i] {
+                            continue;
+                        }
+                        let d = max_point_difference(&[a[i]], &[*q]);
+                        if d <= radius && best.is_none_or(|(_, bd)| d < bd) {
+                            best = Some((i, d));
+                        }
+                    }
+                }
+            }
+        }
+        let (i, d) = best?;
+        used[i] = true;
+        worst = worst.max(d);
+    }
+    Some(worst)
+}
+
+/// Per-frame disagreement of two trajectories of equal length.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Agreement {
+    /// Position difference per frame (m).
+    pub translation_m: Vec<f64>,
+    /// Rotation difference per frame (rad).
+    pub rotation_rad: Vec<f64>,
+    /// Difference of the frame-to-frame motion per frame (m): how differently the two
+    /// estimated each step, independent of what came before.
+    pub step_translation_m: Vec<f64>,
+}
+
+impl Agreement {
+    /// Compares `a` and `b` frame by frame.
+    pub fn of(a: &[Isometry3<f64>], b: &[Isometry3<f64>]) -> Self {
+        let mut out = Self::default();
+        for (k, (p, q)) in a.iter().zip(b).enumerate() {
+            let (t, r) = pose_difference(p, q);
+            out.translation_m.push(t);
+            out.rotation_rad.push(r);
+            let step = if k == 0 {
+                0.0
+            } else {
+                let sa = a[k - 1].inverse() * p;
+                let sb = b[k - 1].inverse() * q;
+                pose_difference(&sa, &sb).0
+            };
+            out.step_translation_m.push(step);
+        }
+        out
+    }
+
+    /// Frames from the start while both differences stay within `(m, rad)`.
+    pub fn agreeing_prefix(&self, m: f64, rad: f64) -> usize {
+        self.translation_m
+            .iter()
+            .zip(&self.rotation_rad)
+            .take_while(|(t, r)| **t <= m && **r <= rad)
+            .count()
+    }
+}
+
+/// (max, mean, last) of a series (zeros when empty).
+pub fn summary(v: &[f64]) -> (f64, f64, f64) {
+    if v.is_empty() {
+        return (0.0, 0.0, 0.0);
+    }
+    let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    (max, mean, v[v.len() - 1])
+}
+
+/// Least-squares slope of `v` against its index.
+pub fn slope(v: &[f64]) -> f64 {
+    let n = v.len() as f64;
+    if v.len() < 2 {
+        return 0.0;
+    }
+    let mx = (n - 1.0) / 2.0;
+    let my = v.iter().sum::<f64>() / n;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (i, y) in v.iter().enumerate() {
+        let dx = i as f64 - mx;
+        sxy += dx * (y - my);
+        sxx += dx * dx;
+    }
+    sxy / sxx
+}
+
+/// Heap buffers for a [`LocalMap`] (the core never allocates; the cross-check may).
+pub struct MapStore {
+    keys: Vec<VoxelKey>,
+    heads: Vec<u32>,
+    counts: Vec<u8>,
+    points: Vec<[f64; 3]>,
+    links: Vec<u32>,
+}
+
+impl MapStore {
+    /// Room for `points` points in any arrangement (one block per point at worst).
+    pub fn for_points(points: usize) -> Self {
+        let slots = ((points.max(1) * 4).div_ceil(3) + 1).next_power_of_two();
+        let blocks = points.max(1);
+        Self {
+            keys: vec![[0; 3]; slots],
+            heads: vec![0; slots],
+            counts: vec![0; slots],
+            points: vec![[0.0; 3]; blocks * BLOCK],
+            links: vec![0; blocks],
+        }
+    }
+
+    /// An empty map with the voxel size, range and points per voxel of `cfg`.
+    pub fn map(&mut self, cfg: &Config<f64>) -> Option<LocalMap<'_, f64, Exact>> {
+        let slots = self.keys.len();
+        LocalMap::new(
+            cfg.voxel_size,
+            cfg.max_range,
+            cfg.max_points_per_voxel,
+            slots / 4 * 3,
+            MapBuffers {
+                keys: &mut self.keys,
+                heads: &mut self.heads,
+                counts: &mut self.counts,
+                points: &mut self.points,
+                links: &mut self.links,
+            },
+        )
+    }
+}
+
+/// Every point of a map, voxel by voxel.
+pub fn map_points(map: &LocalMap<'_, f64, Exact>) -> Vec<[f64; 3]> {
+    let mut out = Vec::with_capacity(map.points());
+    map.for_each_point(|_, p| out.push([p.x, p.y, p.z]));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn pose_difference_measures_distance_and_angle() {
+        let a = Isometry3::new(Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.0, 0.0, 0.3));
+        let b = Isometry3::new(
+            Vector3::new(1.0, 2.0, 3.5),
+            Vector3::new(0.0, 0.0, 0.3 + 1e-9),
+        );
+        let (t, r) = pose_difference(&a, &b);
+        assert!((t - 0.5).abs() < 1e-15);
+        assert!((r - 1e-9).abs() < 1e-15, "{r}");
+    }
+
+    #[test]
+    fn matching_finds_rounded_copies_and_refuses_missing_ones() {
+        let a = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]];
+        let b = [[1.0, 1.0, 1.0 + 1e-12], [1e-12, 0.0, 0.0], [1.0, 1.0, 1.0]];
+        let d = matched_distance(&a, &b, 1e-6).unwrap();
+        assert!((d - 1e-12).abs() < 1e-15);
+        assert_eq!(matched_distance(&a, &[[0.0; 3]; 3], 1e-6), None);
+        assert_eq!(matched_distance(&a, &a[..2], 1e-6), None);
+    }
+
+    #[test]
+    fn sets_and_orders_compare_exact_bits() {
+        let a = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+        let b = [[4.0, 5.0, 6.0], [1.0, 2.0, 3.0]];
+        assert_eq!(set_difference(&a, &b), 0);
+        assert_eq!(order_difference(&a, &b), 2);
+        assert_eq!(order_difference(&a, &a[..1]), 1);
+    }
+
+    #[test]
+    fn slope_of_a_line_is_its_gradient() {
+        let v: Vec<f64> = (0..50).map(|i| 3.0 + 0.25 * i as f64).collect();
+        assert!((slope(&v) - 0.25).abs() < 1e-12);
+    }
+}
