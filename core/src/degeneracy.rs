@@ -9,6 +9,15 @@
 //! information `sum M_i` (translation) and `sum [s_i]x^T M_i [s_i]x` (rotation about the
 //! sensor) then shows weak directions; the frame's observability is the smaller of the two
 //! blocks' smallest-to-largest eigenvalue ratios.
+//!
+//! A line can also be an artefact of the scan pattern: where rings are sparse (the ground
+//! beyond a few metres, anything far away) a voxel holds the arc of a single ring, a line
+//! lying in that beam's cone around the spin axis. Its position across the cone is set by the
+//! sensor's height and attitude, not by the scene, so it would report information that a flat
+//! ground does not have (the plane profile read 0.03-0.05 on its first frames, unflagged, while
+//! ICP slid metres). Lines within 30 degrees of the cone's surface therefore give no
+//! information; steeper lines (poles, trunks, vertical edges) keep theirs. The spin axis is
+//! taken as the map's z (the first scan's up), which is right for ground vehicles.
 
 use crate::lie::hat;
 use crate::local_map::{LocalMap, PointCodec};
@@ -18,6 +27,10 @@ use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 /// Most points sampled per frame; the sample is every k-th point, so it is deterministic.
 pub const SAMPLES: usize = 256;
+
+/// A line voxel counts only if its direction leaves the local beam cone by more than this
+/// sine (30 degrees); flatter lines may be single scan rings (see the module doc).
+pub const RING_SINE: f64 = 0.5;
 
 /// Observability ratio in `[0, 1]` of the registered `points` (world frame) seen from
 /// `origin`, or `None` if no sample had a structured voxel nearby.
@@ -42,10 +55,11 @@ pub fn observability<T: Real, P: PointCodec<T>>(
         if n < 3 {
             continue;
         }
-        let Some(m) = shape_information(&cov) else {
+        let ray = s - origin;
+        let Some(m) = shape_information(&cov, &ray) else {
             continue;
         };
-        let arm = hat(&(s - origin));
+        let arm = hat(&ray);
         info_t += m;
         info_r += arm.transpose() * m * arm;
         used += 1;
@@ -56,8 +70,9 @@ pub fn observability<T: Real, P: PointCodec<T>>(
     Some(ratio(&info_t).min(ratio(&info_r)))
 }
 
-/// Information `M` (trace 1) a voxel of covariance `cov` gives a point matched in it.
-fn shape_information<T: Real>(cov: &Matrix3<T>) -> Option<Matrix3<T>> {
+/// Information `M` (trace 1) a voxel of covariance `cov` gives a point matched in it, seen
+/// along `ray` from the sensor; `None` for no information.
+fn shape_information<T: Real>(cov: &Matrix3<T>, ray: &Vector3<T>) -> Option<Matrix3<T>> {
     let eig = SymmetricEigen::new(*cov);
     let mut idx = [0usize, 1, 2];
     idx.sort_unstable_by(|&a, &b| {
@@ -77,6 +92,9 @@ fn shape_information<T: Real>(cov: &Matrix3<T>) -> Option<Matrix3<T>> {
     let col = |i: usize| -> Vector3<T> { eig.eigenvectors.column(idx[i]).into_owned() };
     let m = if l[1] < tenth * l[2] {
         let d = col(2);
+        if along_beam_cone(&d, ray) {
+            return None;
+        }
         (Matrix3::identity() - d * d.transpose()) * T::of(0.5)
     } else if l[0] < tenth * l[1] {
         let n = col(0);
@@ -85,6 +103,20 @@ fn shape_information<T: Real>(cov: &Matrix3<T>) -> Option<Matrix3<T>> {
         Matrix3::identity() * T::of(1.0 / 3.0)
     };
     Some(m)
+}
+
+/// Whether direction `d` (unit) at the end of `ray` lies within [`RING_SINE`] of the cone that
+/// the beam along `ray` sweeps around z. The cone's normal there is z projected off the ray.
+fn along_beam_cone<T: Real>(d: &Vector3<T>, ray: &Vector3<T>) -> bool {
+    let len = ray.norm();
+    if len <= T::zero() || !len.is_finite() {
+        return false;
+    }
+    let u = ray / len;
+    let normal = Vector3::z() - u * u.z;
+    let n = normal.norm();
+    // A vertical ray has no cone; keep the line.
+    n > T::of(1e-6) && d.dot(&normal).abs() < T::of(RING_SINE) * n
 }
 
 /// Smallest over largest eigenvalue of a symmetric positive semi-definite matrix.
@@ -110,15 +142,33 @@ mod tests {
     fn shapes_are_classified_by_their_covariance() {
         // A plane z = 0: information only along z.
         let plane = Matrix3::from_diagonal(&Vector3::new(0.1f64, 0.08, 1e-6));
-        let m = shape_information(&plane).unwrap();
+        let m = shape_information(&plane, &Vector3::x()).unwrap();
         assert!((m[(2, 2)] - 1.0).abs() < 1e-9 && m[(0, 0)].abs() < 1e-9);
-        // A line along x: information across it only.
-        let line = Matrix3::from_diagonal(&Vector3::new(0.1f64, 1e-6, 1e-6));
-        let m = shape_information(&line).unwrap();
-        assert!(m[(0, 0)].abs() < 1e-9 && (m[(1, 1)] - 0.5).abs() < 1e-9);
+        // A vertical line (a pole) seen side-on: information across it only.
+        let pole = Matrix3::from_diagonal(&Vector3::new(1e-6f64, 1e-6, 0.1));
+        let m = shape_information(&pole, &Vector3::x()).unwrap();
+        assert!(m[(2, 2)].abs() < 1e-9 && (m[(0, 0)] - 0.5).abs() < 1e-9);
         // A blob: isotropic.
         let blob = Matrix3::from_diagonal(&Vector3::new(0.1f64, 0.09, 0.08));
-        assert!((shape_information(&blob).unwrap() - Matrix3::identity() / 3.0).amax() < 1e-12);
+        let m = shape_information(&blob, &Vector3::x()).unwrap();
+        assert!((m - Matrix3::identity() / 3.0).amax() < 1e-12);
+    }
+
+    #[test]
+    fn single_ring_arcs_give_no_information() {
+        // A ring on the ground 20 m ahead of a sensor 1.8 m up: an arc along y, across the ray.
+        let ray = Vector3::new(20.0f64, 0.0, -1.8);
+        let arc = Matrix3::from_diagonal(&Vector3::new(1e-6f64, 0.1, 1e-6));
+        assert_eq!(shape_information(&arc, &ray), None);
+        // The same arc on a side wall, seen at 45 degrees: along the wall, slightly tilted.
+        let ray = Vector3::new(10.0f64, 10.0, -1.0);
+        let d = Vector3::new(1.0f64, 0.0, -0.07).normalize();
+        let wall_arc = d * d.transpose() * 0.1 + Matrix3::identity() * 1e-6;
+        assert_eq!(shape_information(&wall_arc, &ray), None);
+        // A line leaving the cone steeply (a pole, 20 degrees off vertical) still counts.
+        let d = Vector3::new(0.34f64, 0.0, 0.94).normalize();
+        let leaning = d * d.transpose() * 0.1 + Matrix3::identity() * 1e-6;
+        assert!(shape_information(&leaning, &Vector3::new(15.0, 0.0, 0.5)).is_some());
     }
 
     #[test]
