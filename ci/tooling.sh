@@ -1,0 +1,96 @@
+#!/usr/bin/env bash
+# Issue 6 tooling, run by .ci/run after the tests: the core's proptest properties (release),
+# every cargo-fuzz target for a bounded time on its committed corpus, and Miri on the core's
+# unit tests. Fails on any finding. A stage is skipped, with the reason printed, only when its
+# tool cannot be installed.
+#
+#   ci/tooling.sh [props] [fuzz] [miri]     (default: all three)
+#
+# FUZZ_SECONDS  seconds per fuzz target (default 60; 9 targets, so about 9 minutes)
+# FUZZ_TARGETS  space-separated subset of targets (default: all of `cargo fuzz list`)
+# MIRI_TIMEOUT  seconds before Miri counts as a failure (default 900)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+FUZZ_SECONDS=${FUZZ_SECONDS:-60}
+MIRI_TIMEOUT=${MIRI_TIMEOUT:-900}
+CARGO_FUZZ_VERSION=0.13.2
+STAGES=${*:-props fuzz miri}
+
+step() { printf '\n=== %s\n' "$*"; }
+skip() { printf 'SKIP: %s\n' "$*"; }
+FAILED=()
+SECONDS=0
+
+have_nightly() {
+  rustup run nightly rustc --version >/dev/null 2>&1 ||
+    rustup toolchain install nightly --profile minimal >/dev/null 2>&1
+}
+
+props() {
+  step "tooling: proptest properties of the core (release)"
+  # Also part of `cargo test --workspace --release`; run on its own here to report it.
+  if ! cargo test -p kiss-odom-core --release --test properties -- --nocapture; then
+    FAILED+=("proptest properties")
+  fi
+}
+
+fuzz() {
+  step "tooling: cargo-fuzz, ${FUZZ_SECONDS} s per target"
+  if ! have_nightly; then
+    skip "no nightly toolchain (rustup toolchain install nightly failed); fuzzing skipped"
+    return
+  fi
+  if ! cargo fuzz --version >/dev/null 2>&1 &&
+    ! cargo install cargo-fuzz --version "$CARGO_FUZZ_VERSION" --locked; then
+    skip "cargo install cargo-fuzz failed; fuzzing skipped"
+    return
+  fi
+  # One build for every target, so build time does not eat into the fuzzing budget.
+  if ! cargo +nightly fuzz build; then
+    FAILED+=("fuzz build")
+    return
+  fi
+  local targets=${FUZZ_TARGETS:-$(cargo +nightly fuzz list)}
+  local scratch
+  scratch=$(mktemp -d)
+  for t in $targets; do
+    echo "--- fuzz $t"
+    # New inputs go to the scratch corpus (first directory); the committed one is only read.
+    mkdir -p "$scratch/$t"
+    if ! cargo +nightly fuzz run "$t" "$scratch/$t" "fuzz/corpus/$t" -- \
+      -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 \
+      -print_final_stats=1 2>&1 | grep -v -E '^#[0-9]+\s+(NEW|REDUCE|pulse)'; then
+      FAILED+=("fuzz $t (reproducer in fuzz/artifacts/$t/)")
+    fi
+  done
+  rm -rf "$scratch"
+  # The targets that read paths write their input to one tmpfs file per process.
+  rm -f /dev/shm/kiss-odom-fuzz-* 2>/dev/null || true
+}
+
+miri() {
+  step "tooling: Miri on kiss-odom-core's tests"
+  if ! have_nightly || ! rustup +nightly component add miri rust-src >/dev/null 2>&1; then
+    skip "rustup could not install the nightly miri component; Miri skipped"
+    return
+  fi
+  cargo +nightly miri setup
+  # Slow tests carry #[cfg_attr(miri, ignore)]; properties.rs is compiled out under Miri.
+  if ! timeout "$MIRI_TIMEOUT" cargo +nightly miri test -p kiss-odom-core; then
+    FAILED+=("miri")
+  fi
+}
+
+for s in $STAGES; do
+  case "$s" in
+    props | fuzz | miri) "$s" ;;
+    *) echo "unknown stage $s (props, fuzz, miri)" >&2; exit 2 ;;
+  esac
+done
+
+step "tooling done in ${SECONDS} s"
+if [ ${#FAILED[@]} -gt 0 ]; then
+  printf 'FAILED: %s\n' "${FAILED[@]}"
+  exit 1
+fi

@@ -1,0 +1,35 @@
+//! ROS 1 bags (`io::rosbag::open`, path only: a tmpfs file), streamed to the end or the first
+//! container error; then, where the source can seek, back to frame 0, which must read the same
+//! as the first time.
+#![no_main]
+
+mod common;
+
+use kiss_odom::io::{rosbag, OpenOptions};
+use libfuzzer_sys::fuzz_target;
+
+/// Items read at most (a bag of many empty messages would otherwise take long).
+const MAX_ITEMS: usize = 256;
+
+fuzz_target!(|data: &[u8]| {
+    let path = common::scratch_file("in.bag", data);
+    let Ok(mut dataset) = rosbag::open(&path, &OpenOptions::default()) else {
+        return;
+    };
+    let src = &mut dataset.frames;
+    let mut first = None;
+    for _ in 0..MAX_ITEMS {
+        match src.next_item() {
+            Ok(Some(item)) => {
+                first.get_or_insert(item);
+            }
+            Ok(None) | Err(_) => break,
+        }
+    }
+    if let Some(first) = first {
+        if src.seek(0) {
+            let again = src.next_item().expect("frame 0 read before").expect("frame 0 exists");
+            assert_eq!(again, first, "frame 0 reads differently after seek(0)");
+        }
+    }
+});

@@ -1,0 +1,201 @@
+"""Writes the hand-made seeds of fuzz/corpus/<target>/ (seed-*); the rest of each corpus is what
+libFuzzer kept from our runs, minimised with `-merge=1`. Standard library only; run from
+anywhere: python3 fuzz/make_seeds.py
+"""
+
+import math
+import random
+import shutil
+import struct
+from pathlib import Path
+
+FUZZ = Path(__file__).resolve().parent
+ROOT = FUZZ.parent
+CORPUS = FUZZ / "corpus"
+rng = random.Random(6)
+
+
+def put(target, name, data):
+    d = CORPUS / target
+    d.mkdir(parents=True, exist_ok=True)
+    (d / f"seed-{name}").write_bytes(data if isinstance(data, bytes) else data.encode())
+
+
+def xyzt(n):
+    return [(1.0 + i / 8, -i / 4, 0.5, i / 32) for i in range(n)]
+
+
+def bin_seeds():
+    pts = b"".join(struct.pack("<4f", x, y, z, 0.5) for x, y, z, _ in xyzt(4))
+    put("bin", "4-points", pts)
+    kitti = (ROOT / "fixtures/kitti-05-reduced/velodyne/000000.bin").read_bytes()
+    put("bin", "kitti-64-points", kitti[: 64 * 16])
+    put("bin", "nan-inf", struct.pack("<8f", math.nan, math.inf, -math.inf, 0, 1e38, -0.0, 1, 2))
+
+
+def ply_seeds():
+    pts = xyzt(3)
+    head = "ply\nformat {}\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    text = head.format("ascii 1.0") + "property double time\nend_header\n"
+    text += "".join(f"{x} {y} {z} {t}\n" for x, y, z, t in pts)
+    put("ply", "ascii-time", text)
+    for fmt, e in (("binary_little_endian 1.0", "<"), ("binary_big_endian 1.0", ">")):
+        h = head.format(fmt) + "property uchar intensity\nproperty float t\nend_header\n"
+        body = b"".join(struct.pack(e + "3fBf", x, y, z, 7, t) for x, y, z, t in pts)
+        put("ply", fmt.split()[0], h.encode() + body)
+    # An element before the vertices, and a list property.
+    h = ("ply\nformat ascii 1.0\ncomment x\nelement camera 1\nproperty int id\n"
+         "element vertex 2\nproperty double x\nproperty double y\nproperty double z\n"
+         "element face 1\nproperty list uchar int vertex_indices\nend_header\n")
+    put("ply", "elements", h + "5\n1 2 3\n4 5 6\n3 0 1 1\n")
+
+
+def pcd_seeds():
+    pts = xyzt(3)
+
+    def header(fields, size, typ, data):
+        return (f"# .PCD v0.7\nVERSION 0.7\nFIELDS {fields}\nSIZE {size}\nTYPE {typ}\n"
+                f"COUNT {' '.join('1' * len(fields.split()))}\nWIDTH 3\nHEIGHT 1\n"
+                f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA {data}\n")
+
+    text = header("x y z time", "4 4 4 8", "F F F F", "ascii")
+    text += "".join(f"{x} {y} {z} {t}\n" for x, y, z, t in pts)
+    put("pcd", "ascii-time", text)
+    h = header("x y z intensity t", "4 4 4 1 4", "F F F U U", "binary")
+    body = b"".join(struct.pack("<3fBI", x, y, z, 9, int(t * 1e6)) for x, y, z, t in pts)
+    put("pcd", "binary-t", h.encode() + body)
+    h = header("x y z", "8 8 8", "F F F", "binary_compressed")
+    put("pcd", "compressed", h.encode() + b"\0" * 16)
+
+
+def timestamps_seeds():
+    put("timestamps", "stamps-bin", b"".join(struct.pack("<d", i * 1e-4) for i in range(6)))
+    times = (ROOT / "fixtures/kitti-05-reduced/times.txt").read_text().splitlines()[:4]
+    put("timestamps", "times-txt", "\n".join(times) + "\n\n")
+
+
+def poses_seeds():
+    lines = (ROOT / "fixtures/kitti-05-reduced/poses.txt").read_text().splitlines()[:3]
+    put("poses_text", "kitti", "\n".join(lines) + "\n")
+    put("poses_text", "tum", "# t x y z qx qy qz qw\n1317384506.40 1 2 3 0 0 0 1\n"
+        "1317384506.50 1.5 2 3 0.0087 0 0 0.99996\n")
+    put("poses_text", "calib", (ROOT / "fixtures/kitti-05-reduced/calib.txt").read_text())
+
+
+# PointCloud2 bodies; the target's first byte picks the serialization (even: ROS 1, odd: CDR).
+FIELDS = [("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("intensity", 16, 7), ("t", 20, 7), ("ring", 24, 4)]
+
+
+def cloud_data(n, step):
+    out = b""
+    for x, y, z, t in xyzt(n):
+        p = struct.pack("<3f4xffH", x, y, z, 100.0, t, 3)
+        out += p + b"\0" * (step - len(p))
+    return out
+
+
+def ros1_body(n=4, step=32, height=1):
+    s = lambda b: struct.pack("<I", len(b)) + b
+    body = struct.pack("<3I", 7, 1_700_000_000, 5) + s(b"lidar")
+    body += struct.pack("<III", height, n, len(FIELDS))
+    for name, off, dt in FIELDS:
+        body += s(name.encode()) + struct.pack("<IBI", off, dt, 1)
+    data = cloud_data(n * height, step)
+    body += struct.pack("<BIII", 0, step, step * n, len(data)) + data + b"\0"
+    return body
+
+
+class Cdr:
+    def __init__(self):
+        self.b = b""
+
+    def align(self, k):
+        self.b += b"\0" * (-len(self.b) % k)
+
+    def u32(self, v):
+        self.align(4)
+        self.b += struct.pack("<I", v)
+
+    def u8(self, v):
+        self.b += bytes([v])
+
+    def string(self, s):
+        self.u32(len(s) + 1)
+        self.b += s.encode() + b"\0"
+
+
+def cdr_body(n=4, step=32):
+    c = Cdr()
+    c.u32(1_700_000_000)
+    c.u32(5)
+    c.string("lidar")
+    c.u32(1)
+    c.u32(n)
+    c.u32(len(FIELDS))
+    for name, off, dt in FIELDS:
+        c.string(name)
+        c.u32(off)
+        c.u8(dt)
+        c.u32(1)
+    c.u8(0)
+    c.u32(step)
+    c.u32(step * n)
+    data = cloud_data(n, step)
+    c.u32(len(data))
+    c.b += data
+    c.u8(0)
+    return b"\x00\x01\x00\x00" + c.b
+
+
+def pointcloud2_seeds():
+    put("pointcloud2", "ros1", b"\0" + ros1_body())
+    put("pointcloud2", "ros1-organized", b"\0" + ros1_body(n=2, height=2))
+    put("pointcloud2", "cdr", b"\1" + cdr_body())
+
+
+def container_seeds():
+    for stem in ("ouster", "abs_time", "xyz64", "two_topics", "bad_step", "truncated"):
+        for ext, target in ((".bag", "rosbag"), (".mcap", "mcap")):
+            d = CORPUS / target
+            d.mkdir(parents=True, exist_ok=True)
+            shutil.copy(ROOT / "fixtures/bags" / f"{stem}{ext}", d / f"seed-{stem}{ext}")
+
+
+def core_frame_seed(kind, deskew, moves):
+    """A room of about 150 points, then `moves` small motions of it (the layout the target
+    reads: see fuzz_targets/core_frame.rs)."""
+    b = bytes([kind, 0, 0, 0, 20, deskew, 15, 0, 0, 0])
+    b += struct.pack("<5H", 511, 255, 127, 255, 1023)
+    pts = []
+    for a in range(8):
+        for c in range(8):
+            pts.append((a - 4 + rng.random() * 0.5, c - 4 + rng.random() * 0.5, -1.5))
+        for k in range(4):
+            pts.append((a - 4 + rng.random() * 0.5, 4.2, k * 0.6 - 1.5))
+            pts.append((4.3, a - 4 + rng.random() * 0.5, k * 0.6 - 1.5))
+    b += bytes([4]) + struct.pack("<H", len(pts))
+    for p in pts:
+        for v in p:
+            b += bytes([0]) + struct.pack("<h", round(v * 256))
+    b += bytes([0])  # no stamps
+    for _ in range(moves):
+        b += bytes([1]) + struct.pack("<6b", *(rng.randint(-60, 60) for _ in range(6)))
+        b += bytes([2, 0]) + struct.pack("<h", 0) + bytes([0]) + struct.pack("<h", 3)  # a ramp
+    return b
+
+
+def core_frame_seeds():
+    put("core_frame", "room-f64", core_frame_seed(0, 0, 5))
+    put("core_frame", "room-f32-deskew", core_frame_seed(2, 1, 5))
+
+
+def main():
+    for make in (bin_seeds, ply_seeds, pcd_seeds, timestamps_seeds, poses_seeds,
+                 pointcloud2_seeds, container_seeds, core_frame_seeds):
+        make()
+    for d in sorted(CORPUS.iterdir()):
+        print(f"{d.name}: {len(list(d.iterdir()))} seeds")
+
+
+if __name__ == "__main__":
+    main()
