@@ -4,6 +4,7 @@
 mod common;
 
 use common::*;
+use kiss_odom_core::deskew::StampProblem;
 use kiss_odom_core::{Capacities, Config, Exact, FrameError, Odometry, Pose, Quantized, Status};
 
 const RANGE: f64 = 40.0;
@@ -110,17 +111,22 @@ fn unusable_timestamps_are_ignored_reported_and_do_not_poison_the_pose() {
     let mut odom = Odometry::<f64, Exact>::new(Config::new(RANGE), caps, &mut arena).unwrap();
     for (i, frame) in s.iter().enumerate() {
         let n = frame.len();
-        let stamps: Vec<f64> = match i % 4 {
-            0 => vec![5.0; n], // all equal
-            1 => (0..n)
-                .map(|k| if k == 3 { f64::NAN } else { k as f64 })
-                .collect(), // a NaN
-            2 => vec![0.0; n + 2], // too many
-            _ => vec![0.0; n / 2], // too few
+        // Wrong lengths use rising stamps, so only the length can make them unusable.
+        let rising = |m: usize| (0..m).map(|k| k as f64 * 1e-5).collect::<Vec<f64>>();
+        let (stamps, problem) = match i % 4 {
+            0 => (vec![5.0; n], StampProblem::Constant),
+            1 => (
+                (0..n)
+                    .map(|k| if k == 3 { f64::NAN } else { k as f64 })
+                    .collect(),
+                StampProblem::NonFinite,
+            ),
+            2 => (rising(n + 2), StampProblem::Length), // too many
+            _ => (rising(n / 2), StampProblem::Length), // too few
         };
         let r = odom.register_frame(frame, Some(&stamps)).unwrap();
         assert!(r.status.has(Status::TIMESTAMPS_IGNORED) && !r.deskewed);
-        assert!(r.stamp_problem.is_some());
+        assert_eq!(r.stamp_problem, Some(problem), "frame {i}");
         assert_eq!(r.pose, want[i], "frame {i}");
     }
 }

@@ -165,10 +165,13 @@ impl<'a, T: Real, P: PointCodec<T>> LocalMap<'a, T, P> {
         self.links.len() * BLOCK
     }
 
+    /// The slot holding `key`, or `None`. Probing stops at an empty slot; the load cap of 3/4
+    /// guarantees one, and the probe count is bounded anyway, so a broken invariant gives a
+    /// wrong answer that tests catch rather than an endless loop.
     #[inline]
     fn find(&self, key: &VoxelKey) -> Option<usize> {
         let mut i = table_hash(key) as usize & self.mask;
-        loop {
+        for _ in 0..=self.mask {
             if self.counts[i] == 0 {
                 return None;
             }
@@ -177,6 +180,7 @@ impl<'a, T: Real, P: PointCodec<T>> LocalMap<'a, T, P> {
             }
             i = (i + 1) & self.mask;
         }
+        None
     }
 
     /// Calls `f` on each point of the voxel in `slot`, in insertion order, until it returns
@@ -223,14 +227,18 @@ impl<'a, T: Real, P: PointCodec<T>> LocalMap<'a, T, P> {
     fn add_point(&mut self, p: &Point<T>, st: &mut UpdateStats) {
         let key = point_to_voxel(p, self.voxel_size);
         let mut i = table_hash(&key) as usize & self.mask;
-        loop {
-            if self.counts[i] == 0 {
-                break;
-            }
+        let mut probes = 0;
+        while self.counts[i] != 0 {
             if self.keys[i] == key {
                 return self.append(i, &key, p, st);
             }
             i = (i + 1) & self.mask;
+            probes += 1;
+            if probes > self.mask {
+                // No empty slot (cannot happen below the 3/4 load cap): drop, never spin.
+                st.dropped_voxels += 1;
+                return;
+            }
         }
         if self.voxels >= self.max_voxels {
             st.dropped_voxels += 1;
