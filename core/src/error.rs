@@ -4,7 +4,8 @@
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigError {
-    /// `max_range` must be positive and finite and `0 <= min_range < max_range`: fix the ranges.
+    /// `max_range` must be positive and at most [`crate::config::MAX_RANGE_LIMIT`], and
+    /// `0 <= min_range < max_range`: fix the ranges.
     Range,
     /// `voxel_size`, `alpha` and `beta` must be positive and finite.
     VoxelSize,
@@ -35,7 +36,7 @@ pub enum FrameError {
 impl core::fmt::Display for ConfigError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let s = match self {
-            Self::Range => "max_range must be positive and min_range in [0, max_range)",
+            Self::Range => "max_range must be in (0, 1e6] m and min_range in [0, max_range)",
             Self::VoxelSize => "voxel_size, alpha and beta must be positive",
             Self::PointsPerVoxel => "max_points_per_voxel must be in 1..=255",
             Self::Threshold => "threshold and kernel parameters out of range",

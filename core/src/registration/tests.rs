@@ -91,6 +91,7 @@ fn errors(a: &Pose<f64>, b: &Pose<f64>) -> (f64, f64) {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
 fn a_rigid_transform_of_a_structured_scene_is_recovered_to_a_micrometre() {
     let mut f = fixture();
     let truth = Pose::from_parts(
@@ -107,6 +108,7 @@ fn a_rigid_transform_of_a_structured_scene_is_recovered_to_a_micrometre() {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
 fn the_iteration_cap_stops_icp_and_is_reported() {
     let mut f = fixture();
     let truth = Pose::translation(0.4, 0.1, 0.0);
@@ -155,6 +157,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
 fn zero_correspondences_leave_the_initial_guess_and_flag_singular() {
     let mut f = fixture();
     // Far beyond the 27-voxel search: nothing associates.
@@ -182,6 +185,7 @@ impl Executor for Reversed {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
 fn the_result_does_not_depend_on_the_order_chunks_run_in() {
     let truth = Pose::from_parts(
         Translation3::new(0.2, 0.3, -0.02),
