@@ -7,7 +7,7 @@ use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::{
-    Capacities, Exact, FrameError, FrameReport, Odometry, PointCodec, Quantized, Real,
+    Capacities, Exact, FrameError, FrameReport, Odometry, PointCodec, Quantized, Real, Status,
 };
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Serialize;
@@ -381,6 +381,14 @@ fn drive<T: Real, P: PointCodec<T>>(
                 let row = match result {
                     Ok(report) => {
                         core_s += dt;
+                        if args.strict && report.status.has(Status::TIMESTAMPS_IGNORED) {
+                            out.stop = Some(anyhow::anyhow!(
+                                "{}: timestamps unusable ({:?}), frame not deskewed (--strict)",
+                                frame.name,
+                                report.stamp_problem
+                            ));
+                            break;
+                        }
                         row_of(index, dt, &report)
                     }
                     Err(FrameError::EmptyScan) => {
