@@ -13,7 +13,7 @@ use ply_rs::ply::{
 };
 use ply_rs::writer::Writer;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::Path;
 
 /// Name of the time property the writers use.
@@ -94,8 +94,38 @@ fn flat(e: std::io::Error) -> anyhow::Error {
     anyhow!(text)
 }
 
+/// Checks what `ply-rs` trusts: it unwraps every number of the header as a u64 (a longer one
+/// panics, found by fuzzing) and sizes element lists from their declared counts. A header
+/// whose numbers do not fit, or whose elements could not fit in the file (every item takes
+/// at least one byte), is refused here.
+fn check_header(path: &Path) -> Result<()> {
+    let file_len = std::fs::metadata(path)?.len();
+    let mut head = Vec::new();
+    File::open(path)?.take(64 * 1024).read_to_end(&mut head)?;
+    let text = String::from_utf8_lossy(&head);
+    let mut items: u64 = 0;
+    for line in text.lines().take_while(|l| l.trim() != "end_header") {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        for w in &words {
+            if w.bytes().all(|b| b.is_ascii_digit()) && w.parse::<u64>().is_err() {
+                bail!("PLY header number {w} is too large");
+            }
+        }
+        if let ["element", _, count] = words[..] {
+            if let Ok(n) = count.parse::<u64>() {
+                items = items.saturating_add(n);
+            }
+        }
+    }
+    if items > file_len {
+        bail!("PLY header declares {items} items, more than a {file_len}-byte file holds");
+    }
+    Ok(())
+}
+
 /// Reads the scan at `path`.
 pub fn read(path: &Path) -> Result<Cloud> {
+    check_header(path)?;
     let mut reader = BufReader::new(File::open(path)?);
     let parser = Parser::<Vertex>::new();
     let header = parser

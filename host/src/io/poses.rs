@@ -60,7 +60,16 @@ pub fn isometry_from_matrix(m: &Matrix4<f64>) -> Result<Isometry3<f64>> {
         bail!("pose has a non-finite entry");
     }
     let block: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let rotation = Rotation3::from_matrix(&block);
+    // A rotation's entries lie in [-1, 1]; anything far outside cannot pass the defect check,
+    // and the projection's iteration need not converge on it (found by fuzzing: 1e300 entries
+    // made `from_matrix` spin), so refuse it first and bound the iterations anyway.
+    if block.amax() > 1.0 + MAX_ROTATION_DEFECT {
+        bail!(
+            "rotation block is not a rotation (an entry of magnitude {:.3e})",
+            block.amax()
+        );
+    }
+    let rotation = Rotation3::from_matrix_eps(&block, f64::EPSILON, 1000, Rotation3::identity());
     let defect = (rotation.matrix() - block).amax();
     if defect > MAX_ROTATION_DEFECT {
         bail!("rotation block is not a rotation (off by {defect:.3e})");
