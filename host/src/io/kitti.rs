@@ -87,6 +87,10 @@ pub fn read_calib_tr(path: &Path) -> Result<Matrix4<f64>> {
                 values.len()
             );
         };
+        // Values beyond f32's range became infinite above (found by fuzzing).
+        if values.iter().any(|v| !v.is_finite()) {
+            bail!("{}:{}: Tr has a non-finite value", path.display(), i + 1);
+        }
         return Ok(poses::matrix_from_rows(&rows));
     }
     bail!("{}: no Tr line", path.display())

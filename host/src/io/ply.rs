@@ -106,9 +106,10 @@ fn check_header(path: &Path) -> Result<()> {
     let mut items: u64 = 0;
     for line in text.lines().take_while(|l| l.trim() != "end_header") {
         let words: Vec<&str> = line.split_whitespace().collect();
-        for w in &words {
-            if w.bytes().all(|b| b.is_ascii_digit()) && w.parse::<u64>().is_err() {
-                bail!("PLY header number {w} is too large");
+        // Every run of digits, also inside a word: the grammar reads them wherever they are.
+        for run in line.split(|c: char| !c.is_ascii_digit()) {
+            if !run.is_empty() && run.parse::<u64>().is_err() {
+                bail!("PLY header number {run} is too large");
             }
         }
         if let ["element", _, count] = words[..] {

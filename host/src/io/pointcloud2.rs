@@ -280,7 +280,14 @@ pub fn decode(cloud: &PointCloud2<'_>) -> Result<Decoded, String> {
     let mut stamps = time.map(|_| Vec::with_capacity(n));
     let (row_step, point_step) = (cloud.row_step as usize, cloud.point_step as usize);
     let short = || "point outside data".to_string();
-    for r in 0..cloud.height as usize {
+    // A zero width has no points however many (empty) rows it declares; looping over 4e9 of
+    // them took minutes (found by fuzzing).
+    let rows = if cloud.width == 0 {
+        0
+    } else {
+        cloud.height as usize
+    };
+    for r in 0..rows {
         let row = cloud.data.get(r * row_step..).ok_or_else(short)?;
         for c in 0..cloud.width as usize {
             let p = row
