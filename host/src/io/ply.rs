@@ -13,7 +13,7 @@ use ply_rs::ply::{
 };
 use ply_rs::writer::Writer;
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// Name of the time property the writers use.
@@ -98,11 +98,9 @@ fn flat(e: std::io::Error) -> anyhow::Error {
 /// panics, found by fuzzing) and sizes element lists from their declared counts. A header
 /// whose numbers do not fit, or whose elements could not fit in the file (every item takes
 /// at least one byte), is refused here.
-fn check_header(path: &Path) -> Result<()> {
-    let file_len = std::fs::metadata(path)?.len();
-    let mut head = Vec::new();
-    File::open(path)?.take(64 * 1024).read_to_end(&mut head)?;
-    let text = String::from_utf8_lossy(&head);
+fn check_header(bytes: &[u8]) -> Result<()> {
+    let file_len = bytes.len() as u64;
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(64 * 1024)]);
     let mut items: u64 = 0;
     for line in text.lines().take_while(|l| l.trim() != "end_header") {
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -126,8 +124,10 @@ fn check_header(path: &Path) -> Result<()> {
 
 /// Reads the scan at `path`.
 pub fn read(path: &Path) -> Result<Cloud> {
-    check_header(path)?;
-    let mut reader = BufReader::new(File::open(path)?);
+    // One read of the file: the header check and the parser work on the same bytes.
+    let bytes = std::fs::read(path)?;
+    check_header(&bytes)?;
+    let mut reader = bytes.as_slice();
     let parser = Parser::<Vertex>::new();
     let header = parser
         .read_header(&mut reader)
