@@ -132,52 +132,6 @@ pub struct Capacities {
     pub map_points: usize,
 }
 
-/// Points per map block; a voxel owns a chain of blocks, so memory follows the points a voxel
-/// really holds instead of reserving `N_max` for each one.
-pub const BLOCK: usize = 4;
-/// Source points per registration chunk: the unit of parallel work and of the fixed reduction
-/// order (chunk sums are added in chunk order whatever the thread count).
-pub const CHUNK: usize = 64;
-/// Scalars in one chunk's partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`)
-/// + correspondence count + sum of squared residuals.
-pub const SYSTEM_LEN: usize = 29;
-
-/// Where each buffer sits in the arena, in `u64` words.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Layout {
-    /// Slots of the downsampling grid (power of two, load <= 3/4).
-    pub grid_slots: usize,
-    /// Slots of the map's voxel table (power of two, load <= 3/4).
-    pub map_slots: usize,
-    /// Blocks in the map's point pool.
-    pub map_blocks: usize,
-    /// Registration chunks.
-    pub chunks: usize,
-    /// Words per region, in carve order: merge, source, scratch, systems, map keys, map heads,
-    /// map counts, block points, block links.
-    pub words: [usize; 9],
-}
-
-const fn words_for(bytes: usize) -> usize {
-    bytes.div_ceil(8)
-}
-
-const fn pow2_at_least(n: usize) -> usize {
-    let mut p = 1;
-    while p < n {
-        p *= 2;
-    }
-    p
-}
-
-const fn max(a: usize, b: usize) -> usize {
-    if a > b {
-        a
-    } else {
-        b
-    }
-}
-
 impl Capacities {
     /// Full scale, KITTI-like (HDL-64E or OS1-64/128 at `r_max` 100 m, 1 m voxels): margins of
     /// about 2x over the high-water marks measured on kitti-mini and 500-frame simulated runs.
@@ -199,57 +153,6 @@ impl Capacities {
         map_points: 49_152,
     };
 
-    /// Buffer layout for scalar size `t_size` and stored map point size `stored_size` (bytes).
-    pub const fn layout(&self, t_size: usize, stored_size: usize) -> Layout {
-        let point = 3 * t_size;
-        let grid_slots = pow2_at_least((self.merge_points * 4).div_ceil(3));
-        // Scratch serves the dedup grid (key 12 B + index 4 B per slot), then the bucket-order
-        // reconstruction (hash u32 + two u64 sort keys + permutation u32 per kept point).
-        let scratch = max(grid_slots * 16, self.merge_points * 24);
-        let map_slots = pow2_at_least((self.map_voxels * 4).div_ceil(3));
-        let map_blocks = self.map_points.div_ceil(BLOCK);
-        let chunks = self.source_points.div_ceil(CHUNK);
-        Layout {
-            grid_slots,
-            map_slots,
-            map_blocks,
-            chunks,
-            words: [
-                words_for(self.merge_points * point),
-                words_for(self.source_points * point),
-                words_for(scratch),
-                words_for(chunks * SYSTEM_LEN * t_size),
-                words_for(map_slots * 12),
-                words_for(map_slots * 4),
-                words_for(map_slots),
-                words_for(map_blocks * BLOCK * stored_size),
-                words_for(map_blocks * 4),
-            ],
-        }
-    }
-
-    /// `u64` words the arena must hold for scalar `T` and map point codec `P`.
-    pub const fn arena_words<T, P: crate::local_map::PointCodec<T>>(&self) -> usize
-    where
-        T: Real,
-    {
-        let l = self.layout(core::mem::size_of::<T>(), core::mem::size_of::<P::Stored>());
-        let mut total = 0;
-        let mut i = 0;
-        while i < l.words.len() {
-            total += l.words[i];
-            i += 1;
-        }
-        total
-    }
-
-    /// Bytes of the map alone (voxel table and point pool), for comparison with the
-    /// reference's local map.
-    pub const fn map_bytes(&self, stored_size: usize) -> usize {
-        let l = self.layout(8, stored_size);
-        (l.words[4] + l.words[5] + l.words[6] + l.words[7] + l.words[8]) * 8
-    }
-
     /// Checks that every capacity is usable.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let ok = self.scan_points > 0
@@ -258,7 +161,7 @@ impl Capacities {
             && self.map_voxels > 0
             && self.map_points > 0
             && self.merge_points < (1 << 30)
-            && self.map_points / BLOCK < (1 << 30)
+            && self.map_points / crate::local_map::BLOCK < (1 << 30)
             && self.scan_points <= u32::MAX as usize;
         if ok {
             Ok(())

@@ -20,7 +20,7 @@
 //! taken as the map's z (the first scan's up), which is right for ground vehicles.
 
 use crate::lie::hat;
-use crate::local_map::{LocalMap, PointCodec};
+use crate::local_map::{MapView, PointCodec};
 use crate::scalar::Real;
 use crate::Point;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
@@ -32,20 +32,20 @@ pub const SAMPLES: usize = 256;
 /// sine (30 degrees); flatter lines may be single scan rings (see the module doc).
 pub const RING_SINE: f64 = 0.5;
 
-/// Observability ratio in `[0, 1]` of the registered `points` (world frame) seen from
+/// Observability ratio in `[0, 1]` of the `n` registered `points` (world frame) seen from
 /// `origin`, or `None` if no sample had a structured voxel nearby.
 pub fn observability<T: Real, P: PointCodec<T>>(
-    map: &LocalMap<'_, T, P>,
-    points: &[[T; 3]],
+    map: &MapView<'_, T, P>,
+    points: impl Iterator<Item = Point<T>>,
+    n: usize,
     origin: &Point<T>,
     max_distance: T,
 ) -> Option<T> {
-    let step = points.len().div_ceil(SAMPLES).max(1);
+    let step = n.div_ceil(SAMPLES).max(1);
     let mut info_t = Matrix3::zeros();
     let mut info_r = Matrix3::zeros();
     let mut used = 0;
-    for p in points.iter().step_by(step) {
-        let s = Point::from(*p);
+    for s in points.step_by(step) {
         let Some((q, _)) = map.closest_neighbor(&s, max_distance) else {
             continue;
         };

@@ -10,8 +10,8 @@
 //! grows with the kept points only, so both passes keep the same points as the reference and
 //! feed the map in the same order. That is what lets whole trajectories agree to rounding.
 
-use crate::arena::view;
 use crate::scalar::Real;
+use crate::storage::{view, words_for};
 use crate::voxel::{point_to_voxel, reference_hash, table_hash, VoxelKey};
 use crate::Point;
 
@@ -29,15 +29,28 @@ pub struct Downsampled {
 }
 
 /// Scratch slots of the dedup grid for an output of `capacity` points (load at most 3/4).
-pub fn grid_slots_for(capacity: usize) -> usize {
-    ((capacity * 4).div_ceil(3)).next_power_of_two()
+pub const fn grid_slots_for(capacity: usize) -> usize {
+    (capacity * 4).div_ceil(3).next_power_of_two()
 }
 
-/// Scratch `u64` words needed to downsample into an output of `capacity` points.
-pub fn scratch_words_for(capacity: usize) -> usize {
-    (grid_slots_for(capacity) * 16)
-        .max(capacity * 24)
-        .div_ceil(8)
+/// Scratch bytes [`reference_order`] needs for `points` points: two `u64` sort keys and a
+/// `u32` permutation entry per point.
+pub const fn reference_order_bytes(points: usize) -> usize {
+    points * 20
+}
+
+/// Scratch `u64` words needed to downsample into an output of `capacity` points: the dedup
+/// grid (12-byte key and 4-byte index per slot), then, in the same words, the reference-order
+/// reconstruction.
+pub const fn scratch_words_for(capacity: usize) -> usize {
+    let grid = grid_slots_for(capacity) * 16;
+    let order = reference_order_bytes(capacity);
+    words_for(if grid > order { grid } else { order })
+}
+
+/// `u64` words of a cloud of `points` points of scalar `T`.
+pub const fn cloud_words<T>(points: usize) -> usize {
+    words_for(points * 3 * core::mem::size_of::<T>())
 }
 
 /// Streaming first-point-per-voxel filter writing kept points to `out` in first-seen order.
@@ -138,7 +151,7 @@ const VISITED: u32 = 1 << 31;
 
 /// Reorders `points` (one per voxel, in first-seen order) into the iteration order of the
 /// reference's robin-hood table after inserting them in that order into a table reserved for
-/// `n_input` points. `scratch` must hold `points.len() * 20` bytes.
+/// `n_input` points. `scratch` must hold [`reference_order_bytes`]`(points.len())` bytes.
 ///
 /// Robin-hood hashing with linear probing keeps elements sorted by home bucket, cyclically;
 /// the order *within* a run of equal homes depends on how elements were displaced, so each
@@ -155,7 +168,7 @@ pub fn reference_order<T: Real>(
     if m < 2 {
         return true;
     }
-    if scratch.len() < (m * 20).div_ceil(8) {
+    if scratch.len() < words_for(reference_order_bytes(m)) {
         return false;
     }
     let bc = robin_bucket_count(n_input.max(m));

@@ -31,6 +31,9 @@ pub enum ConfigError {
 pub enum FrameError {
     /// No point survived the finite check and the range crop.
     EmptyScan,
+    /// The storage no longer holds the layout the odometry was built with (its `AsMut` now
+    /// gives fewer words than at construction). Nothing was changed; rebuild the odometry.
+    Storage,
 }
 
 impl core::fmt::Display for ConfigError {
@@ -52,6 +55,7 @@ impl core::fmt::Display for FrameError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::EmptyScan => f.write_str("no finite point within [min_range, max_range)"),
+            Self::Storage => f.write_str("the storage shrank below the odometry's layout"),
         }
     }
 }

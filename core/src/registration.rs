@@ -11,23 +11,42 @@
 //! system is summed in point order and the partials are added in chunk order, so the result is
 //! bit-identical whichever [`Executor`] ran the chunks and on how many threads.
 
-use crate::config::{CHUNK, SYSTEM_LEN};
 use crate::lie::se3_exp;
-use crate::local_map::{LocalMap, PointCodec};
+use crate::local_map::{MapView, PointCodec};
 use crate::scalar::Real;
+use crate::storage::{view, words_for};
 use crate::{Point, Pose};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
-/// Runs per-chunk work, possibly in parallel. Implementations must call `f` exactly once for
-/// each pair of (`CHUNK`-point chunk of `points`, matching element of `out`).
+/// Source points per chunk: the unit of parallel work and of the fixed reduction order (chunk
+/// sums are added in chunk order whatever the thread count).
+pub const CHUNK: usize = 64;
+/// Scalars in one chunk's partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`)
+/// + correspondence count + sum of squared residuals.
+pub const SYSTEM_LEN: usize = 29;
+/// Scalars in one chunk: its points (`3 * CHUNK`), its partial system, its point count.
+const CHUNK_LEN: usize = 3 * CHUNK + SYSTEM_LEN + 1;
+
+/// One chunk of ICP work: up to [`CHUNK`] source points, moved in place from iteration to
+/// iteration, and the partial normal equations they gave in the last iteration.
+pub type Chunk<T> = [T; CHUNK_LEN];
+
+/// Chunks for `points` source points.
+pub const fn chunks_for(points: usize) -> usize {
+    points.div_ceil(CHUNK)
+}
+
+/// `u64` words of ICP work space for `points` source points of scalar `T`.
+pub const fn work_words<T>(points: usize) -> usize {
+    words_for(chunks_for(points) * CHUNK_LEN * core::mem::size_of::<T>())
+}
+
+/// Runs ICP's per-chunk work, possibly in parallel. The core cuts the work into [`Chunk`]s and
+/// hands them all over; an executor only decides who runs which chunk, so it cannot change
+/// the chunking, drop points or reorder the reduction.
 pub trait Executor {
-    /// Calls `f(chunk, out)` for every chunk of `points` and its slot in `out`.
-    fn for_each_chunk<P: Send, R: Send>(
-        &self,
-        points: &mut [P],
-        out: &mut [R],
-        f: &(dyn Fn(&mut [P], &mut R) + Sync),
-    );
+    /// Calls `work` exactly once on every element of `chunks`, in any order, on any thread.
+    fn for_each<C: Send>(&self, chunks: &mut [C], work: &(dyn Fn(&mut C) + Sync));
 }
 
 /// Runs chunks one after the other on the calling thread.
@@ -35,14 +54,9 @@ pub trait Executor {
 pub struct Sequential;
 
 impl Executor for Sequential {
-    fn for_each_chunk<P: Send, R: Send>(
-        &self,
-        points: &mut [P],
-        out: &mut [R],
-        f: &(dyn Fn(&mut [P], &mut R) + Sync),
-    ) {
-        for (c, r) in points.chunks_mut(CHUNK).zip(out.iter_mut()) {
-            f(c, r);
+    fn for_each<C: Send>(&self, chunks: &mut [C], work: &(dyn Fn(&mut C) + Sync)) {
+        for c in chunks {
+            work(c);
         }
     }
 }
@@ -128,17 +142,56 @@ fn solve<T: Real>(sum: &[T; SYSTEM_LEN]) -> Option<Vector6<T>> {
     dx.iter().all(|v| v.is_finite()).then_some(dx)
 }
 
-/// The summed normal equations of the last iteration, kept for diagnostics.
-pub type System<T> = [T; SYSTEM_LEN];
+/// The chunk's points, its partial system and its point count.
+#[inline]
+fn parts<T: Real>(c: &mut Chunk<T>) -> Option<(&mut [T; 3 * CHUNK], &mut [T; SYSTEM_LEN], &mut T)> {
+    let (points, rest) = c.split_first_chunk_mut::<{ 3 * CHUNK }>()?;
+    let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
+    Some((points, system, rest.first_mut()?))
+}
 
-/// Registers `source` (sensor frame, overwritten) to `map` starting from `initial_guess`
-/// (the reference's `AlignPointsToMap`). `systems` needs one slot per chunk.
+/// Copies `source` into the chunks of `work` (as many as fit); returns the chunks in use.
+fn load<'w, T: Real>(source: &[[T; 3]], work: &'w mut [u64]) -> &'w mut [Chunk<T>] {
+    let fit = (work.len() * 8) / (CHUNK_LEN * core::mem::size_of::<T>());
+    let n = chunks_for(source.len()).min(fit);
+    let Ok(chunks) = view::<Chunk<T>>(work, n) else {
+        return &mut [];
+    };
+    for (c, pts) in chunks.iter_mut().zip(source.chunks(CHUNK)) {
+        if let Some((points, _, count)) = parts(c) {
+            for (dst, p) in points.chunks_exact_mut(3).zip(pts) {
+                dst.copy_from_slice(p);
+            }
+            *count = T::of(pts.len() as f64);
+        }
+    }
+    chunks
+}
+
+/// The points ICP moved, in source order (world frame, as the last iteration left them).
+pub fn moved_points<T: Real>(work: &mut [u64], n: usize) -> impl Iterator<Item = Point<T>> + '_ {
+    let chunks = view::<Chunk<T>>(work, chunks_for(n)).unwrap_or_default();
+    chunks.iter_mut().flat_map(|c| {
+        let (points, count) = match parts(c) {
+            Some((p, _, count)) => (&p[..], count.wide() as usize),
+            None => (&[][..], 0),
+        };
+        points
+            .chunks_exact(3)
+            .take(count)
+            .map(|p| Point::new(p[0], p[1], p[2]))
+    })
+}
+
+/// Registers `source` (sensor frame) to `map` starting from `initial_guess` (the reference's
+/// `AlignPointsToMap`), moving a copy of the points in `work`, which needs
+/// [`work_words`]`::<T>(source.len())` words (points beyond what fits are not used).
 #[allow(clippy::too_many_arguments)]
 pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     exec: &E,
-    source: &mut [[T; 3]],
-    systems: &mut [System<T>],
-    map: &LocalMap<'_, T, P>,
+    source: &[[T; 3]],
+    work: &mut [u64],
+    map: &MapView<'_, T, P>,
     initial_guess: &Pose<T>,
     max_distance: T,
     kernel: T,
@@ -155,10 +208,7 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     if map.is_empty() {
         return out;
     }
-    let n_chunks = source.len().div_ceil(CHUNK).min(systems.len());
-    let usable = (n_chunks * CHUNK).min(source.len());
-    let source = &mut source[..usable];
-    let systems = &mut systems[..n_chunks];
+    let chunks = load(source, work);
     let k2 = kernel * kernel;
     let mut step: (Matrix3<T>, Vector3<T>) = (
         initial_guess.rotation.to_rotation_matrix().into_inner(),
@@ -168,11 +218,15 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     out.converged = false;
     for _ in 0..params.max_iterations {
         let (rot, tr) = step;
-        exec.for_each_chunk(source, systems, &|chunk, acc| {
+        exec.for_each(chunks, &|c| {
+            let Some((points, acc, count)) = parts(c) else {
+                return;
+            };
             *acc = [T::zero(); SYSTEM_LEN];
-            for p in chunk.iter_mut() {
+            let n = count.wide() as usize;
+            for p in points.chunks_exact_mut(3).take(n) {
                 let moved = rot * Vector3::new(p[0], p[1], p[2]) + tr;
-                *p = [moved.x, moved.y, moved.z];
+                p.copy_from_slice(&[moved.x, moved.y, moved.z]);
                 let s = Point::from(moved);
                 if let Some((q, d2)) = map.closest_neighbor(&s, max_distance) {
                     let r = moved - q.coords;
@@ -182,9 +236,11 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
             }
         });
         let mut sum = [T::zero(); SYSTEM_LEN];
-        for sys in systems.iter() {
-            for (a, b) in sum.iter_mut().zip(sys.iter()) {
-                *a += *b;
+        for c in chunks.iter_mut() {
+            if let Some((_, sys, _)) = parts(c) {
+                for (a, b) in sum.iter_mut().zip(sys.iter()) {
+                    *a += *b;
+                }
             }
         }
         out.iterations += 1;

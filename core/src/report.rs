@@ -5,54 +5,110 @@ use crate::deskew::StampProblem;
 use crate::scalar::Real;
 use crate::Pose;
 
-/// Frame status: empty means ok; each set flag says how the frame was degraded.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Status(pub u16);
-
-impl Status {
+/// One way a frame was degraded; a [`Status`] holds any set of them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u16)]
+pub enum Flag {
     /// Timestamps were given but unusable (see [`FrameReport::stamp_problem`]); the scan was
     /// registered without deskewing.
-    pub const TIMESTAMPS_IGNORED: u16 = 1 << 0;
+    TimestampsIgnored = 1 << 0,
     /// ICP stopped at the iteration cap before converging.
-    pub const ITERATION_CAP: u16 = 1 << 1;
+    IterationCap = 1 << 1,
     /// No correspondence within the threshold: the pose is the constant-velocity prediction.
-    pub const NO_CORRESPONDENCES: u16 = 1 << 2;
+    NoCorrespondences = 1 << 2,
     /// A normal-equation system could not be solved (too few correspondences).
-    pub const SINGULAR: u16 = 1 << 3;
-    /// The scene constrains some direction weakly (corridor, open plane): the pose along it
-    /// mostly follows the prediction. See [`FrameReport::observability`].
-    pub const DEGENERATE: u16 = 1 << 4;
+    Singular = 1 << 3,
+    /// The scene constrains some direction weakly (corridor, open plane), or no structure was
+    /// measured at all: the pose along it mostly follows the prediction. See
+    /// [`FrameReport::observability`].
+    Degenerate = 1 << 4,
     /// Points with NaN or infinite coordinates were skipped.
-    pub const INVALID_POINTS: u16 = 1 << 5;
+    InvalidPoints = 1 << 5,
     /// The scan had more points than `Capacities::scan_points`; the rest were ignored.
-    pub const SCAN_TRUNCATED: u16 = 1 << 6;
+    ScanTruncated = 1 << 6,
     /// A downsampled cloud or the map was full and dropped content (see [`Dropped`]).
-    pub const CAPACITY: u16 = 1 << 7;
+    Capacity = 1 << 7,
+}
 
-    const NAMES: [(u16, &'static str); 8] = [
-        (Self::TIMESTAMPS_IGNORED, "timestamps_ignored"),
-        (Self::ITERATION_CAP, "iteration_cap"),
-        (Self::NO_CORRESPONDENCES, "no_correspondences"),
-        (Self::SINGULAR, "singular"),
-        (Self::DEGENERATE, "degenerate"),
-        (Self::INVALID_POINTS, "invalid_points"),
-        (Self::SCAN_TRUNCATED, "scan_truncated"),
-        (Self::CAPACITY, "capacity"),
+impl Flag {
+    /// Every flag, in bit order.
+    pub const ALL: [Flag; 8] = [
+        Flag::TimestampsIgnored,
+        Flag::IterationCap,
+        Flag::NoCorrespondences,
+        Flag::Singular,
+        Flag::Degenerate,
+        Flag::InvalidPoints,
+        Flag::ScanTruncated,
+        Flag::Capacity,
     ];
 
+    /// The flag's name in reports and `frames.csv` (`snake_case`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Flag::TimestampsIgnored => "timestamps_ignored",
+            Flag::IterationCap => "iteration_cap",
+            Flag::NoCorrespondences => "no_correspondences",
+            Flag::Singular => "singular",
+            Flag::Degenerate => "degenerate",
+            Flag::InvalidPoints => "invalid_points",
+            Flag::ScanTruncated => "scan_truncated",
+            Flag::Capacity => "capacity",
+        }
+    }
+
+    /// The flag called `name`, if any.
+    pub fn from_name(name: &str) -> Option<Flag> {
+        Flag::ALL.into_iter().find(|f| f.name() == name)
+    }
+}
+
+/// A frame's status: a set of [`Flag`]s; empty means ok.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Status(u16);
+
+impl Status {
     /// No flag set.
-    pub fn is_ok(self) -> bool {
+    pub const OK: Status = Status(0);
+
+    /// Whether no flag is set.
+    pub const fn is_ok(self) -> bool {
         self.0 == 0
     }
     /// Whether `flag` is set.
-    pub fn has(self, flag: u16) -> bool {
-        self.0 & flag != 0
+    pub const fn contains(self, flag: Flag) -> bool {
+        self.0 & flag as u16 != 0
     }
-    /// Sets `flag` when `on`.
-    pub fn set(&mut self, flag: u16, on: bool) {
+    /// Sets `flag` when `on`, clears it otherwise.
+    pub fn set(&mut self, flag: Flag, on: bool) {
         if on {
-            self.0 |= flag;
+            self.0 |= flag as u16;
+        } else {
+            self.0 &= !(flag as u16);
         }
+    }
+    /// This status with `flag` set.
+    pub const fn with(self, flag: Flag) -> Status {
+        Status(self.0 | flag as u16)
+    }
+    /// The set flags, in bit order.
+    pub fn flags(self) -> impl Iterator<Item = Flag> {
+        Flag::ALL.into_iter().filter(move |f| self.contains(*f))
+    }
+    /// The flags as bits (`Flag as u16` each), e.g. for a compact log.
+    pub const fn bits(self) -> u16 {
+        self.0
+    }
+}
+
+impl FromIterator<Flag> for Status {
+    fn from_iter<I: IntoIterator<Item = Flag>>(iter: I) -> Self {
+        let mut s = Status::OK;
+        for f in iter {
+            s.set(f, true);
+        }
+        s
     }
 }
 
@@ -63,15 +119,11 @@ impl defmt::Format for Status {
         if self.is_ok() {
             defmt::write!(f, "ok");
         }
-        let mut first = true;
-        for (bit, name) in Self::NAMES {
-            if self.has(bit) {
-                if !first {
-                    defmt::write!(f, "|");
-                }
-                defmt::write!(f, "{=str}", name);
-                first = false;
+        for (i, flag) in self.flags().enumerate() {
+            if i > 0 {
+                defmt::write!(f, "|");
             }
+            defmt::write!(f, "{=str}", flag.name());
         }
     }
 }
@@ -105,15 +157,11 @@ impl core::fmt::Display for Status {
         if self.is_ok() {
             return f.write_str("ok");
         }
-        let mut first = true;
-        for (bit, name) in Self::NAMES {
-            if self.has(bit) {
-                if !first {
-                    f.write_str("|")?;
-                }
-                f.write_str(name)?;
-                first = false;
+        for (i, flag) in self.flags().enumerate() {
+            if i > 0 {
+                f.write_str("|")?;
             }
+            f.write_str(flag.name())?;
         }
         Ok(())
     }
@@ -201,4 +249,36 @@ pub struct FrameReport<T: Real> {
     pub deskewed: bool,
     /// Why timestamps were given but not used.
     pub stamp_problem: Option<StampProblem>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn status_sets_and_clears_named_flags() {
+        let mut s = Status::OK;
+        assert!(s.is_ok());
+        s.set(Flag::Degenerate, true);
+        s.set(Flag::Capacity, true);
+        assert!(s.contains(Flag::Degenerate) && s.contains(Flag::Capacity));
+        assert!(!s.contains(Flag::Singular));
+        s.set(Flag::Degenerate, false);
+        assert_eq!(s.flags().count(), 1);
+        assert_eq!(s.flags().next(), Some(Flag::Capacity));
+        assert_eq!(s, Status::OK.with(Flag::Capacity));
+        s.set(Flag::Capacity, false);
+        assert!(s.is_ok());
+    }
+
+    #[test]
+    fn flag_names_are_unique_and_round_trip() {
+        for (i, f) in Flag::ALL.iter().enumerate() {
+            assert_eq!(Flag::from_name(f.name()), Some(*f));
+            assert_eq!(*f as u16, 1 << i);
+        }
+        assert_eq!(Flag::from_name("fine"), None);
+        let all: Status = Flag::ALL.into_iter().collect();
+        assert_eq!(all.bits(), 0xff);
+    }
 }

@@ -13,13 +13,12 @@
 mod common;
 
 use common::street;
-use kiss_odom_core::config::{BLOCK, CHUNK, MAX_RANGE_LIMIT, SYSTEM_LEN};
-use kiss_odom_core::local_map::{LocalMap, MapBuffers};
-use kiss_odom_core::registration::{align_points_to_map, IcpParams, System};
-use kiss_odom_core::voxel::VoxelKey;
+use kiss_odom_core::stages::{
+    align_points_to_map, work_words, IcpParams, LocalMap, VoxelKey, BLOCK,
+};
 use kiss_odom_core::{
     Capacities, Config, ConfigError, Exact, FrameError, Odometry, Point, PointCodec, Pose,
-    Quantized, Real, Sequential,
+    Quantized, Real, Sequential, MAX_RANGE_LIMIT,
 };
 use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
@@ -47,42 +46,16 @@ fn is_finite_pose<T: Real>(p: &Pose<T>) -> bool {
         && p.rotation.coords.iter().all(|v| v.is_finite())
 }
 
-/// A `LocalMap` over `Vec`s: the table has `slots` (a power of two) and the pool `blocks`.
-struct MapStore<P: PointCodec<f64>> {
-    keys: Vec<VoxelKey>,
-    heads: Vec<u32>,
-    counts: Vec<u8>,
-    points: Vec<P::Stored>,
-    links: Vec<u32>,
-}
-
-impl<P: PointCodec<f64>> MapStore<P> {
-    fn new(slots: usize, blocks: usize) -> Self {
-        Self {
-            keys: vec![[0; 3]; slots],
-            heads: vec![0; slots],
-            counts: vec![0; slots],
-            points: vec![bytemuck::Zeroable::zeroed(); blocks * BLOCK],
-            links: vec![0; blocks],
-        }
-    }
-
-    fn map(&mut self, voxel: f64, range: f64, n_max: u32, voxels: usize) -> LocalMap<'_, f64, P> {
-        LocalMap::new(
-            voxel,
-            range,
-            n_max,
-            voxels,
-            MapBuffers {
-                keys: &mut self.keys,
-                heads: &mut self.heads,
-                counts: &mut self.counts,
-                points: &mut self.points,
-                links: &mut self.links,
-            },
-        )
-        .expect("power-of-two table and matching pool")
-    }
+/// A `LocalMap` over a `Vec`: `voxels` voxels, `points` points.
+fn new_map<P: PointCodec<f64>>(
+    voxel: f64,
+    range: f64,
+    n_max: u32,
+    voxels: usize,
+    points: usize,
+) -> LocalMap<f64, P, Vec<u64>> {
+    let words = vec![0u64; LocalMap::<f64, P, Vec<u64>>::words(voxels, points)];
+    LocalMap::new(voxel, range, n_max, voxels, points, words).expect("N_max in 1..=255")
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -148,24 +121,23 @@ proptest! {
     ) {
         let truth = motion(t, r);
         let pts = scene(seed);
-        let mut store = MapStore::<Exact>::new(32_768, 16_384);
         // Voxel 1 m, N_max 20, r_max 100 m: the reference defaults for a 100 m sensor.
-        let mut map = store.map(1.0, 100.0, 20, 20_000);
+        let mut map = new_map::<Exact>(1.0, 100.0, 20, 20_000, 16_384 * BLOCK);
         let st = map.update(&pts, &Pose::identity());
         prop_assert_eq!(st.dropped_voxels + st.dropped_points, 0);
         // The source is what the map admitted, seen from `truth`: every point has a twin.
         let inv = truth.inverse();
         let mut source = Vec::with_capacity(map.points());
-        map.for_each_point(|_, p| {
+        map.view().for_each_point(|_, p| {
             let q = inv * p;
             source.push([q.x, q.y, q.z]);
         });
-        let mut systems: Vec<System<f64>> = vec![[0.0; SYSTEM_LEN]; source.len().div_ceil(CHUNK)];
+        let mut work = vec![0u64; work_words::<f64>(source.len())];
         // The second frame of a run: identity guess, the threshold's seed sigma = 2 m, so the
         // correspondence gate is 3 sigma = 6 m and the kernel sigma = 2 m.
         let params = IcpParams { convergence_criterion: GAMMA, max_iterations: 500 };
         let a = align_points_to_map(
-            &Sequential, &mut source, &mut systems, &map, &Pose::identity(), 6.0, 2.0, &params,
+            &Sequential, &source, &mut work, &map.view(), &Pose::identity(), 6.0, 2.0, &params,
         );
         let d = a.pose.inverse() * truth;
         let (et, er) = (d.translation.vector.norm(), d.rotation.angle());
@@ -221,10 +193,11 @@ fn any_pose(r: f64) -> impl Strategy<Value = Pose<f64>> {
 /// The map's voxels and points as seen through `for_each_point`: per-voxel counts and the
 /// first point of each voxel.
 fn census<P: PointCodec<f64>>(
-    map: &LocalMap<'_, f64, P>,
+    map: &LocalMap<f64, P, Vec<u64>>,
 ) -> BTreeMap<VoxelKey, (usize, Point<f64>)> {
     let mut voxels = BTreeMap::new();
-    map.for_each_point(|k, p| voxels.entry(*k).or_insert((0, p)).0 += 1);
+    map.view()
+        .for_each_point(|k, p| voxels.entry(*k).or_insert((0, p)).0 += 1);
     voxels
 }
 
@@ -233,18 +206,16 @@ fn check_map_caps<P: PointCodec<f64>>(
     range: f64,
     n_max: u32,
     max_voxels: usize,
-    slots_log2: u32,
     blocks: usize,
     updates: &[(Vec<[f64; 3]>, Pose<f64>)],
 ) -> Result<(), TestCaseError> {
-    let slots = 1usize << slots_log2;
-    let mut store = MapStore::<P>::new(slots, blocks);
-    let mut map = store.map(voxel, range, n_max, max_voxels);
-    prop_assert!(map.voxel_capacity() <= max_voxels && map.voxel_capacity() <= slots / 4 * 3);
-    prop_assert_eq!(map.point_capacity(), blocks * BLOCK);
+    let mut map = new_map::<P>(voxel, range, n_max, max_voxels, blocks * BLOCK);
+    prop_assert!(map.view().voxel_capacity() <= max_voxels);
+    prop_assert_eq!(map.view().point_capacity(), blocks * BLOCK);
     for (i, (pts, pose)) in updates.iter().enumerate() {
         map.update(pts, pose);
         let seen = census(&map);
+        let map = map.view();
         prop_assert!(
             map.voxels() <= map.voxel_capacity(),
             "update {}: {} voxels",
@@ -276,19 +247,17 @@ proptest! {
         range in 0.5..200.0f64,
         n_max in 1u32..=255,
         max_voxels in 1usize..=96,
-        slots_log2 in 0u32..=7,
         blocks in 0usize..=64,
         updates in prop::collection::vec((points(30.0, 120), any_pose(30.0)), 1..8),
         quantized in any::<bool>(),
     ) {
         if quantized {
-            check_map_caps::<Quantized>(voxel, range, n_max, max_voxels, slots_log2, blocks, &updates)?;
+            check_map_caps::<Quantized>(voxel, range, n_max, max_voxels, blocks, &updates)?;
         } else {
-            check_map_caps::<Exact>(voxel, range, n_max, max_voxels, slots_log2, blocks, &updates)?;
+            check_map_caps::<Exact>(voxel, range, n_max, max_voxels, blocks, &updates)?;
             // With exact storage the pruning rule is checkable: after an update, no voxel's
             // first point is `r_max` or more from the pose (squared distances, as pruned).
-            let mut store = MapStore::<Exact>::new(1 << slots_log2, blocks);
-            let mut map = store.map(voxel, range, n_max, max_voxels);
+            let mut map = new_map::<Exact>(voxel, range, n_max, max_voxels, blocks * BLOCK);
             for (pts, pose) in &updates {
                 map.update(pts, pose);
                 let origin = Point::from(pose.translation.vector);
@@ -344,7 +313,7 @@ proptest! {
         config.max_points_per_voxel = n_max;
         config.max_iterations = 30;
         let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
-        let mut odom = Odometry::<f64, Exact>::new(config, caps, &mut arena).unwrap();
+        let mut odom = Odometry::<f64, Exact, _>::new(config, caps, &mut arena[..]).unwrap();
         for (i, scan) in scans.iter().enumerate() {
             let Ok(r) = odom.register_frame(scan, None) else { continue };
             // Points are stored in blocks of BLOCK, so the pool holds `map_points` rounded up
@@ -546,7 +515,7 @@ fn check_no_bad_pose<T: Real, P: PointCodec<T>>(
         return Ok(());
     }
     let mut arena = vec![0u64; caps.arena_words::<T, P>()];
-    let mut odom = Odometry::<T, P>::new(config, caps, &mut arena).unwrap();
+    let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..]).unwrap();
     // Arbitrary points span the range (and beyond: up to 1e300 times it); the room is in voxels.
     let range = knobs.max_range.min(1e300);
     let voxel = knobs.max_range / knobs.voxel_div;
@@ -638,7 +607,7 @@ fn the_threshold_stays_finite_for_every_valid_range() {
     config.voxel_size = 1.0;
     let caps = common::caps();
     let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
-    let mut odom = Odometry::<f64, Exact>::new(config, caps, &mut arena).unwrap();
+    let mut odom = Odometry::<f64, Exact, _>::new(config, caps, &mut arena[..]).unwrap();
     for i in 0..4 {
         let r = odom
             .register_frame(&common::scan(&s, i, 40.0), None)

@@ -50,19 +50,23 @@ fn main() {
     rt::main()
 }
 
-use core::mem::MaybeUninit;
+use kiss_odom_core::Words;
+use static_cell::ConstStaticCell;
 use workload::ARENA_WORDS;
 
 /// Exit status when the painted stack was used up (the stack ran into whatever lies below).
 pub const EXIT_STACK_OVERFLOW: i32 = 98;
 
-/// All of the odometry's storage, sized at compile time by `Capacities::arena_words`. On the
-/// Cortex-M4F a full-scale arena goes to the PSRAM (external RAM on a real board).
+/// All of the odometry's storage, in one `static`: `Words` is const-constructed (zero words,
+/// sized at compile time by `Capacities::arena_words`) and `ConstStaticCell` hands it out once,
+/// so neither `static mut` nor `unsafe` is needed. On the Cortex-M4F a full-scale state goes to
+/// the PSRAM (external RAM on a real board, whose startup code must zero it like `.bss`; QEMU
+/// starts it zeroed).
 #[cfg_attr(
     all(target_arch = "arm", target_os = "none", feature = "full"),
     link_section = ".psram"
 )]
-static mut ARENA: MaybeUninit<[u64; ARENA_WORDS]> = MaybeUninit::uninit();
+static STATE: ConstStaticCell<Words<ARENA_WORDS>> = ConstStaticCell::new(Words::new());
 
 // The capacities are checked against the board at compile time (`arena_words` is a const fn):
 // on the M4F the SRAM also holds the stack, so leave it 256 KiB.
@@ -76,17 +80,6 @@ const _: () = assert!(
     ARENA_WORDS * 8 <= 16 << 20,
     "arena does not fit the 16 MiB PSRAM"
 );
-
-/// Hands out the arena, zeroed. Called once.
-fn arena() -> &'static mut [u64] {
-    // SAFETY: called once from the single thread of execution (see `app`), so this is the only
-    // reference to ARENA; zeroing makes every word initialised before the slice is formed.
-    unsafe {
-        let p = core::ptr::addr_of_mut!(ARENA).cast::<u64>();
-        p.write_bytes(0, ARENA_WORDS);
-        core::slice::from_raw_parts_mut(p, ARENA_WORDS)
-    }
-}
 
 /// The program, after the target's startup code: paints the stack `[lo, top)` if given, runs
 /// the workload, reports the stack high-water mark. Returns the exit status.
@@ -104,7 +97,10 @@ fn app(stack: Option<(usize, usize)>, insns: fn() -> Option<u64>, counter: &str)
     #[cfg(feature = "fault-probe")]
     rt::fault();
 
-    let mut code = workload::run(arena(), insns, counter);
+    let mut code = match STATE.try_take() {
+        Some(state) => workload::run(state, insns, counter),
+        None => workload::EXIT_CONFIG_ERROR,
+    };
 
     #[cfg(target_os = "none")]
     if let Some((lo, top)) = stack {

@@ -5,7 +5,7 @@
 //! `frame` and `pose` lines must agree character for character; `cost` and the summary lines
 //! carry the per-target measurements.
 
-use kiss_odom_core::{Capacities, Config, FrameReport, Odometry};
+use kiss_odom_core::{Capacities, Config, FrameReport, Odometry, Words};
 
 /// Scalar of this build (`f64` feature; `f32` otherwise).
 #[cfg(feature = "f64")]
@@ -100,7 +100,7 @@ pub const EXIT_CONFIG_ERROR: i32 = 3;
 
 /// Runs every embedded frame; returns the exit status (0 on success).
 /// `insns` reads the target's retired-instruction counter, if it has one.
-pub fn run(arena: &mut [u64], insns: fn() -> Option<u64>, counter: &str) -> i32 {
+pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: &str) -> i32 {
     let cfg = config();
     out!(
         "config scalar={} codec={} caps={} max_range={:e} voxel_size={:e} sequence={} first={} frames={} keep_every={}",
@@ -114,7 +114,7 @@ pub fn run(arena: &mut [u64], insns: fn() -> Option<u64>, counter: &str) -> i32 
         frames::FRAMES.len(),
         frames::KEEP_EVERY
     );
-    let mut odom = match Odometry::<Scalar, Codec>::new(cfg, CAPS, arena) {
+    let mut odom = match Odometry::<Scalar, Codec, _>::new(cfg, CAPS, state) {
         Ok(o) => o,
         Err(e) => {
             out!("error Odometry::new: {}", e);

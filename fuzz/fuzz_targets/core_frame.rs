@@ -6,7 +6,7 @@
 #![no_main]
 
 use arbitrary::{Result, Unstructured};
-use kiss_odom_core::config::BLOCK;
+use kiss_odom_core::stages::BLOCK;
 use kiss_odom_core::{
     Capacities, Config, Exact, FrameError, Odometry, PointCodec, Pose, Quantized, Real,
 };
@@ -101,7 +101,7 @@ fn run<T: Real, P: PointCodec<T>>(u: &mut Unstructured) -> Result<()> {
         return Ok(());
     }
     let mut arena = vec![0u64; caps.arena_words::<T, P>()];
-    let mut odom = Odometry::<T, P>::new(config, caps, &mut arena).expect("valid config");
+    let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..]).expect("valid config");
     let unit = config.voxel_size.wide();
     let mut last: Vec<[f64; 3]> = Vec::new();
     for _ in 0..8 {

@@ -14,11 +14,10 @@
 mod common;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use kiss_odom_core::arena::view;
-use kiss_odom_core::downsample::{scratch_words_for, voxel_downsample};
-use kiss_odom_core::local_map::{LocalMap, MapBuffers};
-use kiss_odom_core::preprocess::preprocess;
-use kiss_odom_core::registration::{align_points_to_map, IcpParams};
+use kiss_odom_core::stages::{
+    align_points_to_map, preprocess, scratch_words_for, voxel_downsample, work_words, IcpParams,
+    LocalMap,
+};
 use kiss_odom_core::{Capacities, Config, Exact, Odometry, Point, Real, Sequential};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -27,27 +26,18 @@ const SEQ: &str = "sequences/05";
 const UNDER_TEST: usize = 9;
 
 /// Arena words of a full-scale map.
-fn map_words() -> (usize, usize, usize) {
-    let l = Capacities::FULL_SCALE.layout(8, 24);
-    (l.map_slots, l.map_blocks, l.words[4..9].iter().sum())
+type Map<'a> = LocalMap<f64, Exact, &'a mut [u64]>;
+
+/// Words of a full-scale map.
+fn map_words() -> usize {
+    let caps = Capacities::FULL_SCALE;
+    Map::words(caps.map_voxels, caps.map_points)
 }
 
 /// A full-scale map over `words`.
-fn new_map(words: &mut [u64]) -> LocalMap<'_, f64, Exact> {
-    let (slots, blocks, _) = map_words();
-    let l = Capacities::FULL_SCALE.layout(8, 24);
-    let (a, rest) = words.split_at_mut(l.words[4]);
-    let (b, rest) = rest.split_at_mut(l.words[5]);
-    let (c, rest) = rest.split_at_mut(l.words[6]);
-    let (d, e) = rest.split_at_mut(l.words[7]);
-    let buf = MapBuffers {
-        keys: view(a, slots).unwrap(),
-        heads: view(b, slots).unwrap(),
-        counts: view(c, slots).unwrap(),
-        points: view(d, blocks * kiss_odom_core::config::BLOCK).unwrap(),
-        links: view(e, blocks).unwrap(),
-    };
-    LocalMap::new(1.0, 100.0, 20, Capacities::FULL_SCALE.map_voxels, buf).unwrap()
+fn new_map(words: &mut [u64]) -> Map<'_> {
+    let caps = Capacities::FULL_SCALE;
+    LocalMap::new(1.0, 100.0, 20, caps.map_voxels, caps.map_points, words).unwrap()
 }
 
 /// Stamps by azimuth, 1024 columns over a 0.1 s sweep.
@@ -133,8 +123,7 @@ fn stages(c: &mut Criterion) {
     let source = &source[..s];
 
     // Step 3: map update of frame 9 into the map of frames 0-8 (rebuilt, untimed, each time).
-    let (_, _, words) = map_words();
-    let mut map_arena = vec![0u64; words];
+    let mut map_arena = vec![0u64; map_words()];
     g.bench_function("map_update", |b| {
         b.iter_custom(|iters| {
             let mut total = Duration::ZERO;
@@ -169,20 +158,18 @@ fn stages(c: &mut Criterion) {
             found
         })
     });
-    let mut systems = vec![[0.0f64; kiss_odom_core::config::SYSTEM_LEN]; caps.source_points];
-    let mut src = source.to_vec();
+    let mut work = vec![0u64; work_words::<f64>(caps.source_points)];
     let one = IcpParams {
         convergence_criterion: 0.0,
         max_iterations: 1,
     };
     g.bench_function("icp_iteration", |b| {
         b.iter(|| {
-            src.copy_from_slice(source);
             align_points_to_map(
                 &Sequential,
-                &mut src,
-                &mut systems,
-                &map,
+                source,
+                &mut work,
+                &map.view(),
                 &pose,
                 max_distance,
                 cfg.kernel_scale * sigma,
@@ -197,12 +184,11 @@ fn stages(c: &mut Criterion) {
     let guess = rec.guesses[UNDER_TEST];
     g.bench_function("registration", |b| {
         b.iter(|| {
-            src.copy_from_slice(source);
             align_points_to_map(
                 &Sequential,
-                &mut src,
-                &mut systems,
-                &map,
+                source,
+                &mut work,
+                &map.view(),
                 &guess,
                 max_distance,
                 cfg.kernel_scale * sigma,
@@ -238,7 +224,8 @@ fn whole_frame<T: Real>(
             let mut total = Duration::ZERO;
             for _ in 0..iters {
                 let mut odom =
-                    Odometry::<T, Exact>::new(Config::new(T::of(100.0)), caps, &mut arena).unwrap();
+                    Odometry::<T, Exact, _>::new(Config::new(T::of(100.0)), caps, &mut arena[..])
+                        .unwrap();
                 for p in &pts[UNDER_TEST - 2..UNDER_TEST] {
                     odom.register_frame(p, None).unwrap();
                 }

@@ -20,8 +20,9 @@ mod common;
 use allocator_api2::alloc::{AllocError, Allocator};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use hashbrown::HashTable;
-use kiss_odom_core::downsample::{scratch_words_for, voxel_downsample};
-use kiss_odom_core::voxel::{point_to_voxel, table_hash, VoxelKey, NEIGHBOUR_SHIFTS};
+use kiss_odom_core::stages::{
+    point_to_voxel, scratch_words_for, table_hash, voxel_downsample, VoxelKey, NEIGHBOUR_SHIFTS,
+};
 use kiss_odom_core::{Capacities, Point};
 use std::alloc::Layout;
 use std::cell::Cell;

@@ -395,7 +395,7 @@ fn run_ours<T: Real, P: PointCodec<T>>(
     let reset = reset_peak_rss();
     let rss_before = rss_bytes();
     let mut arena = vec![0u64; caps.arena_words::<T, P>()];
-    let mut odom = Odometry::<T, P>::new(config, caps, &mut arena)
+    let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..])
         .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
     let n = frames.points.len();
     let mut run = OurRun {
@@ -555,9 +555,10 @@ fn drive<T: Real, P: PointCodec<T>>(
         map_voxels: hw.map_voxels.max(1),
         map_points: hw.map_point_slots.max(1),
     };
-    let state_high_water_bytes = hw_caps.validate().ok().map(|_| {
-        hw_caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<'static, T, P>>()
-    });
+    let state_high_water_bytes = hw_caps
+        .validate()
+        .ok()
+        .map(|_| hw_caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<T, P>>());
     let ref_voxels = ref_warm.as_ref().and_then(|r| r.map_voxels_peak);
     let n_max = settings.mapping.max_points_per_voxel as usize;
     let memory = Memory {

@@ -3,8 +3,7 @@
 //! The core fixes the chunking and the reduction order, so any thread count gives the same
 //! bits; the pool only decides who computes which chunk.
 
-use kiss_odom_core::registration::Executor;
-use kiss_odom_core::Sequential;
+use kiss_odom_core::{Executor, Sequential};
 use rayon::prelude::*;
 
 /// A pool of worker threads, or the calling thread alone.
@@ -29,20 +28,10 @@ impl Pool {
 }
 
 impl Executor for Pool {
-    fn for_each_chunk<P: Send, R: Send>(
-        &self,
-        points: &mut [P],
-        out: &mut [R],
-        f: &(dyn Fn(&mut [P], &mut R) + Sync),
-    ) {
+    fn for_each<C: Send>(&self, chunks: &mut [C], work: &(dyn Fn(&mut C) + Sync)) {
         match self {
-            Self::Single(s) => s.for_each_chunk(points, out, f),
-            Self::Rayon(pool) => pool.install(|| {
-                points
-                    .par_chunks_mut(kiss_odom_core::config::CHUNK)
-                    .zip(out.par_iter_mut())
-                    .for_each(|(c, r)| f(c, r));
-            }),
+            Self::Single(s) => s.for_each(chunks, work),
+            Self::Rayon(pool) => pool.install(|| chunks.par_iter_mut().for_each(work)),
         }
     }
 }

@@ -7,7 +7,7 @@ use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::{
-    Capacities, Exact, FrameError, FrameReport, Odometry, PointCodec, Quantized, Real, Status,
+    Capacities, Exact, Flag, FrameError, FrameReport, Odometry, PointCodec, Quantized, Real,
 };
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Serialize;
@@ -302,7 +302,7 @@ fn drive<T: Real, P: PointCodec<T>>(
     let config = settings.core_config::<T>()?;
     let caps = settings.capacities()?;
     let mut arena = vec![0u64; caps.arena_words::<T, P>()];
-    let mut odom = Odometry::<T, P>::new(config, caps, &mut arena)
+    let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..])
         .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
     let pool = Pool::new(settings.threads())?;
     let range = args.frames.unwrap_or(FrameRange {
@@ -381,7 +381,7 @@ fn drive<T: Real, P: PointCodec<T>>(
                 let row = match result {
                     Ok(report) => {
                         core_s += dt;
-                        if args.strict && report.status.has(Status::TIMESTAMPS_IGNORED) {
+                        if args.strict && report.status.contains(Flag::TimestampsIgnored) {
                             out.stop = Some(anyhow::anyhow!(
                                 "{}: timestamps unusable ({:?}), frame not deskewed (--strict)",
                                 frame.name,
@@ -391,6 +391,7 @@ fn drive<T: Real, P: PointCodec<T>>(
                         }
                         row_of(index, dt, &report)
                     }
+                    Err(e @ FrameError::Storage) => bail!("{}: {e}", frame.name),
                     Err(FrameError::EmptyScan) => {
                         bar.suspend(|| writeln!(err, "warning: {}: no usable point", frame.name))
                             .ok();

@@ -102,7 +102,7 @@ where
         voxel_size: T::of(voxel_size),
         ..Config::new(T::of(sel.max_range))
     };
-    let mut odom = Odometry::<T, P>::new(config, caps, &mut arena).unwrap();
+    let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..]).unwrap();
     let mut out = Vec::new();
     for (i, frame) in kitti::load(sel).unwrap().iter().enumerate() {
         let points: Vec<[T; 3]> = frame.points.iter().map(|p| p.map(T::of)).collect();

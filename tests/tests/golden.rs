@@ -8,13 +8,10 @@
 //! One test is ignored by default because it needs the kitti-mini data and reference poses:
 //! `whole_pipeline_poses_match_the_reference_on_kitti_mini` (see its doc comment).
 
-use kiss_odom_core::config::{BLOCK, CHUNK, SYSTEM_LEN};
-use kiss_odom_core::downsample::{scratch_words_for, voxel_downsample};
-use kiss_odom_core::local_map::{LocalMap, MapBuffers};
-use kiss_odom_core::preprocess::preprocess;
-use kiss_odom_core::registration::{align_points_to_map, IcpParams};
-use kiss_odom_core::threshold::AdaptiveThreshold;
-use kiss_odom_core::voxel::VoxelKey;
+use kiss_odom_core::stages::{
+    align_points_to_map, preprocess, scratch_words_for, voxel_downsample, work_words,
+    AdaptiveThreshold, IcpParams, LocalMap,
+};
 use kiss_odom_core::{Capacities, Config, Exact, Odometry, Point, Pose, Sequential};
 use nalgebra::{Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use serde_json::Value;
@@ -147,49 +144,26 @@ fn report(what: &str, worst: f64, tolerance: f64) {
 // ------------------------------------------------------------------------------------------
 // A local map on the heap
 
-struct MapStore {
-    keys: Vec<VoxelKey>,
-    heads: Vec<u32>,
-    counts: Vec<u8>,
-    points: Vec<[f64; 3]>,
-    links: Vec<u32>,
+type Map = LocalMap<f64, Exact, Vec<u64>>;
+
+/// The manifest's map on the heap with a table of 2^15 slots (as the goldens were checked with)
+/// and room for `points` points in any arrangement (a block per point in the worst case).
+fn new_map(manifest_map: &Value, points: usize) -> Map {
+    const VOXELS: usize = (1 << 15) / 4 * 3;
+    LocalMap::new(
+        num(&manifest_map["voxel_size"]),
+        num(&manifest_map["max_distance"]),
+        manifest_map["max_points_per_voxel"].as_u64().unwrap() as u32,
+        VOXELS,
+        points * 4,
+        vec![0; Map::words(VOXELS, points * 4)],
+    )
+    .expect("valid map")
 }
 
-impl MapStore {
-    /// Room for `points` points in any arrangement (a block per point in the worst case).
-    fn new(slots: usize, points: usize) -> Self {
-        let blocks = points;
-        Self {
-            keys: vec![[0; 3]; slots],
-            heads: vec![0; slots],
-            counts: vec![0; slots],
-            points: vec![[0.0; 3]; blocks * BLOCK],
-            links: vec![0; blocks],
-        }
-    }
-
-    fn map(&mut self, manifest_map: &Value) -> LocalMap<'_, f64, Exact> {
-        let slots = self.keys.len();
-        LocalMap::new(
-            num(&manifest_map["voxel_size"]),
-            num(&manifest_map["max_distance"]),
-            manifest_map["max_points_per_voxel"].as_u64().unwrap() as u32,
-            slots / 4 * 3,
-            MapBuffers {
-                keys: &mut self.keys,
-                heads: &mut self.heads,
-                counts: &mut self.counts,
-                points: &mut self.points,
-                links: &mut self.links,
-            },
-        )
-        .expect("valid map buffers")
-    }
-}
-
-fn map_points(map: &LocalMap<'_, f64, Exact>) -> Vec<[f64; 3]> {
+fn map_points(map: &Map) -> Vec<[f64; 3]> {
     let mut out = Vec::new();
-    map.for_each_point(|_, p| out.push([p.x, p.y, p.z]));
+    map.view().for_each_point(|_, p| out.push([p.x, p.y, p.z]));
     out
 }
 
@@ -336,8 +310,7 @@ fn map_update_and_pruning_keep_the_reference_points() {
         pts.iter().map(|p| source_of[&bit_key(p)]).collect()
     };
 
-    let mut store = MapStore::new(1 << 15, cloud.len());
-    let mut map = store.map(mm);
+    let mut map = new_map(mm, cloud.len());
     let st = map.update(&cloud, &pose);
     assert_eq!(
         (st.dropped_voxels, st.dropped_points),
@@ -387,12 +360,8 @@ fn map_update_and_pruning_keep_the_reference_points() {
 
 /// The registration map: the reference's map after `_update(0.5 m cloud, identity)`, rebuilt
 /// from its dumped points in their order (which reproduces every voxel and its point order).
-fn registration_map<'a>(
-    m: &Value,
-    input: &[[f64; 3]],
-    store: &'a mut MapStore,
-) -> LocalMap<'a, f64, Exact> {
-    let mut map = store.map(&m["map"]);
+fn registration_map(m: &Value, input: &[[f64; 3]], points: usize) -> Map {
+    let mut map = new_map(&m["map"], points);
     let cloud = u32s(&m["registration"]["map_points"]);
     let st = map.add_points(cloud.iter().map(|&i| Point::from(input[i])));
     assert_eq!(
@@ -417,8 +386,7 @@ fn correspondences_are_the_reference_pairs() {
     let extra = triples(&f64s(&c["extra_map_points"]));
     let queries = triples(&f64s(&c["queries"]));
     let pool: Vec<[f64; 3]> = input.iter().chain(&extra).copied().collect();
-    let mut store = MapStore::new(1 << 15, pool.len());
-    let mut map = registration_map(&m, &input, &mut store);
+    let mut map = registration_map(&m, &input, pool.len());
     let st = map.add_points(extra.iter().map(|p| Point::from(*p)));
     assert_eq!(
         st.added,
@@ -486,17 +454,15 @@ fn registration_converges_to_the_reference_pose() {
         convergence_criterion: num(&reg["convergence_criterion"]),
         max_iterations: reg["max_iterations"].as_u64().unwrap() as u32,
     };
-    let mut store = MapStore::new(1 << 15, input.len());
-    let map = registration_map(&m, &input, &mut store);
+    let map = registration_map(&m, &input, input.len());
     let mut worst = (0.0f64, 0.0f64);
     for run in reg["runs"].as_array().unwrap() {
-        let mut source = scan.clone();
-        let mut systems = vec![[0.0; SYSTEM_LEN]; source.len().div_ceil(CHUNK)];
+        let mut work = vec![0u64; work_words::<f64>(scan.len())];
         let al = align_points_to_map(
             &Sequential,
-            &mut source,
-            &mut systems,
-            &map,
+            &scan,
+            &mut work,
+            &map.view(),
             &guess,
             num(&run["max_distance"]),
             num(&run["kernel"]),
@@ -627,7 +593,8 @@ fn whole_pipeline_poses_match_the_reference_on_kitti_mini() {
                 .collect();
         files.sort();
         assert_eq!(files.len(), want.len(), "sequence {seq}");
-        let mut odom = Odometry::<f64, Exact>::new(Config::new(100.0), caps, &mut arena).unwrap();
+        let mut odom =
+            Odometry::<f64, Exact, _>::new(Config::new(100.0), caps, &mut arena[..]).unwrap();
         let mut seq_worst = (0.0f64, 0.0f64);
         for (file, w) in files.iter().zip(&want) {
             let raw = std::fs::read(file).unwrap();

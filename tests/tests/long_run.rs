@@ -13,7 +13,7 @@
 //! `cargo test --release -p kiss-odom-tests --test long_run -- --ignored --nocapture`.
 
 use kiss_odom::simulate::{Profile, SimParams, Simulation};
-use kiss_odom_core::{Capacities, Config, Odometry, Quantized, Status};
+use kiss_odom_core::{Capacities, Config, Flag, Odometry, Quantized};
 use std::time::Instant;
 
 const FRAMES: usize = 10_000;
@@ -50,7 +50,7 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
     config.voxel_size = 1.0;
     let mut arena = vec![0u64; caps.arena_words::<f32, Quantized>()];
     let arena_len = arena.len();
-    let mut odom = Odometry::<f32, Quantized>::new(config, caps, &mut arena)
+    let mut odom = Odometry::<f32, Quantized, _>::new(config, caps, &mut arena[..])
         .expect("SMALL fits its own arena");
     let state_bytes = odom.state_bytes();
 
@@ -58,7 +58,7 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
     // Frames that hit the ICP iteration cap, per window: the usual reason for a slowdown.
     let mut capped = vec![0usize; FRAMES / WINDOW];
     let mut points: Vec<[f32; 3]> = Vec::new();
-    let mut flags = [0usize; 8];
+    let mut flags = [0usize; Flag::ALL.len()];
     let mut dropped_points = 0u64;
     let mut travelled = 0.0;
     let mut worst_step = (0.0f64, 0usize);
@@ -82,7 +82,7 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
             && p.rotation.coords.iter().all(|v| v.is_finite());
         assert!(finite, "frame {k}: pose is not finite: {p:?}");
         assert!(
-            !r.status.has(Status::SCAN_TRUNCATED),
+            !r.status.contains(Flag::ScanTruncated),
             "frame {k}: {} points do not fit {} scan points",
             points.len(),
             caps.scan_points
@@ -102,9 +102,9 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
                 && r.map_points as usize <= caps.map_points,
             "frame {k}: occupancy past capacities: {r:?}"
         );
-        capped[k / WINDOW] += usize::from(r.status.has(Status::ITERATION_CAP));
-        for (bit, n) in flags.iter_mut().enumerate() {
-            *n += usize::from(r.status.has(1 << bit));
+        capped[k / WINDOW] += usize::from(r.status.contains(Flag::IterationCap));
+        for (flag, n) in Flag::ALL.iter().zip(flags.iter_mut()) {
+            *n += usize::from(r.status.contains(*flag));
         }
         let d = r.dropped;
         dropped_points += u64::from(d.merge_full + d.source_full + d.map_points_full);
@@ -145,21 +145,11 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
     let drift = (gt.translation.vector - est_t).norm();
     let first = rate(&core_secs[..WINDOW]);
     let last = rate(&core_secs[FRAMES - WINDOW..]);
-    let names = [
-        "timestamps_ignored",
-        "iteration_cap",
-        "no_correspondences",
-        "singular",
-        "degenerate",
-        "invalid_points",
-        "scan_truncated",
-        "capacity",
-    ];
-    let flagged: Vec<String> = names
+    let flagged: Vec<String> = Flag::ALL
         .iter()
         .zip(flags)
         .filter(|(_, n)| *n > 0)
-        .map(|(name, n)| format!("{name} {n}"))
+        .map(|(flag, n)| format!("{} {n}", flag.name()))
         .collect();
     println!(
         "{FRAMES} frames ({:.0} points each) in {:.1} s; core: first {WINDOW} {first:.1} \

@@ -416,7 +416,7 @@ fn odometry_error(dir: &Path, frames: usize, deskew: bool) -> (f64, f64) {
     let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
     let mut config = Config::new(100.0);
     config.deskew = deskew;
-    let mut odom = Odometry::<f64, Exact>::new(config, caps, &mut arena).unwrap();
+    let mut odom = Odometry::<f64, Exact, _>::new(config, caps, &mut arena[..]).unwrap();
     let gt = read_poses(dir);
     let (mut last, mut worst) = (0.0, 0.0f64);
     for (k, (_, t_gt)) in gt.iter().enumerate().take(frames) {

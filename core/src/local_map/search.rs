@@ -7,20 +7,20 @@
 //! margin) already rules out every point in it, either against the best so far or against the
 //! correspondence threshold, which the reference applies after the search anyway.
 
-use super::{LocalMap, PointCodec};
+use super::{MapView, PointCodec};
 use crate::scalar::{norm_lt, sqrt_lt, Real};
 use crate::voxel::{point_to_voxel, NEIGHBOUR_SHIFTS};
 use crate::Point;
 
-impl<T: Real, P: PointCodec<T>> LocalMap<'_, T, P> {
+impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
     /// The closest map point to `query` among the 27 surrounding voxels if its distance is
     /// below `max_distance`, with its squared distance.
     #[inline]
     pub fn closest_neighbor(&self, query: &Point<T>, max_distance: T) -> Option<(Point<T>, T)> {
-        if self.voxels == 0 {
+        if self.st.voxels == 0 {
             return None;
         }
-        let v = self.voxel_size;
+        let v = self.st.voxel_size;
         let key = point_to_voxel(query, v);
         let margin = v * T::of(1e-3);
         // Squared distance from the query to the slab of neighbour offsets -1, 0, +1, per axis.
@@ -62,10 +62,10 @@ impl<T: Real, P: PointCodec<T>> LocalMap<'_, T, P> {
     }
 }
 
-impl<T: Real, P: PointCodec<T>> LocalMap<'_, T, P> {
+impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
     /// Number of points and their covariance in the voxel holding `p`, if it exists.
     pub fn voxel_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
-        let slot = self.find(&point_to_voxel(p, self.voxel_size))?;
+        let slot = self.find(&point_to_voxel(p, self.st.voxel_size))?;
         let n = self.counts[slot] as usize;
         let mut mean = nalgebra::Vector3::zeros();
         self.for_each_in(slot, |q| {

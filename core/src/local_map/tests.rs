@@ -1,50 +1,18 @@
 use super::*;
-use crate::config::BLOCK;
 use crate::testutil::Rng;
 
-const SLOTS: usize = 64;
 const BLOCKS: usize = 40;
+const WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(48, BLOCKS * BLOCK);
 
-struct Bufs {
-    keys: [VoxelKey; SLOTS],
-    heads: [u32; SLOTS],
-    counts: [u8; SLOTS],
-    points: [[f64; 3]; BLOCKS * BLOCK],
-    links: [u32; BLOCKS],
-}
-
-impl Bufs {
-    fn new() -> Self {
-        Self {
-            keys: [[0; 3]; SLOTS],
-            heads: [0; SLOTS],
-            counts: [0; SLOTS],
-            points: [[0.0; 3]; BLOCKS * BLOCK],
-            links: [0; BLOCKS],
-        }
-    }
-    fn map(&mut self, max_voxels: usize, n_max: u32) -> LocalMap<'_, f64, Exact> {
-        LocalMap::new(
-            1.0,
-            10.0,
-            n_max,
-            max_voxels,
-            MapBuffers {
-                keys: &mut self.keys,
-                heads: &mut self.heads,
-                counts: &mut self.counts,
-                points: &mut self.points,
-                links: &mut self.links,
-            },
-        )
-        .unwrap()
-    }
+/// A map of 1 m voxels pruned at 10 m with `max_voxels` voxels and `BLOCKS` blocks.
+fn map(words: &mut [u64], max_voxels: usize, n_max: u32) -> LocalMap<f64, Exact, &mut [u64]> {
+    LocalMap::new(1.0, 10.0, n_max, max_voxels, BLOCKS * BLOCK, words).unwrap()
 }
 
 #[test]
 fn admission_skips_points_closer_than_the_map_resolution() {
-    let mut b = Bufs::new();
-    let mut map = b.map(32, 20);
+    let mut w = [0u64; WORDS];
+    let mut map = map(&mut w, 32, 20);
     // resolution = sqrt(1 / 20) = 0.2236 m
     let st = map.add_points(
         [
@@ -60,8 +28,8 @@ fn admission_skips_points_closer_than_the_map_resolution() {
 
 #[test]
 fn voxels_never_exceed_n_max_points() {
-    let mut b = Bufs::new();
-    let mut map = b.map(32, 5);
+    let mut w = [0u64; WORDS];
+    let mut map = map(&mut w, 32, 5);
     let mut rng = Rng(7);
     for _ in 0..200 {
         map.add_points(core::iter::once(Point::new(
@@ -71,7 +39,7 @@ fn voxels_never_exceed_n_max_points() {
         )));
     }
     let mut per_voxel = 0;
-    map.for_each_point(|k, _| {
+    map.view().for_each_point(|k, _| {
         assert_eq!(*k, [0, 0, 0]);
         per_voxel += 1;
     });
@@ -81,26 +49,26 @@ fn voxels_never_exceed_n_max_points() {
 
 #[test]
 fn full_table_and_pool_drop_new_content_and_count_it() {
-    let mut b = Bufs::new();
+    let mut w = [0u64; WORDS];
     // 3 voxels allowed; the pool has 40 blocks.
-    let mut map = b.map(3, 20);
+    let mut small = map(&mut w, 3, 20);
     let pts = (0..5).map(|i| Point::new(i as f64 + 0.5, 0.5, 0.5));
-    let st = map.add_points(pts);
-    assert_eq!((st.added, st.dropped_voxels, map.voxels()), (3, 2, 3));
-    assert_eq!(map.high_water_voxels(), 3);
+    let st = small.add_points(pts);
+    assert_eq!((st.added, st.dropped_voxels, small.voxels()), (3, 2, 3));
+    assert_eq!(small.view().high_water_voxels(), 3);
 
-    let mut b = Bufs::new();
-    let mut map = b.map(48, 20);
+    let mut w = [0u64; WORDS];
+    let mut map = map(&mut w, 48, 20);
     // 48 voxels would need 48 blocks; only 40 exist.
     let st = map.add_points((0..48).map(|i| Point::new((i % 8) as f64, (i / 8) as f64, 0.5)));
     assert_eq!((st.added, st.dropped_points), (40, 8));
-    assert_eq!(map.high_water_point_slots(), 40 * BLOCK);
+    assert_eq!(map.view().high_water_point_slots(), 40 * BLOCK);
 }
 
 #[test]
 fn pruning_removes_exactly_the_voxels_whose_first_point_is_beyond_range() {
-    let mut b = Bufs::new();
-    let mut map = b.map(48, 20);
+    let mut w = [0u64; WORDS];
+    let mut map = map(&mut w, 48, 20);
     let mut rng = Rng(99);
     let mut inside = 0;
     for _ in 0..60 {
@@ -118,18 +86,19 @@ fn pruning_removes_exactly_the_voxels_whose_first_point_is_beyond_range() {
     let removed = map.remove_far_from(&Point::origin());
     assert_eq!(map.voxels(), inside);
     assert!(removed > 0);
-    map.for_each_point(|_, p| assert!(p.coords.norm() < 10.0 + 1.8));
+    map.view()
+        .for_each_point(|_, p| assert!(p.coords.norm() < 10.0 + 1.8));
     // Every remaining voxel is still findable after the backward shifts.
     let mut keys = [[0i32; 3]; 48];
     let mut n = 0;
-    map.for_each_point(|k, _| {
+    map.view().for_each_point(|k, _| {
         if !keys[..n].contains(k) {
             keys[n] = *k;
             n += 1;
         }
     });
     for k in &keys[..n] {
-        assert!(map.find(k).is_some());
+        assert!(map.view().find(k).is_some());
     }
     // Freed blocks are reusable: fill the map again without pool drops.
     map.clear();
@@ -139,8 +108,8 @@ fn pruning_removes_exactly_the_voxels_whose_first_point_is_beyond_range() {
 
 #[test]
 fn closest_neighbor_equals_brute_force_over_the_27_voxels() {
-    let mut b = Bufs::new();
-    let mut map = b.map(48, 20);
+    let mut w = [0u64; WORDS];
+    let mut map = map(&mut w, 48, 20);
     let mut rng = Rng(12345);
     let mut stored = [Point::origin(); 160];
     let mut n = 0;
@@ -148,7 +117,7 @@ fn closest_neighbor_equals_brute_force_over_the_27_voxels() {
         let p = Point::new(rng.next() * 4.0, rng.next() * 4.0, rng.next() * 2.0);
         map.add_points(core::iter::once(p));
     }
-    map.for_each_point(|_, p| {
+    map.view().for_each_point(|_, p| {
         stored[n] = p;
         n += 1;
     });

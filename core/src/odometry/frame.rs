@@ -1,233 +1,264 @@
-//! One scan through the pipeline: points stream in (steps 1-2, first pass), then `finish`
-//! runs the rest (second downsampling pass, registration, map update).
+//! One scan through the paper's steps (Sec. III), once its points have arrived.
+//!
+//! [`Odometry::register`] reads like the paper; what the paper leaves out (the convergence
+//! floor of a finite scalar, the fallback for a non-finite ICP result, the frame report) lives
+//! in the named helpers below it.
 
 use super::Odometry;
+use crate::config::Config;
 use crate::degeneracy::observability;
-use crate::deskew::{StampProblem, TimeSpan};
+use crate::deskew::StampProblem;
 use crate::downsample::{reference_order, Dedup, Downsampled};
 use crate::error::FrameError;
 use crate::lie::renormalize;
-use crate::local_map::PointCodec;
-use crate::preprocess::{Drop, Preprocessor};
-use crate::registration::{align_points_to_map, Executor, IcpParams, Sequential};
-use crate::report::{Dropped, FrameReport, Status};
+use crate::local_map::{MapMut, PointCodec, UpdateStats};
+use crate::registration::{align_points_to_map, moved_points, Alignment, Executor, IcpParams};
+use crate::report::{Dropped, Flag, FrameReport, Status};
 use crate::scalar::Real;
-use crate::Point;
+use crate::storage::Storage;
+use crate::{Point, Pose};
 
-/// A scan being received: see [`Odometry::begin_frame`].
-pub struct FrameInput<'o, 'a, T: Real, P: PointCodec<T>> {
-    odom: &'o mut Odometry<'a, T, P>,
-    pre: Preprocessor<T>,
-    merged: Downsampled,
-    kept: usize,
-    input: usize,
-    out_of_range: u32,
-    dropped: Dropped,
-    stamp_problem: Option<StampProblem>,
+/// What receiving a scan produced (step 1 and the first pass of step 2, see `input`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Received {
+    /// The `alpha v` pass so far: points in the merge buffer, voxels dropped when it was full.
+    pub(super) merged: Downsampled,
+    /// Points kept by the crop (finite, within range).
+    pub(super) kept: usize,
+    /// Points offered, up to the scan capacity.
+    pub(super) input: usize,
+    /// Finite points outside the range shell.
+    pub(super) out_of_range: u32,
+    /// Input checks and capacity rules so far.
+    pub(super) dropped: Dropped,
+    /// Why the timestamps were not used, if they were given and unusable.
+    pub(super) stamp_problem: Option<StampProblem>,
+    /// Whether the scan is deskewed.
+    pub(super) deskews: bool,
+    /// The storage stopped holding the layout while the scan arrived.
+    pub(super) storage_lost: bool,
 }
 
-impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
-    pub(super) fn begin(
+/// Sizes of the two downsampled clouds.
+#[derive(Clone, Copy, Debug)]
+struct Clouds {
+    merge: usize,
+    source: usize,
+}
+
+impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
+    /// Steps 2-4 of Sec. III for a received scan, then the map update.
+    pub(super) fn register<E: Executor>(
         &mut self,
-        span: Option<Result<TimeSpan, StampProblem>>,
-    ) -> FrameInput<'_, 'a, T, P> {
-        let cfg = &self.config;
-        let pre = Preprocessor::with_span(cfg.min_range, cfg.max_range, span, &self.last_delta);
-        // Clears the first pass's grid; the layout sized scratch for the merge capacity.
-        let merged = Dedup::new(self.merge, self.scratch, cfg.voxel_size * cfg.alpha)
-            .map(Dedup::finish)
-            .unwrap_or_default();
-        FrameInput {
-            stamp_problem: pre.stamp_problem(),
-            odom: self,
-            pre,
-            merged,
-            kept: 0,
-            input: 0,
-            out_of_range: 0,
-            dropped: Dropped::default(),
+        exec: &E,
+        mut scan: Received,
+    ) -> Result<FrameReport<T>, FrameError> {
+        if scan.storage_lost {
+            return Err(FrameError::Storage);
         }
-    }
-}
-
-impl<T: Real, P: PointCodec<T>> FrameInput<'_, '_, T, P> {
-    /// Adds points of the scan (sensor frame) with their capture times, if any (one per
-    /// point). Points past `Capacities::scan_points` are counted and ignored. Times of the
-    /// wrong length, or single times that are not finite, leave those points undeskewed and
-    /// the report says so.
-    pub fn push(&mut self, points: &[[T; 3]], stamps: Option<&[f64]>) {
-        let room = self.odom.caps.scan_points.saturating_sub(self.input);
-        let used = points.len().min(room);
-        self.dropped.truncated += (points.len() - used) as u32;
-        self.input += used;
-        let deskews = self.pre.deskews();
-        let stamps = match stamps {
-            Some(s) if s.len() == points.len() => Some(s),
-            Some(_) if deskews => {
-                self.stamp_problem.get_or_insert(StampProblem::Length);
-                None
-            }
-            _ => None,
-        };
-        let odom = &mut *self.odom;
-        let alpha_v = odom.config.voxel_size * odom.config.alpha;
-        let Some(mut dedup) = Dedup::resume(odom.merge, odom.scratch, alpha_v, self.merged) else {
-            return;
-        };
-        for (i, raw) in points[..used].iter().enumerate() {
-            let t = stamps.map(|s| s[i]);
-            if deskews && t.is_some_and(|t| !t.is_finite()) {
-                self.stamp_problem.get_or_insert(StampProblem::NonFinite);
-            }
-            match self.pre.point(raw, t) {
-                Ok(p) => {
-                    self.kept += 1;
-                    dedup.push(&p);
-                }
-                Err(Drop::NonFinite) => self.dropped.non_finite += 1,
-                Err(Drop::OutOfRange) => self.out_of_range += 1,
-            }
-        }
-        self.merged = dedup.finish();
-    }
-
-    /// Registers the scan on the calling thread.
-    pub fn finish(self) -> Result<FrameReport<T>, FrameError> {
-        self.finish_with(&Sequential)
-    }
-
-    /// Registers the scan, running the correspondence search on `exec`. Returns
-    /// [`FrameError::EmptyScan`], with the odometry untouched, when no point was usable.
-    pub fn finish_with<E: Executor>(self, exec: &E) -> Result<FrameReport<T>, FrameError> {
-        let Self {
-            odom,
-            pre,
-            merged,
-            kept,
-            input,
-            out_of_range,
-            mut dropped,
-            stamp_problem,
-        } = self;
-        let cfg = odom.config;
-        if kept == 0 {
-            odom.merge_len = 0;
+        if scan.kept == 0 {
             return Err(FrameError::EmptyScan);
         }
-        // Step 2: both passes in the reference's order (see `downsample`).
-        let alpha_v = cfg.voxel_size * cfg.alpha;
-        let beta_v = cfg.voxel_size * cfg.beta;
-        dropped.merge_full = merged.dropped as u32;
-        let m = merged.kept;
-        reference_order(&mut odom.merge[..m], alpha_v, kept, odom.scratch);
-        let sourced = match Dedup::new(odom.source, odom.scratch, beta_v) {
-            Some(mut dedup) => {
-                for p in odom.merge[..m].iter() {
-                    dedup.push(&Point::from(*p));
-                }
-                dedup.finish()
-            }
-            None => Downsampled::default(),
-        };
-        dropped.source_full = sourced.dropped as u32;
-        let s = sourced.kept;
-        reference_order(&mut odom.source[..s], beta_v, m, odom.scratch);
-        odom.merge_len = m;
+        let cfg = self.config;
+        let parts = self
+            .layout
+            .split::<T>(&self.caps, self.storage.as_mut())
+            .map_err(|_| FrameError::Storage)?;
+        let mut map = MapMut::<T, P>::of(&mut self.map, &self.layout.map, parts.map)
+            .map_err(|_| FrameError::Storage)?;
 
-        // Steps 3 and 4: register against the map with the adaptive threshold.
-        let sigma = odom.threshold.sigma();
+        // Step 2 (Sec. III-B): P*_merge in the reference's order, then P^* from it.
+        let clouds = downsample(&cfg, &mut scan, parts.merge, parts.source, parts.scratch);
+        let (merge, source) = (&parts.merge[..clouds.merge], &parts.source[..clouds.source]);
+
+        // Step 1's prediction, Eq. (1), and step 4's threshold, tau = 3 sigma_t (Eq. (7)).
+        let prediction = self.last_pose * self.last_delta;
+        let sigma = self.threshold.sigma();
         let max_distance = cfg.max_correspondence_factor * sigma;
-        let initial_guess = odom.last_pose * odom.last_delta;
-        // gamma, but never below what the scalar can resolve where the points are: map points
-        // sit up to |t| + r_max from the origin, and their rounding (8 ulp of that) puts a floor
-        // under the correction ICP can reach. In f64 the floor is below 1e-10 m within 10 km,
-        // far under gamma = 1e-4, so results are the reference's; in f32 it passes gamma once
-        // |t| + r_max exceeds about 105 m, and without it ICP ran to the iteration cap on most
-        // frames beyond 600 m from the start (tests/tests/long_run.rs).
-        let reach = initial_guess.translation.vector.norm() + cfg.max_range;
-        let params = IcpParams {
-            convergence_criterion: cfg.convergence_criterion.max(T::of(8.0) * T::EPS * reach),
-            max_iterations: cfg.max_iterations,
-        };
-        let first_frame = odom.map.is_empty();
-        let al = align_points_to_map(
+
+        // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
+        let first_frame = map.view().is_empty();
+        let icp = align_points_to_map(
             exec,
-            &mut odom.source[..s],
-            odom.systems,
-            &odom.map,
-            &initial_guess,
+            source,
+            parts.icp,
+            &map.view(),
+            &prediction,
             max_distance,
             cfg.kernel_scale * sigma,
-            &params,
+            &icp_params(&cfg, &prediction),
         );
-        let finite = al.pose.translation.vector.iter().all(|v| v.is_finite())
-            && al.pose.rotation.coords.iter().all(|v| v.is_finite());
-        let new_pose = if finite { al.pose } else { initial_guess };
+        let (pose, finite) = finite_or(icp.pose, prediction);
         let observability = if first_frame {
             None
         } else {
-            observability(
-                &odom.map,
-                &odom.source[..s],
-                &Point::from(new_pose.translation.vector),
-                max_distance,
-            )
+            let moved = moved_points::<T>(parts.icp, clouds.source);
+            let origin = Point::from(pose.translation.vector);
+            observability(&map.view(), moved, clouds.source, &origin, max_distance)
         };
 
-        // Update: threshold, map, velocity and pose.
-        let deviation = initial_guess.inverse() * new_pose;
-        let model_error = odom.threshold.model_error(&deviation);
-        odom.threshold.update(&deviation);
-        let st = odom.map.update(&odom.merge[..m], &new_pose);
-        dropped.map_voxels_full = st.dropped_voxels as u32;
-        dropped.map_points_full = st.dropped_points as u32;
-        odom.last_delta = odom.last_pose.inverse() * new_pose;
-        odom.last_pose = new_pose;
-        renormalize(&mut odom.last_pose);
+        // Eq. (13): the model deviation is a sample of the adaptive threshold (Sec. III-D).
+        let deviation = prediction.inverse() * pose;
+        let model_error = self.threshold.model_error(&deviation);
+        self.threshold.update(&deviation);
 
-        odom.high.merge_points = odom.high.merge_points.max(m);
-        odom.high.source_points = odom.high.source_points.max(s);
-        odom.high.map_voxels = odom.map.high_water_voxels();
-        odom.high.map_point_slots = odom.map.high_water_point_slots();
+        // Sec. III-C: P*_merge joins the local map at T_t; voxels beyond r_max are pruned.
+        let update = map.update(merge, &pose);
 
-        let mut status = Status::default();
-        status.set(Status::TIMESTAMPS_IGNORED, stamp_problem.is_some());
-        status.set(Status::ITERATION_CAP, !al.converged && !al.singular);
-        status.set(
-            Status::NO_CORRESPONDENCES,
-            !first_frame && al.correspondences == 0,
-        );
-        status.set(Status::SINGULAR, !first_frame && (al.singular || !finite));
-        status.set(
-            Status::DEGENERATE,
-            observability.is_some_and(|o| o < cfg.degeneracy_ratio),
-        );
-        status.set(Status::INVALID_POINTS, dropped.non_finite > 0);
-        status.set(Status::SCAN_TRUNCATED, dropped.truncated > 0);
-        status.set(Status::CAPACITY, dropped.capacity());
-
-        let report = FrameReport {
-            index: odom.frames,
-            pose: odom.last_pose,
-            status,
-            iterations: al.iterations,
-            correspondences: al.correspondences,
+        self.advance(pose);
+        self.merge_len = clouds.merge;
+        self.source_len = clouds.source;
+        self.note_high_water(&clouds);
+        let facts = Facts {
             sigma,
-            rms: al.rms,
-            model_error,
+            icp,
+            finite,
+            first_frame,
             observability,
-            input_points: (input + dropped.truncated as usize) as u32,
-            out_of_range,
-            merge_points: m as u32,
-            source_points: s as u32,
-            map_voxels: odom.map.voxels() as u32,
-            map_points: odom.map.points() as u32,
-            pruned_voxels: st.pruned_voxels as u32,
-            dropped,
-            deskewed: pre.deskews() && stamp_problem.is_none(),
-            stamp_problem,
+            model_error,
+            update,
         };
-        odom.frames += 1;
+        let report = self.report(&scan, &clouds, &facts);
+        self.frames += 1;
         Ok(report)
     }
+
+    /// The pose becomes `T_t`; the constant-velocity model `dT_t = T_{t-1}^-1 T_t` (Eq. (1))
+    /// predicts the next scan and deskews it.
+    fn advance(&mut self, pose: Pose<T>) {
+        self.scan_motion = self.last_delta;
+        self.last_delta = self.last_pose.inverse() * pose;
+        self.last_pose = pose;
+        renormalize(&mut self.last_pose);
+    }
+
+    fn note_high_water(&mut self, clouds: &Clouds) {
+        let h = &mut self.high;
+        h.merge_points = h.merge_points.max(clouds.merge);
+        h.source_points = h.source_points.max(clouds.source);
+        h.map_voxels = self.map.high_water_voxels();
+        h.map_point_slots = self.map.high_water_point_slots();
+    }
+
+    /// The frame's report: the pose, what happened and what was dropped.
+    fn report(&self, scan: &Received, clouds: &Clouds, f: &Facts<T>) -> FrameReport<T> {
+        let mut dropped = scan.dropped;
+        dropped.map_voxels_full = f.update.dropped_voxels as u32;
+        dropped.map_points_full = f.update.dropped_points as u32;
+        FrameReport {
+            index: self.frames,
+            pose: self.last_pose,
+            status: status(&self.config, scan, &dropped, f),
+            iterations: f.icp.iterations,
+            correspondences: f.icp.correspondences,
+            sigma: f.sigma,
+            rms: f.icp.rms,
+            model_error: f.model_error,
+            observability: f.observability,
+            input_points: (scan.input + dropped.truncated as usize) as u32,
+            out_of_range: scan.out_of_range,
+            merge_points: clouds.merge as u32,
+            source_points: clouds.source as u32,
+            map_voxels: self.map.voxels() as u32,
+            map_points: self.map.points() as u32,
+            pruned_voxels: f.update.pruned_voxels as u32,
+            dropped,
+            deskewed: scan.deskews && scan.stamp_problem.is_none(),
+            stamp_problem: scan.stamp_problem,
+        }
+    }
+}
+
+/// What the steps found, for the report.
+struct Facts<T: Real> {
+    sigma: T,
+    icp: Alignment<T>,
+    finite: bool,
+    first_frame: bool,
+    observability: Option<T>,
+    model_error: T,
+    update: UpdateStats,
+}
+
+/// Step 2 (Sec. III-B): the merge cloud, already filtered as it streamed in, is put in the
+/// reference's order; the registration cloud is its `beta v` downsampling, in the same order.
+fn downsample<T: Real>(
+    cfg: &Config<T>,
+    scan: &mut Received,
+    merge: &mut [[T; 3]],
+    source: &mut [[T; 3]],
+    scratch: &mut [u64],
+) -> Clouds {
+    let alpha_v = cfg.voxel_size * cfg.alpha;
+    let beta_v = cfg.voxel_size * cfg.beta;
+    scan.dropped.merge_full = scan.merged.dropped as u32;
+    let m = scan.merged.kept;
+    reference_order(&mut merge[..m], alpha_v, scan.kept, scratch);
+    let sourced = match Dedup::new(source, scratch, beta_v) {
+        Some(mut dedup) => {
+            for p in merge[..m].iter() {
+                dedup.push(&Point::from(*p));
+            }
+            dedup.finish()
+        }
+        None => Downsampled::default(),
+    };
+    scan.dropped.source_full = sourced.dropped as u32;
+    let s = sourced.kept;
+    reference_order(&mut source[..s], beta_v, m, scratch);
+    Clouds {
+        merge: m,
+        source: s,
+    }
+}
+
+/// ICP's stopping rule: `gamma`, but never below what the scalar can resolve where the points
+/// are. Map points sit up to `|t| + r_max` from the origin, and their rounding (8 ulp of that)
+/// puts a floor under the correction ICP can reach. In f64 the floor is below 1e-10 m within
+/// 10 km, far under gamma = 1e-4, so results are the reference's; in f32 it passes gamma once
+/// `|t| + r_max` exceeds about 105 m, and without it ICP ran to the iteration cap on most frames
+/// beyond 600 m from the start (tests/tests/long_run.rs).
+fn icp_params<T: Real>(cfg: &Config<T>, prediction: &Pose<T>) -> IcpParams<T> {
+    let reach = prediction.translation.vector.norm() + cfg.max_range;
+    IcpParams {
+        convergence_criterion: cfg.convergence_criterion.max(T::of(8.0) * T::EPS * reach),
+        max_iterations: cfg.max_iterations,
+    }
+}
+
+/// ICP's pose and `true`, or the prediction and `false` if ICP produced a non-finite pose
+/// (the frame is then reported as singular).
+fn finite_or<T: Real>(pose: Pose<T>, prediction: Pose<T>) -> (Pose<T>, bool) {
+    let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+        && pose.rotation.coords.iter().all(|v| v.is_finite());
+    if finite {
+        (pose, true)
+    } else {
+        (prediction, false)
+    }
+}
+
+/// The frame's status flags.
+fn status<T: Real>(cfg: &Config<T>, scan: &Received, dropped: &Dropped, f: &Facts<T>) -> Status {
+    let mut status = Status::OK;
+    status.set(Flag::TimestampsIgnored, scan.stamp_problem.is_some());
+    status.set(Flag::IterationCap, !f.icp.converged && !f.icp.singular);
+    status.set(
+        Flag::NoCorrespondences,
+        !f.first_frame && f.icp.correspondences == 0,
+    );
+    status.set(
+        Flag::Singular,
+        !f.first_frame && (f.icp.singular || !f.finite),
+    );
+    // No structured voxel near any sample (a map of one huge voxel, say) measures nothing:
+    // that is no evidence of a constrained pose either.
+    status.set(
+        Flag::Degenerate,
+        !f.first_frame && f.observability.is_none_or(|o| o < cfg.degeneracy_ratio),
+    );
+    status.set(Flag::InvalidPoints, dropped.non_finite > 0);
+    status.set(Flag::ScanTruncated, dropped.truncated > 0);
+    status.set(Flag::Capacity, dropped.capacity());
+    status
 }

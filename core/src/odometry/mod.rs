@@ -10,104 +10,127 @@
 //! Eq. (1)), the first frame returns the identity and seeds the map, the second starts from an
 //! identity prediction, and the model deviation `(T_{t-1} T_pred)^-1 T_t` (Eq. (13)) feeds the
 //! adaptive threshold.
+//!
+//! [`frame`](self) holds the per-scan steps in paper order, `input` the streaming entry
+//! ([`FrameInput`]), `layout` where each buffer lives in the storage.
 
 mod frame;
+mod input;
+mod layout;
 
-pub use frame::FrameInput;
+pub use input::FrameInput;
+pub use layout::Layout;
 
-use crate::arena::Arena;
-use crate::config::{Capacities, Config, SYSTEM_LEN};
-use crate::deskew::TimeSpan;
+use crate::config::{Capacities, Config};
 use crate::error::{ConfigError, FrameError};
 use crate::lie::renormalize;
-use crate::local_map::{Exact, LocalMap, MapBuffers, PointCodec};
-use crate::registration::{Executor, Sequential, System};
+use crate::local_map::{Exact, MapMut, MapState, MapView, PointCodec};
+use crate::preprocess::{preprocess, Preprocessed};
+use crate::registration::{Executor, Sequential};
 use crate::report::{FrameReport, HighWater};
 use crate::scalar::Real;
+use crate::storage::Storage;
 use crate::threshold::AdaptiveThreshold;
 use crate::Pose;
+use core::marker::PhantomData;
 
-/// KISS-ICP odometry over a caller-owned arena.
+/// KISS-ICP odometry over storage it owns or borrows (see [`crate::storage`]).
 ///
 /// ```
 /// use kiss_odom_core::{Capacities, Config, Exact, Odometry};
 /// let caps = Capacities { scan_points: 1000, merge_points: 512, source_points: 128,
 ///                         map_voxels: 1024, map_points: 4096 };
-/// let mut arena = [0u64; 1 << 16];
-/// assert!(caps.arena_words::<f64, Exact>() <= arena.len());
-/// let mut odom = Odometry::<f64, Exact>::new(Config::new(50.0), caps, &mut arena).unwrap();
+/// let mut words = [0u64; 1 << 16];
+/// assert!(caps.arena_words::<f64, Exact>() <= words.len());
+/// let mut odom = Odometry::<f64, Exact, _>::new(Config::new(50.0), caps, &mut words[..]).unwrap();
 /// let scan = [[5.0, 1.0, 0.5], [6.0, -2.0, 0.1], [9.0, 3.0, -1.0]];
 /// let report = odom.register_frame(&scan, None).unwrap();
 /// assert_eq!(report.index, 0); // the first frame is the origin
 /// ```
-pub struct Odometry<'a, T: Real, P: PointCodec<T> = Exact> {
+pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut [u64]> {
+    storage: S,
+    layout: Layout,
     config: Config<T>,
     caps: Capacities,
-    merge: &'a mut [[T; 3]],
-    source: &'a mut [[T; 3]],
-    scratch: &'a mut [u64],
-    systems: &'a mut [System<T>],
-    map: LocalMap<'a, T, P>,
+    map: MapState<T>,
     threshold: AdaptiveThreshold<T>,
     last_pose: Pose<T>,
     last_delta: Pose<T>,
+    /// The motion the last registered scan was deskewed with (its `last_delta` at the time).
+    scan_motion: Pose<T>,
     frames: u64,
     merge_len: usize,
+    source_len: usize,
     high: HighWater,
-    arena_words: usize,
+    _codec: PhantomData<P>,
 }
 
-impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
-    /// Builds the pipeline in `arena`, which must hold `caps.arena_words::<T, P>()` words.
-    pub fn new(
-        config: Config<T>,
-        caps: Capacities,
-        arena: &'a mut [u64],
-    ) -> Result<Self, ConfigError> {
+impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
+    /// Builds the pipeline in `storage`, which must hold `caps.arena_words::<T, P>()` words
+    /// (more is fine). The words are cleared here.
+    pub fn new(config: Config<T>, caps: Capacities, mut storage: S) -> Result<Self, ConfigError> {
         config.validate()?;
         caps.validate()?;
-        let layout = caps.layout(core::mem::size_of::<T>(), core::mem::size_of::<P::Stored>());
-        let w = layout.words;
-        let mut a = Arena::new(arena);
-        let merge = a.slice(w[0], caps.merge_points)?;
-        let source = a.slice(w[1], caps.source_points)?;
-        let scratch = a.words(w[2])?;
-        let systems = a.slice::<[T; SYSTEM_LEN]>(w[3], layout.chunks)?;
-        let buf = MapBuffers {
-            keys: a.slice(w[4], layout.map_slots)?,
-            heads: a.slice(w[5], layout.map_slots)?,
-            counts: a.slice(w[6], layout.map_slots)?,
-            points: a.slice(w[7], layout.map_blocks * crate::config::BLOCK)?,
-            links: a.slice(w[8], layout.map_blocks)?,
-        };
-        let map = LocalMap::new(
+        let layout = Layout::new::<T, P>(&caps);
+        let words = storage.as_mut();
+        if words.len() < layout.words {
+            return Err(ConfigError::ArenaTooSmall);
+        }
+        words[..layout.words].fill(0);
+        let map = MapState::new(
             config.voxel_size,
             config.max_range,
             config.max_points_per_voxel,
             caps.map_voxels,
-            buf,
+            &layout.map,
         )
-        .ok_or(ConfigError::Capacity)?;
-        Ok(Self {
-            threshold: AdaptiveThreshold::new(
-                config.initial_threshold,
-                config.min_motion_threshold,
-                config.max_range,
-            ),
+        .ok_or(ConfigError::PointsPerVoxel)?;
+        let mut odom = Self {
+            storage,
+            layout,
+            threshold: Self::fresh_threshold(&config),
             config,
             caps,
-            merge,
-            source,
-            scratch,
-            systems,
             map,
             last_pose: Pose::identity(),
             last_delta: Pose::identity(),
+            scan_motion: Pose::identity(),
             frames: 0,
             merge_len: 0,
+            source_len: 0,
             high: HighWater::default(),
-            arena_words: a.used_words(),
-        })
+            _codec: PhantomData,
+        };
+        odom.map_mut()
+            .map_err(|_| ConfigError::ArenaTooSmall)?
+            .clear();
+        Ok(odom)
+    }
+
+    fn fresh_threshold(config: &Config<T>) -> AdaptiveThreshold<T> {
+        AdaptiveThreshold::new(
+            config.initial_threshold,
+            config.min_motion_threshold,
+            config.max_range,
+        )
+    }
+
+    /// Back to the state [`Self::new`] left: empty map, identity pose and velocity, the
+    /// threshold's seed, frame count and high-water marks at zero. The same frames then give
+    /// the same poses as on a new odometry.
+    pub fn reset(&mut self) {
+        if let Ok(mut map) = self.map_mut() {
+            map.clear();
+        }
+        self.map.reset_high_water();
+        self.threshold = Self::fresh_threshold(&self.config);
+        self.last_pose = Pose::identity();
+        self.last_delta = Pose::identity();
+        self.scan_motion = Pose::identity();
+        self.frames = 0;
+        self.merge_len = 0;
+        self.source_len = 0;
+        self.high = HighWater::default();
     }
 
     /// Registers one scan on the calling thread. See [`Self::register_frame_with`].
@@ -121,24 +144,24 @@ impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
 
     /// Registers one scan (sensor frame, any number of points) with optional per-point
     /// timestamps (seconds or any unit, any offset; one per point), running the
-    /// correspondence search on `exec`. Returns the end-of-sweep pose and a report, or
-    /// [`FrameError::EmptyScan`] with the state untouched when no point is usable.
+    /// correspondence search on `exec`. Returns the end-of-sweep pose and a report.
     ///
     /// Timestamps that are the wrong length, not finite or all equal are ignored (the scan is
     /// registered without deskewing) and the report says why.
+    ///
+    /// [`FrameError::EmptyScan`] (no finite point within range) leaves every part of the state
+    /// as it was: pose, velocity, map, threshold, frame count. The caller then either drops the
+    /// frame, or calls [`Self::skip_frame`] to advance one frame on the constant-velocity
+    /// model, which is what the reference does with an empty scan (`kiss-odom run` does that,
+    /// so poses stay one per frame).
     pub fn register_frame_with<E: Executor>(
         &mut self,
         exec: &E,
         points: &[[T; 3]],
         stamps: Option<&[f64]>,
     ) -> Result<FrameReport<T>, FrameError> {
-        let span = match stamps {
-            Some(s) if self.config.deskew => Some(TimeSpan::of(s, points.len())),
-            _ => None,
-        };
-        let stamps = stamps.filter(|s| s.len() == points.len());
-        let mut frame = self.begin(span);
-        frame.push(points, stamps);
+        let mut frame = self.begin_scan(stamps, points.len());
+        frame.push(points, stamps.filter(|s| s.len() == points.len()));
         frame.finish_with(exec)
     }
 
@@ -146,13 +169,14 @@ impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
     /// whole sweep: push points with [`FrameInput::push`], then register with
     /// [`FrameInput::finish`]. `span` is the sweep's first and last capture time (the
     /// reference normalises per-point times by the scan's own minimum and maximum); `None`
-    /// registers without deskewing. Dropping the `FrameInput` unfinished leaves the odometry as
-    /// it was.
-    pub fn begin_frame(&mut self, span: Option<(f64, f64)>) -> FrameInput<'_, 'a, T, P> {
-        let span = span
-            .filter(|_| self.config.deskew)
-            .map(|(min, max)| TimeSpan::new(min, max));
-        self.begin(span)
+    /// registers without deskewing.
+    ///
+    /// Dropping the [`FrameInput`] unfinished leaves the odometry as it was (pose, velocity,
+    /// map, threshold, counters, the last [`Self::source`]) except [`Self::merge_cloud`]: the
+    /// new scan streams into the merge cloud's buffer, so that is empty until the next scan
+    /// registers.
+    pub fn begin_frame(&mut self, span: Option<(f64, f64)>) -> FrameInput<'_, T, P, S> {
+        self.begin_span(span)
     }
 
     /// Advances one frame on the constant-velocity model alone, as the reference does when a
@@ -164,11 +188,15 @@ impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
         self.last_pose
     }
 
-    /// The latest pose.
+    /// The latest pose (kiss-icp's `last_pose`).
+    pub fn last_pose(&self) -> &Pose<T> {
+        &self.last_pose
+    }
+    /// The latest pose; the same as [`Self::last_pose`].
     pub fn pose(&self) -> &Pose<T> {
         &self.last_pose
     }
-    /// The latest relative motion (the constant-velocity model).
+    /// The latest relative motion, the constant-velocity model (kiss-icp's `last_delta`).
     pub fn last_delta(&self) -> &Pose<T> {
         &self.last_delta
     }
@@ -176,13 +204,51 @@ impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
     pub fn sigma(&self) -> T {
         self.threshold.sigma()
     }
-    /// The local map.
-    pub fn map(&self) -> &LocalMap<'a, T, P> {
-        &self.map
+    /// The local map (kiss-icp's `local_map`): its points, occupancy and search. An empty
+    /// view if the storage no longer holds the layout (see [`FrameError::Storage`]).
+    pub fn map(&self) -> MapView<'_, T, P> {
+        let words = self.storage.as_ref();
+        let map_words = words.get(self.layout.map.keys.start..).unwrap_or(&[]);
+        MapView::of(&self.map, &self.layout.map, map_words)
+            .unwrap_or_else(|_| MapView::empty(&self.map))
     }
-    /// The last frame's merge cloud (sensor frame, deskewed, in the reference's order).
+    /// The last registered scan's merge cloud `P*_merge` (sensor frame, deskewed, in the
+    /// reference's order); empty while a new scan is being received.
     pub fn merge_cloud(&self) -> &[[T; 3]] {
-        &self.merge[..self.merge_len]
+        self.cloud(self.layout.merge, self.merge_len)
+    }
+    /// The last registered scan's registration cloud `P^*` (sensor frame, deskewed): the
+    /// `source` kiss-icp's `register_frame` returns. `last_pose() * p` puts it in the world.
+    pub fn source(&self) -> &[[T; 3]] {
+        self.cloud(self.layout.source, self.source_len)
+    }
+    fn cloud(&self, region: crate::storage::Region, len: usize) -> &[[T; 3]] {
+        let words = self
+            .storage
+            .as_ref()
+            .get(region.start..region.end())
+            .unwrap_or(&[]);
+        crate::storage::view_ref(words, len).unwrap_or(&[])
+    }
+    /// Deskews and crops `points` as the last registered scan was (same motion, same range
+    /// shell) into `out`: the deskewed frame kiss-icp's `register_frame` returns, without the
+    /// odometry keeping a copy of every scan. Call it with the scan just registered.
+    pub fn deskewed_scan(
+        &self,
+        points: &[[T; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut [[T; 3]],
+    ) -> Preprocessed {
+        let c = &self.config;
+        preprocess(
+            points,
+            stamps,
+            &self.scan_motion,
+            c.min_range,
+            c.max_range,
+            c.deskew,
+            out,
+        )
     }
     /// Parameters in use.
     pub fn config(&self) -> &Config<T> {
@@ -192,6 +258,10 @@ impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
     pub fn capacities(&self) -> &Capacities {
         &self.caps
     }
+    /// Where each buffer lives in the storage.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
     /// Frames registered or skipped so far.
     pub fn frames(&self) -> u64 {
         self.frames
@@ -200,8 +270,27 @@ impl<'a, T: Real, P: PointCodec<T>> Odometry<'a, T, P> {
     pub fn high_water(&self) -> HighWater {
         self.high
     }
-    /// Bytes of state: the arena in use plus this struct. Fixed at construction.
+    /// Bytes of state: the storage in use plus this struct. Fixed at construction.
     pub fn state_bytes(&self) -> usize {
-        self.arena_words * 8 + core::mem::size_of::<Self>()
+        self.layout.words * 8 + core::mem::size_of::<Self>()
+    }
+
+    /// Write access to the map.
+    fn map_mut(&mut self) -> Result<MapMut<'_, T, P>, FrameError> {
+        let words = self.storage.as_mut();
+        let map_words = words
+            .get_mut(self.layout.map.keys.start..)
+            .ok_or(FrameError::Storage)?;
+        MapMut::of(&mut self.map, &self.layout.map, map_words).map_err(|_| FrameError::Storage)
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl<T: Real, P: PointCodec<T>> Odometry<T, P, alloc::boxed::Box<[u64]>> {
+    /// An odometry owning a heap buffer of exactly the size `caps` needs (host only: the
+    /// `alloc` feature, which bare-metal builds do not enable).
+    pub fn boxed(config: Config<T>, caps: Capacities) -> Result<Self, ConfigError> {
+        let words = alloc::vec![0u64; caps.arena_words::<T, P>()].into_boxed_slice();
+        Self::new(config, caps, words)
     }
 }

@@ -1,31 +1,35 @@
 use super::*;
-use crate::config::BLOCK;
-use crate::local_map::{Exact, MapBuffers};
+use crate::local_map::{Exact, LocalMap};
 use crate::testutil::yard;
-use crate::voxel::VoxelKey;
 use nalgebra::{Translation3, UnitQuaternion};
 
-const SLOTS: usize = 4096;
-const BLOCKS: usize = 2048;
+const VOXELS: usize = 3000;
+const POINTS: usize = 8192;
+const MAP_WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(VOXELS, POINTS);
 const N: usize = 6000;
+const WORK_WORDS: usize = work_words::<f64>(N);
 
 struct Fixture {
-    keys: [VoxelKey; SLOTS],
-    heads: [u32; SLOTS],
-    counts: [u8; SLOTS],
-    points: [[f64; 3]; BLOCKS * BLOCK],
-    links: [u32; BLOCKS],
+    map: [u64; MAP_WORDS],
+    work: [u64; WORK_WORDS],
     scene: [[f64; 3]; N],
     n: usize,
 }
 
+impl Fixture {
+    /// A map over the fixture's words holding the scene.
+    fn map(&mut self) -> LocalMap<f64, Exact, &mut [u64]> {
+        let mut map = LocalMap::new(1.0, 100.0, 20, VOXELS, POINTS, &mut self.map[..]).unwrap();
+        let st = map.update(&self.scene[..self.n], &Pose::identity());
+        assert_eq!(st.added, self.n, "every scene point must be in the map");
+        map
+    }
+}
+
 fn fixture() -> Fixture {
     let mut f = Fixture {
-        keys: [[0; 3]; SLOTS],
-        heads: [0; SLOTS],
-        counts: [0; SLOTS],
-        points: [[0.0; 3]; BLOCKS * BLOCK],
-        links: [0; BLOCKS],
+        map: [0; MAP_WORDS],
+        work: [0; WORK_WORDS],
         scene: [[0.0; 3]; N],
         n: 0,
     };
@@ -50,34 +54,19 @@ fn register(
 ) -> Alignment<f64> {
     let scene = f.scene;
     let n = f.n;
-    let mut map = LocalMap::<f64, Exact>::new(
-        1.0,
-        100.0,
-        20,
-        3000,
-        MapBuffers {
-            keys: &mut f.keys,
-            heads: &mut f.heads,
-            counts: &mut f.counts,
-            points: &mut f.points,
-            links: &mut f.links,
-        },
-    )
-    .unwrap();
-    let st = map.update(&scene[..n], &Pose::identity());
-    assert_eq!(st.added, n, "every scene point must be in the map");
     let mut source = [[0.0; 3]; N];
     let inv = truth.inverse();
     for (s, p) in source.iter_mut().zip(scene[..n].iter()) {
         let q = inv * Point::from(*p);
         *s = [q.x, q.y, q.z];
     }
-    let mut systems = [[0.0; SYSTEM_LEN]; N / CHUNK + 1];
+    let mut work = f.work;
+    let map = f.map();
     align_points_to_map(
         exec,
-        &mut source[..n],
-        &mut systems,
-        &map,
+        &source[..n],
+        &mut work,
+        &map.view(),
         guess,
         6.0,
         2.0,
@@ -114,35 +103,21 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
     let truth = Pose::translation(0.4, 0.1, 0.0);
     let scene = f.scene;
     let n = f.n;
-    let mut map = LocalMap::<f64, Exact>::new(
-        1.0,
-        100.0,
-        20,
-        3000,
-        MapBuffers {
-            keys: &mut f.keys,
-            heads: &mut f.heads,
-            counts: &mut f.counts,
-            points: &mut f.points,
-            links: &mut f.links,
-        },
-    )
-    .unwrap();
-    map.update(&scene[..n], &Pose::identity());
     let mut source = [[0.0; 3]; N];
     for (s, p) in source.iter_mut().zip(scene[..n].iter()) {
         *s = [p[0] - 0.4, p[1] - 0.1, p[2]];
     }
-    let mut systems = [[0.0; SYSTEM_LEN]; N / CHUNK + 1];
+    let mut work = f.work;
+    let map = f.map();
     let capped = IcpParams {
         convergence_criterion: 1e-4,
         max_iterations: 2,
     };
     let a = align_points_to_map(
         &Sequential,
-        &mut source[..n],
-        &mut systems,
-        &map,
+        &source[..n],
+        &mut work,
+        &map.view(),
         &Pose::identity(),
         6.0,
         2.0,
@@ -172,14 +147,9 @@ fn zero_correspondences_leave_the_initial_guess_and_flag_singular() {
 /// Runs chunks in reverse order: a stand-in for a thread pool finishing in any order.
 struct Reversed;
 impl Executor for Reversed {
-    fn for_each_chunk<P: Send, R: Send>(
-        &self,
-        points: &mut [P],
-        out: &mut [R],
-        f: &(dyn Fn(&mut [P], &mut R) + Sync),
-    ) {
-        for (c, r) in points.chunks_mut(CHUNK).zip(out.iter_mut()).rev() {
-            f(c, r);
+    fn for_each<C: Send>(&self, chunks: &mut [C], work: &(dyn Fn(&mut C) + Sync)) {
+        for c in chunks.iter_mut().rev() {
+            work(c);
         }
     }
 }

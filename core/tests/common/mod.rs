@@ -121,7 +121,7 @@ pub fn run<T: Real, P: PointCodec<T>>(
     scans: &[Vec<[T; 3]>],
 ) -> Vec<Pose<T>> {
     let mut arena = vec![0u64; caps.arena_words::<T, P>()];
-    let mut odom = Odometry::<T, P>::new(config, caps, &mut arena).unwrap();
+    let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..]).unwrap();
     scans
         .iter()
         .map(|s| odom.register_frame(s, None).unwrap().pose)

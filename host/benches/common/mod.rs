@@ -68,7 +68,8 @@ pub struct Recorded {
 pub fn record(scans: &[Scan]) -> Recorded {
     let caps = Capacities::FULL_SCALE;
     let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
-    let mut odom = Odometry::<f64, Exact>::new(Config::new(100.0), caps, &mut arena).unwrap();
+    let mut odom =
+        Odometry::<f64, Exact, _>::new(Config::new(100.0), caps, &mut arena[..]).unwrap();
     let mut rec = Recorded {
         merge: Vec::new(),
         poses: Vec::new(),

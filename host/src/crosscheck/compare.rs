@@ -2,9 +2,7 @@
 //! position by position, point sets by their exact bits, and maps (whose points each side
 //! computes with its own rounding) by nearest matching.
 
-use kiss_odom_core::config::BLOCK;
-use kiss_odom_core::local_map::{LocalMap, MapBuffers};
-use kiss_odom_core::voxel::VoxelKey;
+use kiss_odom_core::stages::LocalMap;
 use kiss_odom_core::{Config, Exact};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion};
 use std::collections::{HashMap, HashSet};
@@ -174,52 +172,28 @@ pub fn slope(v: &[f64]) -> f64 {
     sxy / sxx
 }
 
-/// Heap buffers for a [`LocalMap`] (the core never allocates; the cross-check may).
-pub struct MapStore {
-    keys: Vec<VoxelKey>,
-    heads: Vec<u32>,
-    counts: Vec<u8>,
-    points: Vec<[f64; 3]>,
-    links: Vec<u32>,
-}
+/// A map on the heap (the core never allocates; the cross-check may).
+pub type HeapMap = LocalMap<f64, Exact, Vec<u64>>;
 
-impl MapStore {
-    /// Room for `points` points in any arrangement (one block per point at worst).
-    pub fn for_points(points: usize) -> Self {
-        let slots = ((points.max(1) * 4).div_ceil(3) + 1).next_power_of_two();
-        let blocks = points.max(1);
-        Self {
-            keys: vec![[0; 3]; slots],
-            heads: vec![0; slots],
-            counts: vec![0; slots],
-            points: vec![[0.0; 3]; blocks * BLOCK],
-            links: vec![0; blocks],
-        }
-    }
-
-    /// An empty map with the voxel size, range and points per voxel of `cfg`.
-    pub fn map(&mut self, cfg: &Config<f64>) -> Option<LocalMap<'_, f64, Exact>> {
-        let slots = self.keys.len();
-        LocalMap::new(
-            cfg.voxel_size,
-            cfg.max_range,
-            cfg.max_points_per_voxel,
-            slots / 4 * 3,
-            MapBuffers {
-                keys: &mut self.keys,
-                heads: &mut self.heads,
-                counts: &mut self.counts,
-                points: &mut self.points,
-                links: &mut self.links,
-            },
-        )
-    }
+/// An empty map with the voxel size, range and points per voxel of `cfg` and room for `points`
+/// points in any arrangement (one voxel per point at worst).
+pub fn heap_map(cfg: &Config<f64>, points: usize) -> Result<HeapMap, kiss_odom_core::ConfigError> {
+    let n = points.max(1);
+    let words = vec![0u64; HeapMap::words(n, n)];
+    LocalMap::new(
+        cfg.voxel_size,
+        cfg.max_range,
+        cfg.max_points_per_voxel,
+        n,
+        n,
+        words,
+    )
 }
 
 /// Every point of a map, voxel by voxel.
-pub fn map_points(map: &LocalMap<'_, f64, Exact>) -> Vec<[f64; 3]> {
+pub fn map_points(map: &HeapMap) -> Vec<[f64; 3]> {
     let mut out = Vec::with_capacity(map.points());
-    map.for_each_point(|_, p| out.push([p.x, p.y, p.z]));
+    map.view().for_each_point(|_, p| out.push([p.x, p.y, p.z]));
     out
 }
 

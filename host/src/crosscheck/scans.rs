@@ -8,7 +8,7 @@ use super::report::{Row, Section};
 use super::stages::{downsample, downsample_cmd, points_row, TOL_REAL_DESKEW_M};
 use crate::settings::Settings;
 use anyhow::{bail, Context, Result};
-use kiss_odom_core::preprocess::preprocess;
+use kiss_odom_core::stages::preprocess;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::path::{Path, PathBuf};
 

@@ -104,7 +104,7 @@ pub fn run_ours<T: Real>(
     let config = settings.core_config::<T>()?;
     let caps = settings.capacities()?;
     let mut arena = vec![0u64; caps.arena_words::<T, Exact>()];
-    let mut odom = Odometry::<T, Exact>::new(config, caps, &mut arena)
+    let mut odom = Odometry::<T, Exact, _>::new(config, caps, &mut arena[..])
         .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
     let pool = Pool::new(threads)?;
     let points: Vec<Vec<[T; 3]>> = frames
@@ -130,6 +130,7 @@ pub fn run_ours<T: Real>(
                 t.capacity_frames += usize::from(report.dropped.capacity());
                 t.status.push(report.status.to_string());
             }
+            Err(e @ FrameError::Storage) => anyhow::bail!("frame {}: {e}", f.index),
             Err(FrameError::EmptyScan) => {
                 odom.skip_frame();
                 t.empty_frames += 1;

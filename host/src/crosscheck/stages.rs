@@ -9,19 +9,18 @@
 //! deviations of the reference's run.
 
 use super::compare::{
-    bits, map_points, matched_distance, max_point_difference, order_difference, pose_difference,
-    pose_of, set_difference, MapStore,
+    bits, heap_map, map_points, matched_distance, max_point_difference, order_difference,
+    pose_difference, pose_of, set_difference,
 };
 use super::driver::{arg, pose_arg, read_f64s, read_json, read_points, Driver};
 use super::report::{sci, Row, Section};
 use crate::io::Frame;
 use crate::settings::Settings;
 use anyhow::{Context, Result};
-use kiss_odom_core::config::{CHUNK, SYSTEM_LEN};
-use kiss_odom_core::downsample::{scratch_words_for, voxel_downsample};
-use kiss_odom_core::preprocess::preprocess;
-use kiss_odom_core::registration::{align_points_to_map, IcpParams};
-use kiss_odom_core::threshold::AdaptiveThreshold;
+use kiss_odom_core::stages::{
+    align_points_to_map, preprocess, scratch_words_for, voxel_downsample, work_words,
+    AdaptiveThreshold, IcpParams,
+};
 use kiss_odom_core::{Config, Point, Sequential};
 use nalgebra::{Isometry3, Matrix4, Translation3, UnitQuaternion, Vector3};
 use std::path::PathBuf;
@@ -426,10 +425,7 @@ fn map_and_registration(
     // Map: updates (add, then prune) at the reference's poses.
     let ref_map = read_points(&dump)?;
     let total: usize = merges.iter().map(|(m, _)| m.len()).sum();
-    let mut store = MapStore::for_points(total);
-    let mut map = store
-        .map(cfg)
-        .ok_or_else(|| anyhow::anyhow!("cannot build a map"))?;
+    let mut map = heap_map(cfg, total).map_err(|e| anyhow::anyhow!("cannot build a map: {e}"))?;
     let mut full = 0;
     for (m, pose) in &merges {
         let st = map.update(m, pose);
@@ -453,10 +449,8 @@ fn map_and_registration(
     }
 
     // Correspondences against the reference's map, rebuilt from its dump on both sides.
-    let mut store = MapStore::for_points(ref_map.len());
-    let mut map = store
-        .map(cfg)
-        .ok_or_else(|| anyhow::anyhow!("cannot build a map"))?;
+    let mut map =
+        heap_map(cfg, ref_map.len()).map_err(|e| anyhow::anyhow!("cannot build a map: {e}"))?;
     let st = map.add_points(ref_map.iter().map(|p| Point::from(*p)));
     let rebuilt = st.added == ref_map.len();
     let pj = read_json(&pairs)?;
@@ -524,13 +518,12 @@ fn map_and_registration(
     };
     for ((what, g, sg), file) in runs.iter().zip(&reg_files) {
         let want = pose_of(&matrix_of(&read_json(file)?["pose"])?);
-        let mut source = source_b.to_vec();
-        let mut systems = vec![[0.0; SYSTEM_LEN]; source.len().div_ceil(CHUNK)];
+        let mut work = vec![0u64; work_words::<f64>(source_b.len())];
         let al = align_points_to_map(
             &Sequential,
-            &mut source,
-            &mut systems,
-            &map,
+            source_b,
+            &mut work,
+            &map.view(),
             g,
             cfg.max_correspondence_factor * sg,
             cfg.kernel_scale * sg,

@@ -1,0 +1,294 @@
+//! The embedding surface of `Odometry`: storage it owns, `reset`, scans streamed and abandoned,
+//! and what a user of kiss-icp's `KissICP` reaches for (last pose and delta, the deskewed scan,
+//! the registration cloud, the local map's points).
+
+mod common;
+
+use common::*;
+use kiss_odom_core::stages::{preprocess, scratch_words_for, voxel_downsample};
+use kiss_odom_core::{
+    Capacities, Config, Exact, FrameReport, Odometry, Pose, Quantized, Storage, Words,
+};
+
+const RANGE: f64 = 40.0;
+const FRAMES: usize = 12;
+
+fn scans() -> Vec<Vec<[f64; 3]>> {
+    let s = street(11);
+    (0..FRAMES).map(|i| scan(&s, i, RANGE)).collect()
+}
+
+/// Per-point times by azimuth over a 0.1 s sweep, so every frame is deskewed.
+fn stamps(scan: &[[f64; 3]]) -> Vec<f64> {
+    scan.iter()
+        .map(|p| 5.0 + (p[1].atan2(p[0]) + std::f64::consts::PI) / std::f64::consts::TAU * 0.1)
+        .collect()
+}
+
+/// A tracker that owns its odometry and the odometry's storage: nothing borrowed, so it can
+/// live in a struct field, be moved, boxed or sent to another thread.
+struct Tracker<S: Storage> {
+    odom: Odometry<f64, Exact, S>,
+    poses: Vec<Pose<f64>>,
+}
+
+impl<S: Storage + Send + 'static> Tracker<S> {
+    fn new(storage: S) -> Self {
+        let odom = Odometry::new(Config::new(RANGE), caps(), storage).unwrap();
+        Self {
+            odom,
+            poses: Vec::new(),
+        }
+    }
+
+    fn track(&mut self, scan: &[[f64; 3]]) {
+        let r = self.odom.register_frame(scan, Some(&stamps(scan))).unwrap();
+        self.poses.push(r.pose);
+    }
+}
+
+fn borrowed_run(frames: &[Vec<[f64; 3]>]) -> Vec<Pose<f64>> {
+    let mut words = vec![0u64; caps().arena_words::<f64, Exact>()];
+    let mut odom =
+        Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps(), &mut words[..]).unwrap();
+    frames
+        .iter()
+        .map(|s| odom.register_frame(s, Some(&stamps(s))).unwrap().pose)
+        .collect()
+}
+
+#[test]
+fn a_struct_owns_its_odometry_and_storage_and_tracks_like_a_borrowed_one() {
+    let frames = scans();
+    let want = borrowed_run(&frames);
+    // Owned words in a Vec; the tracker is moved to another thread half way.
+    let mut t = Tracker::new(vec![0u64; caps().arena_words::<f64, Exact>()]);
+    for s in &frames[..FRAMES / 2] {
+        t.track(s);
+    }
+    let mut t = std::thread::spawn(move || {
+        for s in &scans()[FRAMES / 2..] {
+            t.track(s);
+        }
+        t
+    })
+    .join()
+    .unwrap();
+    assert_eq!(t.poses, want);
+    // Owned words in a boxed slice, behind a Box of the tracker.
+    let mut boxed = Box::new(Tracker::new(
+        vec![0u64; caps().arena_words::<f64, Exact>()].into_boxed_slice(),
+    ));
+    for s in &frames {
+        boxed.track(s);
+    }
+    assert_eq!(boxed.poses, want);
+    t.odom.reset();
+    t.poses.clear();
+    t.track(&frames[0]);
+    assert_eq!(t.poses[0], want[0]);
+}
+
+#[test]
+fn const_constructed_words_hold_a_whole_odometry() {
+    // As `common::caps()`, which is not a const fn.
+    const CAPS: Capacities = Capacities {
+        scan_points: 100_000,
+        merge_points: 65_536,
+        source_points: 16_384,
+        map_voxels: 16_384,
+        map_points: 262_144,
+    };
+    const N: usize = CAPS.arena_words::<f32, Quantized>();
+    // Boxed only so the test thread's stack need not hold it; firmware puts it in a `static`.
+    let mut words: Box<Words<N>> = Box::new(Words::new());
+    let mut odom =
+        Odometry::<f32, Quantized, _>::new(Config::new(RANGE as f32), CAPS, &mut *words).unwrap();
+    let frames = scans();
+    for (i, s) in frames.iter().enumerate() {
+        let r = odom.register_frame(&narrow::<f32>(s), None).unwrap();
+        assert!(r.dropped == Default::default(), "frame {i}: {:?}", r.dropped);
+        let err = error_at(&widen(&r.pose), i);
+        assert!(err < 0.02, "frame {i}: {err} m");
+    }
+    assert_eq!(odom.state_bytes(), N * 8 + std::mem::size_of_val(&odom));
+}
+
+#[cfg(feature = "alloc")]
+#[test]
+fn a_boxed_odometry_sizes_its_own_storage() {
+    let frames = scans();
+    let mut odom = Odometry::<f64, Exact, _>::boxed(Config::new(RANGE), caps()).unwrap();
+    let got: Vec<_> = frames
+        .iter()
+        .map(|s| odom.register_frame(s, Some(&stamps(s))).unwrap().pose)
+        .collect();
+    assert_eq!(got, borrowed_run(&frames));
+    assert_eq!(odom.layout().words, caps().arena_words::<f64, Exact>());
+}
+
+#[test]
+fn reset_gives_the_poses_of_a_new_odometry() {
+    let frames = scans();
+    let want = borrowed_run(&frames);
+    let mut t = Tracker::new(vec![0u64; caps().arena_words::<f64, Exact>()]);
+    // Another drive first: the reset must forget its map, velocity and threshold.
+    for s in frames.iter().rev().take(5) {
+        t.track(s);
+    }
+    let hw_before = t.odom.high_water();
+    assert!(hw_before.map_voxels > 0 && t.odom.frames() == 5);
+    t.odom.reset();
+    assert_eq!(t.odom.frames(), 0);
+    assert_eq!(t.odom.map().voxels(), 0);
+    assert_eq!(*t.odom.last_pose(), Pose::identity());
+    assert_eq!(*t.odom.last_delta(), Pose::identity());
+    assert_eq!(t.odom.high_water(), Default::default());
+    assert!(t.odom.merge_cloud().is_empty() && t.odom.source().is_empty());
+    t.poses.clear();
+    for s in &frames {
+        t.track(s);
+    }
+    assert_eq!(t.poses, want);
+}
+
+/// Everything a frame leaves behind that the next frame or a user can observe.
+#[derive(Debug, PartialEq)]
+struct Observed {
+    report: FrameReport<f64>,
+    merge: Vec<[f64; 3]>,
+    source: Vec<[f64; 3]>,
+    map: Vec<[f64; 3]>,
+    sigma: f64,
+    frames: u64,
+}
+
+fn observe<S: Storage>(odom: &Odometry<f64, Exact, S>, report: FrameReport<f64>) -> Observed {
+    let mut map = Vec::new();
+    odom.map().for_each_point(|_, p| map.push([p.x, p.y, p.z]));
+    Observed {
+        report,
+        merge: odom.merge_cloud().to_vec(),
+        source: odom.source().to_vec(),
+        map,
+        sigma: odom.sigma(),
+        frames: odom.frames(),
+    }
+}
+
+#[test]
+fn an_abandoned_streamed_frame_changes_nothing_the_next_frame_sees() {
+    let frames = scans();
+    let (mut a, mut b) = (
+        vec![0u64; caps().arena_words::<f64, Exact>()],
+        vec![0u64; caps().arena_words::<f64, Exact>()],
+    );
+    let mut clean = Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps(), &mut a[..]).unwrap();
+    let mut tried = Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps(), &mut b[..]).unwrap();
+    for (i, s) in frames.iter().enumerate() {
+        let t = stamps(s);
+        let before = (
+            *tried.last_pose(),
+            *tried.last_delta(),
+            tried.sigma(),
+            tried.frames(),
+        );
+        let (hw, source) = (tried.high_water(), tried.source().to_vec());
+        {
+            // Another sweep starts, a third of it arrives, then it is abandoned.
+            let other = &frames[(i + 5) % FRAMES];
+            let ot = stamps(other);
+            let mut input = tried.begin_frame(Some((5.0, 5.1)));
+            for (p, q) in other[..other.len() / 3].chunks(700).zip(ot.chunks(700)) {
+                input.push(p, Some(q));
+            }
+        }
+        let after = (
+            *tried.last_pose(),
+            *tried.last_delta(),
+            tried.sigma(),
+            tried.frames(),
+        );
+        assert_eq!(
+            before, after,
+            "frame {i}: state changed by an abandoned sweep"
+        );
+        assert_eq!((tried.high_water(), tried.source().to_vec()), (hw, source));
+        // The merge buffer served the abandoned sweep: empty, never a mix of two scans.
+        assert!(tried.merge_cloud().is_empty());
+
+        let want = clean.register_frame(s, Some(&t)).unwrap();
+        let got = tried.register_frame(s, Some(&t)).unwrap();
+        assert_eq!(observe(&tried, got), observe(&clean, want), "frame {i}");
+    }
+}
+
+#[test]
+fn an_empty_scan_keeps_the_last_clouds() {
+    let frames = scans();
+    let mut words = vec![0u64; caps().arena_words::<f64, Exact>()];
+    let mut odom =
+        Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps(), &mut words[..]).unwrap();
+    let r = odom.register_frame(&frames[0], None).unwrap();
+    let kept = observe(&odom, r);
+    assert!(odom.register_frame(&[[1e9, 0.0, 0.0]], None).is_err());
+    let mut input = odom.begin_frame(None);
+    input.push(&[[f64::NAN; 3]], None);
+    assert!(input.finish().is_err());
+    assert_eq!(observe(&odom, r), kept);
+}
+
+#[test]
+fn the_last_frame_is_available_as_kiss_icp_returns_it() {
+    let frames = scans();
+    let cfg = Config::new(RANGE);
+    let mut words = vec![0u64; caps().arena_words::<f64, Exact>()];
+    let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps(), &mut words[..]).unwrap();
+    let mut last_pose = Pose::identity();
+    let mut last_delta = Pose::identity();
+    for (i, s) in frames.iter().enumerate() {
+        let t = stamps(s);
+        let r = odom.register_frame(s, Some(&t)).unwrap();
+        // kiss-icp: last_delta = last_pose^-1 * new_pose, last_pose = new_pose.
+        let delta = last_pose.inverse() * r.pose;
+        assert!((odom.last_delta().to_homogeneous() - delta.to_homogeneous()).amax() < 1e-12);
+        assert_eq!(*odom.last_pose(), r.pose);
+
+        // The deskewed scan is the frame preprocessed with the motion before this frame.
+        let mut deskewed = vec![[0.0; 3]; s.len()];
+        let n = odom.deskewed_scan(s, Some(&t), &mut deskewed).kept;
+        let mut want = vec![[0.0; 3]; s.len()];
+        let m = preprocess(s, Some(&t), &last_delta, 0.0, RANGE, true, &mut want).kept;
+        assert_eq!(&deskewed[..n], &want[..m], "frame {i}");
+
+        // Both clouds are its downsamplings, in the reference's order.
+        let caps = caps();
+        let mut merge = vec![[0.0; 3]; caps.merge_points];
+        let mut scratch = vec![0u64; scratch_words_for(caps.merge_points)];
+        let v = cfg.voxel_size;
+        let mk = voxel_downsample(&deskewed[..n], v * cfg.alpha, &mut merge, &mut scratch)
+            .unwrap()
+            .kept;
+        assert_eq!(odom.merge_cloud(), &merge[..mk], "frame {i}");
+        let mut source = vec![[0.0; 3]; caps.merge_points];
+        let sk = voxel_downsample(&merge[..mk], v * cfg.beta, &mut source, &mut scratch)
+            .unwrap()
+            .kept;
+        assert_eq!(odom.source(), &source[..sk], "frame {i}");
+        assert_eq!(r.source_points as usize, sk);
+
+        // The local map holds what the report says.
+        let mut points = 0;
+        odom.map().for_each_point(|_, _| points += 1);
+        assert_eq!(
+            (points, odom.map().voxels()),
+            (r.map_points as usize, r.map_voxels as usize)
+        );
+        last_delta = *odom.last_delta();
+        last_pose = r.pose;
+    }
+}
+
+fn widen(p: &Pose<f32>) -> Pose<f64> {
+    nalgebra::convert(*p)
+}
