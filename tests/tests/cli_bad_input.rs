@@ -926,3 +926,24 @@ fn no_frames_or_no_such_path_exit_1_with_the_reason() {
     let line = r.failed_naming(&data);
     assert!(line.contains("no frames"), "{line}");
 }
+
+/// Finding 12 of issue 12: `kiss-odom eval` on finite poses far enough apart for the error
+/// sums to overflow reported the ATE as `null` (JSON has no inf) with exit 0.
+#[test]
+fn eval_with_an_infinite_ate_fails_naming_the_metric() {
+    let dir = tempfile::tempdir().unwrap();
+    let est = dir.path().join("est.txt");
+    let gt = dir.path().join("gt.txt");
+    let line = |x: f64| format!("1 0 0 {x:e} 0 1 0 0 0 0 1 0\n");
+    std::fs::write(&est, [0.0, 1e200, -1e200].map(line).concat()).unwrap();
+    std::fs::write(&gt, [0.0, 1.0, 2.0].map(line).concat()).unwrap();
+    let args: Vec<OsString> = vec![
+        "eval".into(),
+        est.clone().into(),
+        gt.into(),
+        "--json".into(),
+    ];
+    let r = kiss_odom_tests::kiss_odom(&args, dir.path());
+    let line = r.failed_with(&["est.txt", "ate_m is inf"]);
+    println!("{line}");
+}
