@@ -15,6 +15,7 @@
 //! a PointCloud2 message.
 
 use kiss_odom::io::{bin, pcd, ply, poses};
+use kiss_odom_tests::panic_text;
 use nalgebra::Matrix4;
 use std::ffi::OsString;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -87,14 +88,6 @@ struct Row {
     index: usize,
     deskewed: bool,
     status: String,
-}
-
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "(non-string panic payload)".into())
 }
 
 /// `kiss-odom run INPUT --out OUT --quiet EXTRA...` in-process. A panic anywhere inside is

@@ -132,9 +132,9 @@ pub fn ground_truth_matrices(seq: &Path) -> Result<Option<(PathBuf, Vec<Matrix4<
     Ok(Some((path, lidar)))
 }
 
-/// Whether `seq` is a KITTI benchmark sequence folder for `--format auto`: a `calib.txt` and no
-/// `timestamps/` folder (per-point times mark the generic layout). A KITTI-shaped folder whose
-/// `calib.txt` has no usable `Tr` is refused: read as generic, its scans would miss the KITTI
+/// Whether `seq` is a KITTI benchmark sequence folder for `--format auto`: a `calib.txt` with
+/// `Tr` and no `timestamps/` folder (per-point times mark the generic layout). A KITTI-shaped
+/// folder (`calib.txt` beside `velodyne/`) whose `calib.txt` has no usable `Tr` is refused: read as generic, its scans would miss the KITTI
 /// correction and its camera-frame ground truth would be scored as LiDAR poses.
 pub fn detect(seq: &Path) -> Result<bool> {
     let calib = seq.join("calib.txt");
@@ -143,12 +143,14 @@ pub fn detect(seq: &Path) -> Result<bool> {
     }
     match read_calib_tr(&calib) {
         Ok(_) => Ok(true),
-        Err(e) => bail!(
+        Err(e) if seq.join("velodyne").is_dir() => bail!(
             "{e:#}: {} looks like a KITTI sequence (calib.txt beside velodyne/), but without Tr \
              (LiDAR to camera) its camera-frame ground truth cannot be scored as LiDAR poses; \
-             add the Tr line, or run with --format kitti to read it as KITTI without ground truth",
+             add the Tr line, or run with --format kitti to read it as KITTI without ground \
+             truth (if it is not KITTI data, name its frame format with --format)",
             seq.display()
         ),
+        Err(_) => Ok(false),
     }
 }
 

@@ -922,6 +922,62 @@ mod tests {
     }
 
     #[test]
+    fn messages_out_of_log_time_order_are_reordered_with_a_chunk_index_and_flagged_without() {
+        let dir = tempfile::tempdir().unwrap();
+        let order = [0u32, 2, 1, 4, 3];
+        for chunked in [true, false] {
+            let mut w = mcap::WriteOptions::new()
+                .use_chunks(chunked)
+                .chunk_size(Some(400))
+                .create(std::io::Cursor::new(Vec::new()))
+                .unwrap();
+            let sid = w
+                .add_schema(POINTCLOUD2_SCHEMA, "ros2msg", b"# test")
+                .unwrap();
+            let ch = w
+                .add_channel(sid, "/points", CDR_ENCODING, &BTreeMap::new())
+                .unwrap();
+            for (seq, &k) in order.iter().enumerate() {
+                let header = MessageHeader {
+                    channel_id: ch,
+                    sequence: seq as u32,
+                    log_time: u64::from(k) * 100_000_000,
+                    publish_time: u64::from(k) * 100_000_000,
+                };
+                w.write_to_known_channel(&header, &cloud_msg(k)).unwrap();
+            }
+            w.finish().unwrap();
+            let p = save(&dir, "late.mcap", &w.into_inner().into_inner());
+            let mut ds = open_mcap(&p, None).unwrap();
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(err, None);
+            let ks: Vec<f64> = items.iter().map(|i| frame(i).points[0][0]).collect();
+            if chunked {
+                let w = ds.info.warnings.join("\n");
+                assert!(
+                    w.contains("not in time order") && w.contains("message 2"),
+                    "{w}"
+                );
+                for (k, item) in items.iter().enumerate() {
+                    assert_frame_k(frame(item), k, k as u32);
+                }
+            } else {
+                // No chunk index to reorder by: file order, and the late frames say so.
+                assert_eq!(ks, [0.0, 2.0, 1.0, 4.0, 3.0]);
+                let late: Vec<usize> = (0..5)
+                    .filter(|&i| {
+                        frame(&items[i])
+                            .warnings
+                            .iter()
+                            .any(|w| w.contains("out of time order"))
+                    })
+                    .collect();
+                assert_eq!(late, [2, 4]);
+            }
+        }
+    }
+
+    #[test]
     fn several_cloud_topics_need_a_topic_and_the_chosen_one_is_read() {
         let dir = tempfile::tempdir().unwrap();
         let channels = [

@@ -751,6 +751,55 @@ mod tests {
     }
 
     #[test]
+    fn messages_out_of_time_order_are_read_in_time_order_indexed_or_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD), conn("/chatter", STRING)];
+        let msgs: Vec<_> = [0u32, 2, 1, 4, 3]
+            .iter()
+            .flat_map(|&k| {
+                let t = u64::from(k) * 100_000_000;
+                [(0, t, cloud_msg(k)), (1, t + 1, b"\x02\0\0\0hi".to_vec())]
+            })
+            .collect();
+        for indexed in [true, false] {
+            for per_chunk in [1, 3, 100] {
+                let (bytes, _) = write_bag(&conns, &msgs, per_chunk, indexed);
+                let p = save(&dir, "late.bag", &bytes);
+                let mut ds = open_bag(&p, None).unwrap();
+                let w = ds.info.warnings.join("\n");
+                assert!(
+                    w.contains("not in time order") && w.contains("message 2"),
+                    "{w}"
+                );
+                let (items, err) = drain(ds.frames.as_mut());
+                assert_eq!(err, None);
+                assert_eq!(items.len(), 5);
+                for (k, item) in items.iter().enumerate() {
+                    assert_frame_k(frame(item), k, k as u32);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_chunk_larger_than_the_record_limit_is_refused_before_it_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let msgs: Vec<_> = (0..2).map(|k| (0, u64::from(k), cloud_msg(k))).collect();
+        let (mut bytes, chunks) = write_bag(&[conn("/points", CLOUD)], &msgs, 1, true);
+        let at = chunks[1] as usize;
+        let size = at + bytes[at..].windows(5).position(|w| w == b"size=").unwrap() + 5;
+        bytes[size..size + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+        let p = save(&dir, "huge.bag", &bytes);
+        let (items, err) = drain(open_bag(&p, None).unwrap().frames.as_mut());
+        assert_eq!(items.len(), 1);
+        let err = err.unwrap();
+        assert!(
+            err.contains("4294967295 bytes") && err.contains("limit"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn seek_lands_on_the_frame_sequential_reading_gives() {
         let dir = tempfile::tempdir().unwrap();
         let conns = [conn("/points", CLOUD), conn("/chatter", STRING)];
