@@ -50,6 +50,12 @@ pub struct Config<T> {
     /// A frame is flagged degenerate when the weakest direction of the point-to-plane
     /// information (from map voxel normals) carries less than this fraction of the strongest.
     pub degeneracy_ratio: T,
+    /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
+    /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
+    /// exceed it, ICP keeps its last complete iterate and the frame is flagged
+    /// [`crate::Flag::Budget`]. Together with the capacities this bounds a frame's work; see
+    /// `Capacities` for the formula.
+    pub work_budget: Option<u64>,
 }
 
 impl<T: Real> Config<T> {
@@ -70,6 +76,7 @@ impl<T: Real> Config<T> {
             kernel_scale: T::one(),
             max_correspondence_factor: T::of(3.0),
             degeneracy_ratio: T::of(0.02),
+            work_budget: None,
         }
     }
 
