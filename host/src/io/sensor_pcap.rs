@@ -202,11 +202,11 @@ pub struct PcapSweeps {
     finished: bool,
 }
 
-/// Ports and lengths of the first datagrams of a capture.
+/// Ports and lengths of the first datagrams of a capture (up to any damage, which the
+/// decoding pass reports).
 fn survey(path: &Path) -> Result<BTreeMap<(u16, usize), u64>> {
     let mut seen = BTreeMap::new();
-    for d in pcap::open(path)?.take(2000) {
-        let d = d?;
+    for d in pcap::open(path)?.take(2000).map_while(Result::ok) {
         *seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
     }
     Ok(seen)
