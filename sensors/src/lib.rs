@@ -25,4 +25,6 @@ pub mod velodyne;
 pub use error::{ConfigError, PacketError};
 /// The fixed-capacity vectors of [`velodyne::Calibration`] and [`ouster::SensorInfo`].
 pub use heapless;
-pub use sweep::{Chunk, PointMeta, Return, SweepEnd, SweepSink, SweepStart, SweepStats, CHUNK};
+pub use sweep::{
+    Chunk, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStart, SweepStats, CHUNK,
+};

@@ -129,6 +129,20 @@ impl SweepStats {
     }
 }
 
+/// What a decoder did with a packet it accepted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Pushed {
+    /// Decoded into the open sweep (which may have begun with it).
+    Decoded,
+    /// Decoded, and it completed the sweep: `end_sweep` was the sink's last call.
+    Ended,
+    /// Not decoded: it begins a new sweep, so the open one was ended (`end_sweep` was the
+    /// sink's only call). Push the same packet again. A push therefore never hands on points
+    /// of two sweeps, so a caller can finish one frame before the next begins.
+    Again,
+}
+
 /// Receives sweeps from a decoder.
 pub trait SweepSink {
     /// A sweep begins; points follow.

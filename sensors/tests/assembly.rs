@@ -4,7 +4,7 @@
 use kiss_odom_sensors::ouster::{self, Profile, SensorInfo};
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
-    Chunk, PacketError, PointMeta, SweepEnd, SweepSink, SweepStart, SweepStats,
+    Chunk, PacketError, PointMeta, Pushed, SweepEnd, SweepSink, SweepStart, SweepStats,
 };
 
 /// Collects everything a decoder hands on.
@@ -32,6 +32,26 @@ impl SweepSink for Log {
     fn end_sweep(&mut self, s: &SweepStats) {
         self.ends.push(*s);
     }
+}
+
+/// Pushes `bytes` as a caller must: again when the decoder says a new sweep begins with them.
+/// Returns what the last push answered.
+fn feed(push: &mut dyn FnMut(&[u8]) -> Result<Pushed, PacketError>, bytes: &[u8]) -> Pushed {
+    let first = push(bytes).unwrap();
+    if first != Pushed::Again {
+        return first;
+    }
+    let second = push(bytes).unwrap();
+    assert_ne!(second, Pushed::Again, "two Again in a row");
+    second
+}
+
+fn vfeed(dec: &mut velodyne::Decoder, bytes: &[u8], log: &mut Log) -> Pushed {
+    feed(&mut |b| dec.push(b, log), bytes)
+}
+
+fn ofeed(dec: &mut ouster::Decoder, bytes: &[u8], log: &mut Log) -> Pushed {
+    feed(&mut |b| dec.push(b, log), bytes)
 }
 
 /// VLP-16 at 10 Hz: 1327.104 us a packet, 0.398 degrees (40 units) a block.
@@ -77,9 +97,11 @@ fn velodyne_sweeps_end_at_the_cut_and_points_take_the_firing_table_times() {
     let mut dec = velodyne_decoder(Some(0.0));
     let mut log = Log::default();
     // 36000 / 480 = 75 packets a turn; 200 packets pass the cut twice.
+    let mut ended = 0;
     for i in 0..200 {
-        dec.push(&nth(i), &mut log).unwrap();
+        ended += usize::from(vfeed(&mut dec, &nth(i), &mut log) == Pushed::Ended);
     }
+    assert_eq!(ended, 2);
     dec.finish(&mut log);
     assert_eq!(dec.model(), Some(Model::Vlp16));
     let ends: Vec<_> = log.ends.iter().map(|s| s.end).collect();
@@ -126,7 +148,7 @@ fn velodyne_losses_late_packets_and_jumps_are_counted_not_patched() {
         if (4..7).contains(&i) {
             continue; // three packets lost
         }
-        dec.push(&nth(i), &mut log).unwrap();
+        vfeed(&mut dec, &nth(i), &mut log);
     }
     // A repeated and an older packet: dropped.
     assert_eq!(dec.push(&nth(9), &mut log), Err(PacketError::Late));
@@ -148,7 +170,7 @@ fn velodyne_losses_late_packets_and_jumps_are_counted_not_patched() {
 fn velodyne_other_sensors_and_bad_packets_are_refused_and_counted() {
     let mut dec = velodyne_decoder(None);
     let mut log = Log::default();
-    dec.push(&nth(0), &mut log).unwrap();
+    vfeed(&mut dec, &nth(0), &mut log);
     let mut other = nth(1);
     other[1205] = 0x28; // a VLP-32C on the same port
     assert_eq!(dec.push(&other, &mut log), Err(PacketError::OtherSensor));
@@ -165,7 +187,7 @@ fn velodyne_other_sensors_and_bad_packets_are_refused_and_counted() {
     let mut flag = nth(1);
     flag[500] = 0;
     assert_eq!(dec.push(&flag, &mut log), Err(PacketError::BlockFlag));
-    dec.push(&nth(1), &mut log).unwrap();
+    vfeed(&mut dec, &nth(1), &mut log);
     dec.finish(&mut log);
     let s = log.ends[0];
     assert_eq!((s.packets, s.other_sensor, s.bad_packets), (2, 2, 3));
@@ -185,7 +207,7 @@ fn velodyne_other_sensors_and_bad_packets_are_refused_and_counted() {
         Err(PacketError::UnknownReturnMode)
     );
     // Those go to the next sweep's statistics.
-    fresh.push(&nth(0), &mut log).unwrap();
+    vfeed(&mut fresh, &nth(0), &mut log);
     fresh.finish(&mut log);
     assert_eq!(log.ends.last().unwrap().bad_packets, 2);
 }
@@ -194,10 +216,14 @@ fn velodyne_other_sensors_and_bad_packets_are_refused_and_counted() {
 fn velodyne_a_silence_ends_the_sweep() {
     let mut dec = velodyne_decoder(None);
     let mut log = Log::default();
-    dec.push(&nth(0), &mut log).unwrap();
-    dec.push(&nth(1), &mut log).unwrap();
+    vfeed(&mut dec, &nth(0), &mut log);
+    vfeed(&mut dec, &nth(1), &mut log);
     // 0.4 s later (the sensor stopped, or the capture has a hole).
-    dec.push(&vlp16(1_000_000 + 400_000, 0), &mut log).unwrap();
+    let late = vlp16(1_000_000 + 400_000, 0);
+    // The open sweep ends first, alone; the packet then begins the next.
+    assert_eq!(dec.push(&late, &mut log), Ok(Pushed::Again));
+    assert_eq!((log.starts.len(), log.ends.len()), (1, 1));
+    assert_eq!(dec.push(&late, &mut log), Ok(Pushed::Decoded));
     dec.finish(&mut log);
     let ends: Vec<_> = log.ends.iter().map(|s| s.end).collect();
     assert_eq!(ends, [SweepEnd::Gap, SweepEnd::Finished]);
@@ -276,7 +302,7 @@ fn ouster_sweeps_follow_frame_ids_and_times_follow_the_columns() {
     let mut log = Log::default();
     for fid in [7u16, 8] {
         for k in 0..4 {
-            dec.push(&ouster_packet(fid, k, 1234), &mut log).unwrap();
+            ofeed(&mut dec, &ouster_packet(fid, k, 1234), &mut log);
         }
     }
     dec.finish(&mut log);
@@ -306,15 +332,15 @@ fn ouster_lost_late_and_foreign_packets_are_counted() {
     let info = small_ouster();
     let mut dec = ouster::Decoder::new(&info).unwrap();
     let mut log = Log::default();
-    dec.push(&ouster_packet(7, 0, 1234), &mut log).unwrap();
-    dec.push(&ouster_packet(7, 2, 1234), &mut log).unwrap(); // packet 1 lost
-                                                             // Another sensor's packet (serial differs): the metadata is not its.
+    ofeed(&mut dec, &ouster_packet(7, 0, 1234), &mut log);
+    ofeed(&mut dec, &ouster_packet(7, 2, 1234), &mut log); // packet 1 lost
+                                                           // Another sensor's packet (serial differs): the metadata is not its.
     assert_eq!(
         dec.push(&ouster_packet(7, 1, 999), &mut log),
         Err(PacketError::MetadataMismatch)
     );
     // Frame 8 begins before frame 7's last packet: 7 ends with 2 packets lost.
-    dec.push(&ouster_packet(8, 0, 1234), &mut log).unwrap();
+    ofeed(&mut dec, &ouster_packet(8, 0, 1234), &mut log);
     // Frame 7's last packet arrives late.
     assert_eq!(
         dec.push(&ouster_packet(7, 3, 1234), &mut log),
@@ -322,9 +348,9 @@ fn ouster_lost_late_and_foreign_packets_are_counted() {
     );
     // Frames 9 and 10 never arrive.
     for k in 1..4 {
-        dec.push(&ouster_packet(8, k, 1234), &mut log).unwrap();
+        ofeed(&mut dec, &ouster_packet(8, k, 1234), &mut log);
     }
-    dec.push(&ouster_packet(11, 3, 1234), &mut log).unwrap();
+    ofeed(&mut dec, &ouster_packet(11, 3, 1234), &mut log);
     dec.finish(&mut log);
     let [a, b, c] = [log.ends[0], log.ends[1], log.ends[2]];
     assert_eq!(

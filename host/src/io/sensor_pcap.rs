@@ -13,7 +13,9 @@ use super::pcap::{self, Capture};
 use super::{ouster_meta, velodyne_calib, Frame};
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::velodyne::{self, Model};
-use kiss_odom_sensors::{ouster, Chunk, PacketError, PointMeta, SweepSink, SweepStart, SweepStats};
+use kiss_odom_sensors::{
+    ouster, Chunk, PacketError, PointMeta, Pushed, SweepSink, SweepStart, SweepStats,
+};
 use std::collections::{BTreeMap, VecDeque};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -147,11 +149,20 @@ enum Decoder {
 }
 
 impl Decoder {
+    /// Pushes the packet, and again if it began a new sweep ([`Pushed::Again`]; the second
+    /// push never answers that).
     fn push(&mut self, bytes: &[u8], sink: &mut Collect) -> Result<(), PacketError> {
-        match self {
-            Self::Velodyne(d) => d.push(bytes, sink),
-            Self::Ouster(d) => d.push(bytes, sink),
+        let mut r = Ok(Pushed::Again);
+        for _ in 0..2 {
+            r = match self {
+                Self::Velodyne(d) => d.push(bytes, sink),
+                Self::Ouster(d) => d.push(bytes, sink),
+            };
+            if r != Ok(Pushed::Again) {
+                break;
+            }
         }
+        r.map(|_| ())
     }
     fn finish(&mut self, sink: &mut Collect) {
         match self {

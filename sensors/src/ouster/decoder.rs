@@ -4,7 +4,7 @@
 use super::wire::{Column, Layout, Packet};
 use super::{SensorInfo, MAX_BEAMS, MAX_COLUMNS};
 use crate::error::{ConfigError, PacketError};
-use crate::sweep::{Assembly, PointMeta, Return, SweepEnd, SweepSink};
+use crate::sweep::{Assembly, PointMeta, Pushed, Return, SweepEnd, SweepSink};
 use core::f64::consts::PI;
 
 /// One beam's angles, ready to use.
@@ -91,8 +91,13 @@ impl Decoder {
     }
 
     /// Decodes one UDP payload from the lidar port, handing points and finished sweeps to
-    /// `sink`. A refused packet changes nothing but the sweep's counters.
-    pub fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<(), PacketError> {
+    /// `sink` (see [`Pushed`]: on `Again`, push the same bytes again). A refused packet
+    /// changes nothing but the sweep's counters.
+    pub fn push<S: SweepSink>(
+        &mut self,
+        bytes: &[u8],
+        sink: &mut S,
+    ) -> Result<Pushed, PacketError> {
         let r = self.accept(bytes, sink);
         if let Err(e) = r {
             self.asm.stats().refuse(e);
@@ -131,7 +136,7 @@ impl Decoder {
         self.asm.end(sink, end);
     }
 
-    fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<(), PacketError> {
+    fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
         let p = Packet::new_checked(bytes, self.layout)?;
         // Legacy packets carry no identity; eUDP packets must be the metadata's sensor.
         let differs = |ours: Option<u64>, theirs: Option<u64>| matches!((ours, theirs), (Some(a), Some(b)) if a != b);
@@ -148,7 +153,10 @@ impl Decoder {
         let fid = p.frame_id();
         match (self.frame, self.last_closed) {
             (Some(f), _) if f == fid => {}
-            (Some(f), _) if after(fid, f) => self.close(sink, SweepEnd::NextFrame),
+            (Some(f), _) if after(fid, f) => {
+                self.close(sink, SweepEnd::NextFrame);
+                return Ok(Pushed::Again);
+            }
             (Some(_), _) => return Err(PacketError::Late),
             (None, Some(l)) if !after(fid, l) => return Err(PacketError::Late),
             _ => {}
@@ -199,8 +207,9 @@ impl Decoder {
         self.asm.stats().packets += 1;
         if complete {
             self.close(sink, SweepEnd::Complete);
+            return Ok(Pushed::Ended);
         }
-        Ok(())
+        Ok(Pushed::Decoded)
     }
 
     /// The returns of one valid column, as ouster-sdk's `XYZLut` places them.

@@ -4,7 +4,7 @@
 use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
 use super::{Calibration, Config, Model, MAX_LASERS};
 use crate::error::{ConfigError, PacketError};
-use crate::sweep::{Assembly, PointMeta, Return, SweepEnd, SweepSink};
+use crate::sweep::{Assembly, PointMeta, Pushed, Return, SweepEnd, SweepSink};
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
 /// new one: the sensor stopped, or the recording has a hole (velodyne-decoder's 0.3 s).
@@ -174,9 +174,14 @@ impl Decoder {
         self.sensor.as_ref().map(|s| s.model).or(self.config_model)
     }
 
-    /// Decodes one UDP payload, handing points and finished sweeps to `sink`. A refused packet
-    /// changes nothing but the sweep's counters.
-    pub fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<(), PacketError> {
+    /// Decodes one UDP payload, handing points and finished sweeps to `sink` (see [`Pushed`]:
+    /// on `Again`, push the same bytes again). A refused packet changes nothing but the
+    /// sweep's counters.
+    pub fn push<S: SweepSink>(
+        &mut self,
+        bytes: &[u8],
+        sink: &mut S,
+    ) -> Result<Pushed, PacketError> {
         let r = self.accept(bytes, sink);
         if let Err(e) = r {
             self.asm.stats().refuse(e);
@@ -222,7 +227,7 @@ impl Decoder {
         Ok(())
     }
 
-    fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<(), PacketError> {
+    fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
         let p = Packet::new_checked(bytes)?;
         self.identify(&p)?;
         let Some(sensor) = &self.sensor else {
@@ -254,6 +259,7 @@ impl Decoder {
             self.asm.end(sink, SweepEnd::Gap);
             self.initial_azimuth = self.cut.or(Some(self.last_azimuth));
             self.coverage = 0;
+            return Ok(Pushed::Again);
         }
         if self.asm.open.is_none() {
             self.asm.begin(sink, now as u64 * 1000, None);
@@ -297,8 +303,9 @@ impl Decoder {
             self.asm.end(sink, SweepEnd::Complete);
             self.initial_azimuth = self.cut.or(Some(last_az));
             self.coverage = 0;
+            return Ok(Pushed::Ended);
         }
-        Ok(())
+        Ok(Pushed::Decoded)
     }
 
     /// Every return of a checked packet of the identified sensor.
