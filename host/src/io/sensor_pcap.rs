@@ -337,7 +337,12 @@ impl PcapSweeps {
         match self.decoder.push(&d.payload, &mut self.sink) {
             Ok(()) => {
                 r.decoded += 1;
-                r.source.get_or_insert(d.source);
+                if r.source.is_none() {
+                    r.source = Some(d.source);
+                    if let Decoder::Velodyne(v) = &self.decoder {
+                        r.sensor = format!("Velodyne {:?}", v.model().unwrap_or(Model::Vlp16));
+                    }
+                }
             }
             Err(e) => *r.refused.entry(e.to_string()).or_insert(0) += 1,
         }
