@@ -198,6 +198,14 @@ impl Assembly {
         }
     }
 
+    /// Passes a push's result on, counting a refusal in the sweep's statistics.
+    pub fn counted<T>(&mut self, r: Result<T, PacketError>) -> Result<T, PacketError> {
+        if let Err(e) = &r {
+            self.stats().refuse(*e);
+        }
+        r
+    }
+
     /// The statistics refusals go to: the open sweep's, or the next one's.
     pub fn stats(&mut self) -> &mut SweepStats {
         match &mut self.open {

@@ -99,10 +99,7 @@ impl Decoder {
         sink: &mut S,
     ) -> Result<Pushed, PacketError> {
         let r = self.accept(bytes, sink);
-        if let Err(e) = r {
-            self.asm.stats().refuse(e);
-        }
-        r
+        self.asm.counted(r)
     }
 
     /// Ends the open sweep ([`SweepEnd::Finished`]): call at the end of a recording.
