@@ -428,15 +428,14 @@ fn ouster_fields_match_the_digests_beside_the_recordings() {
     }
 }
 
-/// Feeds the core's streaming entry point straight from the decoder's chunks.
-struct CoreFeed<'f, 'o, 'a> {
-    frame: &'f mut kiss_odom_core::FrameInput<'o, 'a, f64, kiss_odom_core::Exact>,
-}
+/// Feeds the core's streaming entry point (`FrameInput::push`) straight from the decoder's
+/// chunks.
+struct CoreFeed<F: FnMut(&[[f64; 3]], &[f64])>(F);
 
-impl kiss_odom_sensors::SweepSink for CoreFeed<'_, '_, '_> {
+impl<F: FnMut(&[[f64; 3]], &[f64])> kiss_odom_sensors::SweepSink for CoreFeed<F> {
     fn begin_sweep(&mut self, _: &kiss_odom_sensors::SweepStart) {}
     fn points(&mut self, c: kiss_odom_sensors::Chunk<'_>) {
-        self.frame.push(c.xyz, Some(c.times));
+        (self.0)(c.xyz, c.times);
     }
     fn end_sweep(&mut self, _: &kiss_odom_sensors::SweepStats) {}
 }
@@ -463,8 +462,8 @@ fn packets_streamed_into_the_core_give_the_poses_of_whole_sweeps() {
     let words = caps.arena_words::<f64, Exact>();
     let (mut arena_a, mut arena_b) = (vec![0u64; words], vec![0u64; words]);
     let config = Config::new(100.0);
-    let mut whole = Odometry::<f64, Exact>::new(config, caps, &mut arena_a).unwrap();
-    let mut streamed = Odometry::<f64, Exact>::new(config, caps, &mut arena_b).unwrap();
+    let mut whole = Odometry::<f64, Exact, _>::new(config, caps, &mut arena_a[..]).unwrap();
+    let mut streamed = Odometry::<f64, Exact, _>::new(config, caps, &mut arena_b[..]).unwrap();
 
     let info = ouster_meta::read(&meta).unwrap().info;
     let mut dec = ouster::Decoder::new(&info).unwrap();
@@ -481,7 +480,7 @@ fn packets_streamed_into_the_core_give_the_poses_of_whole_sweeps() {
             .iter()
             .fold((f64::MAX, f64::MIN), |(lo, hi), &t| (lo.min(t), hi.max(t)));
         let mut frame = streamed.begin_frame(Some(span));
-        let mut feed = CoreFeed { frame: &mut frame };
+        let mut feed = CoreFeed(|xyz: &[[f64; 3]], t: &[f64]| frame.push(xyz, Some(t)));
         while let Some(d) = next.peek() {
             match dec.push(&d.payload, &mut feed) {
                 // The packet begins the next sweep: keep it for the next frame.
