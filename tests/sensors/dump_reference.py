@@ -65,7 +65,10 @@ VARIANTS = [
     ("v_vlp32c_last", "velodyne_vlp32.pcap", 0x28, 0x38, None),
     ("v_vlp32c_dual", "velodyne_vlp32.pcap", 0x28, 0x39, None),
     ("v_hdl32e_dual", "velodyne_vlp16.pcap", 0x21, 0x39, 0.0),
+    # With the calibration file calib_vlp32c.yml beside this script.
+    ("v_vlp32c_calibrated", "velodyne_vlp32.pcap", 0x28, 0x37, None),
 ]
+CALIBRATED = {"v_vlp32c_calibrated": Path(__file__).resolve().parent / "calib_vlp32c.yml"}
 SAMPLE = 200
 
 
@@ -127,7 +130,7 @@ def ouster(pcap, meta):
     return np.concatenate(out), counts, {"frame_ids": frames}
 
 
-def velodyne(pcap, cut):
+def velodyne(pcap, cut, calibration=None):
     import velodyne_decoder as vd
 
     pcap = Path(pcap) if Path(pcap).is_absolute() else DATA / "velodyne" / pcap
@@ -135,6 +138,8 @@ def velodyne(pcap, cut):
     cfg = vd.Config(timestamp_first_packet=True, min_range=0.0, max_range=1000.0)
     if cut is not None:
         cfg.cut_angle = cut
+    if calibration is not None:
+        cfg.calibration = vd.Calibration.read(str(calibration))
     out, counts, stamps = [], [], []
     for i, (stamp, pts) in enumerate(vd.read_pcap(str(pcap), cfg)):
         rec = np.zeros(len(pts), RECORD)
@@ -169,7 +174,8 @@ def main():
     for n, src, product, mode, cut in VARIANTS:
         path = a.out / f"{n}.pcap"
         path.write_bytes(rewrite(DATA / "velodyne" / src, product, mode))
-        jobs.append((n, "velodyne", lambda p=path, c=cut: velodyne(p, c)))
+        calib = CALIBRATED.get(n)
+        jobs.append((n, "velodyne", lambda p=path, c=cut, k=calib: velodyne(p, c, k)))
     for name, kind, run in jobs:
         rec, counts, extra = run()
         rec.tofile(a.out / f"{name}.bin")

@@ -57,7 +57,7 @@ const VLP16_FILE: &str = "velodyne/velodyne_vlp16.pcap";
 const VLP32_FILE: &str = "velodyne/velodyne_vlp32.pcap";
 
 /// The same list as `OUSTER`, `VELODYNE` and `VARIANTS` in dump_reference.py.
-const RECORDINGS: [Recording; 13] = [
+const RECORDINGS: [Recording; 14] = [
     rec(
         "os1_128_lb",
         "ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap",
@@ -107,7 +107,20 @@ const RECORDINGS: [Recording; 13] = [
         Some(0.0),
         Some((0x21, 0x39)),
     ),
+    // With tests/sensors/calib_vlp32c.yml (see `calibration_of`).
+    rec(
+        "v_vlp32c_calibrated",
+        VLP32_FILE,
+        None,
+        None,
+        Some((0x28, 0x37)),
+    ),
 ];
+
+/// The calibration file a recording is decoded with, as `CALIBRATED` in dump_reference.py.
+fn calibration_of(name: &str) -> Option<PathBuf> {
+    (name == "v_vlp32c_calibrated").then(|| repo().join("tests/sensors/calib_vlp32c.yml"))
+}
 
 /// `src` with the product and return-mode bytes of every Velodyne data packet (Ethernet,
 /// IPv4 without options, UDP to 2368, 1206 bytes) replaced: `rewrite` in dump_reference.py.
@@ -170,6 +183,7 @@ fn decode(r: &Recording) -> Ours {
     let opts = SensorOptions {
         meta: r.meta.map(|m| data().join(m)),
         cut_angle_deg: r.cut,
+        calibration: calibration_of(r.name),
         ..SensorOptions::default()
     };
     let dir = tempfile::tempdir().unwrap();
