@@ -121,9 +121,11 @@ impl SweepStats {
     /// Counts a refused packet.
     pub(crate) fn refuse(&mut self, e: PacketError) {
         match e {
-            PacketError::Late => self.out_of_order += 1,
-            PacketError::OtherSensor | PacketError::MetadataMismatch => self.other_sensor += 1,
-            _ => self.bad_packets += 1,
+            PacketError::Late => self.out_of_order = self.out_of_order.saturating_add(1),
+            PacketError::OtherSensor | PacketError::MetadataMismatch => {
+                self.other_sensor = self.other_sensor.saturating_add(1)
+            }
+            _ => self.bad_packets = self.bad_packets.saturating_add(1),
         }
         self.last_error = Some(e);
     }
@@ -245,7 +247,7 @@ impl Assembly {
             *m = meta;
             self.len += 1;
             if let Some(s) = &mut self.open {
-                s.points += 1;
+                s.points = s.points.saturating_add(1);
             }
         }
     }

@@ -127,7 +127,9 @@ impl Decoder {
             let missing = self.window_len().saturating_sub(received);
             let cpp = self.layout.columns as u32;
             let stats = self.asm.stats();
-            stats.lost_packets += missing.div_ceil(cpp.max(1));
+            stats.lost_packets = stats
+                .lost_packets
+                .saturating_add(missing.div_ceil(cpp.max(1)));
             self.last_closed = Some(f);
         }
         self.asm.end(sink, end);
@@ -170,7 +172,10 @@ impl Decoder {
                 .timestamp_ns();
             self.asm.begin(sink, start, Some(fid));
             let per_frame = self.window_len().div_ceil(self.layout.columns as u32);
-            self.asm.stats().lost_packets += skipped.saturating_mul(per_frame);
+            let stats = self.asm.stats();
+            stats.lost_packets = stats
+                .lost_packets
+                .saturating_add(skipped.saturating_mul(per_frame));
             self.frame = Some(fid);
             self.seen = [0; MAX_COLUMNS / 32];
             self.last_column = None;
@@ -189,7 +194,8 @@ impl Decoder {
             let repeated = *w & bit != 0;
             *w |= bit;
             if repeated || self.last_column.is_some_and(|l| m < l) {
-                self.asm.stats().out_of_order += 1;
+                let stats = self.asm.stats();
+                stats.out_of_order = stats.out_of_order.saturating_add(1);
             }
             self.last_column = Some(m);
             if repeated {
@@ -201,7 +207,8 @@ impl Decoder {
                 self.column(&c, m, t, sink);
             }
         }
-        self.asm.stats().packets += 1;
+        let stats = self.asm.stats();
+        stats.packets = stats.packets.saturating_add(1);
         if complete {
             self.close(sink, SweepEnd::Complete);
             return Ok(Pushed::Ended);

@@ -259,7 +259,8 @@ impl Decoder {
             return Ok(Pushed::Again);
         }
         if self.asm.open.is_none() {
-            self.asm.begin(sink, now as u64 * 1000, None);
+            self.asm
+                .begin(sink, (now as u64).saturating_mul(1000), None);
             self.sweep_first_us = now;
             self.next_column = 0;
         }
@@ -285,9 +286,9 @@ impl Decoder {
         let rel_s = (now - self.sweep_first_us) as f64 * 1e-6;
         self.decode(&p, rel_s, sink);
         let stats = self.asm.stats();
-        stats.packets += 1;
+        stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
-        stats.azimuth_jumps += u32::from(jump);
+        stats.azimuth_jumps = stats.azimuth_jumps.saturating_add(u32::from(jump));
         self.last_us = Some(now);
         self.last_azimuth = last_az;
 
@@ -338,7 +339,7 @@ impl Decoder {
                 let t = sensor.firing_f32(g, c);
                 let az = interpolate(block_az, rate, t - t0);
                 let (laser, col) = if columns_per_block == 2 && c >= 16 {
-                    (c - 16, column + 1)
+                    (c - 16, column.wrapping_add(1))
                 } else {
                     (c, column)
                 };
