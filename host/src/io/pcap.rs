@@ -300,6 +300,43 @@ mod tests {
     }
 
     #[test]
+    fn pcapng_captures_read_like_pcap_ones() {
+        use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketBlock;
+        use pcap_file::pcapng::blocks::interface_description::InterfaceDescriptionBlock;
+        use pcap_file::pcapng::PcapNgWriter;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.pcapng");
+        let mut w = PcapNgWriter::new(File::create(&path).unwrap()).unwrap();
+        w.write_pcapng_block(InterfaceDescriptionBlock {
+            linktype: DataLink::ETHERNET,
+            snaplen: 65535,
+            options: vec![],
+        })
+        .unwrap();
+        for (i, d) in datagrams().iter().enumerate() {
+            for f in ethernet_frames(d, i as u16, 1500).unwrap() {
+                w.write_pcapng_block(EnhancedPacketBlock {
+                    interface_id: 0,
+                    timestamp: std::time::Duration::from_nanos(d.time_ns),
+                    original_len: f.len() as u32,
+                    data: f.into(),
+                    options: vec![],
+                })
+                .unwrap();
+            }
+        }
+        drop(w);
+        let back: Vec<_> = open(&path).unwrap().map(|d| d.unwrap()).collect();
+        assert_eq!(back.len(), 3);
+        for (a, b) in back.iter().zip(datagrams()) {
+            assert_eq!(
+                (a.source, a.port, &a.payload),
+                (b.source, b.port, &b.payload)
+            );
+        }
+    }
+
+    #[test]
     fn a_cut_capture_yields_what_came_before_then_names_the_file() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("cut.pcap");
