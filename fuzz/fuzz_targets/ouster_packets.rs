@@ -9,6 +9,7 @@ mod sensor_sink;
 
 use kiss_odom_sensors::heapless::Vec;
 use kiss_odom_sensors::ouster::{Decoder, Profile, SensorInfo};
+use kiss_odom_sensors::Decode;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -8,6 +8,7 @@
 mod sensor_sink;
 
 use kiss_odom_sensors::velodyne::{Config, Decoder, Model};
+use kiss_odom_sensors::Decode;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

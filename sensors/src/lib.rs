@@ -26,5 +26,5 @@ pub use error::{ConfigError, PacketError};
 /// The fixed-capacity vectors of [`velodyne::Calibration`] and [`ouster::SensorInfo`].
 pub use heapless;
 pub use sweep::{
-    Chunk, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStart, SweepStats, CHUNK,
+    Chunk, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStart, SweepStats, CHUNK,
 };

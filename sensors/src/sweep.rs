@@ -145,6 +145,16 @@ pub enum Pushed {
     Again,
 }
 
+/// A packet decoder (Velodyne or Ouster): packets in, sweeps to a [`SweepSink`] out.
+pub trait Decode {
+    /// Decodes one UDP payload from the sensor's data port, handing points and finished
+    /// sweeps to `sink` (see [`Pushed`]: on `Again`, push the same bytes again). A refused
+    /// packet changes nothing but the sweep's counters.
+    fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError>;
+    /// Ends the open sweep ([`SweepEnd::Finished`]): call at the end of a recording.
+    fn finish<S: SweepSink>(&mut self, sink: &mut S);
+}
+
 /// Receives sweeps from a decoder.
 pub trait SweepSink {
     /// A sweep begins; points follow.

@@ -4,7 +4,7 @@
 use kiss_odom_sensors::ouster::{self, Profile, SensorInfo};
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
-    Chunk, PacketError, PointMeta, Pushed, SweepEnd, SweepSink, SweepStart, SweepStats,
+    Chunk, Decode, PacketError, PointMeta, Pushed, SweepEnd, SweepSink, SweepStart, SweepStats,
 };
 
 /// Collects everything a decoder hands on.

@@ -461,7 +461,7 @@ impl<F: FnMut(&[[f64; 3]], &[f64])> kiss_odom_sensors::SweepSink for CoreFeed<F>
 fn packets_streamed_into_the_core_give_the_poses_of_whole_sweeps() {
     use kiss_odom::io::pcap;
     use kiss_odom_core::{Capacities, Config, Exact, Odometry};
-    use kiss_odom_sensors::{ouster, Pushed};
+    use kiss_odom_sensors::{ouster, Decode, Pushed};
     if !have_data() {
         return;
     }

@@ -14,7 +14,7 @@ use super::{ouster_meta, velodyne_calib, Frame};
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
-    ouster, Chunk, PacketError, PointMeta, Pushed, SweepSink, SweepStart, SweepStats,
+    ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart, SweepStats,
 };
 use std::collections::{BTreeMap, VecDeque};
 use std::net::SocketAddr;

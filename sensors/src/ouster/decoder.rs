@@ -4,7 +4,7 @@
 use super::wire::{Column, Layout, Packet};
 use super::{SensorInfo, MAX_BEAMS, MAX_COLUMNS};
 use crate::error::{ConfigError, PacketError};
-use crate::sweep::{Assembly, PointMeta, Pushed, Return, SweepEnd, SweepSink};
+use crate::sweep::{Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink};
 use core::f64::consts::PI;
 
 /// One beam's angles, ready to use.
@@ -88,23 +88,6 @@ impl Decoder {
             last_column: None,
             asm: Assembly::new(),
         })
-    }
-
-    /// Decodes one UDP payload from the lidar port, handing points and finished sweeps to
-    /// `sink` (see [`Pushed`]: on `Again`, push the same bytes again). A refused packet
-    /// changes nothing but the sweep's counters.
-    pub fn push<S: SweepSink>(
-        &mut self,
-        bytes: &[u8],
-        sink: &mut S,
-    ) -> Result<Pushed, PacketError> {
-        let r = self.accept(bytes, sink);
-        self.asm.counted(r)
-    }
-
-    /// Ends the open sweep ([`SweepEnd::Finished`]): call at the end of a recording.
-    pub fn finish<S: SweepSink>(&mut self, sink: &mut S) {
-        self.close(sink, SweepEnd::Finished);
     }
 
     fn in_window(&self, m: u16) -> bool {
@@ -265,5 +248,15 @@ impl Decoder {
     fn rotate(&self, v: [f64; 3]) -> [f64; 3] {
         self.rotation
             .map(|row| row[0] * v[0] + row[1] * v[1] + row[2] * v[2])
+    }
+}
+
+impl Decode for Decoder {
+    fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
+        let r = self.accept(bytes, sink);
+        self.asm.counted(r)
+    }
+    fn finish<S: SweepSink>(&mut self, sink: &mut S) {
+        self.close(sink, SweepEnd::Finished);
     }
 }

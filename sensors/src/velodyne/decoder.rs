@@ -4,7 +4,7 @@
 use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
 use super::{Calibration, Config, Model, MAX_LASERS};
 use crate::error::{ConfigError, PacketError};
-use crate::sweep::{Assembly, PointMeta, Pushed, Return, SweepEnd, SweepSink};
+use crate::sweep::{Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink};
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
 /// new one: the sensor stopped, or the recording has a hole (velodyne-decoder's 0.3 s).
@@ -109,7 +109,7 @@ impl Sensor {
 /// Velodyne packets in, sweeps out (see the module doc of [`crate::velodyne`]).
 ///
 /// ```
-/// use kiss_odom_sensors::{velodyne, Chunk, SweepSink, SweepStart, SweepStats};
+/// use kiss_odom_sensors::{velodyne, Chunk, Decode, SweepSink, SweepStart, SweepStats};
 /// struct Count(usize);
 /// impl SweepSink for Count {
 ///     fn begin_sweep(&mut self, _: &SweepStart) {}
@@ -172,23 +172,6 @@ impl Decoder {
     /// The model, once a packet has been decoded or if configured.
     pub fn model(&self) -> Option<Model> {
         self.sensor.as_ref().map(|s| s.model).or(self.config_model)
-    }
-
-    /// Decodes one UDP payload, handing points and finished sweeps to `sink` (see [`Pushed`]:
-    /// on `Again`, push the same bytes again). A refused packet changes nothing but the
-    /// sweep's counters.
-    pub fn push<S: SweepSink>(
-        &mut self,
-        bytes: &[u8],
-        sink: &mut S,
-    ) -> Result<Pushed, PacketError> {
-        let r = self.accept(bytes, sink);
-        self.asm.counted(r)
-    }
-
-    /// Ends the open sweep ([`SweepEnd::Finished`]): call at the end of a recording.
-    pub fn finish<S: SweepSink>(&mut self, sink: &mut S) {
-        self.asm.end(sink, SweepEnd::Finished);
     }
 
     fn identify(&mut self, p: &Packet<'_>) -> Result<(), PacketError> {
@@ -379,6 +362,16 @@ impl Decoder {
         if let Some(c) = last_column {
             self.next_column = c.wrapping_add(1);
         }
+    }
+}
+
+impl Decode for Decoder {
+    fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
+        let r = self.accept(bytes, sink);
+        self.asm.counted(r)
+    }
+    fn finish<S: SweepSink>(&mut self, sink: &mut S) {
+        self.asm.end(sink, SweepEnd::Finished);
     }
 }
 
