@@ -107,7 +107,11 @@ fn const_constructed_words_hold_a_whole_odometry() {
     let frames = scans();
     for (i, s) in frames.iter().enumerate() {
         let r = odom.register_frame(&narrow::<f32>(s), None).unwrap();
-        assert!(r.dropped == Default::default(), "frame {i}: {:?}", r.dropped);
+        assert!(
+            r.dropped == Default::default(),
+            "frame {i}: {:?}",
+            r.dropped
+        );
         let err = error_at(&widen(&r.pose), i);
         assert!(err < 0.02, "frame {i}: {err} m");
     }
