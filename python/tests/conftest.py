@@ -73,11 +73,12 @@ def generated(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def generated_short(tmp_path_factory) -> list:
-    """Two short simulated sequences (different seeds and scenes) for the batch test."""
+    """Two small simulated sequences for the batch test: a fast drive long enough for KITTI's
+    100 m segments (90 frames at 20-30 m/s) and a short corridor."""
     root = tmp_path_factory.mktemp("sim-short")
     out = []
-    for name, seed, profile in (("urban-s7", 7, "urban"), ("corridor-s3", 3, "corridor")):
-        kiss_odom("simulate", "--out", root / name, "--frames", 20, "--seed", seed,
-                  "--profile", profile)
+    for name, seed, profile, frames in (("fast-s1", 1, "fast", 90), ("corridor-s3", 3, "corridor", 20)):
+        kiss_odom("simulate", "--out", root / name, "--frames", frames, "--seed", seed,
+                  "--profile", profile, "--beams", 32, "--columns", 512)
         out.append(root / name)
     return out
