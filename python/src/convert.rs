@@ -9,6 +9,7 @@ use nalgebra::{Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuater
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use std::borrow::Cow;
 
 /// `numpy.ascontiguousarray(obj, dtype=float64)` as an n-dimensional array.
 pub fn float_array<'py>(
@@ -63,7 +64,9 @@ pub fn matrix(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrix4<f64>> {
     }
     let m = Matrix4::from_row_slice(ro.as_slice()?);
     if m.iter().any(|v| !v.is_finite()) {
-        return Err(PyValueError::new_err(format!("{what} has a non-finite entry")));
+        return Err(PyValueError::new_err(format!(
+            "{what} has a non-finite entry"
+        )));
     }
     Ok(m)
 }
@@ -137,24 +140,42 @@ pub fn narrow<T: Real>(p: &Pose<f64>) -> Pose<T> {
     )
 }
 
-/// Points in scalar `T`.
-pub fn narrow_points<T: Real>(pts: &[[f64; 3]]) -> Vec<[T; 3]> {
-    pts.iter()
-        .map(|p| [T::of(p[0]), T::of(p[1]), T::of(p[2])])
-        .collect()
+/// The scalars the core runs on, with the copies between them and f64 that numpy needs: none
+/// for f64 (the frame is used where it lies), a conversion for f32.
+pub trait Numpy: Real {
+    /// Points from f64.
+    fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[Self; 3]]>;
+    /// Points to f64.
+    fn widen_points(pts: &[[Self; 3]]) -> Vec<[f64; 3]>;
 }
 
-/// Points of any scalar as f64.
-pub fn widen_points<T: Real>(pts: &[[T; 3]]) -> Vec<[f64; 3]> {
-    pts.iter()
-        .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()])
-        .collect()
+impl Numpy for f64 {
+    fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[f64; 3]]> {
+        Cow::Borrowed(pts)
+    }
+    fn widen_points(pts: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        pts.to_vec()
+    }
 }
 
-/// Points as an Nx3 float64 array.
-pub fn points_array<'py>(py: Python<'py>, pts: &[[f64; 3]]) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let flat: Vec<f64> = pts.iter().flatten().copied().collect();
-    PyArray1::from_vec(py, flat).reshape([pts.len(), 3])
+impl Numpy for f32 {
+    fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[f32; 3]]> {
+        Cow::Owned(pts.iter().map(|p| p.map(|v| v as f32)).collect())
+    }
+    fn widen_points(pts: &[[f32; 3]]) -> Vec<[f64; 3]> {
+        pts.iter().map(|p| p.map(f64::from)).collect()
+    }
+}
+
+/// Points as an Nx3 float64 array (the buffer is handed to numpy, not copied).
+pub fn points_array<'py>(
+    py: Python<'py>,
+    pts: Vec<[f64; 3]>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let n = pts.len();
+    let arr = numpy::ndarray::Array2::from_shape_vec((n, 3), pts.into_flattened())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(PyArray2::from_owned_array(py, arr))
 }
 
 /// A matrix as a 4x4 float64 array.

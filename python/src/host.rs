@@ -30,8 +30,7 @@ fn poses(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Isometry3<f64>>> {
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            isometry_from_matrix(m)
-                .map_err(|e| PyValueError::new_err(format!("{what}[{i}]: {e}")))
+            isometry_from_matrix(m).map_err(|e| PyValueError::new_err(format!("{what}[{i}]: {e}")))
         })
         .collect()
 }
@@ -50,10 +49,12 @@ fn kitti_relative_error_segments(
 ) -> PyResult<(f64, f64, usize)> {
     let est = poses(estimate, "estimate")?;
     let gt = poses(ground_truth, "ground_truth")?;
-    Ok(match kitti_relative_error(&est, &gt).map_err(metrics_error)? {
-        Some(k) => (k.t_err_pct, k.r_err_deg_per_m, k.segments),
-        None => (f64::NAN, f64::NAN, 0),
-    })
+    Ok(
+        match kitti_relative_error(&est, &gt).map_err(metrics_error)? {
+            Some(k) => (k.t_err_pct, k.r_err_deg_per_m, k.segments),
+            None => (f64::NAN, f64::NAN, 0),
+        },
+    )
 }
 
 /// kiss-icp's `_kitti_seq_error(gt_poses, results_poses)`: `(translation %, rotation deg/m)`.
@@ -86,7 +87,7 @@ fn correct_kitti_scan<'py>(
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let mut pts = convert::points(points, "points")?;
     kiss_odom::io::kitti::correct_scan(&mut pts);
-    convert::points_array(py, &pts)
+    convert::points_array(py, pts)
 }
 
 /// The ground truth `kiss-odom run` finds for a dataset (LiDAR frame, one 4x4 pose per
@@ -108,7 +109,11 @@ fn ground_truth<'py>(
             (0..16).map(move |i| m[(i / 4, i % 4)])
         })
         .collect();
-    Ok(Some(PyArray1::from_vec(py, flat).reshape([gt.len(), 4, 4])?))
+    Ok(Some(PyArray1::from_vec(py, flat).reshape([
+        gt.len(),
+        4,
+        4,
+    ])?))
 }
 
 /// Adds the functions to the module.

@@ -5,7 +5,7 @@
 //! `run`. The frame call copies the points out of numpy, then registers, deskews and
 //! downsamples with the GIL released.
 
-use crate::convert::{self, narrow, narrow_points, widen_points};
+use crate::convert::{self, narrow, Numpy};
 use kiss_odom::exec::Pool;
 use kiss_odom::run::widen;
 use kiss_odom::settings::{Scalar, Settings, Storage};
@@ -56,7 +56,7 @@ pub struct Odometry {
     settings: Settings,
 }
 
-fn build<T: Real, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
+fn build<T: Numpy, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
     let config = s.core_config::<T>().map_err(value_error)?;
     let caps = s.capacities().map_err(value_error)?;
     Owned::<T, P>::boxed(config, caps).map_err(|e| PyValueError::new_err(e.to_string()))
@@ -85,21 +85,21 @@ impl Odometry {
 
 /// One frame through the core: register (or, for an empty scan, advance on the
 /// constant-velocity model as `kiss-odom run` and kiss-icp do), then the deskewed frame.
-fn one_frame<T: Real, P: PointCodec<T>>(
+fn one_frame<T: Numpy, P: PointCodec<T>>(
     odom: &mut Owned<T, P>,
     pool: &Pool,
     points: &[[f64; 3]],
     stamps: Option<&[f64]>,
 ) -> Result<Outcome, FrameError> {
-    let pts = narrow_points::<T>(points);
-    match odom.register_frame_with(pool, &pts, stamps) {
+    let pts = T::narrow_points(points);
+    match odom.register_frame_with(pool, &pts[..], stamps) {
         Ok(r) => {
             let mut out = vec![[T::zero(); 3]; pts.len()];
             let pre = odom.deskewed_scan(&pts, stamps, &mut out);
             out.truncate(pre.kept.min(pts.len()));
             Ok(Outcome {
-                deskewed: widen_points(&out),
-                source: widen_points(odom.source()),
+                deskewed: T::widen_points(&out),
+                source: T::widen_points(odom.source()),
                 report: Some(widen_report(&r)),
             })
         }
@@ -237,8 +237,8 @@ impl Odometry {
             .detach(|| each!(engine, o => one_frame(o, pool, &points, stamps.as_deref())))
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         let report = report_dict(py, out.report.as_ref(), index, points.len())?;
-        let deskewed = convert::points_array(py, &out.deskewed)?;
-        let source = convert::points_array(py, &out.source)?;
+        let deskewed = convert::points_array(py, out.deskewed)?;
+        let source = convert::points_array(py, out.source)?;
         (deskewed, source, report).into_pyobject(py)
     }
 
@@ -271,7 +271,7 @@ impl Odometry {
     /// Every map point (world frame), Nx3.
     fn map_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let pts = each!(&self.engine, o => map_points(o));
-        convert::points_array(py, &pts)
+        convert::points_array(py, pts)
     }
 
     /// Empties the local map, keeping poses and threshold.

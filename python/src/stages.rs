@@ -55,7 +55,7 @@ impl Vector3dVector {
         copy: Option<bool>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let _ = copy; // always a fresh array
-        let arr = points_array(py, &self.points)?.into_any();
+        let arr = points_array(py, self.points.clone())?.into_any();
         match dtype {
             Some(d) if !d.is_none() => arr.call_method1("astype", (d,)),
             _ => Ok(arr),
@@ -151,7 +151,11 @@ impl VoxelHashMap {
 
     /// `(points, pose)`: adds the points moved by the 4x4 pose, then prunes around the pose;
     /// `(points, origin)`: adds world-frame points, then prunes around the 3-vector origin.
-    fn _update(&mut self, points: PyRef<'_, Vector3dVector>, pose: &Bound<'_, PyAny>) -> PyResult<()> {
+    fn _update(
+        &mut self,
+        points: PyRef<'_, Vector3dVector>,
+        pose: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
         self.reserve(points.points.len())?;
         if PyUntypedArrayMethods::len(&convert::float_array(pose, "pose")?) == 3 {
             let o = convert::vector3(pose, "origin")?;
