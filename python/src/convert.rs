@@ -25,11 +25,19 @@ pub fn float_array<'py>(
 
 /// An Nx3 array (or an empty one of any shape) as points.
 pub fn points(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
+    let mut out = Vec::new();
+    points_into(obj, what, &mut out)?;
+    Ok(out)
+}
+
+/// [`points`] into a buffer that is reused from call to call.
+pub fn points_into(obj: &Bound<'_, PyAny>, what: &str, out: &mut Vec<[f64; 3]>) -> PyResult<()> {
+    out.clear();
     let arr = float_array(obj, what)?;
     let ro = arr.readonly();
     let shape = ro.shape();
     if ro.len() == 0 && (shape.len() == 1 || (shape.len() == 2 && shape[1] == 3)) {
-        return Ok(Vec::new());
+        return Ok(());
     }
     if shape.len() != 2 || shape[1] != 3 {
         return Err(PyValueError::new_err(format!(
@@ -42,7 +50,8 @@ pub fn points(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 3]>> {
         )));
     }
     let flat = ro.as_slice()?;
-    Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    out.extend(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
+    Ok(())
 }
 
 /// A 1-D array of numbers (any shape is flattened, as kiss-icp's `timestamps.ravel()`).
@@ -145,16 +154,24 @@ pub fn narrow<T: Real>(p: &Pose<f64>) -> Pose<T> {
 pub trait Numpy: Real {
     /// Points from f64.
     fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[Self; 3]]>;
-    /// Points to f64.
-    fn widen_points(pts: &[[Self; 3]]) -> Vec<[f64; 3]>;
+    /// Points to f64 (f64 points are moved, not copied).
+    fn widen_points(pts: Vec<[Self; 3]>) -> Vec<[f64; 3]>;
+    /// Lets `fill` write up to `n` points and return how many it kept; leaves those in `out`
+    /// as f64 (written in place for f64).
+    fn fill(out: &mut Vec<[f64; 3]>, n: usize, fill: impl FnOnce(&mut [[Self; 3]]) -> usize);
 }
 
 impl Numpy for f64 {
     fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[f64; 3]]> {
         Cow::Borrowed(pts)
     }
-    fn widen_points(pts: &[[f64; 3]]) -> Vec<[f64; 3]> {
-        pts.to_vec()
+    fn widen_points(pts: Vec<[f64; 3]>) -> Vec<[f64; 3]> {
+        pts
+    }
+    fn fill(out: &mut Vec<[f64; 3]>, n: usize, fill: impl FnOnce(&mut [[f64; 3]]) -> usize) {
+        out.resize(n, [0.0; 3]);
+        let kept = fill(out);
+        out.truncate(kept.min(n));
     }
 }
 
@@ -162,8 +179,14 @@ impl Numpy for f32 {
     fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[f32; 3]]> {
         Cow::Owned(pts.iter().map(|p| p.map(|v| v as f32)).collect())
     }
-    fn widen_points(pts: &[[f32; 3]]) -> Vec<[f64; 3]> {
+    fn widen_points(pts: Vec<[f32; 3]>) -> Vec<[f64; 3]> {
         pts.iter().map(|p| p.map(f64::from)).collect()
+    }
+    fn fill(out: &mut Vec<[f64; 3]>, n: usize, fill: impl FnOnce(&mut [[f32; 3]]) -> usize) {
+        let mut tmp = vec![[0.0f32; 3]; n];
+        let kept = fill(&mut tmp).min(n);
+        out.clear();
+        out.extend(tmp[..kept].iter().map(|p| p.map(f64::from)));
     }
 }
 
@@ -176,6 +199,14 @@ pub fn points_array<'py>(
     let arr = numpy::ndarray::Array2::from_shape_vec((n, 3), pts.into_flattened())
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     Ok(PyArray2::from_owned_array(py, arr))
+}
+
+/// Points copied into a new Nx3 float64 array.
+pub fn points_array_copy<'py>(
+    py: Python<'py>,
+    pts: &[[f64; 3]],
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    PyArray1::from_slice(py, pts.as_flattened()).reshape([pts.len(), 3])
 }
 
 /// A matrix as a 4x4 float64 array.

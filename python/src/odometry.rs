@@ -40,9 +40,8 @@ macro_rules! each {
     };
 }
 
-/// What one frame call gives back, in f64, ready for numpy.
+/// What one frame call gives back besides the deskewed frame, in f64, ready for numpy.
 struct Outcome {
-    deskewed: Vec<[f64; 3]>,
     source: Vec<[f64; 3]>,
     /// `None` for an empty scan.
     report: Option<FrameReport<f64>>,
@@ -54,6 +53,10 @@ pub struct Odometry {
     engine: Engine,
     pool: Pool,
     settings: Settings,
+    /// The frame's points and its deskewed copy: kept from frame to frame so their memory is
+    /// already mapped (fresh 3 MB buffers cost page faults on every frame).
+    input: Vec<[f64; 3]>,
+    deskewed: Vec<[f64; 3]>,
 }
 
 fn build<T: Numpy, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
@@ -79,39 +82,45 @@ impl Odometry {
             engine,
             pool,
             settings,
+            input: Vec::new(),
+            deskewed: Vec::new(),
         })
     }
 }
 
 /// One frame through the core: register (or, for an empty scan, advance on the
-/// constant-velocity model as `kiss-odom run` and kiss-icp do), then the deskewed frame.
+/// constant-velocity model as `kiss-odom run` and kiss-icp do), then the deskewed frame into
+/// `deskewed`.
 fn one_frame<T: Numpy, P: PointCodec<T>>(
     odom: &mut Owned<T, P>,
     pool: &Pool,
     points: &[[f64; 3]],
     stamps: Option<&[f64]>,
+    deskewed: &mut Vec<[f64; 3]>,
 ) -> Result<Outcome, FrameError> {
     let pts = T::narrow_points(points);
     match odom.register_frame_with(pool, &pts[..], stamps) {
         Ok(r) => {
-            let mut out = vec![[T::zero(); 3]; pts.len()];
-            let pre = odom.deskewed_scan(&pts, stamps, &mut out);
-            out.truncate(pre.kept.min(pts.len()));
+            T::fill(deskewed, pts.len(), |out| {
+                odom.deskewed_scan(&pts, stamps, out).kept
+            });
             Ok(Outcome {
-                deskewed: T::widen_points(&out),
-                source: T::widen_points(odom.source()),
+                source: T::widen_points(odom.source().to_vec()),
                 report: Some(widen_report(&r)),
             })
         }
         Err(FrameError::EmptyScan) => {
             odom.skip_frame();
+            deskewed.clear();
             Ok(Outcome {
-                deskewed: Vec::new(),
                 source: Vec::new(),
                 report: None,
             })
         }
-        Err(e) => Err(e),
+        Err(e) => {
+            deskewed.clear();
+            Err(e)
+        }
     }
 }
 
@@ -225,19 +234,20 @@ impl Odometry {
         frame: &Bound<'py, PyAny>,
         timestamps: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-        let points = convert::points(frame, "frame")?;
+        convert::points_into(frame, "frame", &mut self.input)?;
         let stamps = match timestamps {
             Some(t) if !t.is_none() => Some(convert::values(t, "timestamps")?),
             _ => None,
         }
         .filter(|s| !s.is_empty());
         let index = self.frames();
-        let (engine, pool) = (&mut self.engine, &self.pool);
+        let (engine, pool, points) = (&mut self.engine, &self.pool, &self.input);
+        let deskewed = &mut self.deskewed;
         let out = py
-            .detach(|| each!(engine, o => one_frame(o, pool, &points, stamps.as_deref())))
+            .detach(|| each!(engine, o => one_frame(o, pool, points, stamps.as_deref(), deskewed)))
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let report = report_dict(py, out.report.as_ref(), index, points.len())?;
-        let deskewed = convert::points_array(py, out.deskewed)?;
+        let report = report_dict(py, out.report.as_ref(), index, self.input.len())?;
+        let deskewed = convert::points_array_copy(py, &self.deskewed)?;
         let source = convert::points_array(py, out.source)?;
         (deskewed, source, report).into_pyobject(py)
     }
