@@ -80,3 +80,24 @@ def test_the_devkit_total_weighs_segments_and_the_mean_weighs_sequences():
     assert t["kitti_r_err_deg_per_m_devkit"] == pytest.approx(0.125)
     assert t["sequences_scored"] == 2 and t["kitti_segments"] == 40
     assert math.isnan(totals([])["kitti_t_err_pct_devkit"])
+
+
+def test_the_console_script_reports_the_failure_and_exits_1(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(b"not an mcap file")
+    script = Path(sys.executable).parent / "kiss-odom-batch"
+    seq = kitti_root() / "sequences" / "05"
+    out = subprocess.run([str(script), str(seq), str(corrupt), "--out", str(tmp_path / "out"),
+                          "--num-cpus", "2", "--", "--threads", "1"],
+                         capture_output=True, text=True)
+    print(out.stdout)
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert "failed: corrupt.mcap:" in out.stderr
+    assert "| 05 | ok |" in out.stdout
+    kiss_odom("run", seq, "--out", tmp_path / "ref", "--quiet")
+    assert (tmp_path / "out" / "05" / "poses_kitti.txt").read_bytes() == \
+        (tmp_path / "ref" / "poses_kitti.txt").read_bytes()
