@@ -48,6 +48,9 @@
 
 #[cfg(feature = "alloc")]
 extern crate alloc;
+// Unit tests print what they measured.
+#[cfg(test)]
+extern crate std;
 
 mod config;
 mod degeneracy;

@@ -12,8 +12,8 @@
 //! bit-identical whichever [`Executor`] ran the chunks and on how many threads.
 
 use crate::lie::se3_exp;
-use crate::local_map::{MapView, PointCodec};
-use crate::scalar::Real;
+use crate::local_map::{MapView, Nearest, PointCodec};
+use crate::scalar::{sqrt_lt, Real};
 use crate::storage::{view, words_for};
 use crate::{Point, Pose};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
@@ -24,11 +24,17 @@ pub const CHUNK: usize = 64;
 /// Scalars in one chunk's partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`)
 /// + correspondence count + sum of squared residuals.
 pub const SYSTEM_LEN: usize = 29;
-/// Scalars in one chunk: its points (`3 * CHUNK`), its partial system, its point count.
-const CHUNK_LEN: usize = 3 * CHUNK + SYSTEM_LEN + 1;
+/// Scalars per point kept from its last search: the answer's `x, y, z` (infinite: none), and the
+/// search's `others` and `face` bounds less the distance the point moved since (and a rounding
+/// allowance per step).
+const KEPT: usize = 5;
+/// Scalars in one chunk: its points (`3 * CHUNK`), what each kept (`KEPT * CHUNK`), its partial
+/// system, its point count.
+const CHUNK_LEN: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN + 1;
 
 /// One chunk of ICP work: up to [`CHUNK`] source points, moved in place from iteration to
-/// iteration, and the partial normal equations they gave in the last iteration.
+/// iteration, the neighbour each found and how long that holds, and the partial normal
+/// equations they gave in the last iteration.
 pub type Chunk<T> = [T; CHUNK_LEN];
 
 /// Chunks for `points` source points.
@@ -142,15 +148,32 @@ fn solve<T: Real>(sum: &[T; SYSTEM_LEN]) -> Option<Vector6<T>> {
     dx.iter().all(|v| v.is_finite()).then_some(dx)
 }
 
-/// The chunk's points, its partial system and its point count.
-#[inline]
-fn parts<T: Real>(c: &mut Chunk<T>) -> Option<(&mut [T; 3 * CHUNK], &mut [T; SYSTEM_LEN], &mut T)> {
-    let (points, rest) = c.split_first_chunk_mut::<{ 3 * CHUNK }>()?;
-    let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
-    Some((points, system, rest.first_mut()?))
+/// A chunk's parts.
+struct Parts<'c, T> {
+    /// `x, y, z` per point.
+    points: &'c mut [T; 3 * CHUNK],
+    /// Per point: what its last search found (see [`KEPT`]); infinite coordinates: no
+    /// candidate, a negative room: search now.
+    kept: &'c mut [T; KEPT * CHUNK],
+    system: &'c mut [T; SYSTEM_LEN],
+    count: &'c mut T,
 }
 
-/// Copies `source` into the chunks of `work` (as many as fit); returns the chunks in use.
+#[inline]
+fn parts<T: Real>(c: &mut Chunk<T>) -> Option<Parts<'_, T>> {
+    let (points, rest) = c.split_first_chunk_mut::<{ 3 * CHUNK }>()?;
+    let (kept, rest) = rest.split_first_chunk_mut::<{ KEPT * CHUNK }>()?;
+    let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
+    Some(Parts {
+        points,
+        kept,
+        system,
+        count: rest.first_mut()?,
+    })
+}
+
+/// Copies `source` into the chunks of `work` (as many as fit), nothing kept; returns the
+/// chunks in use.
 fn load<'w, T: Real>(source: &[[T; 3]], work: &'w mut [u64]) -> &'w mut [Chunk<T>] {
     let fit = (work.len() * 8) / (CHUNK_LEN * core::mem::size_of::<T>());
     let n = chunks_for(source.len()).min(fit);
@@ -158,11 +181,14 @@ fn load<'w, T: Real>(source: &[[T; 3]], work: &'w mut [u64]) -> &'w mut [Chunk<T
         return &mut [];
     };
     for (c, pts) in chunks.iter_mut().zip(source.chunks(CHUNK)) {
-        if let Some((points, _, count)) = parts(c) {
-            for (dst, p) in points.chunks_exact_mut(3).zip(pts) {
+        if let Some(c) = parts(c) {
+            for (dst, p) in c.points.chunks_exact_mut(3).zip(pts) {
                 dst.copy_from_slice(p);
             }
-            *count = T::of(pts.len() as f64);
+            for k in c.kept.chunks_exact_mut(KEPT) {
+                k[3] = -T::one();
+            }
+            *c.count = T::of(pts.len() as f64);
         }
     }
     chunks
@@ -173,7 +199,7 @@ pub fn moved_points<T: Real>(work: &mut [u64], n: usize) -> impl Iterator<Item =
     let chunks = view::<Chunk<T>>(work, chunks_for(n)).unwrap_or_default();
     chunks.iter_mut().flat_map(|c| {
         let (points, count) = match parts(c) {
-            Some((p, _, count)) => (&p[..], count.wide() as usize),
+            Some(c) => (&c.points[..], c.count.wide() as usize),
             None => (&[][..], 0),
         };
         points
@@ -181,6 +207,119 @@ pub fn moved_points<T: Real>(work: &mut [u64], n: usize) -> impl Iterator<Item =
             .take(count)
             .map(|p| Point::new(p[0], p[1], p[2]))
     })
+}
+
+/// Moves the points of one chunk by `(rot, tr)` and sums their weighted correspondences into
+/// the chunk's system. A point that moved little since its last search re-ranks the candidates
+/// that search kept, which gives the search's answer exactly as long as no other point could
+/// have overtaken them and the point is still in its voxel (see [`MapView::nearest`]);
+/// otherwise it searches again.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn correspond<T: Real, P: PointCodec<T>>(
+    c: Parts<'_, T>,
+    map: &MapView<'_, T, P>,
+    rot: &Matrix3<T>,
+    tr: &Vector3<T>,
+    max_distance: T,
+    kernel: T,
+    slack: T,
+) {
+    let k2 = kernel * kernel;
+    let acc = c.system;
+    *acc = [T::zero(); SYSTEM_LEN];
+    let n = c.count.wide() as usize;
+    for (p, kept) in c
+        .points
+        .chunks_exact_mut(3)
+        .zip(c.kept.chunks_exact_mut(KEPT))
+        .take(n)
+    {
+        let before = Vector3::new(p[0], p[1], p[2]);
+        let moved = rot * before + tr;
+        p.copy_from_slice(&[moved.x, moved.y, moved.z]);
+        let (found, _) = closest_from(kept, map, &before, &moved, max_distance, slack);
+        if let Some((q, d2)) = found {
+            let r = moved - q.coords;
+            let denom = kernel + d2;
+            accumulate(acc, &moved, &r, k2 / (denom * denom));
+        }
+    }
+}
+
+/// The closest map point to `moved` within `max_distance`, exactly as
+/// [`MapView::closest_neighbor`] gives it, for a point that moved from `before` and whose last
+/// search left `kept` (updated here); and whether it came from `kept` (no search).
+#[inline]
+fn closest_from<T: Real, P: PointCodec<T>>(
+    kept: &mut [T],
+    map: &MapView<'_, T, P>,
+    before: &Vector3<T>,
+    moved: &Vector3<T>,
+    max_distance: T,
+    slack: T,
+) -> (Option<(Point<T>, T)>, bool) {
+    let s = Point::from(*moved);
+    let step = (moved - before).norm() + slack;
+    kept[3] -= step;
+    kept[4] -= step;
+    match rerank(kept, &s, map.voxel_size(), max_distance, slack) {
+        Some(found) => (found, true),
+        None => {
+            let nearest = map.nearest(&s, max_distance);
+            keep(kept, &nearest, slack);
+            (nearest.within(max_distance), false)
+        }
+    }
+}
+
+/// Rounding allowance for the distances a kept answer relies on: 16 ulps of `reach`, a bound on
+/// the coordinates of the points and their neighbours.
+fn slack_for<T: Real>(reach: T) -> T {
+    T::of(16.0) * T::EPS * reach
+}
+
+/// Stores what a search found for a point (see [`KEPT`]).
+#[inline]
+fn keep<T: Real>(kept: &mut [T], nearest: &Nearest<T>, slack: T) {
+    let none = T::one() / T::zero();
+    let q = nearest.best.map_or([none; 3], |(q, _)| [q.x, q.y, q.z]);
+    kept[..3].copy_from_slice(&q);
+    kept[3] = nearest.others - slack;
+    kept[4] = nearest.face - slack;
+}
+
+/// The answer a new search from `s` would give, from what the point's last search kept, if that
+/// is certain: `Some(answer)`; `None` if the point must search again. `slack` covers rounding.
+#[inline]
+fn rerank<T: Real>(
+    kept: &[T],
+    s: &Point<T>,
+    v: T,
+    max_distance: T,
+    slack: T,
+) -> Option<Option<(Point<T>, T)>> {
+    // Every other point of the searched 27 voxels is at least `others` away now. Past a face of
+    // the searched voxel, the 27 voxels around `s` also hold points the search did not see:
+    // they lie outside its 3x3x3 block, at least `v + face` away. A kept point that left the 27
+    // voxels around `s` is at least `v` away (less rounding) and cannot pass that bound.
+    let (others, face) = (kept[3], kept[4]);
+    (others > T::zero()).then_some(())?;
+    let bound = if face > T::zero() {
+        others
+    } else {
+        others.min(face + v - slack)
+    };
+    if !kept[0].is_finite() {
+        // No point was found; none can come within the threshold.
+        return (bound > max_distance).then_some(None);
+    }
+    let q = Point::new(kept[0], kept[1], kept[2]);
+    let d2 = (q - s).norm_squared();
+    // Strictly closer than every other point: no rank decides, the search picks it too.
+    // (`sqrt_lt` squares its bound: a bound that went negative must fail first.)
+    let beats_all = bound > T::zero() && sqrt_lt(d2, bound);
+    beats_all.then_some(Some((q, d2)).filter(|_| sqrt_lt(d2, max_distance)))
 }
 
 /// Registers `source` (sensor frame) to `map` starting from `initial_guess` (the reference's
@@ -209,7 +348,16 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
         return out;
     }
     let chunks = load(source, work);
-    let k2 = kernel * kernel;
+    // Points and their neighbours stay within |t| + max |p| (plus a few voxels) of the origin:
+    // the rounding allowance is taken on twice that.
+    let extent = source
+        .iter()
+        .map(|p| Vector3::new(p[0], p[1], p[2]).norm_squared())
+        .fold(T::zero(), |a, b| a.max(b))
+        .sqrt_l();
+    let reach = T::of(2.0) * (extent + initial_guess.translation.vector.norm())
+        + T::of(4.0) * map.voxel_size();
+    let slack = slack_for(reach);
     let mut step: (Matrix3<T>, Vector3<T>) = (
         initial_guess.rotation.to_rotation_matrix().into_inner(),
         initial_guess.translation.vector,
@@ -219,26 +367,14 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     for _ in 0..params.max_iterations {
         let (rot, tr) = step;
         exec.for_each(chunks, &|c| {
-            let Some((points, acc, count)) = parts(c) else {
-                return;
-            };
-            *acc = [T::zero(); SYSTEM_LEN];
-            let n = count.wide() as usize;
-            for p in points.chunks_exact_mut(3).take(n) {
-                let moved = rot * Vector3::new(p[0], p[1], p[2]) + tr;
-                p.copy_from_slice(&[moved.x, moved.y, moved.z]);
-                let s = Point::from(moved);
-                if let Some((q, d2)) = map.closest_neighbor(&s, max_distance) {
-                    let r = moved - q.coords;
-                    let denom = kernel + d2;
-                    accumulate(acc, &moved, &r, k2 / (denom * denom));
-                }
+            if let Some(c) = parts(c) {
+                correspond(c, map, &rot, &tr, max_distance, kernel, slack);
             }
         });
         let mut sum = [T::zero(); SYSTEM_LEN];
         for c in chunks.iter_mut() {
-            if let Some((_, sys, _)) = parts(c) {
-                for (a, b) in sum.iter_mut().zip(sys.iter()) {
+            if let Some(c) = parts(c) {
+                for (a, b) in sum.iter_mut().zip(c.system.iter()) {
                     *a += *b;
                 }
             }

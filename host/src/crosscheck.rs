@@ -289,6 +289,7 @@ fn sequence_checks(
 ) -> Result<()> {
     let opts = OpenOptions {
         topic: args.topic.clone(),
+        ..OpenOptions::default()
     };
     let format = match args.format {
         Format::Auto => io::open::detect(&args.dataset)?,

@@ -100,6 +100,28 @@ pub struct Metrics {
     pub frames: usize,
 }
 
+impl Metrics {
+    /// The first metric that is not a finite number (finite poses far enough apart overflow
+    /// the error sums), with its value; `None` when all are finite.
+    pub fn non_finite(&self) -> Option<(&'static str, f64)> {
+        let optional = [
+            ("kitti_t_err_pct", self.kitti_t_err_pct),
+            ("kitti_r_err_deg_per_m", self.kitti_r_err_deg_per_m),
+        ];
+        [
+            ("ate_m", self.ate_m),
+            ("are_rad", self.are_rad),
+            ("final_error_m", self.final_error_m),
+            ("rpe_m_mean", self.rpe_m_mean),
+            ("rpe_m_max", self.rpe_m_max),
+            ("rpe_rad_mean", self.rpe_rad_mean),
+        ]
+        .into_iter()
+        .chain(optional.into_iter().filter_map(|(n, v)| Some((n, v?))))
+        .find(|(_, v)| !v.is_finite())
+    }
+}
+
 /// KITTI relative error averaged over all segments.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KittiError {
@@ -399,6 +421,15 @@ pub fn execute_to(args: &EvalArgs, out: &mut dyn Write) -> Result<i32> {
             args.ground_truth.display()
         )
     })?;
+    // JSON has no inf or NaN (serde writes null): say so instead of printing a blank.
+    if let Some((name, value)) = m.non_finite() {
+        anyhow::bail!(
+            "{} against {}: {name} is {value}: the poses are too far apart for the error to be \
+             computed in f64 (check the units and that both files are trajectories)",
+            args.estimate.display(),
+            args.ground_truth.display()
+        );
+    }
     if args.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&m)?)?;
     } else {

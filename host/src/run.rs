@@ -268,8 +268,16 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
     settings.capacities()?;
     let opts = OpenOptions {
         topic: args.topic.clone(),
+        scan_points: settings.capacities()?.scan_points,
     };
     let dataset = io::open(&args.path, args.format, &opts)?;
+    // What the dataset layer found before the first frame (counted in the summary).
+    for w in &dataset.info.warnings {
+        writeln!(err, "warning: {w}")?;
+    }
+    if let (true, Some(w)) = (args.strict, dataset.info.warnings.first()) {
+        bail!("{w} (--strict)");
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create output folder", args.out.display()))?;
     let info = dataset.info.clone();
@@ -350,7 +358,7 @@ fn drive<T: Real, P: PointCodec<T>>(
             continue;
         }
         let (row, time) = match item {
-            Item::Skipped { reason, .. } => {
+            Item::Skipped { reason, time, .. } => {
                 bar.suspend(|| writeln!(err, "warning: {reason}")).ok();
                 out.warnings += 1;
                 if args.strict {
@@ -359,7 +367,7 @@ fn drive<T: Real, P: PointCodec<T>>(
                 }
                 out.skipped += 1;
                 odom.skip_frame();
-                (placeholder_row(index, "skipped"), None)
+                (placeholder_row(index, "skipped"), time)
             }
             Item::Frame(frame) => {
                 for w in &frame.warnings {
@@ -540,14 +548,16 @@ fn write_outputs(
     let dir = &args.out;
     let path = |name: &str| dir.join(name);
     io::poses::write_kitti(&path("poses_kitti.txt"), &o.poses)?;
-    // TUM needs a time per pose: the frame's own, else the frame index (as the reference).
+    // TUM needs a time per pose: the frames' own if every frame has one, else the frame
+    // number for all (as the reference does without times), never a mix.
+    let seconds = o.times.iter().all(Option::is_some);
     let timed: Vec<io::poses::TimedPose> = o
         .times
         .iter()
         .zip(&o.indices)
         .zip(&o.poses)
         .map(|((t, &i), p)| io::poses::TimedPose {
-            time: t.unwrap_or(i as f64),
+            time: t.filter(|_| seconds).unwrap_or(i as f64),
             pose: *p,
         })
         .collect();
@@ -556,19 +566,37 @@ fn write_outputs(
         .with_context(|| format!("{}", path("config.toml").display()))?;
     write_csv(&path("frames.csv"), &o.rows)?;
 
-    // Ground truth for the processed frames, re-based to the first one.
-    let gt: Option<Vec<Isometry3<f64>>> = info.ground_truth.as_ref().and_then(|all| {
-        let sel: Option<Vec<_>> = o.indices.iter().map(|&i| all.get(i).copied()).collect();
-        let sel = sel?;
-        let first = sel.first()?.inverse();
-        Some(sel.iter().map(|p| first * p).collect())
-    });
-    let metrics = match &gt {
-        Some(gt) if gt.len() == o.poses.len() => Some(serde_json::to_value(
-            crate::metrics::evaluate(&o.poses, gt)?,
-        )?),
+    // Metrics over the frames that have ground truth (the dataset warned about the others),
+    // both trajectories re-based to the first of them.
+    let gt_rows = info.ground_truth_for(&o.indices);
+    let paired: Vec<usize> = (0..gt_rows.len())
+        .filter(|&k| gt_rows[k].is_some())
+        .collect();
+    let gt: Option<Vec<Isometry3<f64>>> =
+        (!paired.is_empty()).then(|| gt_rows.iter().flatten().copied().collect());
+    let metrics = match (&gt, paired.first()) {
+        (Some(gt), Some(&first)) => {
+            let base = o.poses[first].inverse();
+            let est: Vec<Isometry3<f64>> = paired
+                .iter()
+                .map(|&k| {
+                    if first == 0 {
+                        o.poses[k]
+                    } else {
+                        base * o.poses[k]
+                    }
+                })
+                .collect();
+            Some(serde_json::to_value(crate::metrics::evaluate(&est, gt)?)?)
+        }
         _ => None,
     };
+    let gt = gt.map(|gt| {
+        let origin = paired
+            .first()
+            .map_or(Isometry3::identity(), |&k| o.poses[k]);
+        gt.iter().map(|p| origin * p).collect::<Vec<_>>()
+    });
     let title = args
         .path
         .file_name()
@@ -610,7 +638,7 @@ fn write_outputs(
         empty_frames: o.empty,
         degraded_frames: degraded,
         high_water: o.high_water.clone(),
-        warnings: o.warnings,
+        warnings: o.warnings + info.warnings.len(),
         input: serde_json::json!({
             "path": args.path.display().to_string(),
             "format": info.format,
@@ -619,6 +647,7 @@ fn write_outputs(
             "scalar": settings.runtime.scalar,
             "map_storage": settings.runtime.map_storage,
             "threads": settings.threads(),
+            "tum_times": if seconds { "seconds" } else { "frame numbers" },
         }),
         metrics,
     };

@@ -1,1 +1,177 @@
-//! Shared helpers for the workspace-level tests in `tests/tests/`.
+//! Shared helpers for the workspace-level tests in `tests/tests/`: running `kiss-odom` in
+//! process on a dataset and reading back what it wrote.
+
+use std::ffi::OsString;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+
+/// The repository root.
+pub fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Copies the folder `from` (files and subfolders) to `to`.
+pub fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_tree(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), &target).unwrap();
+        }
+    }
+}
+
+/// A copy of `fixtures/kitti-05-reduced` (10 real KITTI scans, calib, times, ground truth) at
+/// `dir/name`, to break.
+pub fn kitti_copy(dir: &Path, name: &str) -> PathBuf {
+    let to = dir.join(name);
+    copy_tree(&repo().join("fixtures/kitti-05-reduced"), &to);
+    to
+}
+
+/// What one `kiss-odom` command did.
+pub struct Run {
+    /// Exit status.
+    pub code: i32,
+    /// Everything written to stderr.
+    pub stderr: String,
+    /// The output folder (for `run`).
+    pub out: PathBuf,
+}
+
+/// The message of a panic payload.
+pub fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(non-string panic payload)".into())
+}
+
+/// `kiss-odom ARGS...` in process; a panic fails the test naming the command.
+pub fn kiss_odom(args: &[OsString], out: &Path) -> Run {
+    let mut argv: Vec<OsString> = vec!["kiss-odom".into()];
+    argv.extend(args.iter().cloned());
+    let shown: Vec<String> = argv.iter().map(|a| a.to_string_lossy().into()).collect();
+    let mut err = Vec::new();
+    let code = catch_unwind(AssertUnwindSafe(|| {
+        kiss_odom::cli::main_with(argv, &mut err)
+    }))
+    .unwrap_or_else(|p| panic!("`{}` panicked: {}", shown.join(" "), panic_text(p.as_ref())));
+    Run {
+        code,
+        stderr: String::from_utf8_lossy(&err).into_owned(),
+        out: out.to_path_buf(),
+    }
+}
+
+/// `kiss-odom run INPUT --out OUT --quiet EXTRA...` in process.
+pub fn run(input: &Path, out: &Path, extra: &[&str]) -> Run {
+    let mut args: Vec<OsString> = vec![
+        "run".into(),
+        input.into(),
+        "--out".into(),
+        out.into(),
+        "--quiet".into(),
+    ];
+    args.extend(extra.iter().map(OsString::from));
+    kiss_odom(&args, out)
+}
+
+impl Run {
+    /// `summary.json`.
+    pub fn summary(&self) -> serde_json::Value {
+        let path = self.out.join("summary.json");
+        let text = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{}: {e}\nstderr:\n{}", path.display(), self.stderr));
+        serde_json::from_str(&text).expect("summary.json is JSON")
+    }
+
+    /// A number of `summary.json` (`a.b` for nested keys); NaN when absent or null.
+    pub fn number(&self, key: &str) -> f64 {
+        let s = self.summary();
+        key.split('.')
+            .fold(&s, |v, k| &v[k])
+            .as_f64()
+            .unwrap_or(f64::NAN)
+    }
+
+    /// The lines of an output file.
+    pub fn lines(&self, name: &str) -> Vec<String> {
+        let path = self.out.join(name);
+        std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{}: {e}\nstderr:\n{}", path.display(), self.stderr))
+            .lines()
+            .map(String::from)
+            .collect()
+    }
+
+    /// The time column of `poses_tum.txt`.
+    pub fn tum_times(&self) -> Vec<f64> {
+        self.lines("poses_tum.txt")
+            .iter()
+            .map(|l| l.split(' ').next().unwrap().parse().unwrap())
+            .collect()
+    }
+
+    /// A column of `frames.csv`.
+    pub fn column(&self, name: &str) -> Vec<String> {
+        let lines = self.lines("frames.csv");
+        let header: Vec<&str> = lines[0].split(',').collect();
+        let col = header
+            .iter()
+            .position(|c| *c == name)
+            .unwrap_or_else(|| panic!("frames.csv has no column {name}: {header:?}"));
+        lines[1..]
+            .iter()
+            .map(|l| l.split(',').nth(col).unwrap_or_default().to_string())
+            .collect()
+    }
+
+    /// The `warning: ` lines of stderr.
+    pub fn warnings(&self) -> Vec<&str> {
+        self.stderr
+            .lines()
+            .filter(|l| l.starts_with("warning: "))
+            .collect()
+    }
+
+    /// The one warning that contains every one of `needles`; fails showing stderr otherwise.
+    pub fn warning_with(&self, needles: &[&str]) -> &str {
+        let hits: Vec<&str> = self
+            .warnings()
+            .into_iter()
+            .filter(|w| needles.iter().all(|n| w.contains(n)))
+            .collect();
+        assert_eq!(
+            hits.len(),
+            1,
+            "one warning containing {needles:?}; stderr:\n{}",
+            self.stderr
+        );
+        hits[0]
+    }
+
+    /// Exit 0; fails showing stderr otherwise.
+    pub fn ok(&self) -> &Self {
+        assert_eq!(self.code, 0, "exit status; stderr:\n{}", self.stderr);
+        self
+    }
+
+    /// Exit 1 with an `error: ` line containing every one of `needles`; returns the line.
+    pub fn failed_with(&self, needles: &[&str]) -> &str {
+        assert_eq!(self.code, 1, "exit status; stderr:\n{}", self.stderr);
+        let line = self
+            .stderr
+            .lines()
+            .find(|l| l.starts_with("error: "))
+            .unwrap_or_else(|| panic!("no error line; stderr:\n{}", self.stderr));
+        for n in needles {
+            assert!(line.contains(n), "the error names {n:?}: {line}");
+        }
+        line
+    }
+}

@@ -24,6 +24,7 @@ fn fixture(case: &str, ext: &str) -> PathBuf {
 fn open(path: &Path, topic: Option<&str>) -> Result<Dataset, String> {
     let opts = OpenOptions {
         topic: topic.map(String::from),
+        ..OpenOptions::default()
     };
     io::open(path, Format::Auto, &opts).map_err(|e| format!("{e:#}"))
 }
@@ -208,7 +209,7 @@ fn message_with_inconsistent_point_step_is_a_skipped_frame_and_the_stream_goes_o
         assert_eq!(items.len(), 3, "{ext}");
         check_ouster(frame(&items[0]), 0);
         match &items[1] {
-            Item::Skipped { index, reason } => {
+            Item::Skipped { index, reason, .. } => {
                 assert_eq!(*index, 1);
                 assert!(reason.contains(&path.display().to_string()), "{reason}");
                 assert!(reason.contains("point_step 8"), "{reason}");

@@ -15,6 +15,7 @@
 //! a PointCloud2 message.
 
 use kiss_odom::io::{bin, pcd, ply, poses};
+use kiss_odom_tests::panic_text;
 use nalgebra::Matrix4;
 use std::ffi::OsString;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -87,14 +88,6 @@ struct Row {
     index: usize,
     deskewed: bool,
     status: String,
-}
-
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "(non-string panic payload)".into())
 }
 
 /// `kiss-odom run INPUT --out OUT --quiet EXTRA...` in-process. A panic anywhere inside is
@@ -925,4 +918,25 @@ fn no_frames_or_no_such_path_exit_1_with_the_reason() {
     let r = run(&data, &dir.path().join("out-range"), &["--frames", "5.."]);
     let line = r.failed_naming(&data);
     assert!(line.contains("no frames"), "{line}");
+}
+
+/// Finding 12 of issue 12: `kiss-odom eval` on finite poses far enough apart for the error
+/// sums to overflow reported the ATE as `null` (JSON has no inf) with exit 0.
+#[test]
+fn eval_with_an_infinite_ate_fails_naming_the_metric() {
+    let dir = tempfile::tempdir().unwrap();
+    let est = dir.path().join("est.txt");
+    let gt = dir.path().join("gt.txt");
+    let line = |x: f64| format!("1 0 0 {x:e} 0 1 0 0 0 0 1 0\n");
+    std::fs::write(&est, [0.0, 1e200, -1e200].map(line).concat()).unwrap();
+    std::fs::write(&gt, [0.0, 1.0, 2.0].map(line).concat()).unwrap();
+    let args: Vec<OsString> = vec![
+        "eval".into(),
+        est.clone().into(),
+        gt.into(),
+        "--json".into(),
+    ];
+    let r = kiss_odom_tests::kiss_odom(&args, dir.path());
+    let line = r.failed_with(&["est.txt", "ate_m is inf"]);
+    println!("{line}");
 }

@@ -94,27 +94,36 @@ fn le_bytes<const N: usize>(values: impl IntoIterator<Item = [u8; N]>) -> Vec<u8
 // Round trips through the generic layout
 
 #[test]
-fn bin_frames_round_trip_in_name_order() {
+fn bin_frames_are_numbered_by_their_name_and_gaps_are_skipped_frames() {
     let dir = tempfile::tempdir().unwrap();
     let frames = velodyne(dir.path());
-    // Natural order: 2 before 10, whatever the directory listing says.
-    let names = ["frame_1.bin", "frame_2.bin", "frame_10.bin"];
-    for (seed, name) in names.iter().enumerate() {
+    // The number in the name is the frame: 2 before 10, whatever the directory listing says,
+    // and 3..9 are missing.
+    let names = [(1, "frame_1.bin"), (2, "frame_2.bin"), (10, "frame_10.bin")];
+    for (seed, name) in names {
         bin::write(&frames.join(name), &cloud(seed, 50 + seed)).unwrap();
     }
     let mut ds = open(dir.path(), Format::Auto);
     assert_eq!(ds.info.format, Some(Format::Bin));
     assert!(!ds.info.kitti_correction);
-    assert_eq!(ds.frames.len_hint(), Some(3));
+    assert_eq!(ds.frames.len_hint(), Some(10));
     let items = all_items(&mut ds);
-    assert_eq!(items.len(), 3);
-    for (seed, (item, name)) in items.iter().zip(names).enumerate() {
-        let f = frame(item);
-        assert_eq!(f.index, seed);
+    assert_eq!(items.len(), 10);
+    let indices: Vec<usize> = items.iter().map(Item::index).collect();
+    assert_eq!(indices, (1..=10).collect::<Vec<_>>());
+    for (seed, name) in names {
+        let f = frame(&items[seed - 1]);
         assert!(f.name.ends_with(name), "{} is not {name}", f.name);
         assert_eq!(f.points, cloud(seed, 50 + seed));
         assert_eq!(f.stamps, None);
         assert!(f.warnings.is_empty());
+    }
+    for k in 3..10 {
+        let reason = skip_reason(&items[k - 1]);
+        assert!(
+            reason.ends_with(&format!("velodyne/frame_{k}.bin: missing")),
+            "{reason}"
+        );
     }
 }
 
@@ -445,13 +454,24 @@ fn an_explicit_format_wins_over_detection() {
     let dir = tempfile::tempdir().unwrap();
     bin::write(&dir.path().join("0.bin"), &cloud(0, 3)).unwrap();
     ply::write(&dir.path().join("1.ply"), &cloud(1, 4), None).unwrap();
-    assert_eq!(
-        open(dir.path(), Format::Auto).info.format,
-        Some(Format::Bin)
+    // Two formats: `auto` refuses with the counts and the way out.
+    let Err(e) = io::open(dir.path(), Format::Auto, &Default::default()) else {
+        panic!("auto opened a folder of .bin and .ply frames");
+    };
+    let e = format!("{e:#}");
+    assert!(
+        e.contains("1 *.bin, 1 *.ply") && e.contains("--format"),
+        "{e}"
     );
     let mut ds = open(dir.path(), Format::Ply);
+    assert!(
+        ds.info.warnings[0].contains("0.bin"),
+        "{:?}",
+        ds.info.warnings
+    );
     let items = all_items(&mut ds);
     assert_eq!(items.len(), 1);
+    assert_eq!(frame(&items[0]).index, 1);
     assert_eq!(frame(&items[0]).points, cloud(1, 4));
 
     // The KITTI sequence read as plain .bin frames: no correction, no ground-truth conversion.

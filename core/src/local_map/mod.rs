@@ -20,6 +20,7 @@ mod codec;
 mod search;
 
 pub use codec::{Exact, PointCodec, Quantized};
+pub use search::Nearest;
 
 use crate::error::ConfigError;
 use crate::scalar::{sqrt_lt, Real};

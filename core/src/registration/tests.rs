@@ -17,12 +17,12 @@ struct Fixture {
 }
 
 impl Fixture {
-    /// A map over the fixture's words holding the scene.
-    fn map(&mut self) -> LocalMap<f64, Exact, &mut [u64]> {
+    /// A map over the fixture's words holding the scene, and the ICP work words.
+    fn map_and_work(&mut self) -> (LocalMap<f64, Exact, &mut [u64]>, &mut [u64]) {
         let mut map = LocalMap::new(1.0, 100.0, 20, VOXELS, POINTS, &mut self.map[..]).unwrap();
         let st = map.update(&self.scene[..self.n], &Pose::identity());
         assert_eq!(st.added, self.n, "every scene point must be in the map");
-        map
+        (map, &mut self.work[..])
     }
 }
 
@@ -60,12 +60,11 @@ fn register(
         let q = inv * Point::from(*p);
         *s = [q.x, q.y, q.z];
     }
-    let mut work = f.work;
-    let map = f.map();
+    let (map, work) = f.map_and_work();
     align_points_to_map(
         exec,
         &source[..n],
-        &mut work,
+        work,
         &map.view(),
         guess,
         6.0,
@@ -107,8 +106,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
     for (s, p) in source.iter_mut().zip(scene[..n].iter()) {
         *s = [p[0] - 0.4, p[1] - 0.1, p[2]];
     }
-    let mut work = f.work;
-    let map = f.map();
+    let (map, work) = f.map_and_work();
     let capped = IcpParams {
         convergence_criterion: 1e-4,
         max_iterations: 2,
@@ -116,7 +114,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
     let a = align_points_to_map(
         &Sequential,
         &source[..n],
-        &mut work,
+        work,
         &map.view(),
         &Pose::identity(),
         6.0,
@@ -165,4 +163,126 @@ fn the_result_does_not_depend_on_the_order_chunks_run_in() {
     let b = register(&mut fixture(), &truth, &Pose::identity(), &Reversed);
     assert_eq!(a.pose, b.pose);
     assert_eq!(a.iterations, b.iterations);
+}
+
+/// Walks `walkers` queries through `map` by steps of every size (1e-7 m to 0.4 m, some landing
+/// exactly on voxel faces or halfway between two map points), answering each step as ICP does
+/// (keeping answers) and by a fresh search; every answer must be identical, bit for bit.
+/// Returns (steps, answers kept).
+fn walk_and_compare<T: Real, P: PointCodec<T>>(
+    map: &MapView<'_, T, P>,
+    scene: &[[f64; 3]],
+    max_distance: T,
+    seed: u64,
+) -> (usize, usize) {
+    walk_with_steps(map, scene, max_distance, seed, 0.4)
+}
+
+/// [`walk_and_compare`] with steps up to `largest_step` (m).
+fn walk_with_steps<T: Real, P: PointCodec<T>>(
+    map: &MapView<'_, T, P>,
+    scene: &[[f64; 3]],
+    max_distance: T,
+    seed: u64,
+    largest_step: f64,
+) -> (usize, usize) {
+    let mut rng = crate::testutil::Rng(seed);
+    let v = map.voxel_size().wide();
+    let slack = slack_for(T::of(2.0 * 20.0 + 4.0 * v));
+    let (mut steps, mut kept_answers) = (0, 0);
+    let walkers = if cfg!(miri) { 3 } else { 120 };
+    let largest = largest_step.log10();
+    for w in 0..walkers {
+        let start = scene[(rng.next() * scene.len() as f64) as usize];
+        let mut at = Vector3::new(
+            T::of(start[0] + rng.next() - 0.5),
+            T::of(start[1] + rng.next() - 0.5),
+            T::of(start[2] + rng.next() * 0.4 - 0.2),
+        );
+        let mut kept = [T::zero(), T::zero(), T::zero(), -T::one(), -T::one()];
+        let moves = if cfg!(miri) { 20 } else { 200 };
+        for k in 0..moves {
+            let next = match k % 7 {
+                // Onto the nearest voxel face along x.
+                5 => {
+                    let f = (at.x.wide() / v).round() * v;
+                    Vector3::new(T::of(f), at.y, at.z)
+                }
+                // Halfway between two map points: equidistant, ties decided by rank.
+                6 => {
+                    let i = (rng.next() * (scene.len() - 1) as f64) as usize;
+                    let (a, b) = (scene[i], scene[i + 1]);
+                    Vector3::new(
+                        T::of((a[0] + b[0]) / 2.0),
+                        T::of((a[1] + b[1]) / 2.0),
+                        T::of((a[2] + b[2]) / 2.0),
+                    )
+                }
+                _ => {
+                    let size = 10f64.powf(-7.0 + rng.next() * (largest + 7.0));
+                    let d = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+                    at + (d.normalize() * size).map(T::of)
+                }
+            };
+            let (got, from_kept) = closest_from(&mut kept, map, &at, &next, max_distance, slack);
+            let want = map.closest_neighbor(&Point::from(next), max_distance);
+            assert_eq!(got, want, "walker {w} step {k}: {next:?}");
+            steps += 1;
+            kept_answers += usize::from(from_kept);
+            at = next;
+        }
+    }
+    (steps, kept_answers)
+}
+
+#[test]
+fn kept_answers_equal_a_new_search_f64_exact() {
+    let mut f = fixture();
+    let scene = f.scene;
+    let n = f.n;
+    let (map, _) = f.map_and_work();
+    for (i, tau) in [0.3, 1.0, 6.0].into_iter().enumerate() {
+        let (steps, kept) = walk_and_compare(&map.view(), &scene[..n], tau, 17 + i as u64);
+        std::println!("tau {tau} m: {steps} steps, {kept} answered from what was kept");
+        assert!(kept * 4 > steps, "too few kept answers to test anything");
+    }
+}
+
+#[test]
+fn kept_answers_equal_a_new_search_f32_quantized() {
+    use crate::local_map::Quantized;
+    const W: usize = LocalMap::<f32, Quantized, &mut [u64]>::words(VOXELS, POINTS);
+    let f = fixture();
+    let mut words = [0u64; W];
+    let mut map =
+        LocalMap::<f32, Quantized, _>::new(1.0, 100.0, 20, VOXELS, POINTS, &mut words[..]).unwrap();
+    let scene32: [[f32; 3]; N] = core::array::from_fn(|i| f.scene[i].map(|c| c as f32));
+    map.update(&scene32[..f.n], &Pose::identity());
+    for (i, tau) in [0.3f32, 1.0, 6.0].into_iter().enumerate() {
+        let (steps, kept) = walk_and_compare(&map.view(), &f.scene[..f.n], tau, 91 + i as u64);
+        std::println!(
+            "tau {tau} m (f32, quantized): {steps} steps, {kept} answered from what was kept"
+        );
+        assert!(kept * 4 > steps, "too few kept answers to test anything");
+    }
+}
+
+#[test]
+fn kept_answers_equal_a_new_search_in_a_sparse_map() {
+    // Isolated points far apart: a kept answer stays valid across voxel faces, until the point
+    // it names drops out of the 27 voxels or a voxel that enters them holds a closer one.
+    const W: usize = LocalMap::<f64, Exact, &mut [u64]>::words(64, 256);
+    let mut words = [0u64; W];
+    let mut map = LocalMap::<f64, Exact, _>::new(1.0, 100.0, 20, 64, 256, &mut words[..]).unwrap();
+    let mut rng = crate::testutil::Rng(5);
+    let mut scene = [[0.0f64; 3]; 40];
+    for p in scene.iter_mut() {
+        *p = [rng.next() * 6.0, rng.next() * 6.0, rng.next() * 6.0];
+    }
+    map.add_points(scene.iter().map(|p| Point::from(*p)));
+    for (i, tau) in [0.5, 2.0, 6.0].into_iter().enumerate() {
+        let (steps, kept) = walk_with_steps(&map.view(), &scene, tau, 3 + i as u64, 1.5);
+        std::println!("sparse map, tau {tau} m: {steps} steps, {kept} answered from what was kept");
+        assert!(kept * 4 > steps, "too few kept answers to test anything");
+    }
 }

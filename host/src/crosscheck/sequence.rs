@@ -295,12 +295,9 @@ pub fn run_reference(
 
 /// Ground truth for the preloaded frames, re-based to the first (as `run` does).
 pub fn ground_truth(info: &io::DatasetInfo, frames: &[Frame]) -> Option<Vec<Isometry3<f64>>> {
-    let all = info.ground_truth.as_ref()?;
-    let sel: Option<Vec<Isometry3<f64>>> =
-        frames.iter().map(|f| all.get(f.index).copied()).collect();
-    let sel = sel?;
-    let first = sel.first()?.inverse();
-    Some(sel.iter().map(|p| first * p).collect())
+    let indices: Vec<usize> = frames.iter().map(|f| f.index).collect();
+    // Every frame needs one; a frame without ground truth leaves the metrics out.
+    info.ground_truth_for(&indices).into_iter().collect()
 }
 
 /// Figures of one comparison, for the JSON file.

@@ -3,9 +3,13 @@
 //!
 //! The format has no per-point times and no length field, so the only check possible is the
 //! file length: an empty file or one whose length is not a whole number of points is not a scan.
+//! The length comes from the file system, so a frame is checked, and cut at the scan capacity,
+//! before any byte of it is read.
 
+use super::cloud::Cloud;
 use anyhow::{Context, Result};
 use std::fmt;
+use std::io::Read;
 use std::path::Path;
 
 /// Bytes per point: x, y, z, intensity as little-endian `f32`.
@@ -48,10 +52,40 @@ pub fn parse(bytes: &[u8]) -> Result<Vec<[f64; 3]>, BinError> {
         .collect())
 }
 
-/// Reads the scan at `path` (see [`parse`]).
+/// Checks a file length: the number of points it holds.
+pub fn points_in(len: u64) -> Result<usize, BinError> {
+    let n = usize::try_from(len).unwrap_or(usize::MAX);
+    if n == 0 {
+        return Err(BinError::Empty);
+    }
+    if n % POINT_BYTES != 0 {
+        return Err(BinError::Length(n));
+    }
+    Ok(n / POINT_BYTES)
+}
+
+/// Reads at most the first `max_points` points of the scan at `path`; only those bytes are
+/// read, so a huge file costs no more memory than a full scan.
+pub fn read_at_most(path: &Path, max_points: usize) -> Result<Cloud> {
+    let file = std::fs::File::open(path)?;
+    let declared = points_in(file.metadata()?.len())?;
+    let keep = declared.min(max_points);
+    let mut bytes = Vec::with_capacity(keep * POINT_BYTES);
+    file.take((keep * POINT_BYTES) as u64)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() != keep * POINT_BYTES {
+        anyhow::bail!("file shrank while it was read");
+    }
+    Ok(Cloud {
+        points: parse(&bytes)?,
+        stamps: None,
+        declared,
+    })
+}
+
+/// Reads the whole scan at `path` (see [`parse`]).
 pub fn read(path: &Path) -> Result<Vec<[f64; 3]>> {
-    let bytes = std::fs::read(path)?;
-    Ok(parse(&bytes)?)
+    Ok(read_at_most(path, usize::MAX)?.points)
 }
 
 /// The `.bin` bytes of `points`, narrowed to `f32`, intensity 0.
@@ -89,6 +123,22 @@ mod tests {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
         assert_eq!(parse(&bytes).unwrap(), vec![[1.0, 2.0, 3.0]]);
+    }
+
+    #[test]
+    fn reading_at_most_n_points_reads_only_those() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.bin");
+        let points = vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]];
+        write(&path, &points).unwrap();
+        let cloud = read_at_most(&path, 2).unwrap();
+        assert_eq!(cloud.points, points[..2]);
+        assert_eq!(cloud.declared, 3);
+        let whole = read_at_most(&path, 3).unwrap();
+        assert_eq!((whole.points.len(), whole.declared), (3, 3));
+        std::fs::write(&path, [0u8; 20]).unwrap();
+        let e = read_at_most(&path, 1).unwrap_err().to_string();
+        assert!(e.contains("length 20"), "{e}");
     }
 
     #[test]

@@ -1,58 +1,36 @@
 //! The generic folder layout: one file per scan, plus optional side files.
 //!
 //! ```text
-//! PATH/velodyne/*.bin|*.ply|*.pcd   frames, in natural name order (or directly in PATH)
+//! PATH/velodyne/*.bin|*.ply|*.pcd   frames, identified by the number or time in their name
+//!                                   (or directly in PATH; see `listing`)
 //! PATH/timestamps/<stem>.bin        per-point times, f64 little-endian, one per point
 //! PATH/poses.txt                    ground truth, KITTI 3x4, LiDAR frame, end of each sweep
 //! PATH/times.txt                    frame times, one number per line
 //! ```
 //!
-//! This is what `kiss-odom simulate` writes and what most recordings can be converted to. Frames
-//! are read one at a time when asked for; a bad frame becomes an [`Item::Skipped`], a bad
-//! timestamps file a [`Frame::warnings`] entry.
+//! This is what `kiss-odom simulate` writes and what most recordings can be converted to. Row
+//! `k` of `poses.txt` and `times.txt` belongs to frame `k` (the number in the name, or the
+//! place in time order for time-named frames); a side file with fewer or more rows than that
+//! needs is reported. Frames are read one at a time when asked for ([`FileSource`], shared with
+//! the KITTI layout); a missing or bad frame becomes an [`Item::Skipped`], a bad timestamps
+//! file a [`Frame::warnings`] entry.
 
-use super::{bin, pcd, ply, poses, Dataset, DatasetInfo, Format, Frame, FrameSource, Item};
+use super::cloud::{truncation_warning, Cloud};
+use super::listing::{self, Listing, Naming, Slot};
+use super::{
+    bin, pcd, ply, poses, Dataset, DatasetInfo, Format, Frame, FrameSource, Item, OpenOptions,
+};
 use anyhow::{bail, Context, Result};
 use std::cmp::Ordering;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
-/// Names of a per-point time field, in the order the reference looks them up
-/// (`kiss_icp/datasets/generic.py`): the first one a file has is used.
-pub const STAMP_FIELDS: [&str; 5] = ["t", "timestamp", "timestamps", "time", "stamps"];
-
-/// Points of one file and their per-point times, if the file has them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Cloud {
-    /// Points in metres, sensor frame.
-    pub points: Vec<[f64; 3]>,
-    /// One time per point, in the file's unit and offset.
-    pub stamps: Option<Vec<f64>>,
-}
-
-/// Frame formats of the generic layout and their file extension.
-const FRAME_FORMATS: [(Format, &str); 3] = [
-    (Format::Bin, "bin"),
-    (Format::Ply, "ply"),
-    (Format::Pcd, "pcd"),
-];
-
-/// The file extension of the frames of `format`, if it is a per-file format.
-pub fn frame_extension(format: Format) -> Option<&'static str> {
-    FRAME_FORMATS
-        .iter()
-        .find(|(f, _)| *f == format)
-        .map(|(_, ext)| *ext)
-}
-
-/// Reads one frame file of `format` (`Bin`, `Ply` or `Pcd`).
-pub fn read_cloud(path: &Path, format: Format) -> Result<Cloud> {
+/// Reads at most `max_points` points of one frame file of `format` (`Bin`, `Ply` or `Pcd`).
+pub fn read_cloud(path: &Path, format: Format, max_points: usize) -> Result<Cloud> {
     match format {
-        Format::Bin => Ok(Cloud {
-            points: bin::read(path)?,
-            stamps: None,
-        }),
-        Format::Ply => ply::read(path),
-        Format::Pcd => pcd::read(path),
+        Format::Bin => bin::read_at_most(path, max_points),
+        Format::Ply => ply::read_at_most(path, max_points),
+        Format::Pcd => pcd::read_at_most(path, max_points),
         other => bail!("{other:?} is not a per-file frame format"),
     }
 }
@@ -100,29 +78,6 @@ fn trim_zeros(s: &[u8]) -> &[u8] {
     &s[n..]
 }
 
-/// Files in `dir` whose extension is `ext` (case-insensitive), in natural name order.
-pub fn list_frames(dir: &Path, ext: &str) -> Result<Vec<PathBuf>> {
-    let mut files = Vec::new();
-    for entry in std::fs::read_dir(dir).with_context(|| format!("{}", dir.display()))? {
-        let path = entry.with_context(|| format!("{}", dir.display()))?.path();
-        let matches = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case(ext));
-        if matches && path.is_file() {
-            files.push(path);
-        }
-    }
-    files.sort_by(|a, b| natural_cmp(&file_name(a), &file_name(b)));
-    Ok(files)
-}
-
-fn file_name(path: &Path) -> String {
-    path.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
-
 /// Where the frames of the generic layout at `root` live: `root/velodyne` if it exists.
 pub fn frames_dir(root: &Path) -> PathBuf {
     let velodyne = root.join("velodyne");
@@ -133,23 +88,16 @@ pub fn frames_dir(root: &Path) -> PathBuf {
     }
 }
 
-/// The frame format of the generic layout at `root`, by the extension of the first frame file
-/// in name order; `None` if there is no `.bin`, `.ply` or `.pcd` file.
+/// The frame format of the generic layout at `root`: the only one its frames have; several is
+/// an error naming the counts, none is `None`.
 pub fn detect_format(root: &Path) -> Result<Option<Format>> {
     let dir = frames_dir(root);
-    let mut first: Option<(String, Format)> = None;
-    for (format, ext) in FRAME_FORMATS {
-        if let Some(path) = list_frames(&dir, ext)?.first() {
-            let name = file_name(path);
-            if first
-                .as_ref()
-                .is_none_or(|(n, _)| natural_cmp(&name, n) == Ordering::Less)
-            {
-                first = Some((name, format));
-            }
-        }
+    match listing::count_formats(&dir)?.as_slice() {
+        [] => Ok(None),
+        [(format, _)] => Ok(Some(*format)),
+        // The listing refuses several formats with the counts and the way out.
+        _ => listing::list(&dir, None).map(|l| Some(l.format)),
     }
-    Ok(first.map(|(_, f)| f))
 }
 
 /// Reads a `times.txt`-style file: one number per line (blank lines ignored).
@@ -192,54 +140,54 @@ pub(crate) fn reason(path: &Path, err: &anyhow::Error) -> String {
     text.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-/// Frames of the generic layout, read on demand.
-pub struct GenericSource {
-    files: Vec<PathBuf>,
+/// Per-file frames of a folder (generic or KITTI), read on demand in frame order.
+pub struct FileSource {
+    slots: Vec<Slot>,
     format: Format,
     stamps_dir: Option<PathBuf>,
+    /// Frame times by identity (`times.txt`), for frames whose name is not a time.
     times: Option<Vec<f64>>,
+    max_points: usize,
+    /// Applied to every scan read (the KITTI correction).
+    correct: Option<fn(&mut [[f64; 3]])>,
     next: usize,
 }
 
-impl GenericSource {
-    /// Frames `files` of `format` (`Bin`, `Ply` or `Pcd`); per-point times from
-    /// `stamps_dir/<stem>.bin` if given, frame times from `times` if given.
+impl FileSource {
+    /// The frames of `listing`; per-point times from `stamps_dir/<stem>.bin` if given, frame
+    /// times from `times` (by identity) if given, at most `max_points` points a frame.
     pub fn new(
-        files: Vec<PathBuf>,
-        format: Format,
+        listing: Listing,
         stamps_dir: Option<PathBuf>,
         times: Option<Vec<f64>>,
+        max_points: usize,
     ) -> Self {
         Self {
-            files,
-            format,
+            slots: listing.slots,
+            format: listing.format,
             stamps_dir,
             times,
+            max_points,
+            correct: None,
             next: 0,
         }
     }
 
+    /// Applies `correct` to every scan read.
+    pub fn with_correction(mut self, correct: fn(&mut [[f64; 3]])) -> Self {
+        self.correct = Some(correct);
+        self
+    }
+
     /// Replaces the file's own times by the side file's. A side file that cannot be used is a
-    /// warning; the frame keeps the times of its own file (none for `.bin`).
-    fn attach_timestamps(&self, path: &Path, frame: &mut Frame) {
+    /// warning; the frame keeps the times of its own file (none for `.bin`). Only as many
+    /// times as points were read are read.
+    fn attach_timestamps(&self, path: &Path, declared: usize, frame: &mut Frame) {
         let Some(dir) = &self.stamps_dir else { return };
         let Some(stem) = path.file_stem() else { return };
         let mut side = dir.join(stem);
         side.as_mut_os_string().push(".bin");
-        let stamps = std::fs::read(&side)
-            .map_err(anyhow::Error::from)
-            .and_then(|bytes| parse_timestamps(&bytes))
-            .and_then(|stamps| {
-                if stamps.len() == frame.points.len() {
-                    Ok(stamps)
-                } else {
-                    bail!(
-                        "{} timestamps for {} points; timestamps ignored",
-                        stamps.len(),
-                        frame.points.len()
-                    )
-                }
-            });
+        let stamps = read_side_stamps(&side, declared, frame.points.len());
         match stamps {
             Ok(stamps) => frame.stamps = Some(stamps),
             Err(e) => frame.warnings.push(reason(&side, &e)),
@@ -247,91 +195,189 @@ impl GenericSource {
     }
 }
 
-impl FrameSource for GenericSource {
+/// The first `keep` times of a `timestamps/<stem>.bin` file that must hold `declared`.
+fn read_side_stamps(side: &Path, declared: usize, keep: usize) -> Result<Vec<f64>> {
+    let file = std::fs::File::open(side)?;
+    let len = file.metadata()?.len();
+    if len % 8 != 0 {
+        bail!("length {len} is not a multiple of 8 bytes");
+    }
+    if len / 8 != declared as u64 {
+        bail!(
+            "{} timestamps for {declared} points; timestamps ignored",
+            len / 8
+        );
+    }
+    let mut bytes = Vec::with_capacity(keep * 8);
+    file.take(keep as u64 * 8).read_to_end(&mut bytes)?;
+    parse_timestamps(&bytes)
+}
+
+impl FrameSource for FileSource {
     fn len_hint(&self) -> Option<usize> {
-        Some(self.files.len())
+        Some(self.slots.len())
     }
 
     fn next_item(&mut self) -> Result<Option<Item>> {
-        let index = self.next;
-        let Some(path) = self.files.get(index) else {
+        let Some(slot) = self.slots.get(self.next) else {
             return Ok(None);
         };
         self.next += 1;
-        let cloud = match read_cloud(path, self.format) {
+        let (index, path) = (slot.index, &slot.path);
+        let time = slot
+            .time
+            .or_else(|| self.times.as_ref().and_then(|t| t.get(index).copied()));
+        let name = path.display().to_string();
+        let read = match &slot.problem {
+            Some(problem) => Err(anyhow::anyhow!("{problem}")),
+            None => read_cloud(path, self.format, self.max_points),
+        };
+        let cloud = match read {
             Ok(cloud) => cloud,
             Err(e) => {
                 let reason = reason(path, &e);
-                return Ok(Some(Item::Skipped { index, reason }));
+                return Ok(Some(Item::Skipped {
+                    index,
+                    name,
+                    time,
+                    reason,
+                }));
             }
         };
         let mut frame = Frame {
             index,
-            name: path.display().to_string(),
+            name,
             points: cloud.points,
             stamps: cloud.stamps,
-            time: self.times.as_ref().and_then(|t| t.get(index).copied()),
+            time,
             warnings: Vec::new(),
         };
-        self.attach_timestamps(path, &mut frame);
+        if cloud.declared > frame.points.len() {
+            let w = truncation_warning(frame.points.len(), cloud.declared);
+            frame.warnings.push(format!("{}: {w}", frame.name));
+        }
+        if let Some(correct) = self.correct {
+            correct(&mut frame.points);
+        }
+        self.attach_timestamps(path, cloud.declared, &mut frame);
         Ok(Some(Item::Frame(frame)))
     }
 
     fn seek(&mut self, index: usize) -> bool {
-        if index > self.files.len() {
+        let end = self.slots.last().map_or(0, |s| s.index + 1);
+        if index > end {
             return false;
         }
-        self.next = index;
+        self.next = self.slots.partition_point(|s| s.index < index);
         true
+    }
+}
+
+/// A file with one row per frame (`poses.txt`, `times.txt`), checked against the frames of
+/// `listing`: the warning when it has too few rows (naming the frames left without, which lack
+/// `what`) or rows that match no frame.
+pub(crate) fn check_rows(
+    file: &Path,
+    rows: usize,
+    listing: &Listing,
+    what: &str,
+) -> Option<String> {
+    let last = listing.slots.last()?;
+    let shown = file.display();
+    let without = listing.slots.iter().filter(|s| s.index >= rows).count();
+    if without > 0 {
+        let first = listing.slots.iter().find(|s| s.index >= rows)?;
+        return Some(format!(
+            "{shown} has {rows} rows but the frames go up to {} (frame {}): {without} frame(s) \
+             from {} on have no {what}",
+            last.path.display(),
+            last.index,
+            first.path.display(),
+        ));
+    }
+    (rows > last.index + 1).then(|| {
+        format!(
+            "{shown} has {rows} rows but the last frame is {} (frame {}): its last {} rows \
+             match no frame file (frames lost at the end?)",
+            last.path.display(),
+            last.index,
+            rows - last.index - 1
+        )
+    })
+}
+
+/// What a row of `poses.txt` and `times.txt` lacks for a frame without it.
+pub(crate) const NO_GROUND_TRUTH: &str = "ground truth (metrics use the frames that have it)";
+/// See [`NO_GROUND_TRUTH`].
+pub(crate) const NO_TIME: &str =
+    "time (poses_tum.txt then gives every frame its number instead of seconds)";
+
+/// Frame times from `times.txt` at `path` for the frames of `listing`, with what is worth
+/// reporting; time-named frames keep the times of their names.
+pub(crate) fn frame_times(
+    path: &Path,
+    listing: &Listing,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Vec<f64>>> {
+    if !path.is_file() {
+        return Ok(None);
+    }
+    if listing.naming == Naming::Timed {
+        warnings.push(format!(
+            "{}: not used, the frame names give the times",
+            path.display()
+        ));
+        return Ok(None);
+    }
+    let times = read_times(path)?;
+    warnings.extend(check_rows(path, times.len(), listing, NO_TIME));
+    Ok(Some(times))
+}
+
+/// Says how rows of side files pair with frames numbered in steps (thinned sequences).
+pub(crate) fn step_note(listing: &Listing, side_files: bool) -> Option<String> {
+    match listing.naming {
+        Naming::Numbered { step } if step > 1 && side_files => Some(format!(
+            "{}: frame numbers go in steps of {step}; frame N is paired with row N of poses.txt \
+             and times.txt",
+            listing.dir.display()
+        )),
+        _ => None,
     }
 }
 
 /// Opens the generic layout at `root`; `format` is `Bin`, `Ply`, `Pcd`, or `None` to pick by
 /// the extension of the frames found.
-pub fn open(root: &Path, format: Option<Format>) -> Result<Dataset> {
+pub fn open(root: &Path, format: Option<Format>, opts: &OpenOptions) -> Result<Dataset> {
     if !root.is_dir() {
         bail!("{}: not a folder", root.display());
     }
-    let format = match format {
-        Some(f) => f,
-        None => match detect_format(root)? {
-            Some(f) => f,
-            None => bail!(
-                "{}: no frames (*.bin, *.ply or *.pcd) found",
-                frames_dir(root).display()
-            ),
-        },
-    };
-    let Some(ext) = frame_extension(format) else {
-        bail!("{}: {format:?} is not a folder format", root.display());
-    };
-    let files = list_frames(&frames_dir(root), ext)?;
-    if files.is_empty() {
-        bail!("{}: no *.{ext} frames found", frames_dir(root).display());
-    }
-
+    let listing = listing::list(&frames_dir(root), format)?;
+    let mut warnings = listing.warnings.clone();
     let stamps_dir = Some(root.join("timestamps")).filter(|d| d.is_dir());
-    let times_path = root.join("times.txt");
-    let frame_times = if times_path.is_file() {
-        Some(read_times(&times_path)?)
-    } else {
-        None
-    };
+    let frame_times = frame_times(&root.join("times.txt"), &listing, &mut warnings)?;
     let gt_path = root.join("poses.txt");
     let (ground_truth, ground_truth_path) = if gt_path.is_file() {
-        (Some(poses::read_kitti(&gt_path)?), Some(gt_path))
+        let gt = poses::read_kitti(&gt_path)?;
+        warnings.extend(check_rows(&gt_path, gt.len(), &listing, NO_GROUND_TRUTH));
+        (Some(gt), Some(gt_path))
     } else {
         (None, None)
     };
+    warnings.extend(step_note(
+        &listing,
+        ground_truth.is_some() || frame_times.is_some(),
+    ));
 
     let info = DatasetInfo {
         ground_truth,
         ground_truth_path,
         frame_times: frame_times.clone(),
-        format: Some(format),
+        format: Some(listing.format),
         kitti_correction: false,
+        warnings,
     };
-    let frames = GenericSource::new(files, format, stamps_dir, frame_times);
+    let frames = FileSource::new(listing, stamps_dir, frame_times, opts.scan_points);
     Ok(Dataset {
         frames: Box::new(frames),
         info,

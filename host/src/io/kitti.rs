@@ -12,8 +12,8 @@
 //! angle correction ([`correct_scan`]), and ground truth is moved from the camera to the LiDAR
 //! frame ([`lidar_ground_truth`]) with `Tr` rounded to `f32` as the reference does.
 
-use super::generic::{list_frames, read_times, reason};
-use super::{bin, poses, Dataset, DatasetInfo, Format, Frame, FrameSource, Item};
+use super::generic::{check_rows, frame_times, step_note, FileSource, NO_GROUND_TRUTH};
+use super::{listing, poses, Dataset, DatasetInfo, Format, OpenOptions};
 use anyhow::{bail, Context, Result};
 use nalgebra::{Isometry3, Matrix4};
 use std::path::{Path, PathBuf};
@@ -132,68 +132,53 @@ pub fn ground_truth_matrices(seq: &Path) -> Result<Option<(PathBuf, Vec<Matrix4<
     Ok(Some((path, lidar)))
 }
 
-/// Scans of a KITTI sequence, corrected, read on demand.
-pub struct KittiSource {
-    files: Vec<PathBuf>,
-    times: Option<Vec<f64>>,
-    next: usize,
-}
-
-impl FrameSource for KittiSource {
-    fn len_hint(&self) -> Option<usize> {
-        Some(self.files.len())
+/// Whether `seq` is a KITTI benchmark sequence folder for `--format auto`: a `calib.txt` with
+/// `Tr` and no `timestamps/` folder (per-point times mark the generic layout). A KITTI-shaped
+/// folder (`calib.txt` beside `velodyne/`) whose `calib.txt` has no usable `Tr` is refused: read as generic, its scans would miss the KITTI
+/// correction and its camera-frame ground truth would be scored as LiDAR poses.
+pub fn detect(seq: &Path) -> Result<bool> {
+    let calib = seq.join("calib.txt");
+    if seq.join("timestamps").is_dir() || !calib.is_file() {
+        return Ok(false);
     }
-
-    fn next_item(&mut self) -> Result<Option<Item>> {
-        let index = self.next;
-        let Some(path) = self.files.get(index) else {
-            return Ok(None);
-        };
-        self.next += 1;
-        let mut points = match bin::read(path) {
-            Ok(points) => points,
-            Err(e) => {
-                let reason = reason(path, &e);
-                return Ok(Some(Item::Skipped { index, reason }));
-            }
-        };
-        correct_scan(&mut points);
-        Ok(Some(Item::Frame(Frame {
-            index,
-            name: path.display().to_string(),
-            points,
-            stamps: None,
-            time: self.times.as_ref().and_then(|t| t.get(index).copied()),
-            warnings: Vec::new(),
-        })))
-    }
-
-    fn seek(&mut self, index: usize) -> bool {
-        if index > self.files.len() {
-            return false;
-        }
-        self.next = index;
-        true
+    match read_calib_tr(&calib) {
+        Ok(_) => Ok(true),
+        Err(e) if seq.join("velodyne").is_dir() => bail!(
+            "{e:#}: {} looks like a KITTI sequence (calib.txt beside velodyne/), but without Tr \
+             (LiDAR to camera) its camera-frame ground truth cannot be scored as LiDAR poses; \
+             add the Tr line, or run with --format kitti to read it as KITTI without ground \
+             truth (if it is not KITTI data, name its frame format with --format)",
+            seq.display()
+        ),
+        Err(_) => Ok(false),
     }
 }
 
-/// Opens the KITTI sequence folder `seq` (`.../sequences/XX`).
-pub fn open(seq: &Path) -> Result<Dataset> {
+/// Opens the KITTI sequence folder `seq` (`.../sequences/XX`). Without a usable `Tr` in
+/// `calib.txt` the ground truth is not used, with a warning.
+pub fn open(seq: &Path, opts: &OpenOptions) -> Result<Dataset> {
     let velodyne = seq.join("velodyne");
     if !velodyne.is_dir() {
         bail!("{}: no velodyne/ folder", seq.display());
     }
-    let files = list_frames(&velodyne, "bin")?;
-    if files.is_empty() {
-        bail!("{}: no *.bin frames found", velodyne.display());
-    }
-    let times_path = seq.join("times.txt");
-    let times = if times_path.is_file() {
-        Some(read_times(&times_path)?)
-    } else {
-        None
+    let listing = listing::list(&velodyne, Some(Format::Bin))?;
+    let mut warnings = listing.warnings.clone();
+    let times = frame_times(&seq.join("times.txt"), &listing, &mut warnings)?;
+    let found = match ground_truth_matrices(seq) {
+        Ok(found) => found,
+        Err(e)
+            if ground_truth_path(seq).is_some()
+                && read_calib_tr(&seq.join("calib.txt")).is_err() =>
+        {
+            warnings.push(format!(
+                "{e:#}: ground truth not used (it is in the camera frame, and Tr is needed to \
+                 score it against LiDAR poses)"
+            ));
+            None
+        }
+        Err(e) => return Err(e),
     };
-    let (ground_truth, ground_truth_path) = match ground_truth_matrices(seq)? {
+    let (ground_truth, ground_truth_path) = match found {
         Some((path, matrices)) => {
             let poses = matrices
                 .iter()
@@ -203,22 +188,25 @@ pub fn open(seq: &Path) -> Result<Dataset> {
                         .with_context(|| format!("{}:{}", path.display(), i + 1))
                 })
                 .collect::<Result<Vec<Isometry3<f64>>>>()?;
+            warnings.extend(check_rows(&path, poses.len(), &listing, NO_GROUND_TRUTH));
             (Some(poses), Some(path))
         }
         None => (None, None),
     };
+    warnings.extend(step_note(
+        &listing,
+        ground_truth.is_some() || times.is_some(),
+    ));
     let info = DatasetInfo {
         ground_truth,
         ground_truth_path,
         frame_times: times.clone(),
         format: Some(Format::Kitti),
         kitti_correction: true,
+        warnings,
     };
-    let frames = KittiSource {
-        files,
-        times,
-        next: 0,
-    };
+    let frames =
+        FileSource::new(listing, None, times, opts.scan_points).with_correction(correct_scan);
     Ok(Dataset {
         frames: Box::new(frames),
         info,

@@ -1,18 +1,24 @@
 //! ROS 2 MCAP files carrying `sensor_msgs/msg/PointCloud2`.
 //!
 //! The container is read with the `mcap` crate's sans-io readers fed from a buffered file, so
-//! neither the file nor a whole chunk of it has to fit in memory: the summary at the end of the
-//! file says which topics exist and how many messages each holds, then a linear reader streams
-//! the data section record by record. The message body is CDR; it is parsed here into a
-//! [`PointCloud2`] view and decoded by [`pointcloud2`].
+//! neither the file nor more than a few chunks of it have to fit in memory, and no record
+//! larger than the limit the scan capacity sets ([`pointcloud2::record_limit`]) is read. The
+//! summary at the end of the file says which topics exist and how many messages each holds;
+//! with its chunk index the messages of the chosen topic are read in log-time order (as
+//! `ros2 bag play` plays them) whatever order they were written in, and a file written out of
+//! order says so in a dataset warning. Without a summary (a file cut short) or chunks, a linear
+//! reader streams the data section in file order and warns at the first message out of order.
+//! The message body is CDR; it is parsed here into a [`PointCloud2`] view and decoded by
+//! [`pointcloud2`].
 
-use super::pointcloud2::{self, PointCloud2, PointField, Stamp};
+use super::pointcloud2::{self, MessageAt, PointCloud2, PointField, Stamp};
 use super::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
 use anyhow::{anyhow, bail, Context, Result};
-use mcap::records::Record;
+use mcap::records::{op, Record};
+use mcap::sans_io::indexed_reader::ReadOrder;
 use mcap::sans_io::{
-    LinearReadEvent, LinearReader, LinearReaderOptions, SummaryReadEvent, SummaryReader,
-    SummaryReaderOptions,
+    IndexedReadEvent, IndexedReader, IndexedReaderOptions, LinearReadEvent, LinearReader,
+    LinearReaderOptions, SummaryReadEvent, SummaryReader, SummaryReaderOptions,
 };
 use std::collections::HashMap;
 use std::fs::File;
@@ -25,14 +31,15 @@ pub const POINTCLOUD2_SCHEMA: &str = "sensor_msgs/msg/PointCloud2";
 /// Message encoding of ROS 2 messages.
 pub const CDR_ENCODING: &str = "cdr";
 
-/// Largest record accepted. A corrupt length would otherwise size a buffer; no point cloud
-/// comes near this.
-const RECORD_LIMIT: usize = 1 << 30;
+/// Chunks whose time ranges overlap are held decompressed together while reading in log-time
+/// order; more than this many limits' worth is read in file order instead.
+const OVERLAP_BUDGET: u64 = 4;
 
 /// Opens an MCAP file and streams the PointCloud2 messages of `opts.topic`, or of the only
 /// PointCloud2 topic in the file.
 pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     let label = path.display().to_string();
+    let limit = pointcloud2::record_limit(opts.scan_points);
     let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
     let len = file
         .metadata()
@@ -43,21 +50,32 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         bail!("{label}: not an MCAP file (no MCAP magic at the start)");
     }
     let mut input = BufReader::with_capacity(1 << 16, file);
-    let catalog = match read_summary(&mut input, len) {
-        Ok(Some(catalog)) if !catalog.channels.is_empty() => catalog,
+    let mut warnings = Vec::new();
+    let summary = read_summary(&mut input, len, limit).ok().flatten();
+    let catalog = match &summary {
+        Some(summary) if !summary.channels.is_empty() => Catalog::of(summary),
         // No summary (cut short, or written without one): learn the channels by reading once.
         _ => {
             input
                 .seek(SeekFrom::Start(0))
                 .with_context(|| format!("{label}: cannot read"))?;
-            scan(&mut input)
+            warnings.push(format!(
+                "{label}: MCAP file has no summary (cut short or not finished); its topics were \
+                 found by scanning"
+            ));
+            scan(&mut input, limit)
         }
     };
 
     let topics: Vec<(String, String)> = catalog
         .channels
         .values()
-        .map(|c| (c.topic.clone(), c.schema.clone()))
+        .map(|c| {
+            (
+                c.topic.clone(),
+                catalog.schema_name(c.schema_id).to_string(),
+            )
+        })
         .collect();
     let topic = pointcloud2::choose_topic(
         &label,
@@ -75,58 +93,117 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
             .map(|(id, _)| counts.get(id).copied().unwrap_or(0) as usize)
             .sum()
     });
+    let indexed = summary
+        .as_ref()
+        .filter(|s| !s.chunk_indexes.is_empty() && !s.channels.is_empty())
+        .and_then(|s| {
+            indexed_reader(&label, &topic, s, &mut input, limit, &mut warnings)
+                .ok()
+                .flatten()
+        });
     input
         .seek(SeekFrom::Start(0))
         .with_context(|| format!("{label}: cannot read"))?;
+    let (reader, channels) = match indexed {
+        Some(reader) => (Reader::Indexed(reader), catalog.channels.clone()),
+        None => (
+            Reader::Linear(LinearReader::new_with_options(reader_options(limit))),
+            HashMap::new(),
+        ),
+    };
     let source = McapSource {
-        file: label,
         input,
-        reader: LinearReader::new_with_options(reader_options()),
-        topic,
-        schemas: HashMap::new(),
-        channels: HashMap::new(),
-        index: 0,
+        reader,
+        chunk: Vec::new(),
         total,
-        note: catalog.note,
         done: false,
+        topic: Topic {
+            file: label,
+            name: topic,
+            schemas: catalog.schemas.clone(),
+            channels,
+            index: 0,
+            max_points: opts.scan_points,
+            latest: None,
+        },
     };
     Ok(Dataset {
         frames: Box::new(source),
         info: DatasetInfo {
             format: Some(Format::Mcap),
+            warnings,
             ..DatasetInfo::default()
         },
     })
 }
 
-fn reader_options() -> LinearReaderOptions {
+fn reader_options(limit: u64) -> LinearReaderOptions {
     LinearReaderOptions::default()
         .with_validate_chunk_crcs(true)
-        .with_record_length_limit(RECORD_LIMIT)
+        .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX))
 }
 
-/// A channel: its topic and schema name ("" without schema).
+/// A channel: its topic, schema id and message encoding.
 #[derive(Clone, Debug)]
 struct ChannelInfo {
     topic: String,
-    schema: String,
+    schema_id: u16,
+    encoding: String,
 }
 
-/// Channels known before streaming and how many messages each has, if known.
+/// Channels and schemas known before streaming, and how many messages each channel has.
 #[derive(Debug, Default)]
 struct Catalog {
     channels: HashMap<u16, ChannelInfo>,
+    schemas: HashMap<u16, String>,
     counts: Option<HashMap<u16, u64>>,
-    /// Warning for the first frame.
-    note: Option<String>,
+}
+
+impl Catalog {
+    fn of(summary: &mcap::Summary) -> Self {
+        let channels = summary
+            .channels
+            .iter()
+            .map(|(&id, c)| {
+                let info = ChannelInfo {
+                    topic: c.topic.clone(),
+                    schema_id: c.schema.as_ref().map_or(0, |s| s.id),
+                    encoding: c.message_encoding.clone(),
+                };
+                (id, info)
+            })
+            .collect();
+        let schemas = summary
+            .schemas
+            .iter()
+            .map(|(&id, s)| (id, s.name.clone()))
+            .collect();
+        let counts = summary
+            .stats
+            .as_ref()
+            .map(|s| s.channel_message_counts.clone().into_iter().collect());
+        Catalog {
+            channels,
+            schemas,
+            counts,
+        }
+    }
+
+    fn schema_name(&self, id: u16) -> &str {
+        self.schemas.get(&id).map_or("", String::as_str)
+    }
 }
 
 /// Reads the summary section; `Ok(None)` when the file has none.
-fn read_summary(input: &mut BufReader<File>, len: u64) -> mcap::McapResult<Option<Catalog>> {
+fn read_summary(
+    input: &mut BufReader<File>,
+    len: u64,
+    limit: u64,
+) -> mcap::McapResult<Option<mcap::Summary>> {
     let mut reader = SummaryReader::new_with_options(
         SummaryReaderOptions::default()
             .with_file_size(len)
-            .with_record_length_limit(RECORD_LIMIT),
+            .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX)),
     );
     while let Some(event) = reader.next_event() {
         match event? {
@@ -140,39 +217,13 @@ fn read_summary(input: &mut BufReader<File>, len: u64) -> mcap::McapResult<Optio
             }
         }
     }
-    let Some(summary) = reader.finish() else {
-        return Ok(None);
-    };
-    let channels = summary
-        .channels
-        .iter()
-        .map(|(&id, c)| {
-            let info = ChannelInfo {
-                topic: c.topic.clone(),
-                schema: c
-                    .schema
-                    .as_ref()
-                    .map(|s| s.name.clone())
-                    .unwrap_or_default(),
-            };
-            (id, info)
-        })
-        .collect();
-    let counts = summary
-        .stats
-        .map(|s| s.channel_message_counts.into_iter().collect());
-    Ok(Some(Catalog {
-        channels,
-        counts,
-        note: None,
-    }))
+    Ok(reader.finish())
 }
 
 /// Reads the whole data section once, counting messages per channel, up to the first error.
-fn scan(input: &mut BufReader<File>) -> Catalog {
-    let mut reader = LinearReader::new_with_options(reader_options());
-    let mut schemas: HashMap<u16, String> = HashMap::new();
-    let mut raw: HashMap<u16, (String, u16)> = HashMap::new();
+fn scan(input: &mut BufReader<File>, limit: u64) -> Catalog {
+    let mut reader = LinearReader::new_with_options(reader_options(limit));
+    let mut catalog = Catalog::default();
     let mut counts: HashMap<u16, u64> = HashMap::new();
     while let Some(Ok(event)) = reader.next_event() {
         match event {
@@ -182,10 +233,15 @@ fn scan(input: &mut BufReader<File>) -> Catalog {
             }
             LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data) {
                 Ok(Record::Schema { header, .. }) => {
-                    schemas.insert(header.id, header.name);
+                    catalog.schemas.insert(header.id, header.name);
                 }
                 Ok(Record::Channel(c)) => {
-                    raw.insert(c.id, (c.topic, c.schema_id));
+                    let info = ChannelInfo {
+                        topic: c.topic,
+                        schema_id: c.schema_id,
+                        encoding: c.message_encoding,
+                    };
+                    catalog.channels.insert(c.id, info);
                 }
                 Ok(Record::Message { header, .. }) => {
                     *counts.entry(header.channel_id).or_default() += 1;
@@ -195,37 +251,171 @@ fn scan(input: &mut BufReader<File>) -> Catalog {
             },
         }
     }
-    let channels = raw
-        .into_iter()
-        .map(|(id, (topic, schema_id))| {
-            let schema = schemas.get(&schema_id).cloned().unwrap_or_default();
-            (id, ChannelInfo { topic, schema })
+    catalog.counts = Some(counts);
+    catalog
+}
+
+/// A reader of the messages of `topic` in log-time order, if the chunk index allows it within
+/// memory; warns (in `warnings`) when the file was written out of order, naming the first
+/// message out of order, and when it is but cannot be reordered.
+fn indexed_reader(
+    label: &str,
+    topic: &str,
+    summary: &mcap::Summary,
+    input: &mut BufReader<File>,
+    limit: u64,
+    warnings: &mut Vec<String>,
+) -> Result<Option<IndexedReader>> {
+    let ours: Vec<u16> = summary
+        .channels
+        .iter()
+        .filter(|(_, c)| c.topic == topic)
+        .map(|(&id, _)| id)
+        .collect();
+    let mut chunks = summary.chunk_indexes.clone();
+    chunks.sort_by_key(|c| c.chunk_start_offset);
+    // Log times of our messages in file order, from the message indexes after each chunk.
+    let mut times = Vec::new();
+    for chunk in &chunks {
+        let mut entries = Vec::new();
+        for id in &ours {
+            let Some(&at) = chunk.message_index_offsets.get(id) else {
+                continue;
+            };
+            input.seek(SeekFrom::Start(at))?;
+            let mut head = [0u8; 9];
+            input.read_exact(&mut head)?;
+            let len = u64::from_le_bytes(head[1..].try_into()?);
+            if head[0] != op::MESSAGE_INDEX || len > limit {
+                bail!("no message index at byte {at}");
+            }
+            let mut body = vec![0u8; len as usize];
+            input.read_exact(&mut body)?;
+            if let Record::MessageIndex(index) = mcap::parse_record(op::MESSAGE_INDEX, &body)? {
+                entries.extend(index.records.into_iter().map(|e| (e.offset, e.log_time)));
+            }
+        }
+        entries.sort_unstable();
+        times.extend(entries.into_iter().map(|(_, t)| t));
+    }
+    let mut order: Vec<u64> = times.clone();
+    let warning = pointcloud2::time_order(label, topic, &mut order, |t| *t);
+    // Chunks overlapping in time are held together; bound how many.
+    let mut spans: Vec<(u64, u64, u64)> = chunks
+        .iter()
+        .map(|c| {
+            (
+                c.message_start_time,
+                c.message_end_time,
+                c.uncompressed_size,
+            )
         })
         .collect();
-    Catalog {
-        channels,
-        counts: Some(counts),
-        note: Some(
-            "MCAP file has no summary (cut short or not finished); its topics were found by scanning"
-                .into(),
-        ),
+    spans.sort_unstable();
+    let mut held = 0u64;
+    for (i, &(start, _, _)) in spans.iter().enumerate() {
+        let overlapping: u64 = spans[..=i]
+            .iter()
+            .filter(|(_, end, _)| *end >= start)
+            .map(|(_, _, size)| *size)
+            .sum();
+        held = held.max(overlapping);
     }
+    if held > OVERLAP_BUDGET.saturating_mul(limit) {
+        if let Some(w) = warning {
+            warnings.push(format!(
+                "{w} would need {held} bytes of chunks at once, so frames are read in file order"
+            ));
+        }
+        return Ok(None);
+    }
+    warnings.extend(warning);
+    let options = IndexedReaderOptions::new()
+        .with_order(ReadOrder::LogTime)
+        .include_topics([topic])
+        .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX));
+    Ok(Some(IndexedReader::new_with_options(summary, options)?))
+}
+
+/// How the data section is read.
+enum Reader {
+    /// Record by record in file order.
+    Linear(LinearReader),
+    /// The chosen topic's messages in log-time order, chunk by chunk.
+    Indexed(IndexedReader),
 }
 
 /// The frames of one topic of an open MCAP file.
 struct McapSource {
-    file: String,
     input: BufReader<File>,
-    reader: LinearReader,
-    topic: String,
-    /// Schema names by id, as met in the data section.
-    schemas: HashMap<u16, String>,
-    /// Channels by id, as met in the data section: topic, schema id, message encoding.
-    channels: HashMap<u16, (String, u16, String)>,
-    index: usize,
+    reader: Reader,
+    /// Buffer for a chunk the indexed reader asks for.
+    chunk: Vec<u8>,
     total: Option<usize>,
-    note: Option<String>,
     done: bool,
+    topic: Topic,
+}
+
+/// What turns messages of the data section into items of the chosen topic.
+struct Topic {
+    file: String,
+    name: String,
+    /// Schema names by id (from the summary, or as met in the data section).
+    schemas: HashMap<u16, String>,
+    /// Channels by id (from the summary, or as met in the data section).
+    channels: HashMap<u16, ChannelInfo>,
+    index: usize,
+    max_points: usize,
+    /// Latest log time and message index so far, for the order warning of linear reading.
+    latest: Option<(u64, usize)>,
+}
+
+impl Topic {
+    /// The item of a message, `None` for a message of another topic.
+    fn item(&mut self, channel_id: u16, log_time: u64, data: &[u8]) -> Result<Option<Item>> {
+        let (file, index) = (&self.file, self.index);
+        let Some(channel) = self.channels.get(&channel_id) else {
+            bail!("{file}: message on channel {channel_id} before its channel record");
+        };
+        if channel.topic != self.name {
+            return Ok(None);
+        }
+        let topic = &self.name;
+        let schema = self
+            .schemas
+            .get(&channel.schema_id)
+            .map_or("no schema", String::as_str);
+        if schema != POINTCLOUD2_SCHEMA || channel.encoding != CDR_ENCODING {
+            bail!(
+                "{file}: message {index} on {topic} is {schema} ({}), not {POINTCLOUD2_SCHEMA} \
+                 ({CDR_ENCODING})",
+                channel.encoding
+            );
+        }
+        let at = MessageAt {
+            index,
+            file,
+            topic,
+            received: log_time,
+        };
+        let mut item = pointcloud2::message_item(at, parse_cdr(data), self.max_points);
+        match self.latest {
+            Some((t, k)) if log_time < t => {
+                if let Item::Frame(f) = &mut item {
+                    f.warnings.push(format!(
+                        "{file}: message {index} on {topic} was logged at {}, before message {k} \
+                         ({}): the file is out of time order and cannot be reordered (no chunk \
+                         index); frames are read in file order",
+                        pointcloud2::stamp_of_nanos(log_time),
+                        pointcloud2::stamp_of_nanos(t)
+                    ));
+                }
+            }
+            _ => self.latest = Some((log_time, index)),
+        }
+        self.index += 1;
+        Ok(Some(item))
+    }
 }
 
 impl FrameSource for McapSource {
@@ -237,88 +427,89 @@ impl FrameSource for McapSource {
         if self.done {
             return Ok(None);
         }
+        let result = self.next_frame();
+        if !matches!(result, Ok(Some(_))) {
+            self.done = true;
+        }
+        result
+    }
+}
+
+impl McapSource {
+    /// Reads the data section up to the next message on the chosen topic.
+    fn next_frame(&mut self) -> Result<Option<Item>> {
+        let file = self.topic.file.clone();
         loop {
-            let event = match self.reader.next_event() {
-                None => {
-                    self.done = true;
-                    return Ok(None);
-                }
-                Some(Err(e)) => {
-                    self.done = true;
-                    let hint = match e {
-                        mcap::McapError::UnexpectedEof => " (the file looks cut short)",
-                        _ => "",
-                    };
-                    bail!("{}: {e}{hint}", self.file);
-                }
-                Some(Ok(event)) => event,
-            };
-            match event {
-                LinearReadEvent::ReadRequest(need) => {
-                    let n = self.input.read(self.reader.insert(need));
-                    match n {
-                        Ok(n) => self.reader.notify_read(n),
-                        Err(e) => {
-                            self.done = true;
-                            bail!("{}: {e}", self.file);
-                        }
-                    }
-                }
-                LinearReadEvent::Record { opcode, data } => {
-                    let record = match mcap::parse_record(opcode, data) {
-                        Ok(r) => r,
-                        Err(e) => {
-                            self.done = true;
-                            bail!("{}: bad record (opcode {opcode:#04x}): {e}", self.file);
-                        }
-                    };
-                    match record {
-                        Record::Schema { header, .. } => {
-                            self.schemas.insert(header.id, header.name);
-                        }
-                        Record::Channel(c) => {
-                            self.channels
-                                .insert(c.id, (c.topic, c.schema_id, c.message_encoding));
-                        }
-                        Record::Message { header, data } => {
-                            let Some((topic, schema_id, encoding)) =
-                                self.channels.get(&header.channel_id)
-                            else {
-                                self.done = true;
-                                bail!(
-                                    "{}: message on channel {} before its channel record",
-                                    self.file,
-                                    header.channel_id
-                                );
+            match &mut self.reader {
+                Reader::Linear(reader) => {
+                    let event = match reader.next_event() {
+                        None => return Ok(None),
+                        Some(Err(e)) => {
+                            let hint = match e {
+                                mcap::McapError::UnexpectedEof => " (the file looks cut short)",
+                                _ => "",
                             };
-                            if *topic != self.topic {
-                                continue;
-                            }
-                            let schema = self.schemas.get(schema_id).map_or("no schema", |s| s);
-                            if schema != POINTCLOUD2_SCHEMA || encoding != CDR_ENCODING {
-                                self.done = true;
-                                bail!(
-                                    "{}: message {} on {} is {schema} ({encoding}), not {POINTCLOUD2_SCHEMA} ({CDR_ENCODING})",
-                                    self.file,
-                                    self.index,
-                                    self.topic
-                                );
-                            }
-                            let mut item = pointcloud2::message_item(
-                                self.index,
-                                &self.file,
-                                &self.topic,
-                                parse_cdr(&data),
-                            );
-                            self.index += 1;
-                            if let (Item::Frame(f), Some(note)) = (&mut item, self.note.take()) {
-                                f.warnings.insert(0, note);
-                            }
-                            return Ok(Some(item));
+                            bail!("{file}: {e}{hint}");
                         }
-                        _ => {}
+                        Some(Ok(event)) => event,
+                    };
+                    match event {
+                        LinearReadEvent::ReadRequest(need) => {
+                            let n = self
+                                .input
+                                .read(reader.insert(need))
+                                .with_context(|| file.clone())?;
+                            reader.notify_read(n);
+                        }
+                        LinearReadEvent::Record { opcode, data } => {
+                            let record = mcap::parse_record(opcode, data).map_err(|e| {
+                                anyhow!("{file}: bad record (opcode {opcode:#04x}): {e}")
+                            })?;
+                            let topic = &mut self.topic;
+                            match record {
+                                Record::Schema { header, .. } => {
+                                    topic.schemas.insert(header.id, header.name);
+                                }
+                                Record::Channel(c) => {
+                                    let info = ChannelInfo {
+                                        topic: c.topic,
+                                        schema_id: c.schema_id,
+                                        encoding: c.message_encoding,
+                                    };
+                                    topic.channels.insert(c.id, info);
+                                }
+                                Record::Message { header, data } => {
+                                    let item =
+                                        topic.item(header.channel_id, header.log_time, &data)?;
+                                    if item.is_some() {
+                                        return Ok(item);
+                                    }
+                                }
+                                _ => {}
+                            }
+                        }
                     }
                 }
+                Reader::Indexed(reader) => match reader.next_event() {
+                    None => return Ok(None),
+                    Some(Err(e)) => bail!("{file}: {e}"),
+                    Some(Ok(IndexedReadEvent::ReadChunkRequest { offset, length })) => {
+                        self.chunk.resize(length, 0);
+                        self.input
+                            .seek(SeekFrom::Start(offset))
+                            .and_then(|_| self.input.read_exact(&mut self.chunk))
+                            .with_context(|| format!("{file}: cannot read a chunk"))?;
+                        reader
+                            .insert_chunk_record_data(offset, &self.chunk)
+                            .with_context(|| file.clone())?;
+                    }
+                    Some(Ok(IndexedReadEvent::Message { header, data })) => {
+                        let item = self.topic.item(header.channel_id, header.log_time, data)?;
+                        if item.is_some() {
+                            return Ok(item);
+                        }
+                    }
+                },
             }
         }
     }
@@ -555,6 +746,7 @@ mod tests {
             path,
             &OpenOptions {
                 topic: topic.map(String::from),
+                ..OpenOptions::default()
             },
         )
     }
@@ -664,7 +856,7 @@ mod tests {
             for (k, item) in items.iter().enumerate() {
                 assert_frame_k(frame(item), k, k as u32);
             }
-            assert!(frame(&items[0]).warnings[0].contains("no summary"));
+            assert!(ds.info.warnings[0].contains("no summary"));
             let err = err.expect("a cut file must end with an error");
             assert!(
                 err.contains(&p.display().to_string()) && err.contains("cut short"),
@@ -717,7 +909,7 @@ mod tests {
         assert_eq!(items.len(), 3);
         assert_frame_k(frame(&items[0]), 0, 0);
         match &items[1] {
-            Item::Skipped { index, reason } => {
+            Item::Skipped { index, reason, .. } => {
                 assert_eq!(*index, 1);
                 assert!(
                     reason.contains(&p.display().to_string()) && reason.contains("point_step 12"),
@@ -727,6 +919,62 @@ mod tests {
             other => panic!("expected a skip, got {other:?}"),
         }
         assert_frame_k(frame(&items[2]), 2, 2);
+    }
+
+    #[test]
+    fn messages_out_of_log_time_order_are_reordered_with_a_chunk_index_and_flagged_without() {
+        let dir = tempfile::tempdir().unwrap();
+        let order = [0u32, 2, 1, 4, 3];
+        for chunked in [true, false] {
+            let mut w = mcap::WriteOptions::new()
+                .use_chunks(chunked)
+                .chunk_size(Some(400))
+                .create(std::io::Cursor::new(Vec::new()))
+                .unwrap();
+            let sid = w
+                .add_schema(POINTCLOUD2_SCHEMA, "ros2msg", b"# test")
+                .unwrap();
+            let ch = w
+                .add_channel(sid, "/points", CDR_ENCODING, &BTreeMap::new())
+                .unwrap();
+            for (seq, &k) in order.iter().enumerate() {
+                let header = MessageHeader {
+                    channel_id: ch,
+                    sequence: seq as u32,
+                    log_time: u64::from(k) * 100_000_000,
+                    publish_time: u64::from(k) * 100_000_000,
+                };
+                w.write_to_known_channel(&header, &cloud_msg(k)).unwrap();
+            }
+            w.finish().unwrap();
+            let p = save(&dir, "late.mcap", &w.into_inner().into_inner());
+            let mut ds = open_mcap(&p, None).unwrap();
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(err, None);
+            let ks: Vec<f64> = items.iter().map(|i| frame(i).points[0][0]).collect();
+            if chunked {
+                let w = ds.info.warnings.join("\n");
+                assert!(
+                    w.contains("not in time order") && w.contains("message 2"),
+                    "{w}"
+                );
+                for (k, item) in items.iter().enumerate() {
+                    assert_frame_k(frame(item), k, k as u32);
+                }
+            } else {
+                // No chunk index to reorder by: file order, and the late frames say so.
+                assert_eq!(ks, [0.0, 2.0, 1.0, 4.0, 3.0]);
+                let late: Vec<usize> = (0..5)
+                    .filter(|&i| {
+                        frame(&items[i])
+                            .warnings
+                            .iter()
+                            .any(|w| w.contains("out of time order"))
+                    })
+                    .collect();
+                assert_eq!(late, [2, 4]);
+            }
+        }
     }
 
     #[test]

@@ -1,21 +1,31 @@
 //! Recorded data in, trajectories out.
 //!
 //! Every input format is a [`FrameSource`]: a stream of scans read one at a time, so a long
-//! recording never has to fit in memory. Damage confined to one frame (a truncated `.bin`, a
-//! garbage PLY header, timestamps of the wrong length) is reported as a [`Item::Skipped`] frame
-//! or a frame [`Frame::warnings`] entry and the run goes on; damage to a container (a bag or
-//! MCAP file cut in the middle) ends the stream with an error after the frames before it.
+//! recording never has to fit in memory, and no frame costs more than the scan capacity
+//! ([`OpenOptions::scan_points`]) whatever its file says. A frame's [`Frame::index`] is its
+//! identity in the dataset (the number in its file name, its place in time order), so ground
+//! truth and times pair with it whatever was lost before it.
+//!
+//! What the layer finds is reported through three channels the run loop prints, counts and
+//! turns into exit 1 under `--strict`: [`DatasetInfo::warnings`] for the dataset as a whole
+//! (ignored files, side files of the wrong length, a recording out of time order), a
+//! [`Frame::warnings`] entry for a frame used despite a problem, and [`Item::Skipped`] for a
+//! frame that cannot be used (missing, truncated, garbage). Names that cannot be told apart
+//! are refused when the dataset is opened; damage to a container (a bag or MCAP file cut in
+//! the middle) ends the stream with an error after the frames before it.
 
 use anyhow::Result;
 use nalgebra::Isometry3;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// One scan as read from disk, in the sensor frame.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Frame {
-    /// Position of the frame in the sequence (0-based, counting skipped frames).
+    /// The frame's identity: the number in its file name, or its place in time order (name
+    /// times, bag and MCAP messages), 0-based, counting skipped frames. Row `index` of the
+    /// ground truth and of `times.txt` belongs to it.
     pub index: usize,
-    /// Where it came from: a file path, or `file:topic@stamp` for bags.
+    /// Where it came from: a file path, or `file:topic@stamp` for bags and MCAP files.
     pub name: String,
     /// Points in metres, sensor frame.
     pub points: Vec<[f64; 3]>,
@@ -34,11 +44,33 @@ pub enum Item {
     Frame(Frame),
     /// A frame that could not be read; `reason` names the file and what was wrong.
     Skipped {
-        /// Position in the sequence.
+        /// The frame's identity (see [`Frame::index`]).
         index: usize,
+        /// Where it was expected: a file path, or `file:topic@time`.
+        name: String,
+        /// Its time in seconds, if known without reading it.
+        time: Option<f64>,
         /// One-line reason, naming the file.
         reason: String,
     },
+}
+
+impl Item {
+    /// The frame's identity.
+    pub fn index(&self) -> usize {
+        match self {
+            Item::Frame(f) => f.index,
+            Item::Skipped { index, .. } => *index,
+        }
+    }
+
+    /// The frame's time in seconds, if known.
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            Item::Frame(f) => f.time,
+            Item::Skipped { time, .. } => *time,
+        }
+    }
 }
 
 /// A stream of scans.
@@ -80,16 +112,35 @@ pub enum Format {
 /// Everything known about a dataset besides its frames.
 #[derive(Clone, Debug, Default)]
 pub struct DatasetInfo {
-    /// Ground truth in the LiDAR frame, one pose per frame, if present.
+    /// Ground truth in the LiDAR frame, row `i` for frame `i` (see [`Frame::index`]).
     pub ground_truth: Option<Vec<Isometry3<f64>>>,
     /// Where the ground truth came from.
     pub ground_truth_path: Option<PathBuf>,
-    /// Frame times in seconds (`times.txt`), if present.
+    /// Frame times in seconds (`times.txt`), row `i` for frame `i`, if present.
     pub frame_times: Option<Vec<f64>>,
     /// The format actually used (never `Auto`).
     pub format: Option<Format>,
     /// Whether the reference's KITTI vertical-angle correction is applied to every scan.
     pub kitti_correction: bool,
+    /// Findings about the dataset as a whole, one line each, naming the file: to print, count
+    /// and, under `--strict`, refuse.
+    pub warnings: Vec<String>,
+}
+
+impl DatasetInfo {
+    /// Ground truth of the frames `indices`, re-based to the first of them that has one;
+    /// `None` for a frame without ground truth.
+    pub fn ground_truth_for(&self, indices: &[usize]) -> Vec<Option<Isometry3<f64>>> {
+        let Some(all) = &self.ground_truth else {
+            return vec![None; indices.len()];
+        };
+        let rows: Vec<Option<Isometry3<f64>>> =
+            indices.iter().map(|&i| all.get(i).copied()).collect();
+        let Some(first) = rows.iter().flatten().next().map(Isometry3::inverse) else {
+            return rows;
+        };
+        rows.into_iter().map(|p| p.map(|p| first * p)).collect()
+    }
 }
 
 /// An opened dataset: its frames and what else is known about it.
@@ -101,29 +152,70 @@ pub struct Dataset {
 }
 
 /// Options that affect how a dataset is opened.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct OpenOptions {
     /// Topic to read from a bag or MCAP file (default: the only point-cloud topic).
     pub topic: Option<String>,
+    /// Most points read from one frame (the core's `Capacities::scan_points`, which ignores
+    /// the rest anyway); a larger frame is truncated with a warning.
+    pub scan_points: usize,
 }
 
-/// Whether `path` looks like a KITTI benchmark sequence folder: a `calib.txt` with a `Tr`
-/// line and no `timestamps/` folder.
-pub fn is_kitti_layout(path: &Path) -> bool {
-    if path.join("timestamps").is_dir() {
-        return false;
+impl Default for OpenOptions {
+    fn default() -> Self {
+        Self {
+            topic: None,
+            scan_points: kiss_odom_core::Capacities::FULL_SCALE.scan_points,
+        }
     }
-    std::fs::read_to_string(path.join("calib.txt"))
-        .map(|s| {
-            s.lines()
-                .any(|l| l.starts_with("Tr:") || l.starts_with("Tr "))
-        })
-        .unwrap_or(false)
 }
 
+/// Wraps every source: a frame whose time is earlier than the previous frame's gets a warning,
+/// so that times going backwards (a recording out of order, a wrong `times.txt`) are never
+/// silent.
+struct TimeOrder {
+    inner: Box<dyn FrameSource>,
+    last: Option<(f64, String)>,
+}
+
+impl FrameSource for TimeOrder {
+    fn len_hint(&self) -> Option<usize> {
+        self.inner.len_hint()
+    }
+
+    fn next_item(&mut self) -> Result<Option<Item>> {
+        let mut item = self.inner.next_item()?;
+        // Skipped frames are left out: their time may come from another clock (a bag's
+        // receive time instead of the header stamp).
+        if let Some(Item::Frame(f)) = &mut item {
+            if let (Some(t), Some((last, last_name))) = (f.time, &self.last) {
+                if t < *last {
+                    f.warnings.push(format!(
+                        "{}: time {t} s is earlier than the previous frame's {last} s ({last_name}): \
+                         the times go backwards here",
+                        f.name
+                    ));
+                }
+            }
+            if let Some(t) = f.time {
+                self.last = Some((t, f.name.clone()));
+            }
+        }
+        Ok(item)
+    }
+
+    fn seek(&mut self, index: usize) -> bool {
+        self.last = None;
+        self.inner.seek(index)
+    }
+}
+
+pub mod bagfile;
 pub mod bin;
+pub mod cloud;
 pub mod generic;
 pub mod kitti;
+pub mod listing;
 pub mod mcap;
 pub mod open;
 pub mod pcd;

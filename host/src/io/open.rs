@@ -1,11 +1,12 @@
 //! Opening a dataset path: which reader a `--format` (or `auto`) picks.
 //!
-//! `auto` picks KITTI only for the benchmark layout ([`is_kitti_layout`]), because KITTI scans
-//! get a correction no other data should get; bag and MCAP files are recognised by extension;
-//! anything else is the generic layout with the frame format its files show. An explicit
-//! format always wins.
+//! `auto` picks KITTI only for the benchmark layout ([`kitti::detect`]), because KITTI scans
+//! get a correction no other data should get, and refuses a KITTI-shaped folder it cannot
+//! read as KITTI; bag and MCAP files are recognised by extension; anything else is the generic
+//! layout with the one frame format its files show (several is refused). An explicit format
+//! always wins.
 
-use super::{generic, is_kitti_layout, kitti, Dataset, Format, OpenOptions};
+use super::{generic, kitti, Dataset, Format, OpenOptions, TimeOrder};
 use anyhow::{bail, Result};
 use std::path::Path;
 
@@ -25,7 +26,7 @@ pub fn detect(path: &Path) -> Result<Format> {
             ),
         };
     }
-    if is_kitti_layout(path) {
+    if kitti::detect(path)? {
         return Ok(Format::Kitti);
     }
     match generic::detect_format(path)? {
@@ -43,13 +44,18 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
         Format::Auto => detect(path)?,
         explicit => explicit,
     };
-    match format {
-        Format::Kitti => kitti::open(path),
-        Format::Bin | Format::Ply | Format::Pcd => generic::open(path, Some(format)),
-        Format::Bag => super::rosbag::open(path, opts),
-        Format::Mcap => super::mcap::open(path, opts),
+    let mut dataset = match format {
+        Format::Kitti => kitti::open(path, opts)?,
+        Format::Bin | Format::Ply | Format::Pcd => generic::open(path, Some(format), opts)?,
+        Format::Bag => super::rosbag::open(path, opts)?,
+        Format::Mcap => super::mcap::open(path, opts)?,
         Format::Auto => bail!("{}: format detection failed", path.display()),
-    }
+    };
+    dataset.frames = Box::new(TimeOrder {
+        inner: dataset.frames,
+        last: None,
+    });
+    Ok(dataset)
 }
 
 #[cfg(test)]
@@ -71,6 +77,9 @@ mod tests {
         std::fs::create_dir_all(seq.join("velodyne")).unwrap();
         std::fs::write(seq.join("velodyne/000000.bin"), [0u8; 16]).unwrap();
         assert_eq!(detect(&seq).unwrap(), Format::Bin);
+        std::fs::write(seq.join("calib.txt"), "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
+        let e = format!("{:#}", detect(&seq).unwrap_err());
+        assert!(e.contains("no Tr") && e.contains("--format kitti"), "{e}");
         std::fs::write(seq.join("calib.txt"), "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
         assert_eq!(detect(&seq).unwrap(), Format::Kitti);
         // Per-point timestamps mark a generic layout even next to a calib file.

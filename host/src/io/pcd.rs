@@ -4,7 +4,7 @@
 //! `pcd-rs` 0.12 does not decode `DATA binary_compressed`; such files are reported as skipped
 //! frames with that reason rather than parsed by hand.
 
-use super::generic::{Cloud, STAMP_FIELDS};
+use super::cloud::{Cloud, STAMP_FIELDS};
 use anyhow::{anyhow, bail, Context, Result};
 use pcd_rs::{DataKind, DynReader, DynRecord, DynWriter, Field, Schema, ValueKind, WriterInit};
 use std::io::{Cursor, Read};
@@ -48,8 +48,14 @@ fn explain_header_error(path: &Path, e: pcd_rs::Error) -> anyhow::Error {
     }
 }
 
-/// Reads the scan at `path`.
+/// Reads the whole scan at `path`.
 pub fn read(path: &Path) -> Result<Cloud> {
+    read_at_most(path, usize::MAX)
+}
+
+/// Reads at most the first `max_points` points of the scan at `path` (`pcd-rs` reads records
+/// one at a time, so the rest of the file is not read).
+pub fn read_at_most(path: &Path, max_points: usize) -> Result<Cloud> {
     let reader = DynReader::open(path).map_err(|e| explain_header_error(path, e))?;
     let meta = reader.meta().clone();
     let fields = &meta.field_defs;
@@ -66,7 +72,8 @@ pub fn read(path: &Path) -> Result<Cloud> {
     }
     let stamp = STAMP_FIELDS.iter().find_map(|f| index_of(f));
 
-    let n = usize::try_from(meta.num_points).unwrap_or(usize::MAX);
+    let declared = usize::try_from(meta.num_points).unwrap_or(usize::MAX);
+    let n = declared.min(max_points);
     // The header's count is not trusted for allocation; the data decides.
     let mut points = Vec::with_capacity(n.min(1 << 20));
     let mut stamps = stamp.map(|_| Vec::with_capacity(n.min(1 << 20)));
@@ -87,7 +94,11 @@ pub fn read(path: &Path) -> Result<Cloud> {
     if points.len() != n {
         bail!("PCD data has {} of {n} points", points.len());
     }
-    Ok(Cloud { points, stamps })
+    Ok(Cloud {
+        points,
+        stamps,
+        declared,
+    })
 }
 
 /// Writes `points` (and `stamps` as a `time` field) as `DATA binary` PCD with `F 8` fields, so
@@ -172,6 +183,18 @@ mod tests {
         std::fs::write(&path, text).unwrap();
         let e = format!("{:#}", read(&path).unwrap_err());
         assert!(e.contains("binary_compressed"), "{e}");
+    }
+
+    #[test]
+    fn only_the_first_max_points_points_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.pcd");
+        let points: Vec<[f64; 3]> = (0..5).map(|i| [f64::from(i), 1.0, 2.0]).collect();
+        write(&path, &points, Some(&[0.0, 0.1, 0.2, 0.3, 0.4])).unwrap();
+        let cloud = read_at_most(&path, 2).unwrap();
+        assert_eq!(cloud.points, points[..2]);
+        assert_eq!(cloud.stamps, Some(vec![0.0, 0.1]));
+        assert_eq!(cloud.declared, 5);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! Vertices are decoded into a small fixed struct rather than `ply-rs`'s per-point hash map, so
 //! a 100k-point scan costs one allocation per property name, not one map per point.
 
-use super::generic::{Cloud, STAMP_FIELDS};
+use super::cloud::{Cloud, STAMP_FIELDS};
 use anyhow::{anyhow, bail, Context, Result};
 use ply_rs::parser::Parser;
 use ply_rs::ply::{
@@ -12,8 +12,9 @@ use ply_rs::ply::{
     ScalarType,
 };
 use ply_rs::writer::Writer;
+use std::collections::HashSet;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
 
 /// Name of the time property the writers use.
@@ -94,14 +95,19 @@ fn flat(e: std::io::Error) -> anyhow::Error {
     anyhow!(text)
 }
 
+/// Bytes of the file the header check looks at; a longer header is garbage.
+const HEADER_BYTES: u64 = 64 * 1024;
+
 /// Checks what `ply-rs` trusts: it unwraps every number of the header as a u64 (a longer one
-/// panics, found by fuzzing) and sizes element lists from their declared counts. A header
-/// whose numbers do not fit, or whose elements could not fit in the file (every item takes
-/// at least one byte), is refused here.
-fn check_header(bytes: &[u8]) -> Result<()> {
-    let file_len = bytes.len() as u64;
-    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(64 * 1024)]);
+/// panics, found by fuzzing), sizes element lists from their declared counts, and keeps one
+/// property per name (a second `x` would silently change the stride it reads with). A header
+/// whose numbers do not fit, whose elements could not fit in the `file_len`-byte file (every
+/// item takes at least one byte), or that declares a property twice is refused here.
+fn check_header(head: &[u8], file_len: u64) -> Result<()> {
+    let text = String::from_utf8_lossy(head);
     let mut items: u64 = 0;
+    let mut element = String::new();
+    let mut names: HashSet<String> = HashSet::new();
     for line in text.lines().take_while(|l| l.trim() != "end_header") {
         let words: Vec<&str> = line.split_whitespace().collect();
         // Every run of digits, also inside a word: the grammar reads them wherever they are.
@@ -110,10 +116,18 @@ fn check_header(bytes: &[u8]) -> Result<()> {
                 bail!("PLY header number {run} is too large");
             }
         }
-        if let ["element", _, count] = words[..] {
-            if let Ok(n) = count.parse::<u64>() {
-                items = items.saturating_add(n);
+        match words[..] {
+            ["element", name, count] => {
+                if let Ok(n) = count.parse::<u64>() {
+                    items = items.saturating_add(n);
+                }
+                element = name.to_string();
+                names.clear();
             }
+            ["property", .., name] if !names.insert(name.to_string()) => {
+                bail!("PLY element {element} declares property {name} twice");
+            }
+            _ => {}
         }
     }
     if items > file_len {
@@ -122,12 +136,22 @@ fn check_header(bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// Reads the scan at `path`.
+/// Reads the whole scan at `path`.
 pub fn read(path: &Path) -> Result<Cloud> {
-    // One read of the file: the header check and the parser work on the same bytes.
-    let bytes = std::fs::read(path)?;
-    check_header(&bytes)?;
-    let mut reader = bytes.as_slice();
+    read_at_most(path, usize::MAX)
+}
+
+/// Reads at most the first `max_points` vertices of the scan at `path`; the rest of the file
+/// is not read.
+pub fn read_at_most(path: &Path, max_points: usize) -> Result<Cloud> {
+    let mut file = File::open(path)?;
+    let file_len = file.metadata()?.len();
+    let mut head = Vec::new();
+    (&mut file).take(HEADER_BYTES).read_to_end(&mut head)?;
+    check_header(&head, file_len)?;
+    drop(head);
+    file.rewind()?;
+    let mut reader = BufReader::new(file);
     let parser = Parser::<Vertex>::new();
     let header = parser
         .read_header(&mut reader)
@@ -141,16 +165,23 @@ pub fn read(path: &Path) -> Result<Cloud> {
     }
     let stamp = STAMP_FIELDS.iter().position(|f| is_scalar(vertex, f));
 
-    // Elements are stored one after the other; those before `vertex` are read and dropped.
+    // Elements are stored one after the other; those before `vertex` are read and dropped, and
+    // only the first `max_points` vertices are read.
     for (name, element) in &header.elements {
+        let mut element = element.clone();
+        let declared = element.count;
+        if name == "vertex" {
+            element.count = declared.min(max_points);
+        }
         let items = parser
-            .read_payload_for_element(&mut reader, element, &header)
+            .read_payload_for_element(&mut reader, &element, &header)
             .map_err(flat)
             .with_context(|| format!("PLY {name} data truncated or malformed"))?;
         if name == "vertex" {
             return Ok(Cloud {
                 points: items.iter().map(|v| v.xyz).collect(),
                 stamps: stamp.map(|i| items.iter().map(|v| v.stamps[i]).collect()),
+                declared,
             });
         }
     }
@@ -275,6 +306,34 @@ mod tests {
                     property double t\nend_header\n1 2 3 10 20\n";
         std::fs::write(&path, text).unwrap();
         assert_eq!(read(&path).unwrap().stamps, Some(vec![20.0]));
+    }
+
+    #[test]
+    fn a_property_declared_twice_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.ply");
+        let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n\
+                    property float x\nproperty float y\nproperty float z\nend_header\n1 2 3 4\n";
+        std::fs::write(&path, text).unwrap();
+        let e = format!("{:#}", read(&path).unwrap_err());
+        assert!(e.contains("property x twice"), "{e}");
+    }
+
+    #[test]
+    fn only_the_first_max_points_vertices_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.ply");
+        let points: Vec<[f64; 3]> = (0..5).map(|i| [f64::from(i), 1.0, 2.0]).collect();
+        for ascii in [false, true] {
+            if ascii {
+                write_ascii(&path, &points, None).unwrap();
+            } else {
+                write(&path, &points, None).unwrap();
+            }
+            let cloud = read_at_most(&path, 3).unwrap();
+            assert_eq!(cloud.points, points[..3]);
+            assert_eq!(cloud.declared, 5);
+        }
     }
 
     #[test]

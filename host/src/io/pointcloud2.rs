@@ -161,6 +161,12 @@ impl Scalar {
 /// `row_step == width * point_step` (every publisher we know of) this reads exactly the bytes the
 /// reference reads; the reference ignores `row_step` altogether.
 pub fn decode(cloud: &PointCloud2<'_>) -> Result<Decoded, String> {
+    decode_at_most(cloud, usize::MAX)
+}
+
+/// [`decode`], reading at most the first `max_points` points (row-major); a cloud cut there
+/// says so in [`Decoded::warnings`].
+pub fn decode_at_most(cloud: &PointCloud2<'_>, max_points: usize) -> Result<Decoded, String> {
     let point_step = u64::from(cloud.point_step);
     // The reference names subfields of count > 1 `name_0`, `name_1`, ... and unnamed fields
     // `unnamed_field_i`, then rejects duplicate names; the same rule is checked here without
@@ -275,7 +281,11 @@ pub fn decode(cloud: &PointCloud2<'_>) -> Result<Decoded, String> {
     }
 
     // `needed <= data.len()` bounds every index below, and the capacity by data.len() / 4.
-    let n = usize::try_from(width * height).map_err(|_| "too many points".to_string())?;
+    let declared = usize::try_from(width * height).map_err(|_| "too many points".to_string())?;
+    let n = declared.min(max_points);
+    if n < declared {
+        warnings.push(super::cloud::truncation_warning(n, declared));
+    }
     let mut points = Vec::with_capacity(n);
     let mut stamps = time.map(|_| Vec::with_capacity(n));
     let (row_step, point_step) = (cloud.row_step as usize, cloud.point_step as usize);
@@ -290,6 +300,9 @@ pub fn decode(cloud: &PointCloud2<'_>) -> Result<Decoded, String> {
     for r in 0..rows {
         let row = cloud.data.get(r * row_step..).ok_or_else(short)?;
         for c in 0..cloud.width as usize {
+            if points.len() == n {
+                break;
+            }
             let p = row
                 .get(c * point_step..(c + 1) * point_step)
                 .ok_or_else(short)?;
@@ -307,31 +320,111 @@ pub fn decode(cloud: &PointCloud2<'_>) -> Result<Decoded, String> {
     })
 }
 
-/// Turns one serialized message into a stream item: a frame named `file:topic@stamp`, or a
-/// skipped entry naming the file, topic and message when the payload cannot be read.
-pub(crate) fn message_item(
-    index: usize,
+/// Bytes a point of a PointCloud2 may take when sizing container records: generous for every
+/// lidar driver we know (Ouster 48, Hesai 32, Velodyne 22-32, Livox 18-26).
+pub const MAX_POINT_BYTES: u64 = 512;
+
+/// Smallest record limit, so that chunks of small messages around the clouds still fit.
+pub const MIN_RECORD_LIMIT: u64 = 64 << 20;
+
+/// Largest container record (a bag chunk, an MCAP chunk or message) read for a scan capacity
+/// of `scan_points`: a cloud of that many points of [`MAX_POINT_BYTES`] each, at least
+/// [`MIN_RECORD_LIMIT`]. Bigger records are refused before anything is allocated for them, so
+/// the memory a container costs is set by the configuration, not by the file.
+pub fn record_limit(scan_points: usize) -> u64 {
+    (scan_points as u64)
+        .saturating_mul(MAX_POINT_BYTES)
+        .max(MIN_RECORD_LIMIT)
+}
+
+/// Puts the messages `plan` (in file order) in receive-time order (stable: equal times keep
+/// file order); if they were not in that order, the warning naming the first message out of
+/// order.
+pub(crate) fn time_order<T>(
     file: &str,
     topic: &str,
+    plan: &mut [T],
+    time: impl Fn(&T) -> u64,
+) -> Option<String> {
+    let mut latest: Option<(usize, u64)> = None;
+    let mut first_late = None;
+    for (k, m) in plan.iter().enumerate() {
+        let t = time(m);
+        match latest {
+            Some((j, l)) if t < l => {
+                first_late = Some((k, t, j, l));
+                break;
+            }
+            Some((_, l)) if t == l => {}
+            _ => latest = Some((k, t)),
+        }
+    }
+    let (k, t, j, l) = first_late?;
+    plan.sort_by_key(|m| time(m));
+    Some(format!(
+        "{file}: messages on {topic} are not in time order (message {k} was received at {}, \
+         after message {j} at {}); frames are read in receive-time order",
+        stamp_of_nanos(t),
+        stamp_of_nanos(l)
+    ))
+}
+
+/// A container's receive (log) time in nanoseconds as a [`Stamp`].
+pub fn stamp_of_nanos(ns: u64) -> Stamp {
+    Stamp {
+        sec: (ns / 1_000_000_000) as i64,
+        nsec: (ns % 1_000_000_000) as u32,
+    }
+}
+
+/// Where a message is in its container: frame identity, file, topic and receive time.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MessageAt<'a> {
+    /// The frame's identity (place in receive-time order).
+    pub index: usize,
+    /// The container file, as shown.
+    pub file: &'a str,
+    /// The topic.
+    pub topic: &'a str,
+    /// Receive (log) time in nanoseconds.
+    pub received: u64,
+}
+
+/// Turns one serialized message into a stream item: a frame named `file:topic@stamp`, or a
+/// skipped entry named `file:topic@receive time` whose reason names the file, topic and
+/// message when the payload cannot be read. At most `max_points` points are decoded.
+pub(crate) fn message_item(
+    at: MessageAt<'_>,
     parsed: Result<PointCloud2<'_>, String>,
+    max_points: usize,
 ) -> Item {
+    let MessageAt {
+        index, file, topic, ..
+    } = at;
+    let received = stamp_of_nanos(at.received);
     let skipped = |reason: String| Item::Skipped {
         index,
+        name: format!("{file}:{topic}@{received}"),
+        time: Some(received.seconds()),
         reason: format!("{file}:{topic} message {index}: {reason}"),
     };
     let cloud = match parsed {
         Ok(c) => c,
         Err(e) => return skipped(e),
     };
-    match decode(&cloud) {
-        Ok(d) => Item::Frame(Frame {
-            index,
-            name: format!("{file}:{topic}@{}", cloud.stamp),
-            points: d.points,
-            stamps: d.stamps,
-            time: Some(cloud.stamp.seconds()),
-            warnings: d.warnings,
-        }),
+    match decode_at_most(&cloud, max_points) {
+        Ok(d) => {
+            let name = format!("{file}:{topic}@{}", cloud.stamp);
+            let warnings = d.warnings.iter().map(|w| format!("{name}: {w}")).collect();
+            Item::Frame(Frame {
+                index,
+                name,
+                points: d.points,
+                stamps: d.stamps,
+                time: Some(cloud.stamp.seconds()),
+                warnings,
+            })
+        }
         Err(e) => skipped(format!("stamp {}: {e}", cloud.stamp)),
     }
 }

@@ -1,18 +1,18 @@
 //! ROS 1 bags (format 2.0) carrying `sensor_msgs/PointCloud2`.
 //!
-//! The container (records, chunks, compression, index) is read with the `rosbag` crate; the
-//! message body, in the ROS 1 wire format, is parsed here into a [`PointCloud2`] view and decoded
-//! by [`pointcloud2`]. Chunks are decompressed one at a time when the stream reaches them, so a
-//! bag never has to fit in memory; the index (or, without one, a first scan) tells where the
-//! chunks are and how many frames each holds, which also makes [`FrameSource::seek`] cheap.
+//! The container (records, chunks, compression, index) is read by [`bagfile`], in place, also
+//! when the bag is cut short or was never closed; the message body, in the ROS 1 wire format,
+//! is parsed here into a [`PointCloud2`] view and decoded by [`pointcloud2`]. Frames are the
+//! messages of one topic in receive-time order (as `rosbag play` plays them), whatever order
+//! they were written in; a bag written out of order says so in a dataset warning. A chunk is
+//! decompressed when the stream reaches it, so a bag never has to fit in memory, and
+//! [`FrameSource::seek`] is cheap.
 
-use super::pointcloud2::{self, PointCloud2, PointField, Stamp};
-use super::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
-use anyhow::{anyhow, bail, Context, Result};
-use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
-use std::collections::{BTreeMap, HashMap, VecDeque};
-use std::fs::File;
-use std::io::{Read, Seek, SeekFrom, Write};
+use super::bagfile::{Bag, MessageRef};
+use super::pointcloud2::{self, MessageAt, PointCloud2, PointField, Stamp};
+use super::{bagfile, Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
+use anyhow::{anyhow, bail, Result};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// Connection type of the messages this reader decodes.
@@ -22,45 +22,19 @@ pub const POINTCLOUD2_TYPE: &str = "sensor_msgs/PointCloud2";
 /// sum was recorded from a different definition and cannot be parsed with this layout.
 pub const POINTCLOUD2_MD5: &str = "1158d486dd51d683ce2f1be655c3c181";
 
-const MAGIC: &[u8] = b"#ROSBAG V2.0\n";
-
 /// Opens a ROS 1 bag and streams the PointCloud2 messages of `opts.topic`, or of the only
-/// PointCloud2 topic in the bag.
+/// PointCloud2 topic in the bag, in receive-time order.
 pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     let label = path.display().to_string();
-    let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
-    let len = file
-        .metadata()
-        .with_context(|| format!("{label}: cannot stat"))?
-        .len();
-    let header = read_bag_header(&mut file).map_err(|e| anyhow!("{label}: {e}"))?;
-
-    // rosbag 0.6 slices its map from the end of the header to `index_pos` and panics when that
-    // runs past the end of the file (a bag cut short) or backwards (0: a recording never
-    // closed). Such a bag is read from a temporary copy whose header says the chunk section
-    // runs to the end of the file; the copy costs one pass over the file, only for damaged bags.
-    let header_sane = header.index_pos >= header.start_pos && header.index_pos <= len;
-    let (bag, repaired, chunk_end) = if header_sane {
-        let bag = RosBag::new(path).with_context(|| format!("{label}: cannot read"))?;
-        (bag, None, header.index_pos)
-    } else {
-        let copy = repaired_copy(&mut file, &header, len)
-            .with_context(|| format!("{label}: cannot make a repaired temporary copy"))?;
-        let bag = RosBag::new(copy.path()).with_context(|| format!("{label}: cannot read"))?;
-        (bag, Some(copy), len)
-    };
-    let index = if header_sane {
-        read_index(&bag).ok()
-    } else {
-        None
-    };
-    let layout = match index {
-        Some(layout) => layout,
-        None => scan_chunks(&bag, &mut file, header.start_pos, chunk_end),
-    };
-
-    let topics: Vec<(String, String)> = layout
-        .conns
+    let limit = pointcloud2::record_limit(opts.scan_points);
+    let bag = Bag::open(path, limit).map_err(|e| anyhow!("{label}: {e}"))?;
+    if bag.connections.is_empty() {
+        if let Some(d) = &bag.damage {
+            bail!("{label}: damaged before its first message: {d}");
+        }
+    }
+    let topics: Vec<(String, String)> = bag
+        .connections
         .values()
         .map(|c| (c.topic.clone(), c.tp.clone()))
         .collect();
@@ -71,166 +45,50 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         POINTCLOUD2_TYPE,
         opts.topic.as_deref(),
     )
-    .map_err(|e| anyhow!(e))?;
-    let ours: HashMap<u32, ConnKind> = layout
-        .conns
+    .map_err(|e| match &bag.damage {
+        Some(d) => anyhow!("{e}; the bag is damaged: {d}"),
+        None => anyhow!(e),
+    })?;
+    let ours: HashMap<u32, ConnKind> = bag
+        .connections
         .iter()
         .filter(|(_, c)| c.topic == topic)
-        .map(|(&id, c)| (id, c.kind()))
+        .map(|(&id, c)| (id, ConnKind::of(c)))
         .collect();
-    let chunks: Vec<(u64, usize)> = layout
-        .chunks
+    let mut plan: Vec<MessageRef> = bag
+        .messages
         .iter()
-        .map(|c| {
-            let n = c
-                .counts
-                .iter()
-                .filter(|(id, _)| ours.contains_key(id))
-                .map(|(_, n)| *n as usize)
-                .sum();
-            (c.pos, n)
-        })
+        .filter(|m| ours.contains_key(&m.conn))
+        .copied()
         .collect();
-    let total = chunks.iter().map(|c| c.1).sum();
-    let note = (!layout.indexed).then(|| {
-        "bag has no usable index (cut short or not closed); its chunks were found by scanning"
-            .to_string()
-    });
+    let mut warnings = Vec::new();
+    if !bag.indexed {
+        warnings.push(format!(
+            "{label}: bag has no usable index (cut short or not closed); its chunks were found \
+             by scanning"
+        ));
+    }
+    if let Some(w) = pointcloud2::time_order(&label, &topic, &mut plan, |m| m.time) {
+        warnings.push(w);
+    }
     let source = BagSource {
         bag,
-        _repaired: repaired,
         file: label,
         topic,
         ours,
-        chunks,
-        next_chunk: 0,
-        skip: 0,
-        pending: VecDeque::new(),
-        pending_err: None,
-        damage: layout.damage,
-        index: 0,
-        total,
-        note,
+        plan,
+        next: 0,
+        max_points: opts.scan_points,
         done: false,
     };
     Ok(Dataset {
         frames: Box::new(source),
         info: DatasetInfo {
             format: Some(Format::Bag),
+            warnings,
             ..DatasetInfo::default()
         },
     })
-}
-
-/// What the bag header record says, plus where things are in the file.
-#[derive(Debug)]
-struct BagHeader {
-    index_pos: u64,
-    /// File offset of the 8-byte `index_pos` value.
-    index_pos_at: u64,
-    /// First byte after the header record: the chunk section.
-    start_pos: u64,
-}
-
-fn read_u32(r: &mut impl Read) -> std::io::Result<u32> {
-    let mut b = [0u8; 4];
-    r.read_exact(&mut b)?;
-    Ok(u32::from_le_bytes(b))
-}
-
-fn read_bag_header(file: &mut File) -> Result<BagHeader, String> {
-    let short = |_| "too short for a ROS bag".to_string();
-    let mut magic = [0u8; 13];
-    file.read_exact(&mut magic).map_err(short)?;
-    if magic != MAGIC {
-        return Err("not a ROS bag v2.0 (no `#ROSBAG V2.0` line)".into());
-    }
-    let header_len = read_u32(file).map_err(short)?;
-    if header_len > 1 << 20 {
-        return Err(format!("bag header claims {header_len} bytes"));
-    }
-    let mut fields = vec![0u8; header_len as usize];
-    file.read_exact(&mut fields).map_err(short)?;
-    let data_len = read_u32(file).map_err(short)?;
-    let mut index_pos = None;
-    let mut at = 0usize;
-    while at < fields.len() {
-        let flen = fields
-            .get(at..at + 4)
-            .and_then(|b| b.first_chunk::<4>())
-            .map(|b| u32::from_le_bytes(*b) as usize)
-            .ok_or("bag header field cut short")?;
-        let field = fields
-            .get(at + 4..at + 4 + flen)
-            .ok_or("bag header field cut short")?;
-        if let Some(value) = field.strip_prefix(b"index_pos=") {
-            let v: [u8; 8] = value.try_into().map_err(|_| "bad index_pos field")?;
-            let value_at = (MAGIC.len() + 4 + at + 4 + b"index_pos=".len()) as u64;
-            index_pos = Some((u64::from_le_bytes(v), value_at));
-        }
-        at += 4 + flen;
-    }
-    let (index_pos, index_pos_at) = index_pos.ok_or("bag header has no index_pos")?;
-    Ok(BagHeader {
-        index_pos,
-        index_pos_at,
-        start_pos: (MAGIC.len() + 4 + 4) as u64 + u64::from(header_len) + u64::from(data_len),
-    })
-}
-
-/// A temporary copy of the bag whose `index_pos` is the end of the file.
-fn repaired_copy(file: &mut File, header: &BagHeader, len: u64) -> Result<tempfile::NamedTempFile> {
-    let mut copy = tempfile::Builder::new()
-        .prefix("kiss-odom-bag-")
-        .suffix(".bag")
-        .tempfile()?;
-    file.seek(SeekFrom::Start(0))?;
-    std::io::copy(file, copy.as_file_mut())?;
-    copy.as_file_mut()
-        .seek(SeekFrom::Start(header.index_pos_at))?;
-    copy.as_file_mut().write_all(&len.to_le_bytes())?;
-    copy.as_file_mut().flush()?;
-    Ok(copy)
-}
-
-/// Offset just past the record starting at `pos` (header length, header, data length, data).
-fn record_end(file: &mut File, pos: u64) -> std::io::Result<u64> {
-    file.seek(SeekFrom::Start(pos))?;
-    let header_len = read_u32(file)?;
-    file.seek(SeekFrom::Start(pos + 4 + u64::from(header_len)))?;
-    let data_len = read_u32(file)?;
-    Ok(pos + 8 + u64::from(header_len) + u64::from(data_len))
-}
-
-/// A connection record: which topic and type its messages have.
-#[derive(Clone, Debug)]
-struct Conn {
-    topic: String,
-    tp: String,
-    md5: String,
-}
-
-impl Conn {
-    fn from_record(c: &rosbag::record_types::Connection<'_>) -> Self {
-        Conn {
-            topic: c.topic.to_string(),
-            tp: c.tp.to_string(),
-            md5: c.md5sum.iter().map(|b| format!("{b:02x}")).collect(),
-        }
-    }
-
-    fn kind(&self) -> ConnKind {
-        if self.tp != POINTCLOUD2_TYPE {
-            ConnKind::Wrong(self.tp.clone())
-        } else if self.md5 != POINTCLOUD2_MD5 {
-            ConnKind::Wrong(format!(
-                "{} with md5 {} (expected {POINTCLOUD2_MD5})",
-                self.tp, self.md5
-            ))
-        } else {
-            ConnKind::Cloud
-        }
-    }
 }
 
 /// Whether messages of a connection on the chosen topic can be decoded.
@@ -241,249 +99,84 @@ enum ConnKind {
     Wrong(String),
 }
 
-/// Where a chunk is and how many messages of each connection it holds.
-#[derive(Debug)]
-struct ChunkPlan {
-    pos: u64,
-    counts: Vec<(u32, u32)>,
-}
-
-/// Everything found out about the bag before streaming.
-#[derive(Debug, Default)]
-struct Layout {
-    conns: BTreeMap<u32, Conn>,
-    chunks: Vec<ChunkPlan>,
-    /// Why the chunks after the last planned one cannot be read.
-    damage: Option<String>,
-    indexed: bool,
-}
-
-/// Reads connections and chunk positions from the index section; `Err` if it is incomplete.
-fn read_index(bag: &RosBag) -> Result<Layout, String> {
-    let mut layout = Layout {
-        indexed: true,
-        ..Layout::default()
-    };
-    for record in bag.index_records() {
-        match record.map_err(|e| e.to_string())? {
-            IndexRecord::Connection(c) => {
-                layout.conns.insert(c.id, Conn::from_record(&c));
-            }
-            IndexRecord::ChunkInfo(info) => {
-                let counts = info.entries().map(|e| (e.conn_id, e.count)).collect();
-                layout.chunks.push(ChunkPlan {
-                    pos: info.chunk_pos,
-                    counts,
-                });
-            }
-            IndexRecord::IndexData(_) => {}
+impl ConnKind {
+    fn of(c: &bagfile::Connection) -> Self {
+        if c.tp != POINTCLOUD2_TYPE {
+            ConnKind::Wrong(c.tp.clone())
+        } else if c.md5 != POINTCLOUD2_MD5 {
+            ConnKind::Wrong(format!(
+                "{} with md5 {} (expected {POINTCLOUD2_MD5})",
+                c.tp, c.md5
+            ))
+        } else {
+            ConnKind::Cloud
         }
     }
-    if layout.chunks.len() != bag.get_chunk_count() as usize
-        || layout.conns.len() != bag.get_conn_count() as usize
-    {
-        return Err("index does not list every chunk and connection".into());
-    }
-    layout.chunks.sort_by_key(|c| c.pos);
-    Ok(layout)
-}
-
-/// Walks the chunk section from `start` to `end` record by record, decompressing each chunk once
-/// to learn its connections and message counts; stops at the first unreadable record.
-fn scan_chunks(bag: &RosBag, file: &mut File, start: u64, end: u64) -> Layout {
-    let mut layout = Layout::default();
-    let mut pos = start;
-    while pos < end {
-        let mut records = bag.chunk_records();
-        let record = match records.seek(pos) {
-            Ok(()) => records.next(),
-            Err(e) => Some(Err(e)),
-        };
-        match record {
-            None => break,
-            Some(Err(e)) => {
-                layout.damage = Some(format!(
-                    "cannot read the record at byte {pos} ({e}); the bag ends at byte {end} and looks cut short"
-                ));
-                break;
-            }
-            Some(Ok(ChunkRecord::IndexData(_))) => {}
-            Some(Ok(ChunkRecord::Chunk(chunk))) => {
-                let mut counts: BTreeMap<u32, u32> = BTreeMap::new();
-                let mut inner_error = None;
-                for m in chunk.messages() {
-                    match m {
-                        Ok(MessageRecord::Connection(c)) => {
-                            layout
-                                .conns
-                                .entry(c.id)
-                                .or_insert_with(|| Conn::from_record(&c));
-                        }
-                        Ok(MessageRecord::MessageData(m)) => {
-                            *counts.entry(m.conn_id).or_default() += 1;
-                        }
-                        Err(e) => {
-                            inner_error = Some(format!("chunk at byte {pos}: {e}"));
-                            break;
-                        }
-                    }
-                }
-                layout.chunks.push(ChunkPlan {
-                    pos,
-                    counts: counts.into_iter().collect(),
-                });
-                if inner_error.is_some() {
-                    layout.damage = inner_error;
-                    break;
-                }
-            }
-        }
-        match record_end(file, pos) {
-            Ok(next) if next > pos => pos = next,
-            _ => {
-                layout.damage = Some(format!("cannot find the record after byte {pos}"));
-                break;
-            }
-        }
-    }
-    layout
 }
 
 /// The frames of one topic of an open bag.
 struct BagSource {
-    bag: RosBag,
-    /// Keeps the repaired copy alive while `bag` maps it (declared after `bag`: dropped later).
-    _repaired: Option<tempfile::NamedTempFile>,
+    bag: Bag,
     file: String,
     topic: String,
     /// Connections on the chosen topic.
     ours: HashMap<u32, ConnKind>,
-    /// Chunk positions in file order and how many messages of `ours` each holds.
-    chunks: Vec<(u64, usize)>,
-    next_chunk: usize,
-    /// Messages of `ours` to drop at the start of the next chunk (after a seek).
-    skip: usize,
-    /// Decoded items of the current chunk not yet handed out.
-    pending: VecDeque<Item>,
-    /// Error met in the current chunk, reported after `pending`.
-    pending_err: Option<String>,
-    /// Why the chunk section ends early, reported after the last chunk.
-    damage: Option<String>,
-    index: usize,
-    total: usize,
-    /// Warning for the first frame.
-    note: Option<String>,
+    /// The messages of `ours`, in receive-time order.
+    plan: Vec<MessageRef>,
+    next: usize,
+    max_points: usize,
     done: bool,
-}
-
-impl BagSource {
-    /// Decompresses chunk `k` and decodes its messages on the chosen topic into `pending`.
-    fn load_chunk(&mut self, k: usize) {
-        let Some(&(pos, _)) = self.chunks.get(k) else {
-            return;
-        };
-        let mut records = self.bag.chunk_records();
-        let record = match records.seek(pos) {
-            Ok(()) => records.next(),
-            Err(e) => Some(Err(e)),
-        };
-        let chunk = match record {
-            Some(Ok(ChunkRecord::Chunk(chunk))) => chunk,
-            Some(Ok(ChunkRecord::IndexData(_))) | None => {
-                self.pending_err = Some(format!("no chunk at byte {pos} where the index says"));
-                return;
-            }
-            Some(Err(e)) => {
-                self.pending_err = Some(format!("cannot read the chunk at byte {pos}: {e}"));
-                return;
-            }
-        };
-        for m in chunk.messages() {
-            let m = match m {
-                Ok(MessageRecord::MessageData(m)) => m,
-                Ok(MessageRecord::Connection(_)) => continue,
-                Err(e) => {
-                    self.pending_err = Some(format!("chunk at byte {pos}: {e}"));
-                    return;
-                }
-            };
-            let Some(kind) = self.ours.get(&m.conn_id) else {
-                continue;
-            };
-            if self.skip > 0 {
-                self.skip -= 1;
-                continue;
-            }
-            if let ConnKind::Wrong(tp) = kind {
-                self.pending_err = Some(format!(
-                    "message {} on {} is {tp}, not {POINTCLOUD2_TYPE}",
-                    self.index, self.topic
-                ));
-                return;
-            }
-            let item =
-                pointcloud2::message_item(self.index, &self.file, &self.topic, parse_ros1(m.data));
-            self.pending.push_back(item);
-            self.index += 1;
-        }
-    }
 }
 
 impl FrameSource for BagSource {
     fn len_hint(&self) -> Option<usize> {
-        Some(self.total)
+        Some(self.plan.len())
     }
 
     fn next_item(&mut self) -> Result<Option<Item>> {
-        loop {
-            if let Some(mut item) = self.pending.pop_front() {
-                if let (Item::Frame(f), Some(note)) = (&mut item, self.note.take()) {
-                    f.warnings.insert(0, note);
-                }
-                return Ok(Some(item));
-            }
-            if self.done {
-                return Ok(None);
-            }
-            if let Some(e) = self.pending_err.take() {
+        if self.done {
+            return Ok(None);
+        }
+        let Some(&m) = self.plan.get(self.next) else {
+            self.done = true;
+            return match &self.bag.damage {
+                Some(d) => bail!("{}: {d}", self.file),
+                None => Ok(None),
+            };
+        };
+        let index = self.next;
+        self.next += 1;
+        if let Some(ConnKind::Wrong(tp)) = self.ours.get(&m.conn) {
+            self.done = true;
+            bail!(
+                "{}: message {index} on {} is {tp}, not {POINTCLOUD2_TYPE}",
+                self.file,
+                self.topic
+            );
+        }
+        let at = MessageAt {
+            index,
+            file: &self.file,
+            topic: &self.topic,
+            received: m.time,
+        };
+        let body = match self.bag.message(m) {
+            Ok(body) => body,
+            Err(e) => {
                 self.done = true;
                 bail!("{}: {e}", self.file);
             }
-            match self.chunks.get(self.next_chunk) {
-                Some(&(_, n)) => {
-                    let k = self.next_chunk;
-                    self.next_chunk += 1;
-                    if n > 0 {
-                        self.load_chunk(k);
-                    }
-                }
-                None => {
-                    self.done = true;
-                    if let Some(d) = &self.damage {
-                        bail!("{}: {d}", self.file);
-                    }
-                    return Ok(None);
-                }
-            }
-        }
+        };
+        Ok(Some(pointcloud2::message_item(
+            at,
+            parse_ros1(body),
+            self.max_points,
+        )))
     }
 
     fn seek(&mut self, index: usize) -> bool {
-        self.pending.clear();
-        self.pending_err = None;
+        self.next = index.min(self.plan.len());
         self.done = false;
-        self.index = index;
-        self.skip = 0;
-        self.next_chunk = self.chunks.len();
-        let mut before = 0;
-        for (k, &(_, n)) in self.chunks.iter().enumerate() {
-            if index < before + n {
-                self.next_chunk = k;
-                self.skip = index - before;
-                break;
-            }
-            before += n;
-        }
         true
     }
 }
@@ -581,8 +274,9 @@ pub fn parse_ros1(body: &[u8]) -> Result<PointCloud2<'_>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::bagfile::MAGIC;
     use crate::io::pointcloud2::fixture::{xyzt, xyzt_points, xyzt_times, RawCloud};
-    use std::collections::BTreeSet;
+    use std::collections::{BTreeMap, BTreeSet};
 
     /// ROS 1 serialization of `c`, written field by field from the message definition.
     fn ros1_body(c: &RawCloud) -> Vec<u8> {
@@ -819,6 +513,7 @@ mod tests {
             path,
             &OpenOptions {
                 topic: topic.map(String::from),
+                ..OpenOptions::default()
             },
         )
     }
@@ -907,7 +602,7 @@ mod tests {
         for (k, item) in items.iter().enumerate() {
             assert_frame_k(frame(item), k, k as u32);
         }
-        assert!(frame(&items[0]).warnings[0].contains("no usable index"));
+        assert!(ds.info.warnings[0].contains("no usable index"));
     }
 
     #[test]
@@ -941,7 +636,7 @@ mod tests {
         let (items, err) = drain(ds.frames.as_mut());
         assert_eq!(err, None);
         assert_eq!(items.len(), 4);
-        assert!(frame(&items[0]).warnings[0].contains("no usable index"));
+        assert!(ds.info.warnings[0].contains("no usable index"));
     }
 
     #[test]
@@ -997,7 +692,7 @@ mod tests {
         assert_eq!(items.len(), 3);
         assert_frame_k(frame(&items[0]), 0, 0);
         match &items[1] {
-            Item::Skipped { index, reason } => {
+            Item::Skipped { index, reason, .. } => {
                 assert_eq!(*index, 1);
                 assert!(
                     reason.contains(&p.display().to_string()) && reason.contains("/points"),
@@ -1051,6 +746,55 @@ mod tests {
         let err = format!("{:#}", open_bag(&p, None).err().unwrap());
         assert!(
             err.contains("no sensor_msgs/PointCloud2 topic") && err.contains("/chatter"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn messages_out_of_time_order_are_read_in_time_order_indexed_or_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let conns = [conn("/points", CLOUD), conn("/chatter", STRING)];
+        let msgs: Vec<_> = [0u32, 2, 1, 4, 3]
+            .iter()
+            .flat_map(|&k| {
+                let t = u64::from(k) * 100_000_000;
+                [(0, t, cloud_msg(k)), (1, t + 1, b"\x02\0\0\0hi".to_vec())]
+            })
+            .collect();
+        for indexed in [true, false] {
+            for per_chunk in [1, 3, 100] {
+                let (bytes, _) = write_bag(&conns, &msgs, per_chunk, indexed);
+                let p = save(&dir, "late.bag", &bytes);
+                let mut ds = open_bag(&p, None).unwrap();
+                let w = ds.info.warnings.join("\n");
+                assert!(
+                    w.contains("not in time order") && w.contains("message 2"),
+                    "{w}"
+                );
+                let (items, err) = drain(ds.frames.as_mut());
+                assert_eq!(err, None);
+                assert_eq!(items.len(), 5);
+                for (k, item) in items.iter().enumerate() {
+                    assert_frame_k(frame(item), k, k as u32);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_chunk_larger_than_the_record_limit_is_refused_before_it_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let msgs: Vec<_> = (0..2).map(|k| (0, u64::from(k), cloud_msg(k))).collect();
+        let (mut bytes, chunks) = write_bag(&[conn("/points", CLOUD)], &msgs, 1, true);
+        let at = chunks[1] as usize;
+        let size = at + bytes[at..].windows(5).position(|w| w == b"size=").unwrap() + 5;
+        bytes[size..size + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+        let p = save(&dir, "huge.bag", &bytes);
+        let (items, err) = drain(open_bag(&p, None).unwrap().frames.as_mut());
+        assert_eq!(items.len(), 1);
+        let err = err.unwrap();
+        assert!(
+            err.contains("4294967295 bytes") && err.contains("limit"),
             "{err}"
         );
     }
