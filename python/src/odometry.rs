@@ -1,8 +1,8 @@
 //! `Odometry`: the core's pipeline on owned storage, the engine of `kiss_odom.KissICP`.
 //!
-//! One object per sequence. The settings are those of `kiss-odom run` (its `Settings`, given
-//! as JSON or a `config.toml` path), so the same frames give the same poses, bit for bit, as
-//! `run`. The frame call copies the points out of numpy, then registers, deskews and
+//! One object per sequence. The settings are those of `kiss-odom run` (its `Settings` as JSON;
+//! `kiss_odom.config` builds them from kiss-icp's configs, dicts and `config.toml` files), so
+//! the same frames give the same poses, bit for bit, as `run`. The frame call copies the points out of numpy, then registers, deskews and
 //! downsamples with the GIL released.
 
 use crate::convert::{self, narrow, Numpy};

@@ -166,3 +166,10 @@ def test_the_report_names_flags_and_counts():
     assert second.sigma == pytest.approx(2.0) and second.observability is not None
     assert set(second.dropped) == {"non_finite", "truncated", "merge_full", "source_full",
                                    "map_voxels_full", "map_points_full"}
+
+
+def test_the_thread_count_does_not_change_a_bit():
+    frames = list(kitti_frames("05"))
+    one, two = our_poses(frames, threads=1), our_poses(frames, threads=2)
+    print(f"{np.count_nonzero(one != two)} pose entries differ between 1 and 2 threads (allowed 0)")
+    assert np.array_equal(one, two)
