@@ -22,41 +22,64 @@ fn good(k: usize) -> PointCloud2 {
             [f(0), f(1), f(2)]
         })
         .collect();
-    let header = Header {
-        stamp: Time::from_seconds(k as f64 * 0.1),
-        frame_id: "velodyne".into(),
-    };
-    PointCloud2::xyzt(header, &points, None)
+    PointCloud2::xyzt(header(k as f64 * 0.1), &points, None)
 }
 
-/// Sends scan 0, then whatever `bad` sends, then scan 1, each once the node is done with the
-/// one before (so nothing is dropped); returns what the node did.
-fn around(k: u16, bad: impl FnOnce(&Writer<PointCloud2>)) -> Stopped {
-    let _lock = serial();
+fn header(seconds: f64) -> Header {
+    Header {
+        stamp: Time::from_seconds(seconds),
+        frame_id: "velodyne".into(),
+    }
+}
+
+/// A node on domain `k` and a cloud writer it has matched. Holds the test lock.
+struct Rig {
+    _lock: std::sync::MutexGuard<'static, ()>,
+    dir: tempfile::TempDir,
+    node: Node,
+    _dp: dds::DomainParticipant,
+    w: Writer<PointCloud2>,
+}
+
+fn rig(k: u16) -> Rig {
+    let lock = serial();
     let dir = tempfile::tempdir().unwrap();
-    let d = domain(k);
-    let node = start_node(d, dir.path(), None);
-    let dp = dds::participant(d).unwrap();
+    let node = start_node(domain(k), dir.path(), None);
+    let dp = dds::participant(domain(k)).unwrap();
     let w: Writer<PointCloud2> =
         dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();
     assert!(
         dds::wait_for_reader(&w, Duration::from_secs(10), &|| false),
         "no node"
     );
+    // The match is seen here first; give the node's side time to learn this writer too.
     std::thread::sleep(Duration::from_millis(500));
-    w.write(good(0), None).unwrap();
-    assert!(wait_until(Duration::from_secs(10), || node.registered() == 1));
-    bad(&w);
+    Rig {
+        _lock: lock,
+        dir,
+        node,
+        _dp: dp,
+        w,
+    }
+}
+
+/// Sends scan 0, then whatever `bad` sends, then scan 1, each once the node is done with the
+/// one before (so nothing is dropped); returns what the node did.
+fn around(k: u16, bad: impl FnOnce(&Writer<PointCloud2>)) -> Stopped {
+    let r = rig(k);
+    r.w.write(good(0), None).unwrap();
+    assert!(wait_until(Duration::from_secs(10), || r.node.registered() == 1));
+    bad(&r.w);
     std::thread::sleep(Duration::from_millis(500));
-    w.write(good(1), None).unwrap();
-    let stopped = node.stop_after(2, Duration::from_secs(10));
+    r.w.write(good(1), None).unwrap();
+    let stopped = r.node.stop_after(2, Duration::from_secs(10));
     println!("{}{}", stopped.out, stopped.err);
     let s = &stopped.summary;
     assert_eq!(s.dropped, 0);
     assert_eq!(s.registered, 2, "the node goes on after the bad cloud");
     let run = run_poses(
         &[&kitti(), "--format", "bin", "--frames", "0..2"],
-        &dir.path().join("run"),
+        &r.dir.path().join("run"),
     );
     assert_eq!(
         stopped.poses, run,
@@ -105,11 +128,8 @@ fn cloud_whose_fields_do_not_fit_its_point_step_is_skipped_with_a_counted_warnin
 #[test]
 fn empty_cloud_is_skipped_with_a_counted_warning() {
     let s = around(8, |w| {
-        let header = Header {
-            stamp: Time::from_seconds(0.15),
-            frame_id: "velodyne".into(),
-        };
-        w.write(PointCloud2::xyzt(header, &[], None), None).unwrap();
+        w.write(PointCloud2::xyzt(header(0.15), &[], None), None)
+            .unwrap();
     });
     assert_eq!((s.summary.empty, s.summary.warnings), (1, 1));
     assert!(s.err.contains("empty cloud"), "{}", s.err);
@@ -118,12 +138,8 @@ fn empty_cloud_is_skipped_with_a_counted_warning() {
 #[test]
 fn non_finite_points_are_skipped_and_counted_and_an_all_nan_cloud_is_skipped() {
     let s = around(9, |w| {
-        let header = Header {
-            stamp: Time::from_seconds(0.15),
-            frame_id: "velodyne".into(),
-        };
         let nan = [[f64::NAN, 1.0, 2.0], [3.0, f64::INFINITY, 0.0]];
-        w.write(PointCloud2::xyzt(header, &nan, None), None)
+        w.write(PointCloud2::xyzt(header(0.15), &nan, None), None)
             .unwrap();
     });
     assert_eq!((s.summary.empty, s.summary.warnings), (1, 1));
@@ -131,20 +147,12 @@ fn non_finite_points_are_skipped_and_counted_and_an_all_nan_cloud_is_skipped() {
 
     // NaN points inside a usable cloud: the cloud is registered, the points skipped (the
     // core drops non-finite points before anything else, as `run` shows).
-    let _lock = serial();
-    let dir = tempfile::tempdir().unwrap();
-    let d = domain(9);
-    let node = start_node(d, dir.path(), None);
-    let dp = dds::participant(d).unwrap();
-    let w: Writer<PointCloud2> =
-        dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();
-    assert!(dds::wait_for_reader(&w, Duration::from_secs(10), &|| false));
-    std::thread::sleep(Duration::from_millis(500));
+    let r = rig(9);
     let mut c = good(0);
     c.data.0[..8].copy_from_slice(&f64::NAN.to_le_bytes());
     c.data.0[32..40].copy_from_slice(&f64::NEG_INFINITY.to_le_bytes());
-    w.write(c, None).unwrap();
-    let stopped = node.stop_after(1, Duration::from_secs(10));
+    r.w.write(c, None).unwrap();
+    let stopped = r.node.stop_after(1, Duration::from_secs(10));
     assert_eq!(
         (stopped.summary.registered, stopped.summary.warnings),
         (1, 1)
@@ -172,11 +180,11 @@ fn message_cut_short_is_skipped_with_a_counted_warning() {
             dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();
         assert!(dds::wait_for_reader(&w, Duration::from_secs(10), &|| false));
         std::thread::sleep(Duration::from_millis(500));
-        let header = Header {
-            stamp: Time::from_seconds(0.15),
-            frame_id: "velodyne".into(),
+        let cut = Cut {
+            header: header(0.15),
+            height: 1,
         };
-        w.write(Cut { header, height: 1 }, None).unwrap();
+        w.write(cut, None).unwrap();
         std::thread::sleep(Duration::from_millis(300));
     });
     assert_eq!((s.summary.malformed, s.summary.warnings), (1, 1));

@@ -12,9 +12,10 @@ use anyhow::{anyhow, Result};
 use rustdds::no_key::{DataReader, DataWriter};
 use rustdds::policy::{Durability, History, Reliability};
 use rustdds::serialization::CDRSerializerAdapter;
+pub use rustdds::DomainParticipant;
 use rustdds::{
-    DataWriterStatus, DomainParticipant, DomainParticipantBuilder, QosPolicies, QosPolicyBuilder,
-    StatusEvented, TopicKind,
+    DataWriterStatus, DomainParticipantBuilder, QosPolicies, QosPolicyBuilder, StatusEvented,
+    TopicKind,
 };
 use serde::Serialize;
 use std::net::{IpAddr, Ipv4Addr};

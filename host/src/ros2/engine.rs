@@ -24,8 +24,6 @@ pub struct Registered {
     pub delta: Isometry3<f64>,
     /// The core's flags for the frame.
     pub status: Status,
-    /// ICP iterations.
-    pub iterations: u32,
     /// Points given.
     pub input_points: u32,
     /// NaN/inf points the core skipped.
@@ -71,7 +69,6 @@ impl<T: Real, P: PointCodec<T>> Engine for Core<'_, T, P> {
                 pose: widen(self.odom.pose()),
                 delta: widen(self.odom.last_delta()),
                 status: r.status,
-                iterations: r.iterations,
                 input_points: r.input_points,
                 non_finite: r.dropped.non_finite,
                 deskewed: r.deskewed,

@@ -11,8 +11,8 @@
 //!
 //! Published per registered cloud, stamped with the cloud's stamp:
 //! - `nav_msgs/Odometry`: pose of the base in `lidar_odom_frame`; twist = the last motion
-//!   (previous registered cloud to this one, in the base frame) over the time between their
-//!   stamps (`scan_period` when the stamps do not increase): linear = translation / dt,
+//!   (previous registered cloud to this one, expressed in the base frame at the previous
+//!   cloud) over the time between their stamps (`scan_period` when the stamps do not increase): linear = translation / dt,
 //!   angular = rotation vector / dt; covariance: see [`covariances`].
 //! - `/tf`: `lidar_odom_frame -> base` (or its inverse with `invert_odom_tf`).
 //! - the local map in `lidar_odom_frame`, at most every `local_map_period` seconds.
@@ -159,39 +159,31 @@ pub fn run(
     let p = &opts.params;
     let dp = dds::participant(opts.domain)?;
     let mut reader = dds::cloud_reader(&dp, &p.points_topic)?;
-    let odom_w: Writer<Odometry> =
-        dds::writer(&dp, &p.odom_topic, ODOMETRY_TYPE, &dds::reliable_qos(10))?;
-    let tf_w: Option<Writer<TfMessage>> = match p.publish_odom_tf {
-        true => Some(dds::writer(
-            &dp,
-            "/tf",
-            TFMESSAGE_TYPE,
-            &dds::reliable_qos(100),
-        )?),
-        false => None,
-    };
-    let map_w: Option<Writer<PointCloud2>> = match p.publish_local_map {
-        true => Some(dds::writer(
-            &dp,
-            &p.local_map_topic,
-            POINTCLOUD2_TYPE,
-            &dds::reliable_qos(1),
-        )?),
-        false => None,
-    };
-    let mut poses = match &opts.poses {
-        Some(path) => {
-            Some(std::fs::File::create(path).with_context(|| format!("{}", path.display()))?)
-        }
-        None => None,
-    };
     let publish = Publishers {
         params: p.clone(),
         extrinsic: p.base_to_lidar.map(|_| p.extrinsic()).transpose()?,
-        odom: odom_w,
-        tf: tf_w,
-        map: map_w,
+        odom: dds::writer(&dp, &p.odom_topic, ODOMETRY_TYPE, &dds::reliable_qos(10))?,
+        tf: p
+            .publish_odom_tf
+            .then(|| dds::writer(&dp, "/tf", TFMESSAGE_TYPE, &dds::reliable_qos(100)))
+            .transpose()?,
+        map: p
+            .publish_local_map
+            .then(|| {
+                dds::writer(
+                    &dp,
+                    &p.local_map_topic,
+                    POINTCLOUD2_TYPE,
+                    &dds::reliable_qos(1),
+                )
+            })
+            .transpose()?,
     };
+    let mut poses = opts
+        .poses
+        .as_ref()
+        .map(|path| std::fs::File::create(path).with_context(|| format!("{}", path.display())))
+        .transpose()?;
     writeln!(
         out,
         "listening on {} (domain {}), publishing {}{}{}",
@@ -289,15 +281,17 @@ fn work(
         for w in &decoded.warnings {
             warn(format!("stamp {}: {w}", cloud.stamp), &mut s);
         }
-        let registered = match decoded.points.is_empty() {
-            true => None,
-            false => engine.register(&decoded.points, decoded.stamps.as_deref()),
+        let registered = if decoded.points.is_empty() {
+            None
+        } else {
+            engine.register(&decoded.points, decoded.stamps.as_deref())
         };
         let Some(r) = registered else {
             s.empty += 1;
-            let what = match decoded.points.is_empty() {
-                true => "empty cloud",
-                false => "no usable point (all non-finite or out of range)",
+            let what = if decoded.points.is_empty() {
+                "empty cloud"
+            } else {
+                "no usable point (all non-finite or out of range)"
             };
             warn(format!("stamp {}: skipped: {what}", cloud.stamp), &mut s);
             continue;
@@ -404,9 +398,10 @@ impl Publishers {
             None => (r.pose, r.delta),
             Some(e) => (e * r.pose * e.inverse(), e * r.delta * e.inverse()),
         };
-        let child = match p.base_frame.is_empty() {
-            true => cloud_frame.to_string(),
-            false => p.base_frame.clone(),
+        let child = if p.base_frame.is_empty() {
+            cloud_frame.to_string()
+        } else {
+            p.base_frame.clone()
         };
         let header = Header {
             stamp,
@@ -429,20 +424,21 @@ impl Publishers {
             .write(msg, None)
             .map_err(|e| anyhow!("publishing {}: {e:?}", p.odom_topic))?;
         if let Some(tf) = &self.tf {
-            let t = match p.invert_odom_tf {
-                false => TransformStamped {
-                    header,
-                    child_frame_id: child,
-                    transform: Pose::of(&pose),
-                },
-                true => TransformStamped {
+            let t = if p.invert_odom_tf {
+                TransformStamped {
                     header: Header {
                         stamp,
                         frame_id: child,
                     },
                     child_frame_id: p.lidar_odom_frame.clone(),
                     transform: Pose::of(&pose.inverse()),
-                },
+                }
+            } else {
+                TransformStamped {
+                    header,
+                    child_frame_id: child,
+                    transform: Pose::of(&pose),
+                }
             };
             tf.write(
                 TfMessage {

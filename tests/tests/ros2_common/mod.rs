@@ -45,10 +45,13 @@ pub fn cli() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_kiss-odom-cli"))
 }
 
+/// The node thread: its result, standard output and warnings.
+type NodeThread = std::thread::JoinHandle<(Result<Summary, String>, Vec<u8>, Vec<u8>)>;
+
 /// A node running in a thread of the test process.
 pub struct Node {
     stop: Arc<AtomicBool>,
-    handle: std::thread::JoinHandle<(Result<Summary, String>, Vec<u8>, Vec<u8>)>,
+    handle: NodeThread,
     /// Where it writes its poses.
     pub poses: PathBuf,
 }
@@ -68,6 +71,16 @@ pub struct Stopped {
 /// Starts a node on `domain` with default parameters, `threads` core threads (None = all), and
 /// its poses written to `dir/poses.txt`.
 pub fn start_node(domain: u16, dir: &Path, threads: Option<usize>) -> Node {
+    start_node_with(domain, dir, threads, NodeParams::default())
+}
+
+/// [`start_node`] with other node parameters.
+pub fn start_node_with(
+    domain: u16,
+    dir: &Path,
+    threads: Option<usize>,
+    params: NodeParams,
+) -> Node {
     let mut settings = Settings::default();
     if let Some(t) = threads {
         settings.runtime.threads = t;
@@ -75,7 +88,7 @@ pub fn start_node(domain: u16, dir: &Path, threads: Option<usize>) -> Node {
     let poses = dir.join("node_poses.txt");
     let opts = NodeOptions {
         settings,
-        params: NodeParams::default(),
+        params,
         domain,
         poses: Some(poses.clone()),
     };
