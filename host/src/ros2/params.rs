@@ -220,10 +220,22 @@ fn apply(values: &Mapping, settings: &mut Settings, params: &mut NodeParams) -> 
                 &mut s,
                 &Value::Mapping(Mapping::from_iter([(k.clone(), v.clone())])),
             );
-        } else {
+        } else if p.get(name).is_some() {
             merge(
                 &mut p,
                 &Value::Mapping(Mapping::from_iter([(k.clone(), v.clone())])),
+            );
+        } else {
+            let node: Vec<&str> = p
+                .as_mapping()
+                .map(|m| m.keys().filter_map(Value::as_str).collect())
+                .unwrap_or_default();
+            let odometry: Vec<&str> = FLAT.iter().map(|(n, _, _)| *n).collect();
+            bail!(
+                "unknown parameter `{name}` (node: {}; odometry: {}; groups: {})",
+                node.join(", "),
+                odometry.join(", "),
+                SECTIONS.join(", ")
             );
         }
     }
@@ -304,7 +316,10 @@ other_node:
             )
         };
         let e = err("kiss_odom:\n  ros__parameters:\n    max_rnage: 3.0\n");
-        assert!(e.contains("max_rnage"), "{e}");
+        assert!(
+            e.contains("unknown parameter `max_rnage`") && e.contains("max_range"),
+            "{e}"
+        );
         let e = err("kiss_odom:\n  ros__parameters:\n    data:\n      max_rnage: 3.0\n");
         assert!(e.contains("max_rnage"), "{e}");
         let e = err("kiss_icp_node:\n  ros__parameters:\n    max_range: 3.0\n");
