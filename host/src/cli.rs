@@ -26,6 +26,9 @@ pub enum Command {
     Crosscheck(crate::crosscheck::CrosscheckArgs),
     /// Time kiss-odom against the reference on preloaded frames.
     Bench(crate::bench::BenchArgs),
+    /// ROS 2 node over DDS: PointCloud2 in, odometry and /tf out (or --play a recording).
+    #[cfg(feature = "ros2")]
+    Ros2(crate::ros2::Ros2Args),
 }
 
 /// Parses `args` (program name first), runs the command and returns the exit status. Errors are
@@ -52,6 +55,8 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
         Command::Simulate(a) => crate::simulate::execute(&a),
         Command::Crosscheck(a) => crate::crosscheck::execute(&a, err),
         Command::Bench(a) => crate::bench::execute(&a, err),
+        #[cfg(feature = "ros2")]
+        Command::Ros2(a) => crate::ros2::execute(&a, err),
     };
     match result {
         Ok(code) => code,

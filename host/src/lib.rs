@@ -9,6 +9,8 @@ pub mod exec;
 pub mod io;
 pub mod metrics;
 pub mod plot;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod run;
 pub mod settings;
 pub mod simulate;

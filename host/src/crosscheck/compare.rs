@@ -178,14 +178,16 @@ pub type HeapMap = LocalMap<f64, Exact, Vec<u64>>;
 /// An empty map with the voxel size, range and points per voxel of `cfg` and room for `points`
 /// points in any arrangement (one voxel per point at worst).
 pub fn heap_map(cfg: &Config<f64>, points: usize) -> Result<HeapMap, kiss_odom_core::ConfigError> {
+    // A voxel per point and a block per voxel: the worst arrangement.
     let n = points.max(1);
-    let words = vec![0u64; HeapMap::words(n, n)];
+    let slots = n * kiss_odom_core::stages::BLOCK;
+    let words = vec![0u64; HeapMap::words(n, slots)];
     LocalMap::new(
         cfg.voxel_size,
         cfg.max_range,
         cfg.max_points_per_voxel,
         n,
-        n,
+        slots,
         words,
     )
 }
