@@ -322,6 +322,7 @@ fn settings_for(args: &BenchArgs) -> Result<Settings> {
         s.capacities = match p {
             Preset::Full => Capacities::FULL_SCALE,
             Preset::Small => Capacities::SMALL,
+            Preset::Tiny => Capacities::TINY,
         }
         .into();
     }

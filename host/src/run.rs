@@ -81,6 +81,9 @@ pub enum Preset {
     Full,
     /// `Capacities::SMALL` (microcontroller budget).
     Small,
+    /// `Capacities::TINY` (16-beam sensor in 512 KiB); also sets the parameters it was sized
+    /// for (`Config::tiny`: max range 50 m, voxel 2 m, 10 points a voxel) unless given.
+    Tiny,
 }
 
 /// A half-open range of frame indices.
@@ -226,6 +229,12 @@ pub fn settings_for(args: &RunArgs) -> Result<Settings> {
         Some(p) => Settings::load(p)?,
         None => Settings::default(),
     };
+    if args.capacities == Some(Preset::Tiny) {
+        let t = kiss_odom_core::Config::<f64>::tiny();
+        s.data.max_range = t.max_range;
+        s.mapping.voxel_size = Some(t.voxel_size);
+        s.mapping.max_points_per_voxel = t.max_points_per_voxel;
+    }
     if let Some(r) = args.max_range {
         s.data.max_range = r;
     }
@@ -251,6 +260,7 @@ pub fn settings_for(args: &RunArgs) -> Result<Settings> {
         s.capacities = match p {
             Preset::Full => Capacities::FULL_SCALE,
             Preset::Small => Capacities::SMALL,
+            Preset::Tiny => Capacities::TINY,
         }
         .into();
     }
