@@ -151,14 +151,18 @@ pub struct Capacities {
 }
 
 impl Capacities {
-    /// Full scale, KITTI-like (HDL-64E or OS1-64/128 at `r_max` 100 m, 1 m voxels): margins of
-    /// about 2x over the high-water marks measured on kitti-mini and 500-frame simulated runs.
+    /// Full scale, KITTI-like (HDL-64E or OS1-64/128 at `r_max` 100 m, 1 m voxels). Margins
+    /// over the largest high-water marks of kitti-mini and generated 500-1000-frame urban and
+    /// fast drives (BENCHMARKS.md): scan 2.1x (127,109, KITTI 05; an OS1-128 sweep fits),
+    /// merge 2.4x (20,417, KITTI 01), source 2.6x (4,760, KITTI 01), map voxels 1.57x (18,318,
+    /// urban-1000) and map point slots 1.48x (155,444, fast-500), the map sized so that with
+    /// quantized points it stays under a third of the reference's.
     pub const FULL_SCALE: Self = Self {
         scan_points: 262_144,
         merge_points: 49_152,
         source_points: 12_288,
-        map_voxels: 36_864,
-        map_points: 262_144,
+        map_voxels: 28_672,
+        map_points: 229_376,
     };
 
     /// Microcontroller scale (a few MiB): `r_max` about 50 m, 1 m voxels, f32 and quantised
