@@ -146,7 +146,17 @@ fn main() {
         keep = sel.keep_every,
         n = frames.len(),
     );
-    std::fs::write(out.join("frames.rs"), rs).unwrap();
+    std::fs::write(out.join("frames.rs"), rs + &budget_line()).unwrap();
+}
+
+/// `KISS_EMBED_BUDGET` (optional): ICP's work budget per frame (`Config::work_budget`).
+fn budget_line() -> String {
+    println!("cargo:rerun-if-env-changed=KISS_EMBED_BUDGET");
+    let budget = env::var("KISS_EMBED_BUDGET").ok().filter(|v| !v.is_empty()).map(|v| {
+        v.parse::<u64>()
+            .unwrap_or_else(|_| panic!("KISS_EMBED_BUDGET={v} is not a number"))
+    });
+    format!("/// ICP's work budget per frame (`KISS_EMBED_BUDGET`).\npub const BUDGET: Option<u64> = {budget:?};\n")
 }
 
 /// Linker setup for the bare-metal targets; the host twin links as usual.
@@ -241,5 +251,5 @@ fn tiny(out: &std::path::Path) {
          /// Where each frame sits in `frames.bin` and `stamps.bin`, in points.\n\
          pub const FRAMES: [FrameInfo; {n}] = [\n{ranges}];\n"
     );
-    std::fs::write(out.join("frames.rs"), rs).unwrap();
+    std::fs::write(out.join("frames.rs"), rs + &budget_line()).unwrap();
 }

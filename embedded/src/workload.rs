@@ -100,12 +100,17 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 /// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
 /// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels).
 pub fn config() -> Config<Scalar> {
-    if cfg!(feature = "tiny") {
-        return Config::tiny();
-    }
+    let base = if cfg!(feature = "tiny") {
+        Config::tiny()
+    } else {
+        Config {
+            voxel_size: frames::VOXEL_SIZE as Scalar,
+            ..Config::new(frames::MAX_RANGE as Scalar)
+        }
+    };
     Config {
-        voxel_size: frames::VOXEL_SIZE as Scalar,
-        ..Config::new(frames::MAX_RANGE as Scalar)
+        work_budget: frames::BUDGET,
+        ..base
     }
 }
 
@@ -127,7 +132,7 @@ pub const EXIT_CONFIG_ERROR: i32 = 3;
 pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: &str) -> i32 {
     let cfg = config();
     out!(
-        "config scalar={} codec={} caps={} max_range={:e} voxel_size={:e} sequence={} first={} frames={} keep_every={}",
+        "config scalar={} codec={} caps={} max_range={:e} voxel_size={:e} sequence={} first={} frames={} keep_every={} budget={}",
         SCALAR_NAME,
         CODEC_NAME,
         CAPS_NAME,
@@ -136,7 +141,8 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
         frames::SEQUENCE,
         frames::FIRST,
         frames::FRAMES.len(),
-        frames::KEEP_EVERY
+        frames::KEEP_EVERY,
+        frames::BUDGET.unwrap_or(0)
     );
     let mut odom = match Odometry::<Scalar, Codec, _>::new(cfg, CAPS, state) {
         Ok(o) => o,
