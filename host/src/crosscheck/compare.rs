@@ -2,7 +2,7 @@
 //! position by position, point sets by their exact bits, and maps (whose points each side
 //! computes with its own rounding) by nearest matching.
 
-use kiss_odom_core::stages::LocalMap;
+use kiss_odom_core::stages::{LocalMap, BLOCK};
 use kiss_odom_core::{Config, Exact};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion};
 use std::collections::{HashMap, HashSet};
@@ -176,16 +176,18 @@ pub fn slope(v: &[f64]) -> f64 {
 pub type HeapMap = LocalMap<f64, Exact, Vec<u64>>;
 
 /// An empty map with the voxel size, range and points per voxel of `cfg` and room for `points`
-/// points in any arrangement (one voxel per point at worst).
+/// points in any arrangement: one voxel per point at worst, each then taking a whole block of
+/// [`BLOCK`] point slots.
 pub fn heap_map(cfg: &Config<f64>, points: usize) -> Result<HeapMap, kiss_odom_core::ConfigError> {
     let n = points.max(1);
-    let words = vec![0u64; HeapMap::words(n, n)];
+    let slots = n * BLOCK;
+    let words = vec![0u64; HeapMap::words(n, slots)];
     LocalMap::new(
         cfg.voxel_size,
         cfg.max_range,
         cfg.max_points_per_voxel,
         n,
-        n,
+        slots,
         words,
     )
 }
@@ -212,6 +214,15 @@ mod tests {
         let (t, r) = pose_difference(&a, &b);
         assert!((t - 0.5).abs() < 1e-15);
         assert!((r - 1e-9).abs() < 1e-15, "{r}");
+    }
+
+    #[test]
+    fn a_heap_map_holds_its_points_one_voxel_each() {
+        let cfg = Config::<f64>::new(100.0);
+        let points: Vec<[f64; 3]> = (0..50).map(|i| [3.0 * i as f64, 1.0, 0.5]).collect();
+        let mut map = heap_map(&cfg, points.len()).unwrap();
+        map.add_points(points.iter().map(|p| kiss_odom_core::Point::from(*p)));
+        assert_eq!((map.voxels(), map.points()), (50, 50));
     }
 
     #[test]
