@@ -67,13 +67,13 @@ pub struct PipelineArgs {
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Maximum range r_max (m) [default: 100].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_range: Option<f64>,
     /// Minimum range (m) [default: 0].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub min_range: Option<f64>,
     /// Map voxel size v (m) [default: max_range / 100].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub voxel_size: Option<f64>,
     /// Deskew scans that carry per-point timestamps [default].
     #[arg(long, overrides_with = "no_deskew")]

@@ -108,12 +108,12 @@ fn parse_motion(text: &str) -> Result<Isometry3<f64>> {
 
 /// Runs `kiss-odom crosscheck`: prints the table to stdout, breaches to `err`; 1 on a breach.
 pub fn execute(args: &CrosscheckArgs, err: &mut dyn Write) -> Result<i32> {
+    if let Some(path) = &args.json {
+        crate::output::remove_stale_file(path)?;
+    }
     let settings = settings_of(args)?;
     if let Some(w) = settings.threads_warning() {
         writeln!(err, "warning: {w}")?;
-    }
-    if let Some(path) = &args.json {
-        crate::output::remove_file_if_present(path)?;
     }
     if !args.dataset.exists() {
         bail!("{}: no such file or folder", args.dataset.display());

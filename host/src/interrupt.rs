@@ -9,7 +9,7 @@
 //! the same status, for when a step does not return.
 //!
 //! In-process callers (the tests, bindings) do not install the handlers, and the flag then
-//! never rises.
+//! rises only through [`raise`].
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -45,6 +45,15 @@ pub fn install() -> std::io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// Asks the commands to stop as if `signal` had arrived: for callers that catch the signal
+/// themselves (bindings whose host language owns the handlers) and for tests. It stays
+/// raised for the rest of the process.
+pub fn raise(signal: i32) {
+    let f = flags();
+    f.signal.store(signal as usize, Ordering::Relaxed);
+    f.raised.store(true, Ordering::Relaxed);
 }
 
 /// The signal that asked the process to stop, if one did.

@@ -96,6 +96,12 @@ pub fn remove_stale(dir: &Path, names: &[&str]) -> Result<()> {
     Ok(())
 }
 
+/// Removes the single output `path` (a `--json` file) and its temporaries, as
+/// [`remove_stale`] does for a folder of outputs.
+pub fn remove_stale_file(path: &Path) -> Result<()> {
+    remove_stale(parent_of(path), &[&file_name(path)?])
+}
+
 /// Removes `path` if it is a file (or a link); anything else there is left alone.
 pub fn remove_file_if_present(path: &Path) -> Result<()> {
     match std::fs::symlink_metadata(path) {

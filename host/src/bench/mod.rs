@@ -236,15 +236,15 @@ pub fn execute(args: &BenchArgs, err: &mut dyn Write) -> Result<i32> {
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
     }
+    if let Some(path) = &args.json {
+        crate::output::remove_stale_file(path)?;
+    }
     let settings = args.common.settings(Some(1))?;
     if !args.no_reference {
         crate::args::check_reference_compatible(&settings)?;
     }
     if let Some(w) = settings.threads_warning() {
         writeln!(err, "warning: {w}")?;
-    }
-    if let Some(path) = &args.json {
-        crate::output::remove_file_if_present(path)?;
     }
     let threads = settings.threads();
     let frames = load(args, err)?;

@@ -80,6 +80,8 @@ impl Record {
 
 /// Runs `kiss-odom run`.
 pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
+    // Whatever happens next, no output of an earlier run stays to be taken for this one's.
+    crate::output::remove_stale(&args.out, &OUTPUTS)?;
     let settings = args.common.settings(None)?;
     let mut dataset = io::open(
         &args.path,
@@ -88,7 +90,6 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
     )?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create output folder", args.out.display()))?;
-    crate::output::remove_stale(&args.out, &OUTPUTS)?;
     let mut driver = Driver::new(&settings)?;
     let mut record = Record {
         rows: Vec::new(),
