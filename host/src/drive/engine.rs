@@ -88,6 +88,8 @@ pub(super) trait Engine: Send {
     fn reset(&mut self);
     /// The latest pose.
     fn pose(&self) -> Isometry3<f64>;
+    /// The next frame's prediction: the latest pose moved by the latest motion.
+    fn prediction(&self) -> Isometry3<f64>;
     /// The threshold's current sigma.
     fn sigma(&self) -> f64;
     /// High-water marks since start.
@@ -272,6 +274,9 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     }
     fn pose(&self) -> Isometry3<f64> {
         widen(self.odom.pose())
+    }
+    fn prediction(&self) -> Isometry3<f64> {
+        widen(&(self.odom.last_pose() * self.odom.last_delta()))
     }
     fn sigma(&self) -> f64 {
         self.odom.sigma().wide()

@@ -279,6 +279,10 @@ impl Driver {
     pub fn pose(&self) -> Isometry3<f64> {
         self.engine.pose()
     }
+    /// The constant-velocity prediction of the next frame's pose (Eq. (1)): where ICP starts.
+    pub fn prediction(&self) -> Isometry3<f64> {
+        self.engine.prediction()
+    }
     /// Worker threads of the correspondence search.
     pub fn threads(&self) -> usize {
         self.threads

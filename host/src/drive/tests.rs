@@ -161,8 +161,14 @@ fn empty_and_unreadable_frames_advance_on_the_constant_velocity_model() {
         points: vec![[500.0, 0.0, 0.0], [f64::NAN, 0.0, 0.0]],
         ..Frame::default()
     };
+    let predicted = d.prediction();
     let empty = d.register(&far).unwrap();
     assert_eq!(empty.step, Step::Empty);
+    let (t, r) = crate::pose::pose_difference(&empty.pose, &predicted);
+    assert!(
+        t < 1e-12 && r < 1e-12,
+        "{t:e} m {r:e} rad off the prediction"
+    );
     let skipped = d.skip(
         FrameMeta {
             index: 4,
