@@ -22,13 +22,20 @@ pub fn widen<T: Real>(p: &Isometry3<T>) -> Isometry3<f64> {
     )
 }
 
-/// A 4x4 rigid matrix as a pose, converting the rotation block to a quaternion without
-/// re-projection (as Sophus does when the reference receives a matrix). Input that may not be
-/// a rotation must be checked first (`io::poses::isometry_from_matrix` projects and checks).
+/// A rotation matrix as a quaternion, without re-projection (as Sophus does when the
+/// reference receives a matrix). Input that may not be a rotation must be checked first
+/// (`io::poses::isometry_from_matrix` projects and checks).
+pub fn quaternion_of(r: &Matrix3<f64>) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*r))
+}
+
+/// A 4x4 rigid matrix as a pose, the rotation block through [`quaternion_of`].
 pub fn pose_of(m: &Matrix4<f64>) -> Isometry3<f64> {
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
-    Isometry3::from_parts(Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]), q)
+    Isometry3::from_parts(
+        Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
+        quaternion_of(&r),
+    )
 }
 
 /// [`pose_of`] of 16 row-major numbers; `None` for any other count.

@@ -215,3 +215,9 @@ fn a_huge_voxel_is_flagged_degenerate_after_the_first_frame() {
         );
     }
 }
+
+#[test]
+fn a_driver_can_move_to_another_thread() {
+    fn send<T: Send>() {}
+    send::<Driver>(); // bindings and batch runs hold one per worker
+}
