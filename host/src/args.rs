@@ -75,7 +75,7 @@ pub struct PipelineArgs {
     /// Map voxel size v (m) [default: max_range / 100].
     #[arg(long, allow_negative_numbers = true)]
     pub voxel_size: Option<f64>,
-    /// Deskew scans that carry per-point timestamps [default].
+    /// Deskew scans that carry per-point timestamps (the default).
     #[arg(long, overrides_with = "no_deskew")]
     pub deskew: bool,
     /// Do not deskew.

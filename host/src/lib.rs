@@ -4,7 +4,7 @@
 //!
 //! Frames reach the core one way, through [`drive::Driver`]: readers ([`io`]) yield frames,
 //! the driver registers them and answers each with an outcome, and the commands ([`run`],
-//! [`bench`], [`crosscheck`]) decide what to write, time or compare. [`args`] holds the
+//! [`mod@bench`], [`crosscheck`]) decide what to write, time or compare. [`args`] holds the
 //! options the commands share, [`output`] how every file is written.
 
 pub mod args;

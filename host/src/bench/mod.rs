@@ -2,7 +2,7 @@
 //! 1.3.0 on the same frames.
 //!
 //! The frames are read into memory first (file reading is never timed) and handed to the
-//! reference byte for byte ([`reference`]); then both implementations run over all of them,
+//! reference byte for byte ([`mod@reference`]); then both implementations run over all of them,
 //! each run a fresh pipeline, taking turns (ours, ref, ref, ours, ...) so that machine drift
 //! hits both alike. Only the per-frame odometry call is timed. The headline is the ratio
 //! ours/reference of frames per second, paired run by run; absolute times are context, since
