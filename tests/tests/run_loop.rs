@@ -67,6 +67,7 @@ fn a_run_without_poses_reports_its_own_reason_and_writes_no_pose_files() {
     assert!(line.contains("cut short"), "{line}");
     assert!(!line.contains("plot"), "{line}");
     assert_no_pose_outputs(&r);
+    assert!(!r.out.join("frames.csv").exists(), "no empty frames.csv");
     let s = r.summary();
     assert_eq!(
         (s["frames"].as_u64(), s["interrupted"].as_bool()),

@@ -195,8 +195,9 @@ pub(super) struct Run<'a> {
 }
 
 impl Run<'_> {
-    /// Writes the outputs: `config.toml`, `frames.csv` and `summary.json` always, the pose
-    /// files and the plot when a frame was registered.
+    /// Writes the outputs: `config.toml` and `summary.json` always, `frames.csv` when a frame
+    /// was read (its header comes with the first row), the pose files and the plot when a
+    /// frame was registered.
     pub fn write(&self) -> Result<Summary> {
         let dir = &self.args.out;
         let o = self.record;
@@ -204,14 +205,16 @@ impl Run<'_> {
             &dir.join("config.toml"),
             self.settings.to_toml()?.as_bytes(),
         )?;
-        crate::output::write_with(&dir.join("frames.csv"), |w| {
-            let mut csv = csv::Writer::from_writer(w);
-            for row in &o.rows {
-                csv.serialize((row, FlagColumns(row.status)))?;
-            }
-            csv.flush()?;
-            Ok(())
-        })?;
+        if !o.rows.is_empty() {
+            crate::output::write_with(&dir.join("frames.csv"), |w| {
+                let mut csv = csv::Writer::from_writer(w);
+                for row in &o.rows {
+                    csv.serialize((row, FlagColumns(row.status)))?;
+                }
+                csv.flush()?;
+                Ok(())
+            })?;
+        }
         let gt = self.ground_truth();
         let mut metrics = None;
         if o.registered() > 0 {
