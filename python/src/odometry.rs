@@ -7,7 +7,7 @@
 
 use crate::convert::{self, narrow, Numpy};
 use kiss_odom::exec::Pool;
-use kiss_odom::run::widen;
+use kiss_odom::pose::widen;
 use kiss_odom::settings::{Scalar, Settings, Storage};
 use kiss_odom_core::{
     Exact, Flag, FrameError, FrameReport, Odometry as Core, PointCodec, Quantized, Real,
