@@ -36,8 +36,8 @@ import csv, json, sys
 o, b, r = sys.argv[1:]
 s = json.load(open(f"{o}/summary.json")); m = s.get("metrics") or {}
 rows = list(csv.DictReader(open(f"{o}/frames.csv")))
-stopped = sum(1 for x in rows if "budget" in x["status"])
-worst = max(int(x["work"]) for x in rows)
+stopped = sum(1 for x in rows if x.get("budget") == "1")
+worst = max(int(x["work"] or 0) for x in rows)
 t = m.get("kitti_t_err_pct"); t = f"{t:.3f}" if t is not None else "-"
 print(f"| {b} | {r} | {m.get('ate_m', float('nan')):.4f} | {t} | {stopped} of {len(rows)} | {worst} |")
 P

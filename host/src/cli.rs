@@ -78,3 +78,53 @@ pub fn one_line(e: &anyhow::Error) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn help(command: &str) -> String {
+        let mut cli = Cli::command();
+        let sub = cli.find_subcommand_mut(command).unwrap();
+        sub.render_long_help().to_string()
+    }
+
+    #[test]
+    fn the_command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn each_command_states_its_own_defaults_for_the_shared_options() {
+        let (run, bench, cross) = (help("run"), help("bench"), help("crosscheck"));
+        for h in [&run, &bench, &cross] {
+            for flag in [
+                "--frames",
+                "--max-range",
+                "--voxel-size",
+                "--scalar",
+                "--threads",
+            ] {
+                assert!(h.contains(flag), "{flag} missing:\n{h}");
+            }
+        }
+        assert!(
+            run.contains("[default: the settings' (all cores)]"),
+            "{run}"
+        );
+        for h in [&bench, &cross] {
+            assert!(
+                h.contains("[default: 1: the reference is nondeterministic"),
+                "{h}"
+            );
+            assert!(h.contains("The reference gets only the range"), "{h}");
+            assert!(h.contains("--python") && h.contains("--driver"), "{h}");
+        }
+        assert!(cross.contains("f32 also runs the f64 build"), "{cross}");
+        assert!(
+            !run.contains("The reference gets") && !run.contains("--python"),
+            "{run}"
+        );
+    }
+}

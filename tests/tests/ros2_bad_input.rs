@@ -44,7 +44,7 @@ struct Rig {
 fn rig(k: u16) -> Rig {
     let lock = serial();
     let dir = tempfile::tempdir().unwrap();
-    let node = start_node(domain(k), dir.path(), None);
+    let node = start_node(domain(k), dir.path(), Duration::ZERO);
     let dp = dds::participant(domain(k)).unwrap();
     let w: Writer<PointCloud2> =
         dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();

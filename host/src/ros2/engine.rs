@@ -1,18 +1,12 @@
-//! The node's only contact with the core: build the odometry from [`Settings`], register a
-//! cloud, read the pose, the last motion and the local map.
-//!
-//! It stands in for the shared host frame driver (`host/src/drive.rs`, not written yet): when
-//! that lands, [`with_engine`] and [`Engine::register`] become calls into it and nothing else in
-//! `ros2/` changes. Until then this is the fourth copy of the scalar/storage dispatch that
-//! `run`, `bench` and `crosscheck` each have.
+//! The node's contact with the core: the host's frame driver ([`crate::drive::Driver`]), built
+//! from [`Settings`] so that an empty cloud leaves the state untouched ([`OnEmpty::Ignore`]),
+//! and what the node publishes from one registered cloud.
 
-use crate::exec::Pool;
-use crate::run::widen;
-use crate::settings::{Scalar, Settings, Storage};
-use anyhow::{anyhow, Result};
-use kiss_odom_core::{Exact, FrameError, Odometry, PointCodec, Quantized, Real, Status};
+use crate::drive::{Driver, FrameMeta, OnEmpty, Step};
+use crate::settings::Settings;
+use anyhow::Result;
+use kiss_odom_core::Status;
 use nalgebra::Isometry3;
-use std::time::Instant;
 
 /// What registering one cloud gave.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,96 +28,46 @@ pub struct Registered {
     pub core_s: f64,
 }
 
-/// A running odometry, whatever scalar and map storage it was built with.
-pub trait Engine {
-    /// Registers one cloud (sensor frame) with optional per-point times. `None` when no point
-    /// was usable: the state is untouched, as if the cloud had never arrived.
-    fn register(&mut self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Option<Registered>;
-    /// Every local-map point, in the odometry frame.
-    fn local_map(&self) -> Vec<[f64; 3]>;
-    /// Bytes of the core's state (fixed at start).
-    fn state_bytes(&self) -> usize;
+/// The node's driver for `settings`.
+pub fn driver(settings: &Settings) -> Result<Driver> {
+    let mut d = Driver::new(settings)?;
+    d.on_empty(OnEmpty::Ignore);
+    Ok(d)
 }
 
-struct Core<T: Real, P: PointCodec<T>> {
-    odom: Odometry<T, P, Box<[u64]>>,
-    pool: Pool,
-    scratch: Vec<[T; 3]>,
-}
-
-impl<T: Real, P: PointCodec<T>> Engine for Core<T, P> {
-    fn register(&mut self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Option<Registered> {
-        self.scratch.clear();
-        self.scratch.extend(
-            points
-                .iter()
-                .map(|p| [T::of(p[0]), T::of(p[1]), T::of(p[2])]),
-        );
-        let t0 = Instant::now();
-        let result = self
-            .odom
-            .register_frame_with(&self.pool, &self.scratch, stamps);
-        let core_s = t0.elapsed().as_secs_f64();
-        match result {
-            Ok(r) => Some(Registered {
-                pose: widen(self.odom.pose()),
-                delta: widen(self.odom.last_delta()),
-                status: r.status,
-                input_points: r.input_points,
-                non_finite: r.dropped.non_finite,
-                deskewed: r.deskewed,
-                core_s,
-            }),
-            Err(FrameError::EmptyScan | FrameError::Storage) => None,
-        }
-    }
-
-    fn local_map(&self) -> Vec<[f64; 3]> {
-        let mut out = Vec::with_capacity(self.odom.map().points());
-        self.odom
-            .map()
-            .for_each_point(|_, p| out.push([p.x.wide(), p.y.wide(), p.z.wide()]));
-        out
-    }
-
-    fn state_bytes(&self) -> usize {
-        self.odom.state_bytes()
-    }
-}
-
-/// Builds the odometry `settings` describe and lends it to `f`; the core's storage lives for
-/// the duration of the call.
-pub fn with_engine<R>(
-    settings: &Settings,
-    f: impl FnOnce(&mut dyn Engine) -> Result<R>,
-) -> Result<R> {
-    match (settings.runtime.scalar, settings.runtime.map_storage) {
-        (Scalar::F64, Storage::Exact) => build::<f64, Exact, R>(settings, f),
-        (Scalar::F64, Storage::Quantized) => build::<f64, Quantized, R>(settings, f),
-        (Scalar::F32, Storage::Exact) => build::<f32, Exact, R>(settings, f),
-        (Scalar::F32, Storage::Quantized) => build::<f32, Quantized, R>(settings, f),
-    }
-}
-
-fn build<T: Real, P: PointCodec<T>, R>(
-    settings: &Settings,
-    f: impl FnOnce(&mut dyn Engine) -> Result<R>,
-) -> Result<R> {
-    let config = settings.core_config::<T>()?;
-    let caps = settings.capacities()?;
-    let odom = Odometry::<T, P, _>::boxed(config, caps)
-        .map_err(|e| anyhow!("cannot build the odometry: {e}"))?;
-    let mut core = Core {
-        odom,
-        pool: Pool::new(settings.threads())?,
-        scratch: Vec::new(),
+/// Registers cloud number `n` (sensor frame) with optional per-point times. `None` when no
+/// point was usable: the state is untouched, as if the cloud had never arrived.
+pub fn register(
+    driver: &mut Driver,
+    n: u64,
+    topic: &str,
+    points: &[[f64; 3]],
+    stamps: Option<&[f64]>,
+) -> Result<Option<Registered>> {
+    let meta = FrameMeta {
+        index: n as usize,
+        source: topic.to_string(),
+        time: None,
     };
-    f(&mut core)
+    let outcome = driver.register_points(meta, points, stamps)?;
+    let Step::Registered(r) = &outcome.step else {
+        return Ok(None);
+    };
+    Ok(Some(Registered {
+        pose: outcome.pose,
+        delta: driver.last_delta(),
+        status: r.status,
+        input_points: r.input_points,
+        non_finite: r.dropped.non_finite,
+        deskewed: r.deskewed,
+        core_s: outcome.latency.as_secs_f64(),
+    }))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::{Scalar, Storage};
 
     /// An irregular room seen from a sensor at `x`: scattered points on five planes (a
     /// regular grid would let ICP slide by one grid step).
@@ -161,12 +105,14 @@ mod tests {
             s.runtime.map_storage = storage;
             s.runtime.threads = 1;
             s.capacities = kiss_odom_core::Capacities::SMALL.into();
-            with_engine(&s, |e| {
-                let first = e.register(&room(0.0), None).unwrap();
+            let mut d = driver(&s).unwrap();
+            let mut reg = |pts: &[[f64; 3]]| register(&mut d, 0, "/points", pts, None).unwrap();
+            {
+                let first = reg(&room(0.0)).unwrap();
                 assert_eq!(first.pose, Isometry3::identity());
-                assert!(e.register(&[], None).is_none());
-                assert!(e.register(&[[f64::NAN; 3]], None).is_none());
-                let second = e.register(&room(0.3), None).unwrap();
+                assert!(reg(&[]).is_none());
+                assert!(reg(&[[f64::NAN; 3]]).is_none());
+                let second = reg(&room(0.3)).unwrap();
                 assert!(
                     (second.pose.translation.x - 0.3).abs() < 0.05,
                     "{scalar:?}: x = {}",
@@ -177,11 +123,9 @@ mod tests {
                     .vector
                     .norm();
                 assert!(gap < 1e-12, "delta from the identity is the pose ({gap})");
-                assert!(!e.local_map().is_empty());
-                assert!(e.state_bytes() > 0);
-                Ok(())
-            })
-            .unwrap();
+            }
+            assert!(!d.map_points().is_empty());
+            assert!(d.state_bytes() > 0);
         }
     }
 }

@@ -5,7 +5,7 @@
 //! `sensor_msgs/PointCloud2` from the wire ([`node`]) and publishes odometry, `/tf` and the
 //! local map; [`play`] goes the other way, from the file readers to the wire. [`msg`] holds the
 //! ROS 2 message layouts, [`dds`] the participant, QoS and discovery, [`params`] the parameter
-//! file, and [`engine`] the one adapter to the core.
+//! file, and [`engine`] the adapter to the host frame driver.
 
 pub mod dds;
 pub mod engine;
@@ -61,6 +61,10 @@ pub struct Ros2Args {
     /// Also write each published pose as a KITTI line to this file.
     #[arg(long)]
     pub poses: Option<PathBuf>,
+    /// Take a cloud at most once per this many seconds (0: as they come); the others are
+    /// latest-only.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub min_period: f64,
     /// Publish this recording's clouds instead of running the node (.mcap, .bag or a folder).
     #[arg(long)]
     pub play: Option<PathBuf>,
@@ -82,6 +86,15 @@ pub struct Ros2Args {
     /// --play: seconds to wait for a subscriber before the first cloud.
     #[arg(long, default_value_t = 10.0)]
     pub wait: f64,
+}
+
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && (0.0..=3600.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a number of seconds between 0 and 3600"
+        )),
+    }
 }
 
 /// Set by Ctrl-C or SIGTERM; every loop of the node and the player looks at it.
@@ -116,6 +129,7 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
         params,
         domain,
         poses: args.poses.clone(),
+        min_period: std::time::Duration::from_secs_f64(args.min_period),
     };
     node::run(&opts, &STOP, &mut out, err)?;
     Ok(0)

@@ -21,16 +21,17 @@
 //! (the odometry frame is the base frame at the first cloud), as kiss-icp's wrapper does.
 
 use super::dds::{self, Writer};
-use super::engine::{with_engine, Engine, Registered};
+use super::engine::{self, Registered};
 use super::msg::{
     Covariance, Header, Odometry, PointCloud2, Pose, PoseWithCovariance, RawCloud, TfMessage, Time,
     TransformStamped, Twist, TwistWithCovariance, Vector3, ODOMETRY_TYPE, POINTCLOUD2_TYPE,
     TFMESSAGE_TYPE,
 };
 use super::params::NodeParams;
+use crate::drive::Driver;
 use crate::io::{mcap::parse_cdr, pointcloud2::decode, poses::format_kitti};
-use crate::run::percentile;
 use crate::settings::Settings;
+use crate::stats::percentile;
 use anyhow::{anyhow, Context, Result};
 use nalgebra::Isometry3;
 use rustdds::mio1::{Events, Interest, Poll, Token};
@@ -54,6 +55,10 @@ pub struct NodeOptions {
     pub domain: u16,
     /// Also write each published pose as a KITTI line to this file.
     pub poses: Option<PathBuf>,
+    /// The worker takes a cloud at most once per this period (zero: as soon as one waits).
+    /// Clouds arriving meanwhile are latest-only, as during a slow registration: a way to
+    /// bound the node's share of the computer, and to make drops certain in tests.
+    pub min_period: Duration,
 }
 
 /// Counters printed at exit.
@@ -201,8 +206,20 @@ pub fn run(
     let mailbox = Mailbox::default();
     let mut summary = std::thread::scope(|scope| -> Result<Summary> {
         let receiver = scope.spawn(|| receive(&mut reader, &mailbox, stop));
-        let result = with_engine(&opts.settings, |engine| {
-            work(engine, &mailbox, &publish, poses.as_mut(), stop, out, err)
+        let result = engine::driver(&opts.settings).and_then(|mut driver| {
+            let cycle = Cycle {
+                min_period: opts.min_period,
+                stop,
+            };
+            work(
+                &mut driver,
+                &mailbox,
+                &publish,
+                poses.as_mut(),
+                cycle,
+                out,
+                err,
+            )
         });
         // The worker may have failed; make sure the receiver ends either way.
         stop.store(true, Ordering::SeqCst);
@@ -235,24 +252,38 @@ fn receive(reader: &mut dds::CloudReader, mailbox: &Mailbox, stop: &AtomicBool) 
     Ok(())
 }
 
+/// How often the worker may take a cloud, and the flag that ends it.
+struct Cycle<'a> {
+    min_period: Duration,
+    stop: &'a AtomicBool,
+}
+
 /// The worker loop: one registered or skipped cloud per mailbox delivery.
 fn work(
-    engine: &mut dyn Engine,
+    driver: &mut Driver,
     mailbox: &Mailbox,
     publish: &Publishers,
     mut poses: Option<&mut std::fs::File>,
-    stop: &AtomicBool,
+    cycle: Cycle,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<Summary> {
+    let stop = cycle.stop;
+    let mut next_take = Instant::now();
     let mut s = Summary::default();
     let mut previous: Option<f64> = None;
     let mut last_map: Option<Instant> = None;
     let mut n = 0u64;
     while !stop.load(Ordering::SeqCst) {
+        let wait = next_take.saturating_duration_since(Instant::now());
+        if !wait.is_zero() {
+            std::thread::sleep(wait.min(TICK));
+            continue;
+        }
         let Some((raw, arrived)) = mailbox.take() else {
             continue;
         };
+        next_take = Instant::now() + cycle.min_period;
         n += 1;
         let mut warn = |msg: String, s: &mut Summary| {
             s.warnings += 1;
@@ -284,7 +315,8 @@ fn work(
         let registered = if decoded.points.is_empty() {
             None
         } else {
-            engine.register(&decoded.points, decoded.stamps.as_deref())
+            let topic = &publish.params.points_topic;
+            engine::register(driver, n, topic, &decoded.points, decoded.stamps.as_deref())?
         };
         let Some(r) = registered else {
             s.empty += 1;
@@ -316,7 +348,7 @@ fn work(
         let map_due =
             last_map.is_none_or(|m| m.elapsed().as_secs_f64() >= publish.params.local_map_period);
         if publish.map.is_some() && map_due {
-            publish.local_map(engine, stamp)?;
+            publish.local_map(driver, stamp)?;
             last_map = Some(Instant::now());
         }
         if let Some(f) = poses.as_deref_mut() {
@@ -451,11 +483,11 @@ impl Publishers {
         Ok(pose)
     }
 
-    fn local_map(&self, engine: &dyn Engine, stamp: Time) -> Result<()> {
+    fn local_map(&self, driver: &Driver, stamp: Time) -> Result<()> {
         let Some(w) = &self.map else {
             return Ok(());
         };
-        let mut points = engine.local_map();
+        let mut points = driver.map_points();
         if let Some(e) = &self.extrinsic {
             for q in &mut points {
                 let v = e * nalgebra::Point3::from(*q);

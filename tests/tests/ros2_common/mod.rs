@@ -70,27 +70,20 @@ pub struct Stopped {
 
 /// Starts a node on `domain` with default parameters, `threads` core threads (None = all), and
 /// its poses written to `dir/poses.txt`.
-pub fn start_node(domain: u16, dir: &Path, threads: Option<usize>) -> Node {
-    start_node_with(domain, dir, threads, NodeParams::default())
+pub fn start_node(domain: u16, dir: &Path, min_period: Duration) -> Node {
+    start_node_with(domain, dir, min_period, NodeParams::default())
 }
 
 /// [`start_node`] with other node parameters.
-pub fn start_node_with(
-    domain: u16,
-    dir: &Path,
-    threads: Option<usize>,
-    params: NodeParams,
-) -> Node {
-    let mut settings = Settings::default();
-    if let Some(t) = threads {
-        settings.runtime.threads = t;
-    }
+pub fn start_node_with(domain: u16, dir: &Path, min_period: Duration, params: NodeParams) -> Node {
+    let settings = Settings::default();
     let poses = dir.join("node_poses.txt");
     let opts = NodeOptions {
         settings,
         params,
         domain,
         poses: Some(poses.clone()),
+        min_period,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
