@@ -404,11 +404,11 @@ mod tests {
         assert_eq!(&header[..3], ["index", "source", "outcome"]);
         let first = lines.next().unwrap();
         assert!(
-            first.starts_with("7,\"a,b.bin\",skipped,,,,2.0,"),
+            first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,"),
             "{first}"
         );
-        assert!(first.ends_with(",false,0,0,0,0,0,0,0,0"), "{first}");
+        assert!(first.ends_with(",false,0,0,0,0,0,0,0,0,0"), "{first}");
         let second = lines.next().unwrap();
-        assert!(second.ends_with(",0,0,0,0,1,0,0,1"), "{second}");
+        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0"), "{second}");
     }
 }
