@@ -29,8 +29,8 @@ pub const SYSTEM_LEN: usize = 29;
 /// allowance per step).
 const KEPT: usize = 5;
 /// Scalars in one chunk: its points (`3 * CHUNK`), what each kept (`KEPT * CHUNK`), its partial
-/// system, its point count.
-const CHUNK_LEN: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN + 1;
+/// system, its point count and where it stands in the current iteration (see `Parts::progress`).
+const CHUNK_LEN: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN + 4;
 
 /// One chunk of ICP work: up to [`CHUNK`] source points, moved in place from iteration to
 /// iteration, the neighbour each found and how long that holds, and the partial normal
@@ -74,6 +74,9 @@ pub struct IcpParams<T> {
     pub convergence_criterion: T,
     /// Iteration cap.
     pub max_iterations: u32,
+    /// Work units (see [`crate::local_map::Nearest::work`]) the whole registration may spend;
+    /// `None`: no limit. ICP stops with its last complete iterate before exceeding it.
+    pub budget: Option<u64>,
 }
 
 /// Outcome of one registration.
@@ -92,6 +95,11 @@ pub struct Alignment<T: Real> {
     pub singular: bool,
     /// RMS point-to-point residual of the last iteration's correspondences (m).
     pub rms: T,
+    /// Work spent, in units (see [`IcpParams::budget`]).
+    pub work: u64,
+    /// Whether the budget stopped ICP (an iteration that could not finish within it was
+    /// abandoned; the pose is the iterate before it).
+    pub budget_spent: bool,
 }
 
 /// Index of `(r, c)`, `r <= c`, in the packed upper triangle of a 6x6 matrix.
@@ -157,6 +165,9 @@ struct Parts<'c, T> {
     kept: &'c mut [T; KEPT * CHUNK],
     system: &'c mut [T; SYSTEM_LEN],
     count: &'c mut T,
+    /// In the current iteration: work units spent in the last round, points answered, and 1 if
+    /// the next point was already moved when its share ran out (0 otherwise).
+    progress: &'c mut [T; 3],
 }
 
 #[inline]
@@ -164,11 +175,13 @@ fn parts<T: Real>(c: &mut Chunk<T>) -> Option<Parts<'_, T>> {
     let (points, rest) = c.split_first_chunk_mut::<{ 3 * CHUNK }>()?;
     let (kept, rest) = rest.split_first_chunk_mut::<{ KEPT * CHUNK }>()?;
     let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
+    let (count, rest) = rest.split_first_mut()?;
     Some(Parts {
         points,
         kept,
         system,
-        count: rest.first_mut()?,
+        count,
+        progress: rest.first_chunk_mut::<3>()?,
     })
 }
 
@@ -209,11 +222,10 @@ pub fn moved_points<T: Real>(work: &mut [u64], n: usize) -> impl Iterator<Item =
     })
 }
 
-/// Moves the points of one chunk by `(rot, tr)` and sums their weighted correspondences into
-/// the chunk's system. A point that moved little since its last search re-ranks the candidates
-/// that search kept, which gives the search's answer exactly as long as no other point could
-/// have overtaken them and the point is still in its voxel (see [`MapView::nearest`]);
-/// otherwise it searches again.
+/// One round of a chunk's work in an iteration: moves its points by `(rot, tr)` and sums their
+/// weighted correspondences into the chunk's system, from where the last round stopped, within
+/// `share` work units. A point whose search would pass the share is left for the next round
+/// (it was moved; its kept answer is dropped, so it searches from scratch then).
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn correspond<T: Real, P: PointCodec<T>>(
@@ -224,32 +236,62 @@ fn correspond<T: Real, P: PointCodec<T>>(
     max_distance: T,
     kernel: T,
     slack: T,
+    share: u64,
 ) {
     let k2 = kernel * kernel;
     let acc = c.system;
-    *acc = [T::zero(); SYSTEM_LEN];
     let n = c.count.wide() as usize;
-    for (p, kept) in c
+    let start = c.progress[1].wide() as usize;
+    let pending = c.progress[2] > T::zero();
+    if start >= n {
+        c.progress[0] = T::zero();
+        return;
+    }
+    if start == 0 && !pending {
+        *acc = [T::zero(); SYSTEM_LEN];
+    }
+    let mut used = 0u64;
+    let points = c
         .points
         .chunks_exact_mut(3)
-        .zip(c.kept.chunks_exact_mut(KEPT))
-        .take(n)
-    {
-        let before = Vector3::new(p[0], p[1], p[2]);
-        let moved = rot * before + tr;
+        .zip(c.kept.chunks_exact_mut(KEPT));
+    for (k, (p, kept)) in points.enumerate().take(n).skip(start) {
+        let at = Vector3::new(p[0], p[1], p[2]);
+        let (before, moved) = if k == start && pending {
+            (at, at)
+        } else {
+            (at, rot * at + tr)
+        };
         p.copy_from_slice(&[moved.x, moved.y, moved.z]);
-        let (found, _) = closest_from(kept, map, &before, &moved, max_distance, slack);
-        if let Some((q, d2)) = found {
-            let r = moved - q.coords;
-            let denom = kernel + d2;
-            accumulate(acc, &moved, &r, k2 / (denom * denom));
+        let cap = u32::try_from(share - used).unwrap_or(u32::MAX);
+        match closest_from(kept, map, &before, &moved, max_distance, slack, cap) {
+            Ok((found, work)) => {
+                used += u64::from(work);
+                if let Some((q, d2)) = found {
+                    let r = moved - q.coords;
+                    let denom = kernel + d2;
+                    accumulate(acc, &moved, &r, k2 / (denom * denom));
+                }
+            }
+            Err(spent) => {
+                used += u64::from(spent);
+                kept[3] = -T::one();
+                *c.progress = [T::of(used as f64), T::of(k as f64), T::one()];
+                return;
+            }
         }
     }
+    *c.progress = [T::of(used as f64), T::of(n as f64), T::zero()];
 }
+
+/// A correspondence query's answer: the map point and its squared distance, if any within the
+/// threshold.
+type Answer<T> = Option<(Point<T>, T)>;
 
 /// The closest map point to `moved` within `max_distance`, exactly as
 /// [`MapView::closest_neighbor`] gives it, for a point that moved from `before` and whose last
-/// search left `kept` (updated here); and whether it came from `kept` (no search).
+/// search left `kept` (updated here); and the work it took (1 when it came from `kept`). If that
+/// would take more than `cap` work units: `Err` with the units spent before giving up.
 #[inline]
 fn closest_from<T: Real, P: PointCodec<T>>(
     kept: &mut [T],
@@ -258,17 +300,21 @@ fn closest_from<T: Real, P: PointCodec<T>>(
     moved: &Vector3<T>,
     max_distance: T,
     slack: T,
-) -> (Option<(Point<T>, T)>, bool) {
+    cap: u32,
+) -> Result<(Answer<T>, u32), u32> {
+    if cap < 1 {
+        return Err(0);
+    }
     let s = Point::from(*moved);
     let step = (moved - before).norm() + slack;
     kept[3] -= step;
     kept[4] -= step;
     match rerank(kept, &s, map.voxel_size(), max_distance, slack) {
-        Some(found) => (found, true),
+        Some(found) => Ok((found, 1)),
         None => {
-            let nearest = map.nearest(&s, max_distance);
+            let nearest = map.nearest(&s, max_distance, cap)?;
             keep(kept, &nearest, slack);
-            (nearest.within(max_distance), false)
+            Ok((nearest.within(max_distance), nearest.work))
         }
     }
 }
@@ -322,6 +368,61 @@ fn rerank<T: Real>(
     beats_all.then_some(Some((q, d2)).filter(|_| sqrt_lt(d2, max_distance)))
 }
 
+/// Runs one iteration's correspondence search over every chunk, in rounds: each round shares the
+/// budget left equally among the chunks not yet done (a fixed rule, so the iteration ends the
+/// same way whichever thread runs which chunk), until all are done (`true`) or a round makes no
+/// progress (`false`). Without a budget one round does it all.
+#[allow(clippy::too_many_arguments)]
+fn run_iteration<T: Real, P: PointCodec<T>, E: Executor>(
+    exec: &E,
+    chunks: &mut [Chunk<T>],
+    map: &MapView<'_, T, P>,
+    (rot, tr): &(Matrix3<T>, Vector3<T>),
+    max_distance: T,
+    kernel: T,
+    slack: T,
+    params: &IcpParams<T>,
+    out: &mut Alignment<T>,
+) -> bool {
+    for c in chunks.iter_mut() {
+        if let Some(c) = parts(c) {
+            *c.progress = [T::zero(); 3];
+        }
+    }
+    loop {
+        let open = chunks
+            .iter_mut()
+            .filter_map(parts)
+            .filter(|c| c.progress[1] < *c.count)
+            .count() as u64;
+        if open == 0 {
+            return true;
+        }
+        let left = params
+            .budget
+            .map_or(u64::MAX, |b| b.saturating_sub(out.work));
+        let share = left / open;
+        if share == 0 {
+            return false;
+        }
+        exec.for_each(chunks, &|c| {
+            if let Some(c) = parts(c) {
+                correspond(c, map, rot, tr, max_distance, kernel, slack, share);
+            }
+        });
+        let spent: u64 = chunks
+            .iter_mut()
+            .filter_map(parts)
+            .map(|c| c.progress[0].wide() as u64)
+            .sum();
+        out.work += spent;
+        // Nothing spent, nothing answered (each answer costs a unit): the round is stuck.
+        if spent == 0 {
+            return false;
+        }
+    }
+}
+
 /// Registers `source` (sensor frame) to `map` starting from `initial_guess` (the reference's
 /// `AlignPointsToMap`), moving a copy of the points in `work`, which needs
 /// [`work_words`]`::<T>(source.len())` words (points beyond what fits are not used).
@@ -343,6 +444,8 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
         converged: true,
         singular: false,
         rms: T::zero(),
+        work: 0,
+        budget_spent: false,
     };
     if map.is_empty() {
         return out;
@@ -365,12 +468,22 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     let mut t_icp = Pose::identity();
     out.converged = false;
     for _ in 0..params.max_iterations {
-        let (rot, tr) = step;
-        exec.for_each(chunks, &|c| {
-            if let Some(c) = parts(c) {
-                correspond(c, map, &rot, &tr, max_distance, kernel, slack);
-            }
-        });
+        if !run_iteration(
+            exec,
+            chunks,
+            map,
+            &step,
+            max_distance,
+            kernel,
+            slack,
+            params,
+            &mut out,
+        ) {
+            // An iteration that cannot finish within the budget is abandoned: the pose stays the
+            // last complete iterate.
+            out.budget_spent = true;
+            break;
+        }
         let mut sum = [T::zero(); SYSTEM_LEN];
         for c in chunks.iter_mut() {
             if let Some(c) = parts(c) {

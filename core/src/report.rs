@@ -29,11 +29,14 @@ pub enum Flag {
     ScanTruncated = 1 << 6,
     /// A downsampled cloud or the map was full and dropped content (see [`Dropped`]).
     Capacity = 1 << 7,
+    /// ICP stopped at the frame's work budget (`Config::work_budget`) with its last complete
+    /// iterate.
+    Budget = 1 << 8,
 }
 
 impl Flag {
     /// Every flag, in bit order.
-    pub const ALL: [Flag; 8] = [
+    pub const ALL: [Flag; 9] = [
         Flag::TimestampsIgnored,
         Flag::IterationCap,
         Flag::NoCorrespondences,
@@ -42,6 +45,7 @@ impl Flag {
         Flag::InvalidPoints,
         Flag::ScanTruncated,
         Flag::Capacity,
+        Flag::Budget,
     ];
 
     /// The flag's name in reports and `frames.csv` (`snake_case`).
@@ -55,6 +59,7 @@ impl Flag {
             Flag::InvalidPoints => "invalid_points",
             Flag::ScanTruncated => "scan_truncated",
             Flag::Capacity => "capacity",
+            Flag::Budget => "budget",
         }
     }
 
@@ -216,8 +221,12 @@ pub struct FrameReport<T: Real> {
     pub pose: Pose<T>,
     /// Ok, or how the frame was degraded.
     pub status: Status,
-    /// Gauss-Newton iterations.
+    /// Gauss-Newton iterations completed.
     pub iterations: u32,
+    /// ICP's work in units: one per correspondence query, plus one per voxel looked up and per
+    /// map point compared when the query searched the map (a query that kept its last answer
+    /// costs one). Never above `Config::work_budget`.
+    pub work: u64,
     /// Correspondences in the last iteration.
     pub correspondences: u32,
     /// `sigma_t` used for this frame (threshold `3 sigma`, kernel `kernel_scale * sigma`).
@@ -279,6 +288,6 @@ mod tests {
         }
         assert_eq!(Flag::from_name("fine"), None);
         let all: Status = Flag::ALL.into_iter().collect();
-        assert_eq!(all.bits(), 0xff);
+        assert_eq!(all.bits(), 0x1ff);
     }
 }

@@ -162,6 +162,7 @@ fn stages(c: &mut Criterion) {
     let one = IcpParams {
         convergence_criterion: 0.0,
         max_iterations: 1,
+        budget: None,
     };
     g.bench_function("icp_iteration", |b| {
         b.iter(|| {
@@ -180,6 +181,7 @@ fn stages(c: &mut Criterion) {
     let full = IcpParams {
         convergence_criterion: cfg.convergence_criterion,
         max_iterations: cfg.max_iterations,
+        budget: None,
     };
     let guess = rec.guesses[UNDER_TEST];
     g.bench_function("registration", |b| {

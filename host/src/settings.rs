@@ -77,6 +77,9 @@ pub struct Registration {
     pub max_correspondence_factor: f64,
     /// Observability ratio below which a frame is flagged degenerate.
     pub degeneracy_ratio: f64,
+    /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
+    /// none, the reference's behaviour.
+    pub work_budget: Option<u64>,
 }
 
 /// Capacities of the core's buffers (see `kiss_odom_core::Capacities`).
@@ -164,6 +167,7 @@ impl Default for Registration {
             kernel_scale: 1.0,
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
+            work_budget: None,
         }
     }
 }
@@ -233,6 +237,7 @@ impl Settings {
         c.kernel_scale = T::of(self.registration.kernel_scale);
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
+        c.work_budget = self.registration.work_budget;
         if let Err(e) = c.validate() {
             bail!("invalid configuration: {e}");
         }
@@ -341,7 +346,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 18] {
+fn fields() -> [Field; 19] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -356,6 +361,7 @@ fn fields() -> [Field; 18] {
         field!(registration.kernel_scale, false),
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
+        field!(registration.work_budget, false),
         field!(capacities.scan_points, true),
         field!(capacities.merge_points, true),
         field!(capacities.source_points, true),

@@ -50,6 +50,9 @@ pub struct Nearest<T: Real> {
     /// Distance from the query to the nearest face of its voxel: moving less keeps the same 27
     /// voxels; moving more brings in voxels at least `v + face` away from where it was.
     pub face: T,
+    /// Work done, in units: 1 for the query, 1 per voxel looked up, 1 per point compared. At most
+    /// `1 + 27 (1 + N_max)`.
+    pub work: u32,
 }
 
 impl<T: Real> Nearest<T> {
@@ -66,21 +69,29 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
     /// below `max_distance`, with its squared distance.
     #[inline]
     pub fn closest_neighbor(&self, query: &Point<T>, max_distance: T) -> Option<(Point<T>, T)> {
-        self.nearest(query, max_distance).within(max_distance)
+        self.nearest(query, max_distance, u32::MAX)
+            .ok()
+            .and_then(|n| n.within(max_distance))
     }
 
     /// The search behind [`Self::closest_neighbor`], reporting bounds on the other points too
     /// (points beyond `max_distance` may be left out, which `within` and `others` account for).
+    /// If it would take more than `cap` work units ([`Nearest::work`]) it gives up before the
+    /// unit that would pass `cap`: `Err` with the units spent.
     #[inline]
-    pub fn nearest(&self, query: &Point<T>, max_distance: T) -> Nearest<T> {
+    pub fn nearest(&self, query: &Point<T>, max_distance: T, cap: u32) -> Result<Nearest<T>, u32> {
         let inf = T::max_value().unwrap_or(T::one() / T::zero());
         let mut out = Nearest {
             best: None,
             others: inf,
             face: inf,
+            work: 1,
         };
+        if cap < 1 {
+            return Err(0);
+        }
         if self.st.voxels == 0 {
-            return out;
+            return Ok(out);
         }
         let v = self.st.voxel_size;
         let key = point_to_voxel(query, v);
@@ -135,9 +146,18 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
                         key[1].wrapping_add(iy as i32 - 1),
                         key[2].wrapping_add(iz as i32 - 1),
                     ];
+                    if out.work >= cap {
+                        return Err(out.work);
+                    }
+                    out.work += 1;
                     let Some(slot) = self.find(&nk) else {
                         continue;
                     };
+                    let points = u32::from(self.counts[slot]);
+                    if points > cap - out.work {
+                        return Err(out.work);
+                    }
+                    out.work += points;
                     let rank = u16::from(REFERENCE_RANK[ix * 9 + iy * 3 + iz]) << 8;
                     let mut i = 0;
                     self.for_each_in(slot, |p| {
@@ -162,7 +182,7 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
         }
         out.best = best.map(|(p, _)| (p, best2));
         out.others = other2.sqrt_l();
-        out
+        Ok(out)
     }
 }
 

@@ -150,6 +150,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             pose: self.last_pose,
             status: status(&self.config, scan, &dropped, f),
             iterations: f.icp.iterations,
+            work: f.icp.work,
             correspondences: f.icp.correspondences,
             sigma: f.sigma,
             rms: f.icp.rms,
@@ -223,6 +224,7 @@ fn icp_params<T: Real>(cfg: &Config<T>, prediction: &Pose<T>) -> IcpParams<T> {
     IcpParams {
         convergence_criterion: cfg.convergence_criterion.max(T::of(8.0) * T::EPS * reach),
         max_iterations: cfg.max_iterations,
+        budget: cfg.work_budget,
     }
 }
 
@@ -242,7 +244,11 @@ fn finite_or<T: Real>(pose: Pose<T>, prediction: Pose<T>) -> (Pose<T>, bool) {
 fn status<T: Real>(cfg: &Config<T>, scan: &Received, dropped: &Dropped, f: &Facts<T>) -> Status {
     let mut status = Status::OK;
     status.set(Flag::TimestampsIgnored, scan.stamp_problem.is_some());
-    status.set(Flag::IterationCap, !f.icp.converged && !f.icp.singular);
+    status.set(
+        Flag::IterationCap,
+        !f.icp.converged && !f.icp.singular && !f.icp.budget_spent,
+    );
+    status.set(Flag::Budget, f.icp.budget_spent);
     status.set(
         Flag::NoCorrespondences,
         !f.first_frame && f.icp.correspondences == 0,

@@ -42,6 +42,7 @@ fn params() -> IcpParams<f64> {
     IcpParams {
         convergence_criterion: 1e-4,
         max_iterations: 500,
+        budget: None,
     }
 }
 
@@ -110,6 +111,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
     let capped = IcpParams {
         convergence_criterion: 1e-4,
         max_iterations: 2,
+        budget: None,
     };
     let a = align_points_to_map(
         &Sequential,
@@ -224,7 +226,9 @@ fn walk_with_steps<T: Real, P: PointCodec<T>>(
                     at + (d.normalize() * size).map(T::of)
                 }
             };
-            let (got, from_kept) = closest_from(&mut kept, map, &at, &next, max_distance, slack);
+            let (got, work) =
+                closest_from(&mut kept, map, &at, &next, max_distance, slack, u32::MAX).unwrap();
+            let from_kept = work == 1;
             let want = map.closest_neighbor(&Point::from(next), max_distance);
             assert_eq!(got, want, "walker {w} step {k}: {next:?}");
             steps += 1;

@@ -50,6 +50,8 @@ pub struct FrameRow {
     pub latency_ms: Option<f64>,
     /// ICP iterations.
     pub iterations: Option<u32>,
+    /// ICP's work units (`FrameReport::work`).
+    pub work: Option<u64>,
     /// Correspondences in the last iteration.
     pub correspondences: Option<u32>,
     /// The threshold's sigma the frame was registered with.
@@ -102,6 +104,7 @@ impl FrameRow {
             latency_ms: (kind != RowKind::Skipped)
                 .then(|| (o.latency.as_secs_f64() * 1e6).round() / 1e3),
             iterations: r.map(|r| r.iterations),
+            work: r.map(|r| r.work),
             correspondences: r.map(|r| r.correspondences),
             sigma: o.sigma,
             map_voxels: r.map(|r| r.map_voxels),
@@ -401,11 +404,11 @@ mod tests {
         assert_eq!(&header[..3], ["index", "source", "outcome"]);
         let first = lines.next().unwrap();
         assert!(
-            first.starts_with("7,\"a,b.bin\",skipped,,,,2.0,"),
+            first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,"),
             "{first}"
         );
-        assert!(first.ends_with(",false,0,0,0,0,0,0,0,0"), "{first}");
+        assert!(first.ends_with(",false,0,0,0,0,0,0,0,0,0"), "{first}");
         let second = lines.next().unwrap();
-        assert!(second.ends_with(",0,0,0,0,1,0,0,1"), "{second}");
+        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0"), "{second}");
     }
 }
