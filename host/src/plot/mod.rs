@@ -1,6 +1,6 @@
-//! Trajectory plots: the figure a run leaves next to its poses and metrics, a top view (x
-//! against y, same metres per pixel on both axes) of the estimate and, when known, the ground
-//! truth.
+//! Plots a run leaves next to its poses and metrics: `trajectory.png`, a top view (x against
+//! y, same metres per pixel on both axes) of the estimate and, when known, the ground truth;
+//! and `diagnostics.png` ([`diagnostics_png`]), the error, latency and iterations per frame.
 //!
 //! Text needs a TrueType font, which `plotters` (built with `ab_glyph`) does not ship: one is
 //! loaded from the usual system places the first time a plot is drawn. Without one the plot is
@@ -13,6 +13,10 @@ use plotters::style::{register_font, FontStyle};
 use std::ops::Range;
 use std::path::Path;
 use std::sync::OnceLock;
+
+mod diagnostics;
+
+pub use diagnostics::{diagnostics_png, FramePoint, MARKED};
 
 /// Colour of the estimated trajectory.
 pub const ESTIMATE_COLOR: RGBColor = RGBColor(31, 119, 180);
@@ -236,7 +240,7 @@ mod tests {
     }
 
     /// Width, height and RGB pixels of a PNG, after checking its signature and IHDR by hand.
-    fn decode(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
+    pub(super) fn decode(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
         let bytes = std::fs::read(path).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
         assert_eq!(&bytes[12..16], b"IHDR");
@@ -254,7 +258,7 @@ mod tests {
         (w, h, pixels)
     }
 
-    fn count(pixels: &[[u8; 3]], c: RGBColor) -> usize {
+    pub(super) fn count(pixels: &[[u8; 3]], c: RGBColor) -> usize {
         pixels.iter().filter(|p| **p == [c.0, c.1, c.2]).count()
     }
 
