@@ -185,7 +185,7 @@ mod tests {
                 } else {
                     Status::OK
                 },
-                error: with_error.then(|| (i as f64 * 1.5, 0.01 * i as f64)),
+                error: with_error.then_some((i as f64 * 1.5, 0.01 * i as f64)),
             })
             .collect()
     }
