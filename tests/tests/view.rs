@@ -148,10 +148,17 @@ fn diagnostics_png_beside_the_trajectory_has_its_panels_drawn() {
     assert!(inked > 20_000, "non-white pixels: {inked}");
 }
 
-#[test]
-fn runs_with_and_without_rerun_give_byte_equal_poses() {
+/// Whether this build has the `rerun` feature; prints SKIP if not.
+fn rerun_built() -> bool {
     if !cfg!(feature = "rerun") {
         println!("SKIP: built without the `rerun` feature (cargo test --features rerun)");
+    }
+    cfg!(feature = "rerun")
+}
+
+#[test]
+fn runs_with_and_without_rerun_give_byte_equal_poses() {
+    if !rerun_built() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -169,8 +176,7 @@ fn runs_with_and_without_rerun_give_byte_equal_poses() {
 
 #[test]
 fn rerun_recording_reads_back_with_rerun_sdk() {
-    if !cfg!(feature = "rerun") {
-        println!("SKIP: built without the `rerun` feature (cargo test --features rerun)");
+    if !rerun_built() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

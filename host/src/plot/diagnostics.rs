@@ -3,7 +3,7 @@
 //! latency and ICP iterations per frame; frames the core flagged degenerate or stopped at the
 //! iteration cap are marked in every panel.
 
-use super::{font_available, ESTIMATE_COLOR};
+use super::{font_available, titled, ESTIMATE_COLOR};
 use anyhow::{anyhow, bail, Context, Result};
 use kiss_odom_core::{Flag, Status};
 use plotters::coord::Shift;
@@ -78,14 +78,7 @@ fn render(path: &Path, frames: &[FramePoint], title: &str, text: bool) -> Result
 
     let err = |e: &dyn std::fmt::Display| anyhow!("{e}");
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let area = if text {
-        root.margin(10, 0, 0, 0)
-            .titled(title, ("sans-serif", 28))
-            .map_err(|e| err(&e))?
-    } else {
-        root.clone()
-    };
+    let area = titled(&root, title, text)?;
     let mut panels: Vec<(Series, &str, &str)> = Vec::new();
     if !error.is_empty() {
         panels.push((error, "distance travelled [m]", "position error [m]"));

@@ -8,6 +8,7 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use nalgebra::Isometry3;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use std::ops::Range;
@@ -118,6 +119,22 @@ fn equal_scale_ranges(points: &[(f64, f64)], px_w: u32, px_h: u32) -> (Range<f64
     (cx - hw..cx + hw, cy - hh..cy + hh)
 }
 
+/// Fills `root` white and, when `text`, draws `title` on top: the area left for the chart.
+fn titled<'a>(
+    root: &DrawingArea<BitMapBackend<'a>, Shift>,
+    title: &str,
+    text: bool,
+) -> Result<DrawingArea<BitMapBackend<'a>, Shift>> {
+    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    if !text {
+        return Ok(root.clone());
+    }
+    // The top margin keeps the title's ascenders inside the image.
+    root.margin(10, 0, 0, 0)
+        .titled(title, ("sans-serif", 28))
+        .map_err(|e| anyhow!("{e}"))
+}
+
 fn render(
     path: &Path,
     estimate: &[Isometry3<f64>],
@@ -137,15 +154,7 @@ fn render(
 
     let draw_err = |e: &dyn std::fmt::Display| anyhow!("{e}");
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| draw_err(&e))?;
-    let area = if text {
-        // The top margin keeps the title's ascenders inside the image.
-        root.margin(10, 0, 0, 0)
-            .titled(title, ("sans-serif", 28))
-            .map_err(|e| draw_err(&e))?
-    } else {
-        root.clone()
-    };
+    let area = titled(&root, title, text)?;
     let (x_lab, y_lab) = if text {
         (X_LABEL_AREA, Y_LABEL_AREA)
     } else {
