@@ -1,6 +1,6 @@
 //! What `run` writes: `poses_kitti.txt`, `poses_tum.txt`, `frames.csv` (one typed row per
-//! frame, one 0/1 column per status flag), `summary.json`, `config.toml` and `trajectory.png`,
-//! each atomically (see [`crate::output`]).
+//! frame, one 0/1 column per status flag), `summary.json`, `config.toml`, `trajectory.png` and
+//! `diagnostics.png`, each atomically (see [`crate::output`]).
 
 use super::{Record, RunArgs};
 use crate::drive::{Driver, Outcome, Step};
@@ -15,13 +15,14 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// Every file `run` writes, the stale ones removed before it starts.
-pub const OUTPUTS: [&str; 6] = [
+pub const OUTPUTS: [&str; 7] = [
     "poses_kitti.txt",
     "poses_tum.txt",
     "frames.csv",
     "summary.json",
     "config.toml",
     "trajectory.png",
+    "diagnostics.png",
 ];
 
 /// What became of a frame, as `frames.csv` names it.
@@ -218,7 +219,8 @@ impl Run<'_> {
                 Ok(())
             })?;
         }
-        let (metrics, gt) = self.metrics()?;
+        let rows = self.info.ground_truth_for(&o.indices);
+        let metrics = self.metrics(&rows)?;
         if o.registered() > 0 {
             self.write_poses()?;
             let title = self
@@ -226,8 +228,15 @@ impl Run<'_> {
                 .path
                 .file_name()
                 .map_or_else(|| "trajectory".into(), |n| n.to_string_lossy().into_owned());
+            let gt = self.in_estimate_frame(&rows);
+            let paired: Vec<Isometry3<f64>> = gt.iter().flatten().copied().collect();
+            let paired = (!paired.is_empty()).then_some(paired.as_slice());
             crate::output::write_via_path(&dir.join("trajectory.png"), |p| {
-                crate::plot::trajectory_png(p, &o.poses, gt.as_deref(), &title)
+                crate::plot::trajectory_png(p, &o.poses, paired, &title)
+            })?;
+            let diagnostics = self.diagnostics(&gt);
+            crate::output::write_via_path(&dir.join("diagnostics.png"), |p| {
+                crate::plot::diagnostics_png(p, &diagnostics, &title)
             })?;
         }
         let summary = self.summary(metrics.filter(|_| o.registered() > 0));
@@ -263,15 +272,23 @@ impl Run<'_> {
         self.record.times.iter().all(Option::is_some)
     }
 
-    /// Metrics over the frames that have ground truth (the dataset layer warned about the
-    /// others), both trajectories re-based to the first of them; and the ground truth of those
-    /// frames in the estimate's frame, for the plot.
-    fn metrics(&self) -> Result<Scored> {
+    /// The frames' ground truth `rows` (re-based to the first frame that has one) in the
+    /// estimate's frame: placed at the estimate of that frame, for the plots.
+    fn in_estimate_frame(&self, rows: &[Option<Isometry3<f64>>]) -> Vec<Option<Isometry3<f64>>> {
+        let origin = rows
+            .iter()
+            .position(Option::is_some)
+            .map_or_else(Isometry3::identity, |first| self.record.poses[first]);
+        rows.iter().map(|g| g.map(|g| origin * g)).collect()
+    }
+
+    /// Metrics over the frames that have ground truth `rows` (the dataset layer warned about
+    /// the others), both trajectories re-based to the first of them.
+    fn metrics(&self, rows: &[Option<Isometry3<f64>>]) -> Result<Option<serde_json::Value>> {
         let o = self.record;
-        let rows = self.info.ground_truth_for(&o.indices);
         let paired: Vec<usize> = (0..rows.len()).filter(|&k| rows[k].is_some()).collect();
         let Some(&first) = paired.first() else {
-            return Ok((None, None));
+            return Ok(None);
         };
         let gt: Vec<Isometry3<f64>> = rows.iter().flatten().copied().collect();
         let base = o.poses[first].inverse();
@@ -285,9 +302,37 @@ impl Run<'_> {
                 }
             })
             .collect();
-        let metrics = serde_json::to_value(crate::metrics::evaluate(&est, &gt)?)?;
-        let origin = o.poses[first];
-        Ok((Some(metrics), Some(gt.iter().map(|p| origin * p).collect())))
+        Ok(Some(serde_json::to_value(crate::metrics::evaluate(
+            &est, &gt,
+        )?)?))
+    }
+
+    /// The frames of `diagnostics.png`: latency, iterations and flags from the rows, the
+    /// position error against ground truth `gt` over the distance it travelled.
+    fn diagnostics(&self, gt: &[Option<Isometry3<f64>>]) -> Vec<crate::plot::FramePoint> {
+        let o = self.record;
+        let mut travelled = 0.0;
+        let mut last: Option<nalgebra::Vector3<f64>> = None;
+        o.rows
+            .iter()
+            .zip(&o.poses)
+            .zip(gt)
+            .map(|((row, pose), g)| {
+                let error = g.map(|g| {
+                    let at = g.translation.vector;
+                    travelled += last.map_or(0.0, |l| (at - l).norm());
+                    last = Some(at);
+                    (travelled, (pose.translation.vector - at).norm())
+                });
+                crate::plot::FramePoint {
+                    index: row.index,
+                    latency_ms: row.latency_ms,
+                    iterations: row.iterations,
+                    status: row.status,
+                    error,
+                }
+            })
+            .collect()
     }
 
     fn summary(&self, metrics: Option<serde_json::Value>) -> Summary {
@@ -366,9 +411,6 @@ pub(super) fn print_summary(s: &Summary) {
         println!("metrics: {}", parts.join(", "));
     }
 }
-
-/// Metrics (JSON) and the ground truth they were computed on, in the estimate's frame.
-type Scored = (Option<serde_json::Value>, Option<Vec<Isometry3<f64>>>);
 
 #[cfg(test)]
 mod tests {
