@@ -176,6 +176,8 @@ mod tests {
                     Status::OK.with(Flag::Degenerate)
                 } else if i == 9 {
                     Status::OK.with(Flag::IterationCap)
+                } else if i == 13 {
+                    Status::OK.with(Flag::Budget)
                 } else {
                     Status::OK
                 },
