@@ -43,6 +43,7 @@ fn params() -> IcpParams<f64> {
         convergence_criterion: 1e-4,
         max_iterations: 500,
         budget: None,
+        hold: None,
     }
 }
 
@@ -112,6 +113,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
         convergence_criterion: 1e-4,
         max_iterations: 2,
         budget: None,
+        hold: None,
     };
     let a = align_points_to_map(
         &Sequential,
