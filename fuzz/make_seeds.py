@@ -189,9 +189,64 @@ def core_frame_seeds():
     put("core_frame", "room-f32-deskew", core_frame_seed(2, 1, 5))
 
 
+def pcap_records(path, count):
+    """The global header and the first `count` records of a classic pcap file."""
+    b = path.read_bytes()
+    at = 24
+    for _ in range(count):
+        at += 16 + int.from_bytes(b[at + 8:at + 12], "little")
+    return b[:at]
+
+
+def udp_payloads(path, port):
+    """UDP payloads to `port` of an Ethernet/IPv4 pcap (no options, no fragments)."""
+    b = path.read_bytes()
+    at, out = 24, []
+    while at + 16 <= len(b):
+        incl = int.from_bytes(b[at + 8:at + 12], "little")
+        f = b[at + 16:at + 16 + incl]
+        if len(f) > 42 and f[12:14] == b"\x08\x00" and int.from_bytes(f[36:38], "big") == port:
+            out.append(f[42:])
+        at += 16 + incl
+    return out
+
+
+def ouster_packet(profile, beams, fid, first):
+    """A lidar packet of the fuzz target's small sensor (4 columns, ranges of 8 m)."""
+    pixel = {0: 12, 1: 12, 2: 16, 3: 4}[profile]
+    cols = b""
+    for m in range(first, first + 4):
+        ts = struct.pack("<Q", 10**9 + m * 10**5)
+        px = b"".join(
+            (struct.pack("<I", 8000) if profile != 3 else struct.pack("<H", 1000))
+            + bytes(pixel - (4 if profile != 3 else 2)) for _ in range(beams))
+        if profile == 0:
+            cols += ts + struct.pack("<HHI", m, fid, 0) + px + b"\xff" * 4
+        else:
+            cols += ts + struct.pack("<HH", m, 1) + px
+    if profile == 0:
+        return cols
+    return struct.pack("<HH", 1, fid) + bytes(28) + cols + bytes(32)
+
+
+def sensor_seeds():
+    data = ROOT.parent / "shared" / "data" / "sensors" / "velodyne"
+    packets = udp_payloads(data / "velodyne_vlp16.pcap", 2368)[:3]
+    put("velodyne_packets", "hdl32e-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in packets))
+    dual = [p[:1204] + bytes([0x39, 0x22]) for p in packets]
+    put("velodyne_packets", "vlp16-dual-cut", bytes([0x05 | 8 << 3]) + b"".join(b"\0\0" + p for p in dual))
+    for profile, name in enumerate(["legacy", "single", "dual", "lb"]):
+        head = bytes([profile | 1 << 2, 0, 63, 10])
+        body = b"".join(bytes([0]) + ouster_packet(profile, 2, fid, first)
+                        for fid in (3, 4) for first in range(0, 64, 4))
+        put("ouster_packets", name, head + body)
+    put("sensor_pcap", "vli16-one-packet", (data / "VLI-16-one-packet.pcap").read_bytes())
+    put("sensor_pcap", "vlp16-5-records", pcap_records(data / "velodyne_vlp16.pcap", 5))
+
+
 def main():
     for make in (bin_seeds, ply_seeds, pcd_seeds, timestamps_seeds, poses_seeds,
-                 pointcloud2_seeds, container_seeds, core_frame_seeds):
+                 pointcloud2_seeds, container_seeds, core_frame_seeds, sensor_seeds):
         make()
     for d in sorted(CORPUS.iterdir()):
         print(f"{d.name}: {len(list(d.iterdir()))} seeds")

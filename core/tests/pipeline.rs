@@ -301,3 +301,36 @@ fn an_unfinished_frame_leaves_the_odometry_untouched() {
         assert_eq!(odom.register_frame(frame, None).unwrap().pose, want[i]);
     }
 }
+
+#[test]
+fn assigned_pose_and_velocity_steer_the_next_prediction_and_clear_map_reseeds() {
+    let s = scans();
+    let caps = caps();
+    let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut odom =
+        Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps, &mut arena[..]).unwrap();
+    for frame in &s[..4] {
+        odom.register_frame(frame, None).unwrap();
+    }
+    let (pose, delta) = (*odom.last_pose(), *odom.last_delta());
+    // Non-finite assignments are refused and change nothing.
+    let mut bad = pose;
+    bad.translation.vector.x = f64::NAN;
+    assert!(!odom.set_last_pose(bad) && !odom.set_last_delta(bad));
+    assert_eq!((*odom.last_pose(), *odom.last_delta()), (pose, delta));
+    // A zero velocity makes the prediction the last pose: with the map cleared, the next scan
+    // has nothing to register against and lands exactly there (kiss-icp's empty-map rule).
+    assert!(odom.set_last_delta(Pose::identity()));
+    odom.clear_map();
+    assert!(odom.map().is_empty());
+    let r = odom.register_frame(&s[4], None).unwrap();
+    println!("pose after clear_map: {:?} (expected {:?})", r.pose, pose);
+    assert_eq!(r.pose.translation, pose.translation);
+    assert!(!odom.map().is_empty());
+    // An assigned pose is the next prediction's base.
+    let moved = Pose::translation(1.0, 2.0, 3.0);
+    assert!(odom.set_last_pose(moved) && odom.set_last_delta(Pose::identity()));
+    odom.clear_map();
+    let r = odom.register_frame(&s[5], None).unwrap();
+    assert_eq!(r.pose.translation, moved.translation);
+}

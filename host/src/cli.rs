@@ -26,6 +26,9 @@ pub enum Command {
     Crosscheck(crate::crosscheck::CrosscheckArgs),
     /// Time kiss-odom against the reference on preloaded frames.
     Bench(crate::bench::BenchArgs),
+    /// ROS 2 node over DDS: PointCloud2 in, odometry and /tf out (or --play a recording).
+    #[cfg(feature = "ros2")]
+    Ros2(crate::ros2::Ros2Args),
 }
 
 /// Parses `args` (program name first), runs the command and returns the exit status. Errors are
@@ -52,6 +55,8 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
         Command::Simulate(a) => crate::simulate::execute(&a),
         Command::Crosscheck(a) => crate::crosscheck::execute(&a, err),
         Command::Bench(a) => crate::bench::execute(&a, err),
+        #[cfg(feature = "ros2")]
+        Command::Ros2(a) => crate::ros2::execute(&a, err),
     };
     match result {
         Ok(code) => code,
@@ -72,4 +77,54 @@ pub fn one_line(e: &anyhow::Error) -> String {
         s.push_str(&cause.to_string().replace('\n', " "));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn help(command: &str) -> String {
+        let mut cli = Cli::command();
+        let sub = cli.find_subcommand_mut(command).unwrap();
+        sub.render_long_help().to_string()
+    }
+
+    #[test]
+    fn the_command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn each_command_states_its_own_defaults_for_the_shared_options() {
+        let (run, bench, cross) = (help("run"), help("bench"), help("crosscheck"));
+        for h in [&run, &bench, &cross] {
+            for flag in [
+                "--frames",
+                "--max-range",
+                "--voxel-size",
+                "--scalar",
+                "--threads",
+            ] {
+                assert!(h.contains(flag), "{flag} missing:\n{h}");
+            }
+        }
+        assert!(
+            run.contains("[default: the settings' (all cores)]"),
+            "{run}"
+        );
+        for h in [&bench, &cross] {
+            assert!(
+                h.contains("[default: 1: the reference is nondeterministic"),
+                "{h}"
+            );
+            assert!(h.contains("The reference gets only the range"), "{h}");
+            assert!(h.contains("--python") && h.contains("--driver"), "{h}");
+        }
+        assert!(cross.contains("f32 also runs the f64 build"), "{cross}");
+        assert!(
+            !run.contains("The reference gets") && !run.contains("--python"),
+            "{run}"
+        );
+    }
 }

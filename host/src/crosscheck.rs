@@ -18,8 +18,8 @@ mod stages;
 
 pub use report::{Outcome, Report, Row, Section, TableStyle};
 
-use crate::io::{self, Format, OpenOptions};
-use crate::run::FrameRange;
+use crate::args::{CommonArgs, FrameRange, ReferenceArgs};
+use crate::io::{self, Format};
 use crate::settings::{Scalar, Settings};
 use anyhow::{bail, Context, Result};
 use nalgebra::Isometry3;
@@ -28,62 +28,46 @@ use std::path::PathBuf;
 
 /// `kiss-odom crosscheck` arguments.
 #[derive(Debug, clap::Args)]
+#[command(
+    mut_arg("config", |a| a.help(crate::args::CONFIG_HELP_WITH_REFERENCE)),
+    mut_arg("threads", |a| a.help(crate::args::THREADS_HELP_WITH_REFERENCE)),
+    mut_arg("scalar", |a| a.help(
+        "Scalar of the end-to-end run [default: f64]; f32 also runs the f64 build and \
+         reports against both (stage checks always use f64)"
+    )),
+    mut_arg("storage", |a| a.help(
+        "Map point storage of the end-to-end run [default: exact] (stage checks always \
+         use exact)"
+    )),
+)]
 pub struct CrosscheckArgs {
     /// A sequence (KITTI `sequences/XX`, generic folder, bag, MCAP: anything `run` reads), or
     /// a folder of `raw_NN.bin` (f32 x y z) + `times_NN.bin` (f32 s) scans for the deskew
-    /// checks.
+    /// checks (then `--frames` picks scans by position).
     pub dataset: PathBuf,
-    /// Frames to use, `A..B` (B excluded), `A..` or `..B` (scans: which scans by position).
-    #[arg(long)]
-    pub frames: Option<FrameRange>,
-    /// Threads for both implementations. The reference is nondeterministic with more than
-    /// one (TBB reductions), so 1 is the default.
-    #[arg(long, default_value_t = 1)]
-    pub threads: usize,
-    /// Scalar of the end-to-end run. f32 also runs the f64 build and reports against both;
-    /// stage checks always use the f64 build (their tolerances are f64 ones).
-    #[arg(long, value_enum, default_value_t = Scalar::F64)]
-    pub scalar: Scalar,
-    /// Input format of a sequence; `auto` as in `run`.
-    #[arg(long, value_enum, default_value_t = Format::Auto)]
-    pub format: Format,
-    /// Bag/MCAP topic.
-    #[arg(long)]
-    pub topic: Option<String>,
-    /// Python with kiss-icp 1.3.0 (default: $KISS_ODOM_PYTHON, else python3).
-    #[arg(long)]
-    pub python: Option<PathBuf>,
-    /// The reference driver (default: tests/reference/driver.py of this repository).
-    #[arg(long)]
-    pub driver: Option<PathBuf>,
     /// Also write every figure (and per-frame differences) as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    /// Run only these checks (default: both; scans have stage checks only).
+    /// Run only these checks (default: both; scans have stage checks only). Stage checks
+    /// always use the f64 build with exact map storage (their tolerances are f64 ones).
     #[arg(long, value_enum)]
     pub only: Option<Only>,
     /// Relative motion for deskewing loose scans: 12 or 16 row-major numbers (default 0.5 m
     /// forward, 0.1 rad yaw, 0.02 pitch, -0.01 roll).
     #[arg(long, allow_hyphen_values = true)]
     pub motion: Option<String>,
-    /// Maximum range r_max (m) for both (default 100).
-    #[arg(long)]
-    pub max_range: Option<f64>,
-    /// Minimum range (m) for both (default 0).
-    #[arg(long)]
-    pub min_range: Option<f64>,
-    /// Map voxel size (m) for both (default max_range / 100).
-    #[arg(long)]
-    pub voxel_size: Option<f64>,
-    /// Do not deskew (both).
-    #[arg(long)]
-    pub no_deskew: bool,
     /// Table style.
     #[arg(long, value_enum, default_value_t = TableStyle::Text)]
     pub table: TableStyle,
     /// No progress messages.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Input, pipeline and core options.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Where the reference is.
+    #[command(flatten, next_help_heading = "Reference")]
+    pub reference: ReferenceArgs,
 }
 
 /// Which checks to run.
@@ -96,19 +80,8 @@ pub enum Only {
 }
 
 fn settings_of(args: &CrosscheckArgs) -> Result<Settings> {
-    let mut s = Settings::default();
-    if let Some(r) = args.max_range {
-        s.data.max_range = r;
-    }
-    if let Some(r) = args.min_range {
-        s.data.min_range = r;
-    }
-    if let Some(v) = args.voxel_size {
-        s.mapping.voxel_size = Some(v);
-    }
-    s.data.deskew = !args.no_deskew;
-    s.runtime.threads = args.threads.max(1);
-    s.core_config::<f64>()?;
+    let s = args.common.settings(Some(1))?;
+    crate::args::check_reference_compatible(&s)?;
     Ok(s)
 }
 
@@ -130,30 +103,32 @@ fn parse_motion(text: &str) -> Result<Isometry3<f64>> {
     {
         bail!("--motion: the rotation is not orthonormal to 1e-10 (give full precision)");
     }
-    Ok(compare::pose_of(&m))
+    Ok(crate::pose::pose_of(&m))
 }
 
 /// Runs `kiss-odom crosscheck`: prints the table to stdout, breaches to `err`; 1 on a breach.
 pub fn execute(args: &CrosscheckArgs, err: &mut dyn Write) -> Result<i32> {
+    if let Some(path) = &args.json {
+        crate::output::remove_stale_file(path)?;
+    }
     let settings = settings_of(args)?;
+    if let Some(w) = settings.threads_warning() {
+        writeln!(err, "warning: {w}")?;
+    }
     if !args.dataset.exists() {
         bail!("{}: no such file or folder", args.dataset.display());
     }
-    let python = driver::python_path(args.python.as_deref());
-    let script = driver::driver_path(args.driver.as_deref())?;
-    let mut drv = driver::Driver::new(python, script.clone())?;
-    let threads = args.threads.max(1);
-    let range = args.frames.unwrap_or(FrameRange {
-        start: 0,
-        end: None,
-    });
+    let script = args.reference.driver()?;
+    let mut drv = driver::Driver::new(args.reference.python(), script.clone())?;
+    let threads = settings.threads();
+    let range = args.common.input.range();
     let mut report = Report::default();
     let mut json = serde_json::json!({
         "dataset": args.dataset.display().to_string(),
         "reference": drv.versions,
         "driver": script.display().to_string(),
         "threads": threads,
-        "scalar": args.scalar,
+        "scalar": settings.runtime.scalar,
         "command": command_of(args),
     });
     report
@@ -188,8 +163,14 @@ pub fn execute(args: &CrosscheckArgs, err: &mut dyn Write) -> Result<i32> {
         );
         progress(args, err, "reference and core stages on the scans")?;
         let crop = (
-            args.min_range.unwrap_or(scans::DEFAULT_CROP.0),
-            args.max_range.unwrap_or(scans::DEFAULT_CROP.1),
+            args.common
+                .pipeline
+                .min_range
+                .unwrap_or(scans::DEFAULT_CROP.0),
+            args.common
+                .pipeline
+                .max_range
+                .unwrap_or(scans::DEFAULT_CROP.1),
         );
         report.sections = scans::scan_stages(&mut drv, &picked, &motion, crop, &settings)?;
         json["motion"] = serde_json::json!(driver::pose_arg(&motion));
@@ -214,8 +195,8 @@ pub fn execute(args: &CrosscheckArgs, err: &mut dyn Write) -> Result<i32> {
     if let Some(path) = &args.json {
         json["sections"] = serde_json::to_value(&report.sections)?;
         json["passed"] = serde_json::json!(code == 0);
-        let text = serde_json::to_string_pretty(&json)?;
-        std::fs::write(path, text + "\n").with_context(|| format!("{}", path.display()))?;
+        let text = serde_json::to_string_pretty(&json)? + "\n";
+        crate::output::write(path, text.as_bytes())?;
     }
     Ok(code)
 }
@@ -233,32 +214,24 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
     let mut c = format!("kiss-odom crosscheck {}", args.dataset.display());
     let mut flag = |name: &str, value: Option<String>| {
         if let Some(v) = value {
-            c.push_str(&format!(" --{name} {v}"));
+            c.push_str(&format!(" --{name}"));
+            if !v.is_empty() {
+                c.push_str(&format!(" {v}"));
+            }
         }
     };
-    flag(
-        "frames",
-        args.frames.map(|r| {
-            format!(
-                "{}..{}",
-                r.start,
-                r.end.map_or(String::new(), |e| e.to_string())
-            )
-        }),
-    );
-    flag(
-        "threads",
-        (args.threads != 1).then(|| args.threads.to_string()),
-    );
-    flag(
-        "scalar",
-        (args.scalar == Scalar::F32).then(|| "f32".to_string()),
-    );
+    let (input, p, core) = (&args.common.input, &args.common.pipeline, &args.common.core);
+    let lower = |v: &dyn std::fmt::Debug| format!("{v:?}").to_lowercase();
+    flag("frames", input.frames.map(|r| r.to_string()));
+    flag("threads", core.threads.map(|t| t.to_string()));
+    flag("scalar", core.scalar.map(|v| lower(&v)));
+    flag("storage", core.storage.map(|v| lower(&v)));
+    flag("capacities", core.capacities.map(|v| lower(&v)));
     flag(
         "format",
-        (args.format != Format::Auto).then(|| format!("{:?}", args.format).to_lowercase()),
+        (input.format != Format::Auto).then(|| lower(&input.format)),
     );
-    flag("topic", args.topic.clone());
+    flag("topic", input.topic.clone());
     flag(
         "only",
         args.only.map(|o| match o {
@@ -267,12 +240,12 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
         }),
     );
     flag("motion", args.motion.as_ref().map(|m| format!("'{m}'")));
-    flag("max-range", args.max_range.map(|v| v.to_string()));
-    flag("min-range", args.min_range.map(|v| v.to_string()));
-    flag("voxel-size", args.voxel_size.map(|v| v.to_string()));
-    if args.no_deskew {
-        c.push_str(" --no-deskew");
-    }
+    flag("config", p.config.as_ref().map(|c| c.display().to_string()));
+    flag("max-range", p.max_range.map(|v| v.to_string()));
+    flag("min-range", p.min_range.map(|v| v.to_string()));
+    flag("voxel-size", p.voxel_size.map(|v| v.to_string()));
+    flag("deskew", p.deskew.then(String::new));
+    flag("no-deskew", p.no_deskew.then(String::new));
     c
 }
 
@@ -287,14 +260,14 @@ fn sequence_checks(
     report: &mut Report,
     json: &mut serde_json::Value,
 ) -> Result<()> {
-    let opts = OpenOptions {
-        topic: args.topic.clone(),
-        ..OpenOptions::default()
-    };
-    let format = match args.format {
+    let format = match args.common.input.format {
         Format::Auto => io::open::detect(&args.dataset)?,
         f => f,
     };
+    let opts = args
+        .common
+        .input
+        .open_options(settings.capacities()?.scan_points);
     let mut dataset = io::open(&args.dataset, format, &opts)?;
     progress(args, err, "reading frames")?;
     let frames = sequence::preload(&mut dataset, range, err)?;
@@ -307,7 +280,7 @@ fn sequence_checks(
         first,
         first + n,
         threads,
-        match args.scalar {
+        match settings.runtime.scalar {
             Scalar::F64 => "f64",
             Scalar::F32 => "f32 and f64",
         }
@@ -361,13 +334,13 @@ fn sequence_checks(
 
     if run_e2e {
         progress(args, err, &format!("kiss-odom f64 over {n} frames"))?;
-        let ours64 = sequence::run_ours::<f64>(&frames, settings, threads, "kiss-odom f64")?;
+        let ours64 = sequence::run_ours(&frames, settings, Scalar::F64)?;
         let (sec, fig) = sequence::compare_f64(&ours64, &reference, gt.as_deref(), threads)?;
         report.sections.push(sec);
         let mut figures = vec![fig];
-        if args.scalar == Scalar::F32 {
+        if settings.runtime.scalar == Scalar::F32 {
             progress(args, err, &format!("kiss-odom f32 over {n} frames"))?;
-            let ours32 = sequence::run_ours::<f32>(&frames, settings, threads, "kiss-odom f32")?;
+            let ours32 = sequence::run_ours(&frames, settings, Scalar::F32)?;
             let (sec, figs) =
                 sequence::compare_f32(&ours32, &ours64, &reference, gt.as_deref(), threads)?;
             report.sections.push(sec);

@@ -8,8 +8,10 @@
 //! (lengths that differ, no poses, NaN or inf) with a [`MetricsError`], never a panic.
 
 use crate::io::poses::read_kitti;
+use crate::pose::quaternion_of;
 use anyhow::{Context, Result};
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use kiss_odom_core::stages::rotation_angle;
+use nalgebra::{Isometry3, Matrix3, Translation3, Vector3};
 use serde::Serialize;
 use std::fmt;
 use std::io::Write;
@@ -183,12 +185,6 @@ fn is_finite(p: &Isometry3<f64>) -> bool {
         && p.rotation.coords.iter().all(|v| v.is_finite())
 }
 
-/// Rotation angle in [0, pi], as Eigen's `AngleAxisd` computes it: `2 atan2(|v|, |w|)`, exact
-/// for small angles (unlike `acos` of the trace).
-pub fn rotation_angle(q: &UnitQuaternion<f64>) -> f64 {
-    2.0 * q.imag().norm().atan2(q.w.abs())
-}
-
 /// KITTI relative errors exactly as the reference's port of the KITTI devkit computes them:
 /// for every start frame `f` that is a multiple of [`KITTI_STEP_FRAMES`] and every length `len`
 /// of [`KITTI_SEGMENT_LENGTHS_M`], the end frame `l` is the first frame whose distance travelled
@@ -294,7 +290,7 @@ pub fn umeyama(src: &[Vector3<f64>], dst: &[Vector3<f64>]) -> Result<Isometry3<f
         s[2] = -1.0;
     }
     let r = u * Matrix3::from_diagonal(&s) * v_t;
-    let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    let rotation = quaternion_of(&r);
     let t = dst_mean - rotation * src_mean;
     if !t.iter().all(|v| v.is_finite()) || !rotation.coords.iter().all(|v| v.is_finite()) {
         return Err(MetricsError::SvdFailed);

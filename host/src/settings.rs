@@ -242,7 +242,7 @@ impl Settings {
             .unwrap_or(self.data.max_range / 100.0)
     }
 
-    /// The core's configuration in scalar `T`; invalid values are errors naming the field.
+    /// The core's configuration in scalar `T`; [`Self::validate`] names the setting at fault.
     pub fn core_config<T: Real>(&self) -> Result<Config<T>> {
         let mut c = Config::<T>::new(T::of(self.data.max_range));
         c.min_range = T::of(self.data.min_range);
@@ -281,13 +281,113 @@ impl Settings {
         Ok(caps)
     }
 
-    /// Threads to use (0 resolved to the machine's parallelism).
+    /// What the core would refuse in these settings, if anything.
+    fn fault(&self) -> Option<anyhow::Error> {
+        self.core_config::<f64>()
+            .err()
+            .or_else(|| self.capacities().err())
+    }
+
+    /// Checks every value the core will get. The error names the setting at fault and its
+    /// value: the one that, put back to its default, makes the settings valid (several when
+    /// more than one would).
+    pub fn validate(&self) -> Result<()> {
+        let Some(e) = self.fault() else {
+            return Ok(());
+        };
+        let defaults = Settings::default();
+        let culprits: Vec<String> = fields()
+            .iter()
+            .filter(|f| {
+                let mut fixed = self.clone();
+                (f.reset)(&mut fixed, &defaults);
+                (f.show)(&fixed) != (f.show)(self) && fixed.fault().is_none()
+            })
+            .map(|f| format!("{} = {}", f.name, (f.show)(self)))
+            .collect();
+        if culprits.is_empty() {
+            return Err(e);
+        }
+        Err(e.context(culprits.join(" or ")))
+    }
+
+    /// The pipeline settings away from their defaults that the reference's driver does not
+    /// take (it takes the range, voxel size and deskewing; capacities and the degeneracy ratio
+    /// are ours alone and do not change poses).
+    pub fn changed_beyond_reference(&self) -> Vec<&'static str> {
+        let defaults = Settings::default();
+        fields()
+            .iter()
+            .filter(|f| !f.reference_takes && (f.show)(self) != (f.show)(&defaults))
+            .map(|f| f.name)
+            .collect()
+    }
+
+    /// Threads to use: 0 means all cores, and a count above the machine's cores is capped to
+    /// them (more only contend, and a huge count would take minutes to start).
     pub fn threads(&self) -> usize {
+        let cores = cores();
         match self.runtime.threads {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n,
+            0 => cores,
+            n => n.min(cores),
         }
     }
+
+    /// The warning to print when [`Self::threads`] capped the count asked for.
+    pub fn threads_warning(&self) -> Option<String> {
+        let (asked, cores) = (self.runtime.threads, cores());
+        (asked > cores).then(|| {
+            format!("{asked} threads asked for, but the machine has {cores} cores: using {cores}")
+        })
+    }
+}
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// A setting by its TOML name: how to print its value, how to put back its default, and
+/// whether the reference's driver takes it (or it does not change poses).
+struct Field {
+    name: &'static str,
+    show: fn(&Settings) -> String,
+    reset: fn(&mut Settings, &Settings),
+    reference_takes: bool,
+}
+
+macro_rules! field {
+    ($section:ident . $name:ident, $takes:expr) => {
+        Field {
+            name: concat!(stringify!($section), ".", stringify!($name)),
+            show: |s| serde_json::to_string(&s.$section.$name).unwrap_or_default(),
+            reset: |s, d| s.$section.$name = d.$section.$name.clone(),
+            reference_takes: $takes,
+        }
+    };
+}
+
+/// Every setting the core gets.
+fn fields() -> [Field; 18] {
+    [
+        field!(data.max_range, true),
+        field!(data.min_range, true),
+        field!(mapping.voxel_size, true),
+        field!(mapping.max_points_per_voxel, false),
+        field!(mapping.alpha, false),
+        field!(mapping.beta, false),
+        field!(adaptive_threshold.initial_threshold, false),
+        field!(adaptive_threshold.min_motion_th, false),
+        field!(registration.max_num_iterations, false),
+        field!(registration.convergence_criterion, false),
+        field!(registration.kernel_scale, false),
+        field!(registration.max_correspondence_factor, false),
+        field!(registration.degeneracy_ratio, true),
+        field!(capacities.scan_points, true),
+        field!(capacities.merge_points, true),
+        field!(capacities.source_points, true),
+        field!(capacities.map_voxels, true),
+        field!(capacities.map_points, true),
+    ]
 }
 
 #[cfg(test)]
@@ -326,5 +426,36 @@ mod tests {
         let mut s = Settings::default();
         s.data.min_range = 200.0;
         assert!(s.core_config::<f64>().is_err());
+    }
+
+    #[test]
+    fn a_value_the_core_refuses_is_named_with_its_setting() {
+        let msg = |edit: fn(&mut Settings)| {
+            let mut s = Settings::default();
+            edit(&mut s);
+            format!("{:#}", s.validate().unwrap_err())
+        };
+        let m = msg(|s| s.registration.kernel_scale = 0.0);
+        assert!(m.starts_with("registration.kernel_scale = 0.0: "), "{m}");
+        let m = msg(|s| s.data.min_range = 200.0);
+        assert!(m.starts_with("data.min_range = 200.0: "), "{m}");
+        let m = msg(|s| s.capacities.map_voxels = 0);
+        assert!(m.starts_with("capacities.map_voxels = 0: "), "{m}");
+        let m = msg(|s| s.mapping.voxel_size = Some(-1.0));
+        assert!(m.starts_with("mapping.voxel_size = -1.0: "), "{m}");
+        Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn threads_are_capped_to_the_cores_with_a_warning() {
+        let mut s = Settings::default();
+        let cores = cores();
+        assert_eq!((s.threads(), s.threads_warning()), (cores, None));
+        s.runtime.threads = usize::MAX;
+        assert_eq!(s.threads(), cores);
+        let w = s.threads_warning().unwrap();
+        assert!(w.contains(&usize::MAX.to_string()), "{w}");
+        s.runtime.threads = 1;
+        assert_eq!((s.threads(), s.threads_warning()), (1, None));
     }
 }

@@ -14,257 +14,11 @@
 //! 20k points each), copied byte for byte or rewritten as PLY/PCD, or carried as the payload of
 //! a PointCloud2 message.
 
-use kiss_odom::io::{bin, pcd, ply, poses};
-use kiss_odom_tests::panic_text;
-use nalgebra::Matrix4;
+mod common;
+
+use common::*;
+use kiss_odom::io::{pcd, ply};
 use std::ffi::OsString;
-use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
-
-// ------------------------------------------------------------------------------------------
-// Helpers: data
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// The bytes of KITTI sample scan `k` (x, y, z, intensity as little-endian f32).
-fn kitti_bytes(k: usize) -> Vec<u8> {
-    let path = repo().join(format!("fixtures/kitti-05-reduced/velodyne/{k:06}.bin"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-/// The points of KITTI sample scan `k`.
-fn kitti_points(k: usize) -> Vec<[f64; 3]> {
-    bin::parse(&kitti_bytes(k)).expect("fixture scans are whole")
-}
-
-/// Per-point capture times of a spinning sensor for `points` (10 Hz, by azimuth), as a
-/// `timestamps/NNNNNN.bin` file holds them.
-fn sweep_stamps(points: &[[f64; 3]]) -> Vec<f64> {
-    points
-        .iter()
-        .map(|p| {
-            let turn = (std::f64::consts::PI - p[1].atan2(p[0])) / std::f64::consts::TAU;
-            1.7e9 + 0.1 * turn
-        })
-        .collect()
-}
-
-fn stamp_bytes(stamps: &[f64]) -> Vec<u8> {
-    stamps.iter().flat_map(|t| t.to_le_bytes()).collect()
-}
-
-/// `root/velodyne`, created.
-fn velodyne(root: &Path) -> PathBuf {
-    let dir = root.join("velodyne");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// A generic-layout folder `root` of `n` KITTI scans as `.bin` files, scan `k` at position
-/// `k`.
-fn bin_folder(root: &Path, n: usize) -> PathBuf {
-    let frames = velodyne(root);
-    for k in 0..n {
-        std::fs::write(frames.join(format!("{k:06}.bin")), kitti_bytes(k)).unwrap();
-    }
-    frames
-}
-
-// ------------------------------------------------------------------------------------------
-// Helpers: running the tool and reading what it wrote
-
-/// What one `kiss-odom run` did.
-struct Run {
-    code: i32,
-    stderr: String,
-    out: PathBuf,
-}
-
-/// A `frames.csv` row: the columns these tests look at.
-#[derive(Debug)]
-struct Row {
-    index: usize,
-    deskewed: bool,
-    status: String,
-}
-
-/// `kiss-odom run INPUT --out OUT --quiet EXTRA...` in-process. A panic anywhere inside is
-/// turned into a test failure that says which command panicked.
-fn run(input: &Path, out: &Path, extra: &[&str]) -> Run {
-    let mut argv: Vec<OsString> = vec![
-        "kiss-odom".into(),
-        "run".into(),
-        input.into(),
-        "--out".into(),
-        out.into(),
-        "--quiet".into(),
-    ];
-    argv.extend(extra.iter().map(OsString::from));
-    let shown = argv
-        .iter()
-        .map(|a| a.to_string_lossy())
-        .collect::<Vec<_>>()
-        .join(" ");
-    let mut err = Vec::new();
-    let code = catch_unwind(AssertUnwindSafe(|| {
-        kiss_odom::cli::main_with(argv, &mut err)
-    }))
-    .unwrap_or_else(|p| panic!("`{shown}` panicked: {}", panic_text(p.as_ref())));
-    let stderr = String::from_utf8(err).expect("stderr is UTF-8");
-    Run {
-        code,
-        stderr,
-        out: out.to_path_buf(),
-    }
-}
-
-impl Run {
-    fn summary(&self) -> serde_json::Value {
-        let path = self.out.join("summary.json");
-        let text = std::fs::read_to_string(&path)
-            .unwrap_or_else(|e| panic!("{}: {e}\nstderr:\n{}", path.display(), self.stderr));
-        serde_json::from_str(&text).expect("summary.json is JSON")
-    }
-
-    /// A whole-number field of `summary.json`.
-    fn count(&self, key: &str) -> u64 {
-        let s = self.summary();
-        s[key]
-            .as_u64()
-            .unwrap_or_else(|| panic!("summary.json has no count {key}: {s:#}"))
-    }
-
-    fn rows(&self) -> Vec<Row> {
-        let path = self.out.join("frames.csv");
-        let text = std::fs::read_to_string(&path)
-            .unwrap_or_else(|e| panic!("{}: {e}\nstderr:\n{}", path.display(), self.stderr));
-        let mut lines = text.lines();
-        let header: Vec<&str> = lines.next().expect("a header line").split(',').collect();
-        let col = |name: &str| {
-            header
-                .iter()
-                .position(|c| *c == name)
-                .unwrap_or_else(|| panic!("frames.csv has no column {name}: {header:?}"))
-        };
-        let (index, deskewed, status) = (col("index"), col("deskewed"), col("status"));
-        lines
-            .map(|line| {
-                let cells: Vec<&str> = line.split(',').collect();
-                assert_eq!(cells.len(), header.len(), "frames.csv line {line:?}");
-                Row {
-                    index: cells[index].parse().expect("an index"),
-                    deskewed: cells[deskewed] == "true",
-                    status: cells[status].to_string(),
-                }
-            })
-            .collect()
-    }
-
-    fn poses(&self) -> Vec<Matrix4<f64>> {
-        let path = self.out.join("poses_kitti.txt");
-        poses::read_kitti_matrices(&path)
-            .unwrap_or_else(|e| panic!("{e:#}\nstderr:\n{}", self.stderr))
-    }
-
-    fn warnings(&self) -> Vec<&str> {
-        self.stderr
-            .lines()
-            .filter(|l| l.starts_with("warning: "))
-            .collect()
-    }
-
-    fn errors(&self) -> Vec<&str> {
-        self.stderr
-            .lines()
-            .filter(|l| l.starts_with("error: "))
-            .collect()
-    }
-
-    /// The run failed with exit 1 and exactly one error line, the last line of stderr, that
-    /// names `file`; returns that line.
-    fn failed_naming(&self, file: &Path) -> &str {
-        assert_eq!(self.code, 1, "exit status; stderr:\n{}", self.stderr);
-        let errors = self.errors();
-        assert_eq!(errors.len(), 1, "one error line; stderr:\n{}", self.stderr);
-        let line = errors[0];
-        assert_eq!(
-            self.stderr.lines().last(),
-            Some(line),
-            "the error is the last line; stderr:\n{}",
-            self.stderr
-        );
-        assert!(
-            line.contains(&file.display().to_string()),
-            "the error names {}: {line}",
-            file.display()
-        );
-        line
-    }
-
-    /// Exit 0, every pose finite, and one `frames.csv` row per pose with the indices `0..n`.
-    fn succeeded_with_frames(&self, n: usize) {
-        assert_eq!(self.code, 0, "exit status; stderr:\n{}", self.stderr);
-        assert!(self.errors().is_empty(), "stderr:\n{}", self.stderr);
-        let poses = self.poses();
-        assert_eq!(poses.len(), n, "poses_kitti.txt lines");
-        for (k, p) in poses.iter().enumerate() {
-            assert!(
-                p.iter().all(|v| v.is_finite()),
-                "pose {k} is not finite: {p}"
-            );
-        }
-        let indices: Vec<usize> = self.rows().iter().map(|r| r.index).collect();
-        assert_eq!(indices, (0..n).collect::<Vec<_>>(), "frames.csv indices");
-        assert_eq!(self.count("frames"), n as u64);
-    }
-}
-
-/// The warning line that names `file`, with the reason after the name.
-fn warning_for<'a>(run: &'a Run, file: &Path) -> &'a str {
-    let name = file.display().to_string();
-    let hits: Vec<&str> = run
-        .warnings()
-        .into_iter()
-        .filter(|w| w.contains(&name))
-        .collect();
-    assert_eq!(
-        hits.len(),
-        1,
-        "one warning naming {name}; stderr:\n{}",
-        run.stderr
-    );
-    let reason = hits[0].split_once(&format!("{name}: ")).map(|(_, r)| r);
-    assert!(
-        reason.is_some_and(|r| !r.trim().is_empty()),
-        "the warning gives a reason after the file name: {}",
-        hits[0]
-    );
-    hits[0]
-}
-
-/// `a^-1 b` translation distance of two 4x4 poses.
-fn distance(a: &Matrix4<f64>, b: &Matrix4<f64>) -> f64 {
-    let d = a.try_inverse().expect("a rigid transform") * b;
-    d.fixed_view::<3, 1>(0, 3).norm()
-}
-
-/// Checks that frames `skipped` of `run` have the constant-velocity prediction as their pose
-/// (`T_k = T_{k-1} T_{k-2}^-1 T_{k-1}`), as `summary.json` documents for skipped and empty
-/// frames.
-fn skipped_poses_are_predictions(run: &Run, skipped: &[usize]) {
-    let p = run.poses();
-    for &k in skipped {
-        assert!(k >= 2, "a prediction needs two frames before");
-        let prediction = p[k - 1] * p[k - 2].try_inverse().unwrap() * p[k - 1];
-        let off = (p[k] - prediction).amax();
-        assert!(
-            off < 1e-9,
-            "frame {k}: pose differs from the constant-velocity prediction by {off:e}"
-        );
-    }
-}
 
 // ------------------------------------------------------------------------------------------
 // Damage confined to one frame file: warning, skip, count; --strict fails naming the file
@@ -296,7 +50,7 @@ fn truncated_and_empty_bin_frames_are_skipped_warned_about_and_counted() {
     assert_eq!(r.count("warnings"), 2);
     for row in r.rows() {
         let want_skipped = row.index == 2 || row.index == 4;
-        assert_eq!(row.status == "skipped", want_skipped, "{row:?}");
+        assert_eq!(row.outcome == "skipped", want_skipped, "{row:?}");
     }
     skipped_poses_are_predictions(&r, &[2, 4]);
 
@@ -360,7 +114,7 @@ fn garbage_ply_and_pcd_headers_are_skipped_warned_about_and_counted() {
         assert_eq!(r.count("warnings"), 2, "{ext}");
         for row in r.rows() {
             let want_skipped = row.index == 2 || row.index == 4;
-            assert_eq!(row.status == "skipped", want_skipped, "{ext}: {row:?}");
+            assert_eq!(row.outcome == "skipped", want_skipped, "{ext}: {row:?}");
         }
         skipped_poses_are_predictions(&r, &[2, 4]);
         assert_eq!(r.summary()["input"]["format"], ext, "read as {ext}");
@@ -416,7 +170,7 @@ fn timestamps_files_of_the_wrong_length_are_ignored_with_a_warning() {
     for row in r.rows() {
         let ignored = row.index == 1 || row.index == 3;
         assert_eq!(row.deskewed, !ignored, "{row:?}");
-        assert!(row.status != "skipped" && row.status != "empty", "{row:?}");
+        assert_eq!(row.outcome, "registered", "{row:?}");
     }
 
     let s = run(&data, &dir.path().join("out-strict"), &["--strict"]);
@@ -450,7 +204,7 @@ fn timestamps_all_equal_or_not_finite_are_flagged_in_frames_csv() {
     assert_eq!(r.count("skipped_frames"), 0);
     for row in r.rows() {
         let unusable = bad.contains(&row.index);
-        let flagged = row.status.split('|').any(|f| f == "timestamps_ignored");
+        let flagged = row.flags.iter().any(|f| f == "timestamps_ignored");
         assert_eq!(flagged, unusable, "{row:?}");
         assert_eq!(row.deskewed, !unusable, "{row:?}");
     }
@@ -469,28 +223,6 @@ fn timestamps_all_equal_or_not_finite_are_flagged_in_frames_csv() {
 
 // ------------------------------------------------------------------------------------------
 // Containers: bags and MCAP files
-
-fn bag_fixture(name: &str) -> PathBuf {
-    repo().join("fixtures/bags").join(name)
-}
-
-/// Where the payload of `ouster` frame `k` starts in a fixture: its first point is
-/// `(k, 0, 0.5 + k / 2)` as little-endian f32 (make_bags.py), found exactly once.
-fn ouster_payload_at(bytes: &[u8], k: u32) -> usize {
-    let k = k as f32;
-    let pattern: Vec<u8> = [k, 0.0, 0.5 + k / 2.0]
-        .iter()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
-    let hits: Vec<usize> = bytes
-        .windows(pattern.len())
-        .enumerate()
-        .filter(|(_, w)| *w == pattern.as_slice())
-        .map(|(i, _)| i)
-        .collect();
-    assert_eq!(hits.len(), 1, "frame {k}'s first point in the fixture");
-    hits[0]
-}
 
 #[test]
 fn bag_and_mcap_cut_in_the_middle_keep_the_frames_before_then_fail_naming_the_file() {
@@ -870,7 +602,7 @@ fn a_wrong_message_type_on_the_topic_keeps_the_frames_before_then_fails_naming_t
         assert!(poses.iter().flatten().all(|v| v.is_finite()), "{ext}");
         let rows = r.rows();
         assert!(
-            rows.iter().all(|row| row.status != "skipped"),
+            rows.iter().all(|row| row.outcome == "registered"),
             "{ext}: {rows:?}"
         );
         // The clouds really were read and registered: the car moves about 1 m a frame in the

@@ -78,7 +78,7 @@ fn a_frame_lost_from_a_kitti_sequence_is_skipped_and_later_frames_keep_their_gro
     assert_eq!(gap.number("skipped_frames"), 1.0);
     assert_eq!(gap.number("warnings"), 1.0);
     assert_eq!(indices(&gap), (0..10).collect::<Vec<_>>());
-    assert_eq!(gap.column("status")[5], "skipped");
+    assert_eq!(gap.column("outcome")[5], "skipped");
     same_first_poses(&gap, &full, 5);
     // Later frames keep their own times and ground truth.
     assert_eq!(gap.tum_times(), full.tum_times());
@@ -397,5 +397,5 @@ fn a_ply_declaring_a_property_twice_is_skipped_with_the_reason() {
     r.ok()
         .warning_with(&["velodyne/000003.ply", "property x twice"]);
     assert_eq!(r.number("skipped_frames"), 1.0);
-    assert_eq!(r.column("status")[3], "skipped");
+    assert_eq!(r.column("outcome")[3], "skipped");
 }

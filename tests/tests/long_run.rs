@@ -122,7 +122,7 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
         (last_gt, last_est) = (gt, p);
 
         if (k + 1) % WINDOW == 0 {
-            let rss = kiss_odom::run::peak_rss_bytes().unwrap_or(0);
+            let rss = kiss_odom::memory::peak_rss_bytes().unwrap_or(0);
             println!(
                 "{:>6} frames: {:7.1} frames/s in the core over the last {WINDOW} \
                  ({:3} at the iteration cap), {:6.1} s elapsed, {:.0} m driven, \
@@ -178,7 +178,7 @@ fn ten_thousand_urban_frames_at_small_capacities_stay_bounded_finite_and_fast() 
 
     assert_eq!(odom.state_bytes(), state_bytes, "state size changed");
     assert_eq!(odom.frames(), FRAMES as u64);
-    let peak = kiss_odom::run::peak_rss_bytes();
+    let peak = kiss_odom::memory::peak_rss_bytes();
     println!(
         "state {state_bytes} bytes ({arena_len} arena words); peak RSS {:.0} MiB",
         peak.unwrap_or(0) as f64 / f64::from(1 << 20)

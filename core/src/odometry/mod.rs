@@ -200,6 +200,34 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     pub fn last_delta(&self) -> &Pose<T> {
         &self.last_delta
     }
+    /// Replaces the latest pose, from which the next scan is predicted (kiss-icp's Python
+    /// users assign `last_pose`, e.g. to start at a known pose). The map stays where it is.
+    /// A pose with a non-finite entry is refused (`false`) and nothing changes.
+    pub fn set_last_pose(&mut self, pose: Pose<T>) -> bool {
+        let ok = is_finite_pose(&pose);
+        if ok {
+            self.last_pose = pose;
+            renormalize(&mut self.last_pose);
+        }
+        ok
+    }
+    /// Replaces the constant-velocity model that predicts and deskews the next scan
+    /// (kiss-icp's assignable `last_delta`). Non-finite: refused (`false`), nothing changes.
+    pub fn set_last_delta(&mut self, delta: Pose<T>) -> bool {
+        let ok = is_finite_pose(&delta);
+        if ok {
+            self.last_delta = delta;
+            renormalize(&mut self.last_delta);
+        }
+        ok
+    }
+    /// Empties the local map and keeps the poses, threshold and counters (kiss-icp's
+    /// `local_map.clear()`): the next scan takes its prediction and seeds the map again.
+    pub fn clear_map(&mut self) {
+        if let Ok(mut map) = self.map_mut() {
+            map.clear();
+        }
+    }
     /// The threshold's current `sigma`.
     pub fn sigma(&self) -> T {
         self.threshold.sigma()
@@ -293,4 +321,9 @@ impl<T: Real, P: PointCodec<T>> Odometry<T, P, alloc::boxed::Box<[u64]>> {
         let words = alloc::vec![0u64; caps.arena_words::<T, P>()].into_boxed_slice();
         Self::new(config, caps, words)
     }
+}
+
+fn is_finite_pose<T: Real>(p: &Pose<T>) -> bool {
+    p.translation.vector.iter().all(|v| v.is_finite())
+        && p.rotation.coords.iter().all(|v| v.is_finite())
 }

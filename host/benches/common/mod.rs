@@ -1,10 +1,13 @@
 //! Data for the benchmarks: real KITTI scans (kitti-mini) or a generated sequence, read with
-//! the host's own readers, and the odometry run that records poses and clouds per frame.
+//! the host's own readers, and the odometry run (through the host's driver) that records
+//! poses and clouds per frame.
 
 #![allow(dead_code)]
 
+use kiss_odom::drive::{Driver, FrameMeta};
 use kiss_odom::io::{self, Format, Item, OpenOptions};
-use kiss_odom_core::{Capacities, Config, Exact, Odometry, Pose};
+use kiss_odom::settings::Settings;
+use kiss_odom_core::Pose;
 use std::path::{Path, PathBuf};
 
 /// Where kitti-mini is: `KISS_ODOM_KITTI_MINI`, else `../shared/data/kitti-mini` beside the
@@ -66,10 +69,9 @@ pub struct Recorded {
 
 /// Runs the full-scale f64 odometry with the default configuration over `scans`.
 pub fn record(scans: &[Scan]) -> Recorded {
-    let caps = Capacities::FULL_SCALE;
-    let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
-    let mut odom =
-        Odometry::<f64, Exact, _>::new(Config::new(100.0), caps, &mut arena[..]).unwrap();
+    let mut settings = Settings::default();
+    settings.runtime.threads = 1;
+    let mut driver = Driver::new(&settings).unwrap();
     let mut rec = Recorded {
         merge: Vec::new(),
         poses: Vec::new(),
@@ -77,12 +79,14 @@ pub fn record(scans: &[Scan]) -> Recorded {
         sigmas: Vec::new(),
     };
     for s in scans {
-        let guess = *odom.pose() * *odom.last_delta();
-        let r = odom.register_frame(&s.points, s.stamps.as_deref()).unwrap();
-        rec.merge.push(odom.merge_cloud().to_vec());
-        rec.poses.push(r.pose);
+        let guess = driver.prediction();
+        let o = driver
+            .register_points(FrameMeta::default(), &s.points, s.stamps.as_deref())
+            .unwrap();
+        rec.merge.push(driver.merge_cloud());
+        rec.poses.push(o.pose);
         rec.guesses.push(guess);
-        rec.sigmas.push(r.sigma);
+        rec.sigmas.push(o.sigma);
     }
     rec
 }

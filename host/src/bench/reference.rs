@@ -2,12 +2,12 @@
 //! (`driver.py bench --serve`) that holds the same frames in memory and runs on request, so the
 //! two implementations can take turns.
 
-use super::Loaded;
+use crate::io::Frame;
 use crate::settings::Settings;
 use anyhow::{bail, Context, Result};
 use serde::Deserialize;
 use std::io::{BufRead, BufReader, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 
 /// One timed run of the reference, as `driver.py bench_run` reports it.
@@ -50,25 +50,9 @@ pub struct Reference {
     _frames_dir: tempfile::TempDir,
 }
 
-/// The Python interpreter: `--python`, else `KISS_ODOM_PYTHON`, else `python3`.
-pub fn python(flag: Option<&Path>) -> PathBuf {
-    flag.map(Path::to_path_buf)
-        .or_else(|| std::env::var_os("KISS_ODOM_PYTHON").map(PathBuf::from))
-        .unwrap_or_else(|| PathBuf::from("python3"))
-}
-
-/// The driver script: `--driver`, else `KISS_ODOM_DRIVER`, else the repository's copy.
-pub fn driver(flag: Option<&Path>) -> PathBuf {
-    flag.map(Path::to_path_buf)
-        .or_else(|| std::env::var_os("KISS_ODOM_DRIVER").map(PathBuf::from))
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/driver.py")
-        })
-}
-
 /// Writes the frames as `driver.py load_frames_dir` reads them: `frames.json`, `points.f64`,
 /// `stamps.f64`.
-fn write_frames(dir: &Path, frames: &[Loaded]) -> Result<()> {
+fn write_frames(dir: &Path, frames: &[Frame]) -> Result<()> {
     let mut pts = BufWriter::new(std::fs::File::create(dir.join("points.f64"))?);
     let mut sts = BufWriter::new(std::fs::File::create(dir.join("stamps.f64"))?);
     let mut index = Vec::with_capacity(frames.len());
@@ -101,16 +85,10 @@ impl Reference {
     pub fn start(
         python: &Path,
         driver: &Path,
-        frames: &[Loaded],
+        frames: &[Frame],
         settings: &Settings,
         threads: usize,
     ) -> Result<Self> {
-        if !driver.exists() {
-            bail!(
-                "{}: reference driver not found (give --driver or --no-reference)",
-                driver.display()
-            );
-        }
         let dir = tempfile::Builder::new()
             .prefix("kiss-odom-bench")
             .tempdir()?;

@@ -1,35 +1,13 @@
-//! How two outputs are compared: poses by translation distance and rotation angle, point lists
+//! How two outputs are compared: poses by translation distance and rotation angle
+//! ([`crate::pose::pose_difference`]), point lists
 //! position by position, point sets by their exact bits, and maps (whose points each side
 //! computes with its own rounding) by nearest matching.
 
-use kiss_odom_core::stages::LocalMap;
+use crate::pose::pose_difference;
+use kiss_odom_core::stages::{LocalMap, BLOCK};
 use kiss_odom_core::{Config, Exact};
-use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion};
+use nalgebra::Isometry3;
 use std::collections::{HashMap, HashSet};
-
-/// A 4x4 rigid matrix as a pose, converting the rotation block to a quaternion without
-/// re-projection (as Sophus does when the reference receives a matrix).
-pub fn pose_of(m: &Matrix4<f64>) -> Isometry3<f64> {
-    let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
-    Isometry3::from_parts(Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]), q)
-}
-
-/// (distance between the positions in m, angle of `a^-1 b`'s rotation in rad). The angle uses
-/// `atan2` of the skew part, which stays accurate for tiny angles where `acos` does not.
-pub fn pose_difference(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
-    let dt = (a.translation.vector - b.translation.vector).norm();
-    let r = a.rotation.to_rotation_matrix().into_inner().transpose()
-        * b.rotation.to_rotation_matrix().into_inner();
-    let s = nalgebra::Vector3::new(
-        r[(2, 1)] - r[(1, 2)],
-        r[(0, 2)] - r[(2, 0)],
-        r[(1, 0)] - r[(0, 1)],
-    )
-    .norm()
-        / 2.0;
-    (dt, s.atan2((r.trace() - 1.0) / 2.0))
-}
 
 /// Largest distance between points at the same position of two lists of equal length.
 pub fn max_point_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
@@ -176,16 +154,18 @@ pub fn slope(v: &[f64]) -> f64 {
 pub type HeapMap = LocalMap<f64, Exact, Vec<u64>>;
 
 /// An empty map with the voxel size, range and points per voxel of `cfg` and room for `points`
-/// points in any arrangement (one voxel per point at worst).
+/// points in any arrangement: one voxel per point at worst, each then taking a whole block of
+/// [`BLOCK`] point slots.
 pub fn heap_map(cfg: &Config<f64>, points: usize) -> Result<HeapMap, kiss_odom_core::ConfigError> {
     let n = points.max(1);
-    let words = vec![0u64; HeapMap::words(n, n)];
+    let slots = n * BLOCK;
+    let words = vec![0u64; HeapMap::words(n, slots)];
     LocalMap::new(
         cfg.voxel_size,
         cfg.max_range,
         cfg.max_points_per_voxel,
         n,
-        n,
+        slots,
         words,
     )
 }
@@ -200,18 +180,14 @@ pub fn map_points(map: &HeapMap) -> Vec<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Vector3;
 
     #[test]
-    fn pose_difference_measures_distance_and_angle() {
-        let a = Isometry3::new(Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.0, 0.0, 0.3));
-        let b = Isometry3::new(
-            Vector3::new(1.0, 2.0, 3.5),
-            Vector3::new(0.0, 0.0, 0.3 + 1e-9),
-        );
-        let (t, r) = pose_difference(&a, &b);
-        assert!((t - 0.5).abs() < 1e-15);
-        assert!((r - 1e-9).abs() < 1e-15, "{r}");
+    fn a_heap_map_holds_its_points_one_voxel_each() {
+        let cfg = Config::<f64>::new(100.0);
+        let points: Vec<[f64; 3]> = (0..50).map(|i| [3.0 * i as f64, 1.0, 0.5]).collect();
+        let mut map = heap_map(&cfg, points.len()).unwrap();
+        map.add_points(points.iter().map(|p| kiss_odom_core::Point::from(*p)));
+        assert_eq!((map.voxels(), map.points()), (50, 50));
     }
 
     #[test]

@@ -11,46 +11,6 @@ use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The driver script relative to the repository root.
-pub const DRIVER_IN_REPO: &str = "tests/reference/driver.py";
-
-/// The Python to use: `--python`, else `$KISS_ODOM_PYTHON`, else `python3`.
-pub fn python_path(flag: Option<&Path>) -> PathBuf {
-    flag.map(Path::to_path_buf)
-        .or_else(|| std::env::var_os("KISS_ODOM_PYTHON").map(PathBuf::from))
-        .unwrap_or_else(|| PathBuf::from("python3"))
-}
-
-/// The driver script: `--driver`, else `tests/reference/driver.py` in the first ancestor of
-/// the working directory or of the executable that has it, else in the source tree this binary
-/// was built from.
-pub fn driver_path(flag: Option<&Path>) -> Result<PathBuf> {
-    if let Some(p) = flag {
-        if !p.is_file() {
-            bail!("{}: no such driver script", p.display());
-        }
-        return Ok(p.to_path_buf());
-    }
-    let mut bases: Vec<PathBuf> = Vec::new();
-    if let Ok(cwd) = std::env::current_dir() {
-        bases.extend(cwd.ancestors().map(Path::to_path_buf));
-    }
-    if let Ok(exe) = std::env::current_exe() {
-        bases.extend(exe.ancestors().skip(1).map(Path::to_path_buf));
-    }
-    bases.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
-    bases
-        .iter()
-        .map(|b| b.join(DRIVER_IN_REPO))
-        .find(|p| p.is_file())
-        .ok_or_else(|| {
-            anyhow::anyhow!(
-                "cannot find {DRIVER_IN_REPO} above the working directory or the executable; \
-                 give --driver"
-            )
-        })
-}
-
 /// A driver session: the interpreter, the script and a temporary folder for the exchange.
 pub struct Driver {
     python: PathBuf,

@@ -144,7 +144,7 @@ pub fn scan_stages(
     let mut desk = Section::new(format!(
         "stage checks: deskewing real sensor timing (f64 build; relative motion {:.3} m, {:.3} rad)",
         motion.translation.vector.norm(),
-        motion.rotation.angle()
+        kiss_odom_core::stages::rotation_angle(&motion.rotation)
     ));
     let mut ds = Section::new("stage checks: voxel downsampling of the deskewed scans (f64 build)");
     for (sc, points, times, deskewed, cropped, merge, source) in io {

@@ -1,20 +1,20 @@
 //! End to end: both pipelines over the same preloaded frames, compared pose by pose, scored
 //! against ground truth with the same metrics, and timed in the same run.
 
-use super::compare::{pose_of, slope, summary, Agreement};
+use super::compare::{slope, summary, Agreement};
 use super::driver::{arg, read_json, Driver};
 use super::report::{sci, Row, Section};
 use super::stages::{TOL_REGISTRATION, TOL_SIGMA_REL};
-use crate::exec::Pool;
+use crate::args::FrameRange;
+use crate::drive::{self, Selection, Step};
 use crate::io::{self, Format, Frame};
 use crate::metrics::{evaluate, Metrics};
-use crate::run::widen;
-use crate::settings::Settings;
+use crate::pose::pose_of;
+use crate::settings::{Scalar, Settings};
 use anyhow::{bail, Context, Result};
-use kiss_odom_core::{Exact, FrameError, Odometry, Real};
+use kiss_odom_core::{Flag, Status};
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Largest per-frame position difference to the reference (m).
 pub const TOL_TRANSLATION_M: f64 = 0.01;
@@ -42,8 +42,8 @@ pub struct Trajectory {
     pub capacity_frames: usize,
     /// Frames without a usable point.
     pub empty_frames: usize,
-    /// Status of each frame (`ok`, the core's flags, `empty`; empty for the reference).
-    pub status: Vec<String>,
+    /// Status of each frame (`None` for an empty one; nothing for the reference).
+    pub status: Vec<Option<Status>>,
     /// Dataset index of each frame.
     pub indices: Vec<usize>,
 }
@@ -55,28 +55,15 @@ impl Trajectory {
     }
 }
 
-/// Preloads frames `start..end` of a dataset; fails on a frame that cannot be read.
+/// Preloads the frames of a dataset in `range`; fails on a frame that cannot be read.
 pub fn preload(
     dataset: &mut io::Dataset,
-    range: crate::run::FrameRange,
+    range: FrameRange,
     err: &mut dyn std::io::Write,
 ) -> Result<Vec<Frame>> {
-    if range.start > 0 {
-        dataset.frames.seek(range.start);
-    }
     let mut out = Vec::new();
-    while let Some(item) = dataset.frames.next_item()? {
-        let index = match &item {
-            io::Item::Frame(f) => f.index,
-            io::Item::Skipped { index, .. } => *index,
-        };
-        if !range.contains(index) {
-            if range.end.is_some_and(|e| index >= e) {
-                break;
-            }
-            continue;
-        }
-        match item {
+    for item in Selection::new(dataset.frames.as_mut(), range) {
+        match item? {
             io::Item::Skipped { reason, .. } => {
                 bail!("{reason} (the cross-check needs every frame)")
             }
@@ -94,53 +81,27 @@ pub fn preload(
     Ok(out)
 }
 
-/// Runs our pipeline in scalar `T` over preloaded frames, timing only the frame calls.
-pub fn run_ours<T: Real>(
-    frames: &[Frame],
-    settings: &Settings,
-    threads: usize,
-    label: &str,
-) -> Result<Trajectory> {
-    let config = settings.core_config::<T>()?;
-    let caps = settings.capacities()?;
-    let mut arena = vec![0u64; caps.arena_words::<T, Exact>()];
-    let mut odom = Odometry::<T, Exact, _>::new(config, caps, &mut arena[..])
-        .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
-    let pool = Pool::new(threads)?;
-    let points: Vec<Vec<[T; 3]>> = frames
-        .iter()
-        .map(|f| {
-            f.points
-                .iter()
-                .map(|p| [T::of(p[0]), T::of(p[1]), T::of(p[2])])
-                .collect()
-        })
-        .collect();
+/// Runs our pipeline in `scalar` over preloaded frames through the driver, which times only
+/// the core's frame calls.
+pub fn run_ours(frames: &[Frame], settings: &Settings, scalar: Scalar) -> Result<Trajectory> {
+    let mut settings = settings.clone();
+    settings.runtime.scalar = scalar;
+    let mut driver = drive::Driver::new(&settings)?;
+    let preloaded = driver.preload(frames);
     let mut t = Trajectory {
-        label: label.into(),
+        label: format!("kiss-odom {}", format!("{scalar:?}").to_lowercase()),
         ..Default::default()
     };
-    for (f, pts) in frames.iter().zip(&points) {
-        let sigma = odom.sigma().wide();
-        let t0 = Instant::now();
-        let r = odom.register_frame_with(&pool, pts, f.stamps.as_deref());
-        let dt = t0.elapsed().as_secs_f64();
-        match r {
-            Ok(report) => {
-                t.capacity_frames += usize::from(report.dropped.capacity());
-                t.status.push(report.status.to_string());
-            }
-            Err(e @ FrameError::Storage) => anyhow::bail!("frame {}: {e}", f.index),
-            Err(FrameError::EmptyScan) => {
-                odom.skip_frame();
-                t.empty_frames += 1;
-                t.status.push("empty".into());
-            }
-        }
-        t.indices.push(f.index);
-        t.seconds.push(dt);
-        t.sigmas.push(sigma);
-        t.poses.push(widen(odom.pose()));
+    for k in 0..preloaded.len() {
+        let o = driver.register_preloaded(&preloaded, k)?;
+        let status = o.status();
+        t.capacity_frames += usize::from(status.is_some_and(|s| s.contains(Flag::Capacity)));
+        t.empty_frames += usize::from(o.step == Step::Empty);
+        t.status.push(status);
+        t.indices.push(o.meta.index);
+        t.seconds.push(o.latency.as_secs_f64());
+        t.sigmas.push(o.sigma);
+        t.poses.push(o.pose);
     }
     Ok(t)
 }
@@ -167,7 +128,7 @@ pub fn ref_input(
     driver: &mut Driver,
     path: &Path,
     format: Format,
-    range: crate::run::FrameRange,
+    range: FrameRange,
     frames: &[Frame],
 ) -> Result<RefInput> {
     let slice = format!(
@@ -500,15 +461,17 @@ fn status_rows(ours: &Trajectory, agreeing: usize, sec: &mut Section) {
             format!(
                 "frame {} (kiss-odom status there: {})",
                 ours.indices.get(agreeing).copied().unwrap_or(agreeing),
-                ours.status.get(agreeing).map_or("?", String::as_str)
+                match ours.status.get(agreeing) {
+                    Some(Some(s)) => s.to_string(),
+                    Some(None) => "empty".to_string(),
+                    None => "?".to_string(),
+                }
             ),
         ));
     }
     let mut flags = std::collections::BTreeMap::new();
-    for st in ours.status.iter().filter(|s| *s != "ok") {
-        for f in st.split('|') {
-            *flags.entry(f.to_string()).or_insert(0usize) += 1;
-        }
+    for flag in ours.status.iter().flatten().flat_map(|s| s.flags()) {
+        *flags.entry(flag.name()).or_insert(0usize) += 1;
     }
     if !flags.is_empty() {
         let text: Vec<String> = flags.iter().map(|(f, n)| format!("{f}: {n}")).collect();

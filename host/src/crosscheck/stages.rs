@@ -10,11 +10,12 @@
 
 use super::compare::{
     bits, heap_map, map_points, matched_distance, max_point_difference, order_difference,
-    pose_difference, pose_of, set_difference,
+    set_difference,
 };
 use super::driver::{arg, pose_arg, read_f64s, read_json, read_points, Driver};
 use super::report::{sci, Row, Section};
 use crate::io::Frame;
+use crate::pose::{pose_difference, pose_of};
 use crate::settings::Settings;
 use anyhow::{Context, Result};
 use kiss_odom_core::stages::{

@@ -218,10 +218,14 @@ pub mod kitti;
 pub mod listing;
 pub mod mcap;
 pub mod open;
+pub mod ouster_meta;
+pub mod pcap;
 pub mod pcd;
 pub mod ply;
 pub mod pointcloud2;
 pub mod poses;
 pub mod rosbag;
+pub mod sensor_pcap;
+pub mod velodyne_calib;
 
 pub use open::open;

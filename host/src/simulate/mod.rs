@@ -213,7 +213,7 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub start_time: f64,
     /// Replace a dataset already in --out (removes only its frame files, poses, times and
-    /// sim.toml).
+    /// sim.toml). The new one appears only once complete.
     #[arg(long)]
     pub overwrite: bool,
 }
@@ -297,6 +297,15 @@ pub fn execute(args: &SimulateArgs) -> Result<i32> {
     );
     let mut points = 0usize;
     for k in 0..params.frames {
+        if let Some(sig) = crate::interrupt::requested() {
+            bar.finish_and_clear();
+            drop(out); // the staging folder goes: no partial data set is left
+            eprintln!(
+                "interrupted by signal {sig} after {k} frames: no data set written to {}",
+                args.out.display()
+            );
+            return Ok(crate::interrupt::exit_status(sig));
+        }
         let frame = sim.frame(k);
         points += frame.points.len();
         out.write_frame(&frame, &sim.ground_truth(k))?;

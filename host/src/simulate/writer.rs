@@ -60,9 +60,16 @@ fn is_frame_name(name: &str) -> bool {
         && name[..name.len() - 4].bytes().all(|b| b.is_ascii_digit())
 }
 
-/// Streams a dataset to a folder, frame by frame.
+/// Staging folders start with this (hidden, so no reader takes one for a dataset).
+const STAGING_PREFIX: &str = ".kiss-odom-simulate-";
+
+/// Streams a dataset to a folder, frame by frame, through a hidden staging folder inside it:
+/// the dataset appears in the folder only when [`Self::finish`] moves it there, frame folder
+/// last, so a later `run` never reads half a data set; dropped unfinished (an error, an
+/// interrupt), the staging folder goes and nothing appears.
 pub struct DatasetWriter {
     dir: PathBuf,
+    staging: tempfile::TempDir,
     poses: BufWriter<File>,
     times: BufWriter<File>,
 }
@@ -70,53 +77,39 @@ pub struct DatasetWriter {
 impl DatasetWriter {
     /// Prepares `dir` and writes `provenance` to `sim.toml`. A folder that already holds a
     /// dataset is refused unless `overwrite`, which removes only the layout's own files (frame
-    /// files, poses, times, sim.toml) so that no stale frame survives a shorter run.
+    /// files, poses, times, sim.toml) so that no stale frame survives a shorter run; staging
+    /// folders a killed run left are removed too.
     pub fn create(dir: &Path, overwrite: bool, provenance: &impl Serialize) -> Result<Self> {
         let existing = OWNED_FILES
             .iter()
             .chain(OWNED_DIRS.iter())
             .any(|n| dir.join(n).exists());
-        if existing {
-            if !overwrite {
-                bail!(
-                    "{} already holds a dataset; pass --overwrite to replace it",
-                    dir.display()
-                );
-            }
-            for name in OWNED_FILES {
-                let p = dir.join(name);
-                if p.is_file() {
-                    fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
-                }
-            }
-            for sub in OWNED_DIRS {
-                let d = dir.join(sub);
-                if !d.is_dir() {
-                    continue;
-                }
-                for entry in fs::read_dir(&d).with_context(|| format!("listing {}", d.display()))? {
-                    let entry = entry?;
-                    let name = entry.file_name();
-                    if name.to_str().is_some_and(is_frame_name) && entry.path().is_file() {
-                        fs::remove_file(entry.path())
-                            .with_context(|| format!("removing {}", entry.path().display()))?;
-                    }
-                }
-            }
+        if existing && !overwrite {
+            bail!(
+                "{} already holds a dataset; pass --overwrite to replace it",
+                dir.display()
+            );
         }
+        remove_owned(dir)?;
+        fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let staging = tempfile::Builder::new()
+            .prefix(STAGING_PREFIX)
+            .tempdir_in(dir)
+            .with_context(|| format!("creating a staging folder in {}", dir.display()))?;
+        let root = staging.path();
         for sub in OWNED_DIRS {
-            let d = dir.join(sub);
+            let d = root.join(sub);
             fs::create_dir_all(&d).with_context(|| format!("creating {}", d.display()))?;
         }
         let toml = toml::to_string(provenance).context("serialising sim.toml")?;
         let header = "# Written by `kiss-odom simulate`: the parameters that generated this \
                       dataset.\n# The same parameters (and kiss-odom version) give the same \
                       bytes.\n\n";
-        let p = dir.join("sim.toml");
+        let p = root.join("sim.toml");
         fs::write(&p, format!("{header}{toml}"))
             .with_context(|| format!("writing {}", p.display()))?;
         let open = |name: &str| -> Result<BufWriter<File>> {
-            let p = dir.join(name);
+            let p = root.join(name);
             Ok(BufWriter::new(
                 File::create(&p).with_context(|| format!("creating {}", p.display()))?,
             ))
@@ -125,6 +118,7 @@ impl DatasetWriter {
             dir: dir.to_path_buf(),
             poses: open("poses.txt")?,
             times: open("times.txt")?,
+            staging,
         })
     }
 
@@ -137,25 +131,74 @@ impl DatasetWriter {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
         }
-        let p = self.dir.join("velodyne").join(&name);
+        let root = self.staging.path();
+        let p = root.join("velodyne").join(&name);
         fs::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
         bytes.clear();
         for t in &frame.stamps {
             bytes.extend_from_slice(&t.to_le_bytes());
         }
-        let p = self.dir.join("timestamps").join(&name);
+        let p = root.join("timestamps").join(&name);
         fs::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
         writeln!(self.poses, "{}", pose_line(ground_truth)).context("writing poses.txt")?;
         writeln!(self.times, "{}", fmt_f64(frame.end_time)).context("writing times.txt")?;
         Ok(())
     }
 
-    /// Flushes the text files.
+    /// Flushes the text files and moves the dataset into place, the frame folder last.
     pub fn finish(mut self) -> Result<()> {
         self.poses.flush().context("writing poses.txt")?;
         self.times.flush().context("writing times.txt")?;
+        let names = OWNED_FILES.iter().chain(OWNED_DIRS.iter().rev());
+        for name in names {
+            let (from, to) = (self.staging.path().join(name), self.dir.join(name));
+            fs::rename(&from, &to)
+                .with_context(|| format!("moving {} into place", to.display()))?;
+        }
         Ok(())
     }
+}
+
+/// Removes the dataset files the layout owns from `dir` (and the frame folders once empty),
+/// and staging folders a killed run left.
+fn remove_owned(dir: &Path) -> Result<()> {
+    for name in OWNED_FILES {
+        crate::output::remove_file_if_present(&dir.join(name))?;
+    }
+    for sub in OWNED_DIRS {
+        let d = dir.join(sub);
+        if !d.is_dir() {
+            continue;
+        }
+        for entry in fs::read_dir(&d).with_context(|| format!("listing {}", d.display()))? {
+            let entry = entry?;
+            let name = entry.file_name();
+            if name.to_str().is_some_and(is_frame_name) && entry.path().is_file() {
+                fs::remove_file(entry.path())
+                    .with_context(|| format!("removing {}", entry.path().display()))?;
+            }
+        }
+        fs::remove_dir(&d).with_context(|| {
+            format!(
+                "{} holds files that are not frames; move them away or choose another --out",
+                d.display()
+            )
+        })?;
+    }
+    let Ok(entries) = fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let stale = entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with(STAGING_PREFIX);
+        if stale && entry.path().is_dir() {
+            fs::remove_dir_all(entry.path())
+                .with_context(|| format!("removing {}", entry.path().display()))?;
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

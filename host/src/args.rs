@@ -1,0 +1,378 @@
+//! Command-line options that `run`, `bench` and `crosscheck` share, as clap argument groups
+//! each command flattens (`#[command(flatten)]`), and how they become [`Settings`].
+//!
+//! Precedence is the same everywhere: defaults, then `--config FILE`, then flags.
+
+use crate::io::{Format, OpenOptions};
+use crate::settings::{Scalar, Settings, Storage};
+use anyhow::{bail, Result};
+use kiss_odom_core::Capacities;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// What every command that runs the pipeline takes: which frames, the pipeline's parameters and
+/// how the core runs.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CommonArgs {
+    /// Which frames, how read.
+    #[command(flatten, next_help_heading = "Input")]
+    pub input: InputArgs,
+    /// The pipeline's parameters.
+    #[command(flatten, next_help_heading = "Pipeline")]
+    pub pipeline: PipelineArgs,
+    /// How the core runs.
+    #[command(flatten, next_help_heading = "Core")]
+    pub core: CoreArgs,
+}
+
+impl CommonArgs {
+    /// The settings these options ask for; see [`settings`].
+    pub fn settings(&self, threads: Option<usize>) -> Result<Settings> {
+        settings(&self.pipeline, &self.core, threads)
+    }
+}
+
+/// Which frames of a dataset, and how to read them.
+#[derive(Debug, Clone, clap::Args)]
+pub struct InputArgs {
+    /// Input format; `auto` picks KITTI only for the benchmark layout.
+    #[arg(long, value_enum, default_value_t = Format::Auto)]
+    pub format: Format,
+    /// Frames to use, `A..B` (B excluded), `A..` or `..B`, by frame index.
+    #[arg(long)]
+    pub frames: Option<FrameRange>,
+    /// Bag/MCAP topic (default: the only PointCloud2 topic).
+    #[arg(long)]
+    pub topic: Option<String>,
+}
+
+impl InputArgs {
+    /// The frame range (all frames when not given).
+    pub fn range(&self) -> FrameRange {
+        self.frames.unwrap_or_default()
+    }
+
+    /// Options for `io::open`: read at most `scan_points` points of a frame (the core's
+    /// `Capacities::scan_points`, which ignores the rest anyway).
+    pub fn open_options(&self, scan_points: usize) -> OpenOptions {
+        OpenOptions {
+            topic: self.topic.clone(),
+            scan_points,
+        }
+    }
+}
+
+/// The pipeline's parameters.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PipelineArgs {
+    /// Settings file (TOML, as `run` writes to `config.toml`); flags override it.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Maximum range r_max (m) [default: 100].
+    #[arg(long, allow_negative_numbers = true)]
+    pub max_range: Option<f64>,
+    /// Minimum range (m) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub min_range: Option<f64>,
+    /// Map voxel size v (m) [default: max_range / 100].
+    #[arg(long, allow_negative_numbers = true)]
+    pub voxel_size: Option<f64>,
+    /// Deskew scans that carry per-point timestamps (the default).
+    #[arg(long, overrides_with = "no_deskew")]
+    pub deskew: bool,
+    /// Do not deskew.
+    #[arg(long, overrides_with = "deskew")]
+    pub no_deskew: bool,
+}
+
+/// How the core runs.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CoreArgs {
+    /// Scalar type of the core [default: f64].
+    #[arg(long, value_enum)]
+    pub scalar: Option<Scalar>,
+    /// Map point storage [default: exact, which agrees with the reference; quantized uses 6
+    /// bytes a point].
+    #[arg(long, value_enum)]
+    pub storage: Option<Storage>,
+    /// Capacity preset of the core's buffers [default: full].
+    #[arg(long, value_enum)]
+    pub capacities: Option<Preset>,
+    /// Worker threads for the correspondence search, 0 = all cores, at most the machine's
+    /// cores; results are identical for any count [default: the settings' (all cores)].
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// `--config` of the commands that compare with the reference.
+pub const CONFIG_HELP_WITH_REFERENCE: &str = "Settings file (TOML, as `run` writes to \
+    `config.toml`); flags override it. The reference gets only the range, voxel size and \
+    deskewing, so every other pipeline setting must keep its default";
+
+/// `--threads` of the commands that compare with the reference.
+pub const THREADS_HELP_WITH_REFERENCE: &str = "Threads for both implementations (the \
+    reference's TBB threads), 0 = all cores, at most the machine's cores [default: 1: the \
+    reference is nondeterministic with more, and one thread compares like with like]";
+
+/// Where the reference kiss-icp 1.3.0 is.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ReferenceArgs {
+    /// Python with kiss-icp 1.3.0 [default: $KISS_ODOM_PYTHON, else python3].
+    #[arg(long)]
+    pub python: Option<PathBuf>,
+    /// The reference driver [default: $KISS_ODOM_DRIVER, else tests/reference/driver.py above
+    /// the working directory or the executable, else in this source tree].
+    #[arg(long)]
+    pub driver: Option<PathBuf>,
+}
+
+/// Capacity presets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// `Capacities::FULL_SCALE` (KITTI-like sensors at 100 m).
+    Full,
+    /// `Capacities::SMALL` (microcontroller budget).
+    Small,
+}
+
+impl Preset {
+    /// The capacities of the preset.
+    pub fn capacities(self) -> Capacities {
+        match self {
+            Preset::Full => Capacities::FULL_SCALE,
+            Preset::Small => Capacities::SMALL,
+        }
+    }
+}
+
+/// Resolves the settings: defaults, then `--config`, then the flags. A command whose thread
+/// count must not follow the file (bench and crosscheck time and compare single-threaded
+/// runs) gives it as `threads`, which only `--threads` overrides. The result is validated,
+/// errors naming the setting at fault.
+pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Result<Settings> {
+    let mut s = match &p.config {
+        Some(path) => Settings::load(path)?,
+        None => Settings::default(),
+    };
+    if let Some(t) = threads {
+        s.runtime.threads = t;
+    }
+    if let Some(r) = p.max_range {
+        s.data.max_range = r;
+    }
+    if let Some(r) = p.min_range {
+        s.data.min_range = r;
+    }
+    if let Some(v) = p.voxel_size {
+        s.mapping.voxel_size = Some(v);
+    }
+    if p.deskew {
+        s.data.deskew = true;
+    }
+    if p.no_deskew {
+        s.data.deskew = false;
+    }
+    if let Some(x) = c.scalar {
+        s.runtime.scalar = x;
+    }
+    if let Some(x) = c.storage {
+        s.runtime.map_storage = x;
+    }
+    if let Some(preset) = c.capacities {
+        s.capacities = preset.capacities().into();
+    }
+    if let Some(t) = c.threads {
+        s.runtime.threads = t;
+    }
+    s.validate()?;
+    Ok(s)
+}
+
+/// Refuses settings the reference would not share: it takes only the range, voxel size and
+/// deskewing, so any other pipeline setting away from its default would be compared against a
+/// reference that did not use it.
+pub fn check_reference_compatible(s: &Settings) -> Result<()> {
+    let changed = s.changed_beyond_reference();
+    if !changed.is_empty() {
+        bail!(
+            "the reference takes only max_range, min_range, voxel_size and deskew; these \
+             settings differ from their defaults: {}",
+            changed.join(", ")
+        );
+    }
+    Ok(())
+}
+
+impl ReferenceArgs {
+    /// The interpreter: `--python`, else `KISS_ODOM_PYTHON`, else `python3`.
+    pub fn python(&self) -> PathBuf {
+        self.python
+            .clone()
+            .or_else(|| std::env::var_os("KISS_ODOM_PYTHON").map(PathBuf::from))
+            .unwrap_or_else(|| PathBuf::from("python3"))
+    }
+
+    /// The driver script: `--driver`, else `KISS_ODOM_DRIVER`, else
+    /// `tests/reference/driver.py` in the first ancestor of the working directory or of the
+    /// executable that has it, else in the source tree this binary was built from.
+    pub fn driver(&self) -> Result<PathBuf> {
+        let given = self
+            .driver
+            .clone()
+            .or_else(|| std::env::var_os("KISS_ODOM_DRIVER").map(PathBuf::from));
+        if let Some(p) = given {
+            if !p.is_file() {
+                bail!(
+                    "{}: no such driver script (give --driver, or --no-reference to bench)",
+                    p.display()
+                );
+            }
+            return Ok(p);
+        }
+        let mut bases: Vec<PathBuf> = Vec::new();
+        if let Ok(cwd) = std::env::current_dir() {
+            bases.extend(cwd.ancestors().map(Path::to_path_buf));
+        }
+        if let Ok(exe) = std::env::current_exe() {
+            bases.extend(exe.ancestors().skip(1).map(Path::to_path_buf));
+        }
+        bases.push(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
+        bases
+            .iter()
+            .map(|b| b.join(DRIVER_IN_REPO))
+            .find(|p| p.is_file())
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "cannot find {DRIVER_IN_REPO} above the working directory or the \
+                     executable; give --driver"
+                )
+            })
+    }
+}
+
+/// The reference driver script relative to the repository root.
+pub const DRIVER_IN_REPO: &str = "tests/reference/driver.py";
+
+/// A half-open range of frame indices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameRange {
+    /// First frame.
+    pub start: usize,
+    /// One past the last frame, if bounded.
+    pub end: Option<usize>,
+}
+
+impl FrameRange {
+    /// Whether `i` is inside.
+    pub fn contains(&self, i: usize) -> bool {
+        i >= self.start && self.end.is_none_or(|e| i < e)
+    }
+
+    /// Whether every index from `i` on is past the end.
+    pub fn is_past(&self, i: usize) -> bool {
+        self.end.is_some_and(|e| i >= e)
+    }
+}
+
+impl std::fmt::Display for FrameRange {
+    /// As it is written on the command line: `3..`, `3..7`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..", self.start)?;
+        match self.end {
+            Some(e) => write!(f, "{e}"),
+            None => Ok(()),
+        }
+    }
+}
+
+impl FromStr for FrameRange {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let bad = || format!("'{s}' is not a frame range like 10..20, 10.. or ..20");
+        let (a, b) = s.split_once("..").ok_or_else(bad)?;
+        let start = if a.is_empty() {
+            0
+        } else {
+            a.trim().parse().map_err(|_| bad())?
+        };
+        let end = if b.is_empty() {
+            None
+        } else {
+            Some(b.trim().parse().map_err(|_| bad())?)
+        };
+        if end.is_some_and(|e| e <= start) {
+            return Err(format!("'{s}' is empty"));
+        }
+        Ok(Self { start, end })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        pipeline: PipelineArgs,
+        #[command(flatten)]
+        core: CoreArgs,
+    }
+
+    fn resolve(argv: &[&str], threads: Option<usize>) -> Result<Settings> {
+        let w = Wrap::try_parse_from(std::iter::once("x").chain(argv.iter().copied())).unwrap();
+        settings(&w.pipeline, &w.core, threads)
+    }
+
+    #[test]
+    fn frame_ranges_parse_print_and_reject_nonsense() {
+        let r: FrameRange = "3..7".parse().unwrap();
+        assert_eq!((r.start, r.end, r.to_string()), (3, Some(7), "3..7".into()));
+        assert!(r.contains(3) && !r.contains(7) && r.is_past(7) && !r.is_past(6));
+        let r: FrameRange = "5..".parse().unwrap();
+        assert_eq!((r.start, r.end, r.to_string()), (5, None, "5..".into()));
+        let r: FrameRange = "..4".parse().unwrap();
+        assert_eq!((r.start, r.end), (0, Some(4)));
+        assert!("7..3".parse::<FrameRange>().is_err());
+        assert!("x".parse::<FrameRange>().is_err());
+    }
+
+    #[test]
+    fn flags_override_the_file_which_overrides_the_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("c.toml");
+        std::fs::write(&file, "[data]\nmax_range = 60.0\n[runtime]\nthreads = 3\n").unwrap();
+        let f = file.to_str().unwrap();
+        let s = resolve(&["--config", f], None).unwrap();
+        assert_eq!((s.data.max_range, s.runtime.threads), (60.0, 3));
+        let s = resolve(&["--config", f], Some(1)).unwrap();
+        assert_eq!(
+            s.runtime.threads, 1,
+            "bench and crosscheck keep their default"
+        );
+        let s = resolve(
+            &["--config", f, "--max-range", "50", "--threads", "2"],
+            None,
+        )
+        .unwrap();
+        assert_eq!((s.data.max_range, s.runtime.threads), (50.0, 2));
+        let s = resolve(&["--no-deskew", "--capacities", "small"], Some(1)).unwrap();
+        assert!(!s.data.deskew && s.runtime.threads == 1);
+        assert_eq!(s.capacities, Capacities::SMALL.into());
+        let s = resolve(&[], None).unwrap();
+        assert_eq!(s.runtime.threads, 0, "run's default: all cores");
+    }
+
+    #[test]
+    fn only_what_the_reference_takes_may_change_for_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("c.toml");
+        std::fs::write(&file, "[registration]\nkernel_scale = 0.5\n").unwrap();
+        let s = resolve(&["--max-range", "50", "--scalar", "f32"], None).unwrap();
+        check_reference_compatible(&s).unwrap();
+        let s = resolve(&["--config", file.to_str().unwrap()], None).unwrap();
+        let e = check_reference_compatible(&s).unwrap_err().to_string();
+        assert!(e.contains("registration.kernel_scale"), "{e}");
+    }
+}

@@ -1,0 +1,184 @@
+//! How every command writes its files: whole or not at all, and never beside stale ones.
+//!
+//! A file is written under a hidden temporary name in its own folder and renamed over its
+//! final name when complete, so a reader (or a later command) never sees half a file, and an
+//! interrupted or failed command leaves no partial output. Before a command starts it removes
+//! the outputs of its own kind that an earlier run left ([`remove_stale`]), so a failed run
+//! cannot leave an older `summary.json` looking like its own; temporary files that a killed
+//! process could not clean up go with them.
+
+use anyhow::{Context, Result};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Temporary files start with this, then the final name: `.kiss-odom-tmp-summary.json-XXXXXX`.
+const TEMP_PREFIX: &str = ".kiss-odom-tmp-";
+
+fn parent_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+fn file_name(path: &Path) -> Result<String> {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .with_context(|| format!("{}: not a file name", path.display()))
+}
+
+/// A temporary file beside `path`, with its extension (writers such as the PNG encoder choose
+/// the format by it), readable as a normal output once renamed.
+fn temp_beside(path: &Path) -> Result<tempfile::NamedTempFile> {
+    let prefix = format!("{TEMP_PREFIX}{}-", file_name(path)?);
+    let suffix = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    let mut b = tempfile::Builder::new();
+    b.prefix(&prefix).suffix(&suffix);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        b.permissions(std::fs::Permissions::from_mode(0o666)); // less the umask, as File::create
+    }
+    b.tempfile_in(parent_of(path))
+        .with_context(|| format!("{}: cannot create a temporary file", path.display()))
+}
+
+/// Writes `bytes` to `path` atomically.
+pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_with(path, |w| Ok(w.write_all(bytes)?))
+}
+
+/// Writes `path` atomically through `fill`, which writes the content to a buffered writer.
+pub fn write_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    let tmp = temp_beside(path)?;
+    let mut w = std::io::BufWriter::new(tmp.as_file());
+    fill(&mut w).with_context(|| format!("{}", path.display()))?;
+    w.flush().with_context(|| format!("{}", path.display()))?;
+    drop(w);
+    tmp.persist(path)
+        .map_err(|e| e.error)
+        .with_context(|| format!("{}", path.display()))?;
+    Ok(())
+}
+
+/// Writes `path` atomically through `fill`, which writes a file at the path it is given (for
+/// encoders that open the file themselves).
+pub fn write_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = temp_beside(path)?.into_temp_path();
+    fill(&tmp)?;
+    tmp.persist(path)
+        .map_err(|e| e.error)
+        .with_context(|| format!("{}", path.display()))?;
+    Ok(())
+}
+
+/// Removes the files `names` from `dir` if present, and every temporary file this module left
+/// there for them. A missing `dir` has nothing stale.
+pub fn remove_stale(dir: &Path, names: &[&str]) -> Result<()> {
+    for name in names {
+        remove_file_if_present(&dir.join(name))?;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let ours = name
+            .strip_prefix(TEMP_PREFIX)
+            .is_some_and(|rest| names.iter().any(|n| rest.starts_with(&format!("{n}-"))));
+        if ours {
+            remove_file_if_present(&entry.path())?;
+        }
+    }
+    Ok(())
+}
+
+/// Removes the single output `path` (a `--json` file) and its temporaries, as
+/// [`remove_stale`] does for a folder of outputs.
+pub fn remove_stale_file(path: &Path) -> Result<()> {
+    remove_stale(parent_of(path), &[&file_name(path)?])
+}
+
+/// Removes `path` if it is a file (or a link); anything else there is left alone.
+pub fn remove_file_if_present(path: &Path) -> Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.is_dir() => std::fs::remove_file(path)
+            .with_context(|| format!("{}: cannot remove the earlier output", path.display())),
+        _ => Ok(()),
+    }
+}
+
+/// The files directly in `dir` whose names start with the temporary prefix (for tests).
+pub fn temporaries_in(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .flatten()
+                .filter(|e| e.file_name().to_string_lossy().starts_with(TEMP_PREFIX))
+                .map(|e| e.path())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_written_file_appears_whole_and_nothing_else_remains() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("summary.json");
+        std::fs::write(&path, "old").unwrap();
+        write(&path, b"new").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        assert!(temporaries_in(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_old_file_and_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("frames.csv");
+        std::fs::write(&path, "old").unwrap();
+        let e = write_with(&path, |w| {
+            w.write_all(b"half")?;
+            anyhow::bail!("disk full")
+        });
+        assert!(e.is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+        assert!(temporaries_in(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn stale_outputs_and_their_temporaries_are_removed_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        for name in [
+            "summary.json",
+            "notes.txt",
+            ".kiss-odom-tmp-summary.json-abc123",
+            ".kiss-odom-tmp-other.json-abc123",
+        ] {
+            std::fs::write(d.join(name), "x").unwrap();
+        }
+        std::fs::create_dir(d.join("frames.csv")).unwrap(); // not a file: left alone
+        remove_stale(d, &["summary.json", "frames.csv", "poses_kitti.txt"]).unwrap();
+        let mut left: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(
+            left,
+            [
+                ".kiss-odom-tmp-other.json-abc123",
+                "frames.csv",
+                "notes.txt"
+            ]
+        );
+        remove_stale(&d.join("missing"), &["summary.json"]).unwrap();
+    }
+}

@@ -1,0 +1,285 @@
+//! `kiss-odom run`: odometry over a recording, with poses, per-frame records, a summary,
+//! metrics against ground truth and a plot written to the output folder.
+//!
+//! The frames go through the [`Driver`]; this module decides what stops a run and what is
+//! written. The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
+//! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
+//! in which no frame could be registered ends with exit 1 and its own reason, never an output
+//! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
+//! every case the outputs hold the frames processed so far (pose files and the plot only when
+//! a frame was registered), written atomically, and no output of an earlier run stays beside
+//! them.
+
+mod files;
+
+pub use files::{FrameRow, Latency, RowKind, Summary, OUTPUTS};
+
+use crate::args::CommonArgs;
+use crate::drive::{Driver, Outcome, Selection, Step};
+use crate::io::{self, Item};
+use anyhow::{anyhow, Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use kiss_odom_core::Flag;
+use nalgebra::Isometry3;
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+/// `kiss-odom run` arguments. Flags override `--config`, which overrides the defaults (the
+/// reference's: max range 100 m, voxel max_range/100, deskew on).
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
+    /// .mcap file.
+    pub path: PathBuf,
+    /// Output folder (created if missing); the outputs of an earlier run there are replaced.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Treat a skipped frame, ignored timestamps or a dataset warning as an error (exit 1).
+    #[arg(long)]
+    pub strict: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Input, pipeline and core options.
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+/// Why the frame loop ended.
+enum End {
+    /// Every frame in range was read.
+    Finished,
+    /// An error: a damaged container, a `--strict` stop.
+    Failed(anyhow::Error),
+    /// SIGINT or SIGTERM.
+    Interrupted(i32),
+}
+
+/// What the run produced, frame by frame.
+pub(crate) struct Record {
+    /// One row per frame.
+    pub rows: Vec<FrameRow>,
+    /// The pose after each frame.
+    pub poses: Vec<Isometry3<f64>>,
+    /// Each frame's time (its own, else `times.txt`'s), if known.
+    pub times: Vec<Option<f64>>,
+    /// Frame indices.
+    pub indices: Vec<usize>,
+    /// Warnings printed (dataset, frames, threads).
+    pub warnings: usize,
+}
+
+impl Record {
+    fn registered(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| r.outcome == RowKind::Registered)
+            .count()
+    }
+}
+
+/// Runs `kiss-odom run`.
+pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
+    // Whatever happens next, no output of an earlier run stays to be taken for this one's.
+    crate::output::remove_stale(&args.out, &OUTPUTS)?;
+    let settings = args.common.settings(None)?;
+    let mut dataset = io::open(
+        &args.path,
+        args.common.input.format,
+        &args
+            .common
+            .input
+            .open_options(settings.capacities()?.scan_points),
+    )?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create output folder", args.out.display()))?;
+    let mut driver = Driver::new(&settings)?;
+    let mut record = Record {
+        rows: Vec::new(),
+        poses: Vec::new(),
+        times: Vec::new(),
+        indices: Vec::new(),
+        warnings: 0,
+    };
+    let mut warn = |record: &mut Record, bar: &ProgressBar, text: &str| {
+        bar.suspend(|| writeln!(err, "warning: {text}")).ok();
+        record.warnings += 1;
+    };
+    let hidden = ProgressBar::hidden();
+    if let Some(w) = settings.threads_warning() {
+        warn(&mut record, &hidden, &w);
+    }
+    let mut end = End::Finished;
+    for w in dataset_warnings(&dataset.info) {
+        warn(&mut record, &hidden, w);
+        if args.strict {
+            end = End::Failed(anyhow!("{w} (--strict)"));
+            break;
+        }
+    }
+    if matches!(end, End::Finished) {
+        end = frame_loop(args, &mut driver, &mut dataset, &mut record, &mut warn);
+    }
+    let end = match end {
+        End::Finished if record.rows.is_empty() => {
+            End::Failed(anyhow!("{}: no frames in range", args.path.display()))
+        }
+        End::Finished if record.registered() == 0 => End::Failed(anyhow!(
+            "{}: {}",
+            args.path.display(),
+            nothing_registered(&record)
+        )),
+        other => other,
+    };
+    let (interrupted, stop) = match &end {
+        End::Finished => (None, None),
+        End::Failed(e) => (None, Some(crate::cli::one_line(e))),
+        End::Interrupted(sig) => (Some(*sig), None),
+    };
+    let run = files::Run {
+        args,
+        settings: &settings,
+        info: &dataset.info,
+        driver: &driver,
+        record: &record,
+        interrupted,
+        stop,
+    };
+    let written = run.write();
+    drop(dataset); // readers' temporary files go now, before the process exits
+    let summary = match (written, end) {
+        (Ok(summary), End::Finished) => summary,
+        (Err(e), End::Finished) => return Err(e),
+        // The stop reason is the error; a failed write after it is only a warning.
+        (written, End::Failed(e)) => {
+            if let Err(w) = written {
+                writeln!(
+                    err,
+                    "warning: outputs incomplete: {}",
+                    crate::cli::one_line(&w)
+                )?;
+            }
+            return Err(e);
+        }
+        (written, End::Interrupted(sig)) => {
+            let summary = written?;
+            writeln!(
+                err,
+                "interrupted by signal {sig} after {} frames: the outputs hold those frames",
+                summary.frames
+            )?;
+            return Ok(crate::interrupt::exit_status(sig));
+        }
+    };
+    if !args.quiet {
+        files::print_summary(&summary);
+    }
+    Ok(0)
+}
+
+/// Problems the dataset layer found before any frame (gaps, foreign files, length mismatches).
+fn dataset_warnings(info: &io::DatasetInfo) -> &[String] {
+    &info.warnings
+}
+
+fn nothing_registered(r: &Record) -> String {
+    let count = |k: RowKind| r.rows.iter().filter(|row| row.outcome == k).count();
+    format!(
+        "no frame could be registered ({} of {} unreadable, {} without a usable point)",
+        count(RowKind::Skipped),
+        r.rows.len(),
+        count(RowKind::Empty)
+    )
+}
+
+/// Feeds the frames in range to the driver, recording each outcome, until the end, an error,
+/// a `--strict` stop or a signal.
+fn frame_loop(
+    args: &RunArgs,
+    driver: &mut Driver,
+    dataset: &mut io::Dataset,
+    record: &mut Record,
+    warn: &mut dyn FnMut(&mut Record, &ProgressBar, &str),
+) -> End {
+    let info = &dataset.info;
+    let mut frames = Selection::new(dataset.frames.as_mut(), args.common.input.range());
+    let bar = progress_bar(frames.len_hint(), args.quiet);
+    let mut core_s = 0.0;
+    let end = loop {
+        if let Some(sig) = crate::interrupt::requested() {
+            break End::Interrupted(sig);
+        }
+        let item = match frames.next() {
+            None => break End::Finished,
+            Some(Err(e)) => break End::Failed(e),
+            Some(Ok(item)) => item,
+        };
+        let problems: Vec<String> = match &item {
+            Item::Skipped { reason, .. } => vec![reason.clone()],
+            Item::Frame(f) => f.warnings.clone(),
+        };
+        for p in &problems {
+            warn(record, &bar, p);
+        }
+        if let (true, Some(first)) = (args.strict, problems.first()) {
+            break End::Failed(anyhow!("{first} (--strict)"));
+        }
+        let outcome = match driver.feed(item) {
+            Ok(o) => o,
+            Err(e) => break End::Failed(e),
+        };
+        if let Some(report) = outcome.report() {
+            if args.strict && report.status.contains(Flag::TimestampsIgnored) {
+                break End::Failed(anyhow!(
+                    "{}: timestamps unusable ({:?}), frame not deskewed (--strict)",
+                    outcome.meta.source,
+                    report.stamp_problem
+                ));
+            }
+            core_s += outcome.latency.as_secs_f64();
+        }
+        if outcome.step == Step::Empty {
+            warn(
+                record,
+                &bar,
+                &format!("{}: no usable point", outcome.meta.source),
+            );
+        }
+        add(record, info, &outcome);
+        bar.inc(1);
+        if core_s > 0.0 {
+            let hz = record.registered() as f64 / core_s;
+            bar.set_message(format!("{hz:.1} Hz"));
+        }
+    };
+    bar.finish_and_clear();
+    end
+}
+
+fn add(record: &mut Record, info: &io::DatasetInfo, o: &Outcome) {
+    let index = o.meta.index;
+    let time = o.meta.time.or_else(|| {
+        info.frame_times
+            .as_ref()
+            .and_then(|t| t.get(index).copied())
+    });
+    record.rows.push(FrameRow::of(o));
+    record.poses.push(o.pose);
+    record.times.push(time);
+    record.indices.push(index);
+}
+
+fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
+    }
+    let bar = match total {
+        Some(n) => ProgressBar::new(n as u64),
+        None => ProgressBar::new_spinner(),
+    };
+    let style =
+        ProgressStyle::with_template("{spinner} [{bar:40}] {pos}/{len} frames {msg} ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
+    bar
+}

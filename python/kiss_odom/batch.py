@@ -1,0 +1,243 @@
+"""``kiss_odom.batch``: ``kiss-odom run`` over many sequences as Ray tasks, and one table.
+
+One Ray task per sequence runs ``kiss-odom run SEQUENCE --out OUT/NAME`` inside the worker
+through the binding (``kiss_odom._native.run_cli``, the command's own ``main_with``), so each
+sequence's outputs (``poses_kitti.txt``, ``poses_tum.txt``, ``summary.json``, ``frames.csv``,
+...) are byte for byte what the command writes. A task that fails (a corrupt sequence) is
+reported with the command's reason; the others complete. Then ``OUT/aggregate.csv`` and
+``OUT/aggregate.md`` list per sequence the KITTI relative errors, ATE, Hz and peak memory,
+and two totals for the KITTI errors: the devkit's (every 100-800 m segment of every sequence
+weighs the same) and the mean of the per-sequence values.
+
+Ray starts locally (``ray.init()``) unless ``address`` is given (``"auto"`` or
+``ray://host:10001`` for a cluster). Each task runs in a fresh worker process
+(``max_calls=1``), so its ``peak_rss_bytes`` is that sequence's worker alone.
+
+Command line: ``kiss-odom-batch SEQUENCE... --out DIR [--address A] [--num-cpus N]
+[-- RUN FLAGS]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import sys
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+COLUMNS = (
+    "sequence", "status", "frames", "kitti_t_err_pct", "kitti_r_err_deg_per_m",
+    "kitti_segments", "ate_m", "hz", "peak_rss_mib", "state_mib", "reason",
+)
+
+
+@dataclass
+class Result:
+    """One sequence's row of the aggregate table."""
+
+    sequence: str
+    status: str  # "ok" or "failed"
+    frames: int = 0
+    kitti_t_err_pct: float = math.nan
+    kitti_r_err_deg_per_m: float = math.nan
+    kitti_segments: int = 0
+    ate_m: float = math.nan
+    hz: float = math.nan
+    peak_rss_mib: float = math.nan
+    state_mib: float = math.nan
+    reason: str = ""
+    out: str = ""
+
+
+@dataclass
+class Batch:
+    """Every sequence's result and the totals."""
+
+    results: List[Result]
+    totals: Dict[str, float] = field(default_factory=dict)
+
+    @property
+    def failed(self) -> List[Result]:
+        return [r for r in self.results if r.status != "ok"]
+
+
+def _kitti_lines(path: Path) -> np.ndarray:
+    rows = np.loadtxt(path, ndmin=2)
+    out = np.tile(np.eye(4), (len(rows), 1, 1))
+    out[:, :3, :4] = rows.reshape(-1, 3, 4)
+    return out
+
+
+def run_sequence(path: str, out: str, run_args: Sequence[str] = ()) -> Result:
+    """``kiss-odom run path --out out`` in this process, then this sequence's row. Raises
+    ``RuntimeError`` with the command's reason when it fails."""
+    from kiss_odom import _native
+
+    name = Path(out).name
+    code, err = _native.run_cli(["run", str(path), "--out", str(out), "--quiet", *run_args])
+    if code != 0:
+        lines = err.strip().splitlines()
+        reason = lines[-1].removeprefix("error: ") if lines else f"{path}: exit status {code}"
+        raise RuntimeError(reason)
+    summary = json.loads((Path(out) / "summary.json").read_text())
+    metrics = summary.get("metrics") or {}
+    row = Result(
+        sequence=name,
+        status="ok",
+        frames=summary["frames"],
+        ate_m=metrics.get("ate_m", math.nan),
+        hz=summary["hz"],
+        peak_rss_mib=(summary.get("peak_rss_bytes") or math.nan) / 2**20,
+        state_mib=summary["state_bytes"] / 2**20,
+        out=str(out),
+    )
+    gt = _native.ground_truth(str(path))
+    if gt is not None and metrics:
+        est = _kitti_lines(Path(out) / "poses_kitti.txt")
+        gt = np.linalg.inv(gt[0]) @ gt[: len(est)]  # re-based to the first frame, as run does
+        t, r, n = _native.kitti_relative_error_segments(est, gt)
+        row.kitti_t_err_pct, row.kitti_r_err_deg_per_m, row.kitti_segments = t, r, n
+    return row
+
+
+def _names(paths: Sequence[Path]) -> List[str]:
+    """Output folder names: the sequence folder's name, made unique."""
+    names, seen = [], {}
+    for p in paths:
+        base = p.name or "sequence"
+        seen[base] = seen.get(base, 0) + 1
+        names.append(base if seen[base] == 1 else f"{base}-{seen[base]}")
+    return names
+
+
+def totals(results: Sequence[Result]) -> Dict[str, float]:
+    """The devkit's segment-weighted KITTI errors over all sequences, and the per-sequence
+    means (over sequences that have segments)."""
+    scored = [r for r in results if r.status == "ok" and r.kitti_segments > 0]
+    n = sum(r.kitti_segments for r in scored)
+    weighted = lambda k: sum(getattr(r, k) * r.kitti_segments for r in scored) / n if n else math.nan
+    mean = lambda k: float(np.mean([getattr(r, k) for r in scored])) if scored else math.nan
+    return {
+        "kitti_t_err_pct_devkit": weighted("kitti_t_err_pct"),
+        "kitti_r_err_deg_per_m_devkit": weighted("kitti_r_err_deg_per_m"),
+        "kitti_t_err_pct_mean": mean("kitti_t_err_pct"),
+        "kitti_r_err_deg_per_m_mean": mean("kitti_r_err_deg_per_m"),
+        "kitti_segments": n,
+        "sequences_scored": len(scored),
+    }
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return "" if math.isnan(v) else f"{v:.6g}"
+    return str(v)
+
+
+def write_tables(out: Path, batch: Batch) -> None:
+    """``aggregate.csv`` (one row per sequence, then the totals) and ``aggregate.md``."""
+    with open(out / "aggregate.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(COLUMNS)
+        for r in batch.results:
+            d = asdict(r)
+            w.writerow([_fmt(d[c]) for c in COLUMNS])
+        for k, v in batch.totals.items():
+            w.writerow([f"total:{k}", "", _fmt(v)] + [""] * (len(COLUMNS) - 3))
+    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
+    for r in batch.results:
+        d = asdict(r)
+        lines.append("| " + " | ".join(_fmt(d[c]).replace("|", "/") for c in COLUMNS) + " |")
+    lines += ["", "| total | value |", "|---|---|"]
+    lines += [f"| {k} | {_fmt(v)} |" for k, v in batch.totals.items()]
+    (out / "aggregate.md").write_text("\n".join(lines) + "\n")
+
+
+def run_batch(
+    sequences: Sequence[str],
+    out: str,
+    run_args: Sequence[str] = (),
+    address: Optional[str] = None,
+    num_cpus: Optional[int] = None,
+    progress: bool = True,
+) -> Batch:
+    """Runs every sequence as a Ray task, writes the tables and returns the results (failed
+    sequences included, with their reason)."""
+    import ray
+
+    paths = [Path(s) for s in sequences]
+    out_dir = Path(out)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    started = not ray.is_initialized()
+    if started:
+        if address:
+            ray.init(address=address, log_to_driver=False)
+        else:
+            ray.init(num_cpus=num_cpus, include_dashboard=False, log_to_driver=False)
+    try:
+        task = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(run_sequence)
+        names = _names(paths)
+        pending = {
+            task.remote(str(p.resolve()), str((out_dir / n).resolve()), list(run_args)): n
+            for p, n in zip(paths, names)
+        }
+        by_name: Dict[str, Result] = {}
+        bar = _bar(len(pending), progress)
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            ref = done[0]
+            name = pending.pop(ref)
+            try:
+                by_name[name] = ray.get(ref)
+            except Exception as e:  # a failed task: keep its reason, the others go on
+                cause = getattr(e, "cause", None) or e
+                by_name[name] = Result(sequence=name, status="failed", reason=str(cause).strip()
+                                       .splitlines()[-1])
+            bar.set_postfix_str(f"{name}: {by_name[name].status}")
+            bar.update(1)
+        bar.close()
+    finally:
+        if started:
+            ray.shutdown()
+    results = [by_name[n] for n in names]
+    batch = Batch(results=results, totals=totals(results))
+    write_tables(out_dir, batch)
+    return batch
+
+
+def _bar(total: int, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="seq", desc="kiss-odom-batch", disable=not enabled)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    run_args: List[str] = []
+    if "--" in argv:
+        i = argv.index("--")
+        argv, run_args = argv[:i], argv[i + 1:]
+    p = argparse.ArgumentParser(
+        prog="kiss-odom-batch",
+        description="kiss-odom run over many sequences as Ray tasks, with an aggregate table. "
+        "Flags after -- go to every `kiss-odom run`.",
+    )
+    p.add_argument("sequences", nargs="+", help="dataset folders or files, as for kiss-odom run")
+    p.add_argument("--out", required=True, help="output folder: one subfolder per sequence")
+    p.add_argument("--address", help="Ray cluster address (default: start Ray locally)")
+    p.add_argument("--num-cpus", type=int, help="CPUs for a local Ray (default: all)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    a = p.parse_args(argv)
+    batch = run_batch(a.sequences, a.out, run_args, a.address, a.num_cpus, not a.quiet)
+    print((Path(a.out) / "aggregate.md").read_text())
+    for r in batch.failed:
+        print(f"failed: {r.sequence}: {r.reason}", file=sys.stderr)
+    return 1 if batch.failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,114 @@
+"""Configuration: kiss-icp's config objects, plain dicts and ``config.toml`` files, all turned
+into the settings of ``kiss-odom run`` (the layout of the ``config.toml`` it writes).
+
+Accepted by :func:`settings_from` (and so by :class:`kiss_odom.KissICP`):
+
+- ``None``: the defaults, which are kiss-icp 1.3.0's (max range 100 m, voxel max_range/100);
+- a kiss-icp ``KISSConfig`` (``kiss_icp.config.load_config(...)``), or the path of one of its
+  YAML files;
+- a ``config.toml`` path as ``kiss-odom run`` writes it;
+- a dict with any of the sections ``data``, ``mapping``, ``adaptive_threshold``,
+  ``registration`` (kiss-icp's keys and ours), ``capacities`` and ``runtime``.
+
+kiss-icp keys map as: ``registration.max_num_threads`` -> ``runtime.threads``; ``out_dir`` is
+kiss-icp's pipeline's and is ignored; ``adaptive_threshold.fixed_threshold`` is refused (the
+core always adapts). Keys neither side knows are a ``ValueError``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Mapping, Optional, Union
+
+from kiss_odom import _native
+
+ConfigLike = Union[None, Mapping[str, Any], str, os.PathLike, Any]
+
+
+def defaults() -> dict:
+    """The default settings (those of ``kiss-odom run``)."""
+    return json.loads(_native.default_settings_json())
+
+
+def _yaml_dict(path: Path) -> dict:
+    try:
+        from kiss_icp.config import load_config
+    except ImportError:
+        load_config = None
+    if load_config is not None:
+        return load_config(path).model_dump()
+    try:
+        import yaml
+    except ImportError as e:
+        raise ValueError(f"{path}: reading a YAML config needs kiss-icp or PyYAML") from e
+    with open(path) as f:
+        return yaml.safe_load(f) or {}
+
+
+def _as_dict(config: ConfigLike) -> dict:
+    if config is None:
+        return {}
+    if isinstance(config, (str, os.PathLike)):
+        path = Path(config)
+        if not path.is_file():
+            raise ValueError(f"{path}: no such configuration file")
+        if path.suffix == ".toml":
+            return json.loads(_native.load_settings_json(str(path)))
+        if path.suffix in (".yaml", ".yml"):
+            return _yaml_dict(path)
+        raise ValueError(f"{path}: a configuration is a .toml (kiss-odom) or .yaml (kiss-icp) file")
+    if hasattr(config, "model_dump"):  # kiss-icp's pydantic KISSConfig
+        return config.model_dump()
+    if isinstance(config, Mapping):
+        return {k: (dict(v) if isinstance(v, Mapping) else v) for k, v in config.items()}
+    raise ValueError(
+        f"config must be None, a dict, a kiss-icp KISSConfig or a file path, not {type(config).__name__}"
+    )
+
+
+def _merge(base: dict, over: dict, where: str = "") -> None:
+    for key, value in over.items():
+        if isinstance(value, Mapping):
+            if not isinstance(base.get(key), dict):
+                raise ValueError(f"unknown configuration section {where}{key!r}")
+            _merge(base[key], value, f"{where}{key}.")
+        elif value is not None or key == "voxel_size":
+            base[key] = value
+
+
+def settings_from(
+    config: ConfigLike = None,
+    *,
+    scalar: Optional[str] = None,
+    map_storage: Optional[str] = None,
+    capacities: Union[None, str, Mapping[str, int]] = None,
+    threads: Optional[int] = None,
+) -> dict:
+    """The ``kiss-odom run`` settings for ``config`` plus kiss-odom's extras: ``scalar``
+    (``"f64"`` or ``"f32"``), ``map_storage`` (``"exact"`` or ``"quantized"``),
+    ``capacities`` (``"full"``, ``"small"`` or a dict of the five capacities) and ``threads``
+    (0: all cores; results do not depend on it)."""
+    given = _as_dict(config)
+    given.pop("out_dir", None)
+    registration = dict(given.get("registration") or {})
+    runtime = dict(given.get("runtime") or {})
+    if "max_num_threads" in registration:
+        runtime.setdefault("threads", registration.pop("max_num_threads") or 0)
+    threshold = dict(given.get("adaptive_threshold") or {})
+    if threshold.pop("fixed_threshold", None) is not None:
+        raise ValueError(
+            "adaptive_threshold.fixed_threshold is not supported: kiss-odom's core always "
+            "adapts the threshold (set initial_threshold instead)"
+        )
+    given.update(registration=registration, runtime=runtime, adaptive_threshold=threshold)
+    if isinstance(capacities, str):
+        capacities = _native.capacity_preset(capacities)
+    extras = {"scalar": scalar, "map_storage": map_storage, "threads": threads}
+    given["runtime"].update({k: v for k, v in extras.items() if v is not None})
+    if capacities is not None:
+        given["capacities"] = {**given.get("capacities", {}), **capacities}
+    settings = defaults()
+    _merge(settings, given)
+    return settings

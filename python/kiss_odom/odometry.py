@@ -1,0 +1,170 @@
+"""``KissICP``: kiss-icp 1.3.0's ``KissICP`` surface on kiss-odom's core.
+
+Each ``register_frame`` call runs the whole frame (deskew, crop, both downsamplings, ICP,
+map update) in Rust with the GIL released, with the settings and the arithmetic of
+``kiss-odom run``: the same frames give the same poses, bit for bit, as ``run``, and agree
+with kiss-icp 1.3.0's ``KissICP`` to rounding.
+
+Input handling, each covered by a test in ``python/tests/test_bad_input.py``:
+
+- ``frame`` is an Nx3 array of x, y, z. float32, integer and non-contiguous arrays are
+  converted to contiguous float64; any other shape (Nx2, Nx4, 1-D) is a ``ValueError`` (pass
+  ``frame[:, :3]`` to drop an intensity column).
+- Rows with NaN or inf are skipped and counted (``last_report.dropped["non_finite"]``, flag
+  ``invalid_points``).
+- An empty frame (or one with no point within range) is not an error: as kiss-icp and
+  ``kiss-odom run`` do, the pose advances on the constant-velocity model, both returned
+  arrays are empty and ``last_report.status`` is ``"empty"``.
+- ``timestamps`` may be empty or ``None`` (no deskewing). Timestamps of the wrong length,
+  non-finite or all equal are ignored: the frame is registered without deskewing, with the
+  flag ``timestamps_ignored`` and the reason in ``last_report.stamp_problem``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Optional, Tuple
+
+import numpy as np
+
+from kiss_odom import _native
+from kiss_odom.config import ConfigLike, settings_from
+
+
+@dataclass(frozen=True)
+class FrameReport:
+    """How the last frame went (the core's ``FrameReport``).
+
+    ``status`` is ``"ok"``, ``"empty"`` or the set flags joined by ``|``; ``flags`` lists
+    them (``timestamps_ignored``, ``iteration_cap``, ``no_correspondences``, ``singular``,
+    ``degenerate``, ``invalid_points``, ``scan_truncated``, ``capacity``). ``dropped``
+    counts points and voxels dropped by reason."""
+
+    index: int
+    status: str
+    flags: Tuple[str, ...] = ()
+    iterations: int = 0
+    correspondences: int = 0
+    sigma: float = float("nan")
+    rms: float = float("nan")
+    model_error: float = float("nan")
+    observability: Optional[float] = None
+    input_points: int = 0
+    out_of_range: int = 0
+    merge_points: int = 0
+    source_points: int = 0
+    map_voxels: int = 0
+    map_points: int = 0
+    pruned_voxels: int = 0
+    deskewed: bool = False
+    stamp_problem: Optional[str] = None
+    dropped: Mapping[str, int] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """No flag set and not empty."""
+        return self.status == "ok"
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "FrameReport":
+        return cls(**{**d, "flags": tuple(d.get("flags", ()))})
+
+
+class LocalMap:
+    """kiss-icp's ``local_map``: the map of a :class:`KissICP` (world frame)."""
+
+    def __init__(self, odometry: "_native.Odometry"):
+        self._odom = odometry
+
+    def point_cloud(self) -> np.ndarray:
+        """Every map point, Nx3 float64 (voxel by voxel; kiss-icp's order differs)."""
+        return self._odom.map_points()
+
+    def clear(self) -> None:
+        """Empties the map; poses and threshold stay (as in kiss-icp)."""
+        self._odom.clear_map()
+
+    def empty(self) -> bool:
+        return self._odom.map_empty()
+
+
+def _is_kiss_icp_config(config: Any) -> bool:
+    return hasattr(config, "model_dump") and hasattr(config, "data")
+
+
+class KissICP:
+    """kiss-icp's ``KissICP(config)`` on kiss-odom.
+
+    ``config`` is anything :func:`kiss_odom.settings_from` accepts (a kiss-icp
+    ``KISSConfig``, its YAML, our ``config.toml``, a dict or ``None``); the keyword extras
+    pick the scalar (``"f64"``/``"f32"``), the map storage (``"exact"``/``"quantized"``),
+    the capacities (``"full"``/``"small"``/dict) and the thread count. A bad setting is a
+    ``ValueError`` naming it.
+    """
+
+    def __init__(
+        self,
+        config: ConfigLike = None,
+        *,
+        scalar: Optional[str] = None,
+        map_storage: Optional[str] = None,
+        capacities: Any = None,
+        threads: Optional[int] = None,
+    ):
+        self.settings = settings_from(
+            config, scalar=scalar, map_storage=map_storage, capacities=capacities, threads=threads
+        )
+        self._odom = _native.Odometry.from_json(json.dumps(self.settings))
+        # kiss-icp's pipeline reads its own config back (config.data.max_range, ...).
+        self.config = config if _is_kiss_icp_config(config) else self.settings
+        self.local_map = LocalMap(self._odom)
+        self.last_report: Optional[FrameReport] = None
+
+    def register_frame(self, frame, timestamps=None) -> Tuple[np.ndarray, np.ndarray]:
+        """Registers one scan; returns ``(deskewed_frame, source)`` like kiss-icp: the
+        deskewed, cropped frame and the registration points (both sensor frame, Nx3)."""
+        deskewed, source, report = self._odom.register_frame(frame, timestamps)
+        self.last_report = FrameReport.from_dict(report)
+        return deskewed, source
+
+    @property
+    def last_pose(self) -> np.ndarray:
+        """The latest pose, 4x4 (a copy; assign a 4x4 rigid transform to replace it)."""
+        return self._odom.last_pose()
+
+    @last_pose.setter
+    def last_pose(self, pose) -> None:
+        self._odom.set_last_pose(pose)
+
+    @property
+    def last_delta(self) -> np.ndarray:
+        """The constant-velocity model, 4x4 (assignable like ``last_pose``)."""
+        return self._odom.last_delta()
+
+    @last_delta.setter
+    def last_delta(self, delta) -> None:
+        self._odom.set_last_delta(delta)
+
+    @property
+    def sigma(self) -> float:
+        """The adaptive threshold's current sigma (m)."""
+        return self._odom.sigma()
+
+    @property
+    def state_bytes(self) -> int:
+        """Bytes of the core's state, fixed at construction."""
+        return self._odom.state_bytes()
+
+    def high_water(self) -> dict:
+        """Largest occupancy of each buffer since start, ``(peak, capacity)``."""
+        return self._odom.high_water()
+
+    def settings_toml(self) -> str:
+        """The settings as the ``config.toml`` ``kiss-odom run`` would write."""
+        return self._odom.settings_toml()
+
+    def reset(self) -> None:
+        """Back to a new odometry's state (empty map, identity pose)."""
+        self._odom.reset()
+        self.last_report = None

@@ -1,0 +1,29 @@
+//! `kiss_odom._native`: the compiled half of the `kiss_odom` Python package.
+//!
+//! Three groups, each a thin layer over code that already exists in Rust:
+//! - [`odometry`]: `Odometry`, the engine behind `kiss_odom.KissICP` (the core's `Odometry`
+//!   on owned storage; every frame runs with the GIL released);
+//! - [`stages`]: the classes and functions kiss-icp 1.3.0's Python layer imports from its
+//!   compiled `kiss_icp_pybind`, on the core's stage functions (`kiss_odom.backend`);
+//! - [`host`]: the `kiss-odom` command as a library call (batch runs), the metrics, the
+//!   KITTI scan correction and ground truth, from the `kiss-odom` host crate.
+//!
+//! Conversions between numpy arrays and points or poses live in [`convert`]; anything that
+//! is not an Nx3 or 4x4 array of numbers becomes a `ValueError`, never a crash.
+
+use pyo3::prelude::*;
+
+pub mod convert;
+pub mod host;
+pub mod odometry;
+pub mod stages;
+
+/// The extension module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    odometry::register(m)?;
+    stages::register(m)?;
+    host::register(m)?;
+    Ok(())
+}

@@ -1,0 +1,103 @@
+"""`kiss_odom.batch` on a local Ray: four kitti-mini sequences, two generated ones and a
+corrupt one. Each sequence's outputs are byte-equal to `kiss-odom run`'s, the aggregate table
+is written, and the corrupt sequence is reported with its reason while the others complete."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import pytest
+
+from conftest import KITTI_SEQUENCES, kiss_odom, kitti_root
+from kiss_odom.batch import Result, run_batch, totals
+
+pytest.importorskip("ray", reason="SKIP: ray not installed")
+
+
+@pytest.fixture(scope="module")
+def batch(generated_short, tmp_path_factory):
+    root = tmp_path_factory.mktemp("batch")
+    corrupt = root / "corrupt.mcap"
+    corrupt.write_bytes(b"\x89MCAP0\r\n" + bytes(range(256)) * 4)
+    sequences = [kitti_root() / "sequences" / s for s in KITTI_SEQUENCES]
+    sequences += list(generated_short) + [corrupt]
+    out = root / "out"
+    result = run_batch([str(s) for s in sequences], str(out), num_cpus=2, progress=False)
+    return sequences, out, result
+
+
+def test_every_sequence_writes_what_kiss_odom_run_writes(batch, tmp_path):
+    sequences, out, result = batch
+    ok = [r for r in result.results if r.status == "ok"]
+    assert len(ok) == 6
+    for seq, r in zip(sequences, result.results):
+        if r.status != "ok":
+            continue
+        ref = tmp_path / r.sequence
+        kiss_odom("run", seq, "--out", ref, "--quiet")
+        for name in ("poses_kitti.txt", "poses_tum.txt", "config.toml"):
+            same = (out / r.sequence / name).read_bytes() == (ref / name).read_bytes()
+            print(f"{r.sequence}/{name}: byte-equal to kiss-odom run: {same}")
+            assert same
+        assert (out / r.sequence / "summary.json").is_file()
+        assert (out / r.sequence / "frames.csv").is_file()
+
+
+def test_the_corrupt_sequence_is_reported_with_its_reason(batch):
+    _, _, result = batch
+    (failed,) = result.failed
+    print(f"{failed.sequence}: {failed.reason}")
+    assert failed.sequence == "corrupt.mcap" and "corrupt.mcap" in failed.reason
+    # The command's own one-line reason, not a Ray traceback.
+    assert "PointCloud2" in failed.reason and "\n" not in failed.reason
+    assert "Traceback" not in failed.reason
+
+
+def test_the_aggregate_table_has_every_sequence_and_both_kitti_totals(batch):
+    sequences, out, result = batch
+    rows = list(csv.DictReader(open(out / "aggregate.csv")))
+    per_seq = [r for r in rows if not r["sequence"].startswith("total:")]
+    assert [r["sequence"] for r in per_seq] == [s.name for s in sequences]
+    for r in per_seq:
+        if r["status"] == "ok":
+            assert float(r["ate_m"]) >= 0 and float(r["hz"]) > 0 and float(r["peak_rss_mib"]) > 0
+    scored = [r for r in result.results if r.kitti_segments > 0]
+    assert [r.sequence for r in scored] == ["fast-s1"], "only the fast drive passes 100 m"
+    t = result.totals
+    assert t["kitti_segments"] == scored[0].kitti_segments
+    assert t["kitti_t_err_pct_devkit"] == pytest.approx(scored[0].kitti_t_err_pct)
+    assert "kitti_t_err_pct_devkit" in (out / "aggregate.md").read_text()
+
+
+def test_the_devkit_total_weighs_segments_and_the_mean_weighs_sequences():
+    rows = [Result("a", "ok", kitti_t_err_pct=1.0, kitti_r_err_deg_per_m=0.1, kitti_segments=30),
+            Result("b", "ok", kitti_t_err_pct=2.0, kitti_r_err_deg_per_m=0.2, kitti_segments=10),
+            Result("c", "ok"), Result("d", "failed", reason="x")]
+    t = totals(rows)
+    assert t["kitti_t_err_pct_devkit"] == pytest.approx((30 * 1.0 + 10 * 2.0) / 40)
+    assert t["kitti_t_err_pct_mean"] == pytest.approx(1.5)
+    assert t["kitti_r_err_deg_per_m_devkit"] == pytest.approx(0.125)
+    assert t["sequences_scored"] == 2 and t["kitti_segments"] == 40
+    assert math.isnan(totals([])["kitti_t_err_pct_devkit"])
+
+
+def test_the_console_script_reports_the_failure_and_exits_1(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(b"not an mcap file")
+    script = Path(sys.executable).parent / "kiss-odom-batch"
+    seq = kitti_root() / "sequences" / "05"
+    out = subprocess.run([str(script), str(seq), str(corrupt), "--out", str(tmp_path / "out"),
+                          "--num-cpus", "2", "--", "--threads", "1"],
+                         capture_output=True, text=True)
+    print(out.stdout)
+    assert out.returncode == 1, out.stderr[-2000:]
+    assert "failed: corrupt.mcap:" in out.stderr
+    assert "| 05 | ok |" in out.stdout
+    kiss_odom("run", seq, "--out", tmp_path / "ref", "--quiet")
+    assert (tmp_path / "out" / "05" / "poses_kitti.txt").read_bytes() == \
+        (tmp_path / "ref" / "poses_kitti.txt").read_bytes()

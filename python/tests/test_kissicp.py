@@ -1,0 +1,175 @@
+"""`kiss_odom.KissICP` against `kiss-odom run` (bit for bit) and against kiss-icp 1.3.0's own
+`KissICP` in the same process (to 1e-9 m), and its kiss-icp-shaped surface."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import kiss_odom
+from conftest import KITTI_SEQUENCES, kiss_odom as run_binary, kitti_frames, kitti_root, read_kitti
+
+TOL_REFERENCE_M = 1e-9
+
+
+def our_poses(frames, **kwargs) -> np.ndarray:
+    odom = kiss_odom.KissICP(**kwargs)
+    poses = []
+    for f in frames:
+        odom.register_frame(f, np.array([]))
+        poses.append(odom.last_pose)
+    return np.array(poses)
+
+
+@pytest.mark.parametrize("sequence", KITTI_SEQUENCES)
+def test_poses_are_bit_identical_to_kiss_odom_run(sequence, tmp_path):
+    run_binary("run", kitti_root() / "sequences" / sequence, "--out", tmp_path, "--quiet")
+    printed = read_kitti(tmp_path / "poses_kitti.txt")
+    ours = our_poses(kitti_frames(sequence))
+    assert ours.shape == printed.shape
+    differ = np.count_nonzero(ours[:, :3, :] != printed[:, :3, :])
+    print(f"{sequence}: {differ} of {printed[:, :3, :].size} pose entries differ from run's "
+          f"poses_kitti.txt (allowed 0), worst {np.abs(ours - printed).max():.1e}")
+    assert differ == 0
+
+
+def _translation_gap(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.linalg.norm(a[:, :3, 3] - b[:, :3, 3], axis=1).max())
+
+
+def _rotation_gap(a: np.ndarray, b: np.ndarray) -> float:
+    # atan2 of the skew part: arccos of the trace loses half the digits near zero.
+    rel = np.einsum("nji,njk->nik", a[:, :3, :3], b[:, :3, :3])
+    skew = np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0],
+                     rel[:, 1, 0] - rel[:, 0, 1]], axis=1)
+    sin = np.linalg.norm(skew, axis=1) / 2
+    cos = (np.trace(rel, axis1=1, axis2=2) - 1) / 2
+    return float(np.arctan2(sin, cos).max())
+
+
+@pytest.mark.parametrize("sequence", KITTI_SEQUENCES)
+def test_poses_agree_with_kiss_icp_in_the_same_process(sequence):
+    kiss_icp = pytest.importorskip("kiss_icp.kiss_icp", reason="SKIP: kiss-icp not installed")
+    from kiss_icp.config import load_config
+
+    frames = list(kitti_frames(sequence))
+    config = load_config(None)
+    ref = kiss_icp.KissICP(config)
+    want = []
+    for f in frames:
+        ref.register_frame(f, np.array([]))
+        want.append(ref.last_pose)
+    want = np.array(want)
+    ours = our_poses(frames, config=config)
+    dt, dr = _translation_gap(ours, want), _rotation_gap(ours, want)
+    print(f"{sequence}: worst {dt:.2e} m, {dr:.2e} rad from kiss-icp 1.3.0 "
+          f"(allowed {TOL_REFERENCE_M:.0e})")
+    assert dt <= TOL_REFERENCE_M and dr <= TOL_REFERENCE_M
+
+
+def test_returns_the_deskewed_frame_and_the_source_like_kiss_icp():
+    kiss_icp = pytest.importorskip("kiss_icp.kiss_icp", reason="SKIP: kiss-icp not installed")
+    from kiss_icp.config import load_config
+
+    frames = list(kitti_frames("05"))[:3]
+    ref, ours = kiss_icp.KissICP(load_config(None)), kiss_odom.KissICP()
+    for f in frames:
+        ref_frame, ref_source = ref.register_frame(f, np.array([]))
+        frame, source = ours.register_frame(f, np.array([]))
+        assert frame.shape == ref_frame.shape and source.shape == ref_source.shape
+        worst = max(np.abs(frame - ref_frame).max(), np.abs(source - ref_source).max())
+        print(f"deskewed frame and source: worst {worst:.1e} m (allowed {TOL_REFERENCE_M:.0e})")
+        assert worst <= TOL_REFERENCE_M
+
+
+def test_every_configuration_form_gives_the_same_settings(tmp_path):
+    pytest.importorskip("kiss_icp.config", reason="SKIP: kiss-icp not installed")
+    from kiss_icp.config import load_config
+
+    yaml_file = tmp_path / "kiss.yaml"
+    yaml_file.write_text("data:\n  max_range: 60.0\nmapping:\n  max_points_per_voxel: 10\n")
+    forms = {
+        "KISSConfig": load_config(yaml_file),
+        "YAML path": yaml_file,
+        "dict": {"data": {"max_range": 60.0}, "mapping": {"max_points_per_voxel": 10,
+                                                          "voxel_size": 0.6}},
+    }
+    settings = {name: kiss_odom.KissICP(c).settings for name, c in forms.items()}
+    toml_file = tmp_path / "config.toml"
+    toml_file.write_text(kiss_odom.KissICP(forms["dict"]).settings_toml())
+    settings["config.toml"] = kiss_odom.KissICP(toml_file).settings
+    first = settings["dict"]
+    assert first["data"]["max_range"] == 60.0 and first["mapping"]["max_points_per_voxel"] == 10
+    for name, s in settings.items():
+        assert s == first, f"{name}: {json.dumps(s)} != {json.dumps(first)}"
+    # kiss-icp's pipeline reads its own config object back.
+    assert kiss_odom.KissICP(forms["KISSConfig"]).config is forms["KISSConfig"]
+
+
+def test_extras_pick_the_build_and_bad_settings_name_themselves():
+    frames = list(kitti_frames("05"))[:4]
+    ref = our_poses(frames)
+    for scalar, storage in (("f32", "exact"), ("f64", "quantized"), ("f32", "quantized")):
+        poses = our_poses(frames, scalar=scalar, map_storage=storage, capacities="full")
+        gap = _translation_gap(poses, ref)
+        print(f"{scalar}/{storage}: {gap:.2e} m from f64/exact after {len(frames)} frames")
+        assert 0 < gap < 0.05
+    odom = kiss_odom.KissICP(capacities="small", threads=1)
+    assert odom.settings["capacities"]["map_voxels"] == 8192
+    assert odom.state_bytes < kiss_odom.KissICP().state_bytes
+    with pytest.raises(ValueError, match="max_rnage"):
+        kiss_odom.KissICP({"data": {"max_rnage": 3.0}})
+    with pytest.raises(ValueError, match="fixed_threshold"):
+        kiss_odom.KissICP({"adaptive_threshold": {"fixed_threshold": 1.0}})
+    with pytest.raises(ValueError, match="max_range"):
+        kiss_odom.KissICP({"data": {"max_range": -1.0}})
+    with pytest.raises(ValueError, match="scalar"):
+        kiss_odom.KissICP(scalar="f16")
+
+
+def test_pose_and_velocity_are_assignable_and_the_map_clears_like_kiss_icp():
+    frames = list(kitti_frames("05"))
+    odom = kiss_odom.KissICP()
+    assert odom.local_map.empty()
+    for f in frames[:3]:
+        odom.register_frame(f, np.array([]))
+    assert not odom.local_map.empty()
+    cloud = odom.local_map.point_cloud()
+    assert cloud.ndim == 2 and cloud.shape[1] == 3 and len(cloud) == odom.last_report.map_points
+    # kiss-icp: an empty map registers nothing, so the pose is the prediction last_pose @ delta.
+    start = np.eye(4)
+    start[:3, 3] = [10.0, -5.0, 2.0]
+    odom.last_pose, odom.last_delta = start, np.eye(4)
+    odom.local_map.clear()
+    assert odom.local_map.empty()
+    odom.register_frame(frames[3], np.array([]))
+    assert np.array_equal(odom.last_pose, start)
+    with pytest.raises(ValueError, match="rigid"):
+        odom.last_pose = np.full((4, 4), 2.0)
+    with pytest.raises(ValueError, match="4x4"):
+        odom.last_delta = np.eye(3)
+
+
+def test_the_report_names_flags_and_counts():
+    odom = kiss_odom.KissICP()
+    frames = list(kitti_frames("05"))[:2]
+    odom.register_frame(frames[0], np.array([]))
+    first = odom.last_report
+    assert first.index == 0 and first.status == "ok" and first.ok
+    assert first.input_points == len(frames[0]) and first.map_points > 0
+    assert first.observability is None and not first.deskewed
+    odom.register_frame(frames[1], np.array([]))
+    second = odom.last_report
+    assert second.index == 1 and second.iterations > 0 and second.correspondences > 0
+    assert second.sigma == pytest.approx(2.0) and second.observability is not None
+    assert set(second.dropped) == {"non_finite", "truncated", "merge_full", "source_full",
+                                   "map_voxels_full", "map_points_full"}
+
+
+def test_the_thread_count_does_not_change_a_bit():
+    frames = list(kitti_frames("05"))
+    one, two = our_poses(frames, threads=1), our_poses(frames, threads=2)
+    print(f"{np.count_nonzero(one != two)} pose entries differ between 1 and 2 threads (allowed 0)")
+    assert np.array_equal(one, two)

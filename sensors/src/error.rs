@@ -1,0 +1,92 @@
+//! Error enums: small, `Copy`, each variant saying what the caller should do.
+
+/// Why a packet was not decoded. The packet is skipped and counted in the sweep's
+/// [`crate::SweepStats`] (`bad_packets`, `out_of_order` or `other_sensor`); the decoder state is
+/// unchanged, so the caller can log the error and go on with the next packet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PacketError {
+    /// Shorter than the format's fixed length: the capture cut it (snap length, a file cut in
+    /// the middle). Skip it.
+    Truncated,
+    /// Longer than the format's fixed length: a packet of another kind (Velodyne position
+    /// packet, Ouster IMU packet) or another Ouster profile/beam count than the metadata
+    /// says. Skip it; if every packet says so, check the port and the metadata.
+    Length,
+    /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.
+    BlockFlag,
+    /// A Velodyne azimuth at or above 360.00 degrees: corrupted. Skip it.
+    Azimuth,
+    /// A Velodyne timestamp at or above one hour (it counts microseconds past the hour):
+    /// corrupted. Skip it.
+    Timestamp,
+    /// The Velodyne factory byte names a model this crate does not decode (or none, as old
+    /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`].
+    UnknownModel,
+    /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39).
+    UnknownReturnMode,
+    /// The packet comes from another sensor than the sweep's (another model or return mode,
+    /// or an Ouster column whose measurement id is beyond the frame): two sensors on one
+    /// port. Filter by source address, or give each sensor its own port.
+    OtherSensor,
+    /// An Ouster packet whose type is not lidar data: skip it.
+    PacketType,
+    /// The Ouster packet's initialisation id or serial number differs from the metadata's:
+    /// the metadata JSON belongs to another sensor. Give the JSON saved with this recording.
+    MetadataMismatch,
+    /// The packet is older than the sweep being assembled (a late or repeated packet): it is
+    /// dropped and counted in `out_of_order`. Nothing to do.
+    Late,
+}
+
+impl core::fmt::Display for PacketError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Truncated => "packet shorter than the format's length (truncated)",
+            Self::Length => {
+                "packet longer than the format's length (another packet kind or profile)"
+            }
+            Self::BlockFlag => "a data block without its 0xFFEE flag",
+            Self::Azimuth => "an azimuth of 360 degrees or more",
+            Self::Timestamp => "a timestamp of one hour or more",
+            Self::UnknownModel => "unknown Velodyne model byte",
+            Self::UnknownReturnMode => "unknown Velodyne return-mode byte",
+            Self::OtherSensor => "packet of another sensor than the sweep's",
+            Self::PacketType => "not a lidar data packet",
+            Self::MetadataMismatch => "initialisation id or serial differs from the metadata",
+            Self::Late => "packet older than the sweep being assembled",
+        })
+    }
+}
+
+/// A configuration that cannot decode anything. Fix the configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigError {
+    /// The calibration has another number of lasers than the model fires, or a non-finite
+    /// number: give one entry per laser.
+    Calibration,
+    /// Ouster beam count (`pixels_per_column`) is zero, above [`crate::ouster::MAX_BEAMS`], or
+    /// differs from the length of the angle tables.
+    Beams,
+    /// Ouster `columns_per_frame` is zero or above [`crate::ouster::MAX_COLUMNS`],
+    /// `columns_per_packet` is zero or above [`crate::ouster::MAX_COLUMNS_PER_PACKET`], or the
+    /// column window lies outside the frame.
+    Columns,
+    /// A transform or angle is not finite.
+    NonFinite,
+    /// The cut angle is not below 360 degrees.
+    CutAngle,
+}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Calibration => "calibration does not have one finite entry per laser",
+            Self::Beams => "beam count zero, too large or not matching the angle tables",
+            Self::Columns => "columns per frame or per packet zero or too large, or bad window",
+            Self::NonFinite => "a transform or angle is not finite",
+            Self::CutAngle => "cut angle not below 360 degrees",
+        })
+    }
+}

@@ -1,0 +1,136 @@
+//! Ouster OS-0/OS-1/OS-2: lidar packets to timed points in the sensor frame, sweeps by frame
+//! id.
+//!
+//! The geometry is the sensor's: each beam has an altitude and an azimuth angle and starts
+//! `lidar_origin_to_beam_origin_mm` from the lidar origin (or as `beam_to_lidar_transform`
+//! says), the encoder angle of column `m` is `2 pi (1 - m / columns_per_frame)`, and
+//! `lidar_to_sensor_transform` takes the lidar frame to the sensor frame, as ouster-sdk's
+//! `XYZLut` computes it. Every point takes its column's timestamp. The host reads the
+//! metadata JSON into a [`SensorInfo`].
+
+mod decoder;
+pub mod wire;
+
+pub use decoder::Decoder;
+pub use wire::{Layout, Packet};
+
+use crate::error::ConfigError;
+
+/// Beams of the largest sensor decoded here.
+pub const MAX_BEAMS: usize = 128;
+/// Columns per frame of the widest mode (2048x10).
+pub const MAX_COLUMNS: usize = 2048;
+/// Columns per packet, at most.
+pub const MAX_COLUMNS_PER_PACKET: usize = 64;
+
+/// The lidar packet profile (`udp_profile_lidar`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Profile {
+    /// `LEGACY`: firmware before 2.2, and later firmware configured so.
+    Legacy,
+    /// `RNG19_RFL8_SIG16_NIR16`: one return.
+    Rng19Rfl8Sig16Nir16,
+    /// `RNG19_RFL8_SIG16_NIR16_DUAL`: two returns.
+    Rng19Rfl8Sig16Nir16Dual,
+    /// `RNG15_RFL8_NIR8`: low bandwidth, range in 8 mm units.
+    Rng15Rfl8Nir8,
+}
+
+impl Profile {
+    /// The profile the metadata names (`udp_profile_lidar`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "LEGACY" => Some(Self::Legacy),
+            "RNG19_RFL8_SIG16_NIR16" => Some(Self::Rng19Rfl8Sig16Nir16),
+            "RNG19_RFL8_SIG16_NIR16_DUAL" => Some(Self::Rng19Rfl8Sig16Nir16Dual),
+            "RNG15_RFL8_NIR8" => Some(Self::Rng15Rfl8Nir8),
+            _ => None,
+        }
+    }
+}
+
+/// What the decoder needs from a sensor's metadata, as plain numbers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SensorInfo {
+    /// Packet profile.
+    pub profile: Profile,
+    /// Columns in a full frame (`1024` in `1024x10`).
+    pub columns_per_frame: u16,
+    /// Columns in a packet (16 for the sensors here).
+    pub columns_per_packet: u16,
+    /// First and last column the sensor sends (inclusive; first > last wraps).
+    pub column_window: (u16, u16),
+    /// Beam elevation angles, degrees, one per beam (top first).
+    pub beam_altitude_deg: heapless::Vec<f64, MAX_BEAMS>,
+    /// Beam azimuth offsets, degrees, one per beam.
+    pub beam_azimuth_deg: heapless::Vec<f64, MAX_BEAMS>,
+    /// Destaggering shift of each row (for images; points do not need it).
+    pub pixel_shift_by_row: heapless::Vec<i16, MAX_BEAMS>,
+    /// Beam origin in the lidar frame, 4x4 row-major, mm (older metadata: identity with
+    /// `lidar_origin_to_beam_origin_mm` at `[0][3]`).
+    pub beam_to_lidar: [f64; 16],
+    /// Lidar frame to sensor frame, 4x4 row-major, mm.
+    pub lidar_to_sensor: [f64; 16],
+    /// The metadata's `initialization_id`, checked against eUDP packets.
+    pub initialization_id: Option<u32>,
+    /// The metadata's serial number (`prod_sn`), checked against eUDP packets.
+    pub serial: Option<u64>,
+}
+
+impl SensorInfo {
+    /// Beams (pixels per column).
+    pub fn beams(&self) -> usize {
+        self.beam_altitude_deg.len()
+    }
+
+    /// The packet layout this metadata announces.
+    pub fn layout(&self) -> Layout {
+        Layout {
+            profile: self.profile,
+            beams: self.beams(),
+            columns: usize::from(self.columns_per_packet),
+        }
+    }
+
+    /// Column `column` of row `row` in the destaggered image (ouster-sdk's `destagger`).
+    pub fn destaggered_column(&self, row: usize, column: u16) -> Option<u16> {
+        let shift = i32::from(*self.pixel_shift_by_row.get(row)?);
+        let w = i32::from(self.columns_per_frame);
+        (w > 0).then(|| (i32::from(column) + shift).rem_euclid(w) as u16)
+    }
+
+    /// Whether the numbers describe a sensor this crate can decode.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let beams = self.beams();
+        if beams == 0
+            || self.beam_azimuth_deg.len() != beams
+            || (!self.pixel_shift_by_row.is_empty() && self.pixel_shift_by_row.len() != beams)
+        {
+            return Err(ConfigError::Beams);
+        }
+        let w = usize::from(self.columns_per_frame);
+        let cpp = usize::from(self.columns_per_packet);
+        let (a, b) = self.column_window;
+        if w == 0
+            || w > MAX_COLUMNS
+            || cpp == 0
+            || cpp > MAX_COLUMNS_PER_PACKET
+            || usize::from(a) >= w
+            || usize::from(b) >= w
+        {
+            return Err(ConfigError::Columns);
+        }
+        let finite = self
+            .beam_altitude_deg
+            .iter()
+            .chain(self.beam_azimuth_deg.iter())
+            .chain(self.beam_to_lidar.iter())
+            .chain(self.lidar_to_sensor.iter())
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(ConfigError::NonFinite);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,343 @@
+//! `kiss-odom ros2` on the wire: against an independent DDS stack (Cyclone DDS from Python),
+//! fed by `--play` in another process, and at 10 and 50 Hz.
+//!
+//! Every pose the node publishes must be, as printed in a KITTI file, the pose `kiss-odom run`
+//! writes for the same cloud when run on the sequence of clouds the node registered (a cloud
+//! the node dropped under the latest-only rule is never registered, so `run` gets the
+//! registered ones only). The Cyclone test needs `KISS_ODOM_ROS2_PYTHON` (a Python with
+//! `tests/ros2/requirements.txt`, which `.ci/run` makes) and prints SKIP without it.
+
+mod ros2_common;
+
+use kiss_odom::drive::Driver;
+use kiss_odom::io::mcap::parse_cdr;
+use kiss_odom::io::pointcloud2::decode;
+use kiss_odom::io::poses::{format_kitti, read_kitti};
+use kiss_odom::io::{open, Format, Item, OpenOptions};
+use kiss_odom::ros2::dds;
+use kiss_odom::ros2::node::twist_of;
+use kiss_odom::ros2::params::NodeParams;
+use kiss_odom::settings::Settings;
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+use ros2_common::*;
+use serde_json::Value;
+use std::path::Path;
+use std::time::Duration;
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
+}
+
+/// The pose a message carries, every value as sent.
+fn pose_of(position: &Value, orientation: &Value) -> Isometry3<f64> {
+    let (p, q) = (floats(position), floats(orientation));
+    Isometry3::from_parts(
+        Translation3::new(p[0], p[1], p[2]),
+        UnitQuaternion::new_unchecked(Quaternion::new(q[3], q[0], q[1], q[2])),
+    )
+}
+
+fn stamp_of(v: &Value) -> f64 {
+    let s = floats(v);
+    s[0] + s[1] / 1e9
+}
+
+#[test]
+fn cyclonedds_publisher_and_subscriber_get_runs_poses_bit_for_bit_with_twist_and_covariance() {
+    let Some(py) = std::env::var_os("KISS_ODOM_ROS2_PYTHON") else {
+        println!(
+            "SKIP: KISS_ODOM_ROS2_PYTHON is not set (a Python with tests/ros2/requirements.txt)"
+        );
+        return;
+    };
+    let _lock = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(0);
+    let node = start_node(d, dir.path(), Duration::ZERO);
+    let json = dir.path().join("received.json");
+    let status = std::process::Command::new(&py)
+        .arg(root().join("tests/ros2/interop.py"))
+        .args(["--folder", &kitti()])
+        .args(["--domain", &d.to_string(), "--rate", "10"])
+        .arg("--out")
+        .arg(&json)
+        .status()
+        .expect("start the Cyclone DDS side");
+    let stopped = node.stop();
+    println!("{}{}", stopped.out, stopped.err);
+    assert!(status.success(), "interop.py failed");
+
+    // The clouds went out as raw .bin scans: `run` reads the same floats as a generic folder.
+    let expected = run_poses(&[&kitti(), "--format", "bin"], &dir.path().join("run"));
+    let expected: Vec<&str> = expected.lines().collect();
+    let got: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let odom = got["odometry"].as_array().unwrap();
+    let tf = got["tf"].as_array().unwrap();
+    assert_eq!(odom.len(), 10, "one odometry message per cloud");
+    assert_eq!(tf.len(), 10, "one transform per cloud");
+    assert_eq!(stopped.summary.registered, 10);
+    assert_eq!(stopped.summary.dropped, 0, "10 Hz: no cloud dropped");
+
+    let mut worst_twist = 0.0f64;
+    let mut previous: Option<(Isometry3<f64>, f64)> = None;
+    for (k, m) in odom.iter().enumerate() {
+        let pose = pose_of(&m["position"], &m["orientation"]);
+        assert_eq!(
+            format_kitti(&[pose]).trim_end(),
+            expected[k],
+            "frame {k}: published pose differs from run's"
+        );
+        assert_eq!(m["frame_id"], "odom_lidar");
+        assert_eq!(m["child_frame_id"], "velodyne", "base = the cloud's frame");
+        let t = &tf[k];
+        assert_eq!(t["stamp"], m["stamp"]);
+        assert_eq!(
+            (&t["frame_id"], &t["child_frame_id"]),
+            (&m["frame_id"], &m["child_frame_id"])
+        );
+        assert_eq!(
+            pose_of(&t["translation"], &t["rotation"]),
+            pose,
+            "frame {k}: /tf"
+        );
+
+        // Documented: twist = last motion / time between stamps (0.1 s for the first cloud);
+        // pose covariance diag(0.1 x 6); twist covariance the same over dt^2.
+        let stamp = stamp_of(&m["stamp"]);
+        let (delta, dt) = match previous {
+            None => (Isometry3::identity(), 0.1),
+            Some((p, s)) => (p.inverse() * pose, stamp - s),
+        };
+        previous = Some((pose, stamp));
+        let want = twist_of(&delta, dt);
+        let want = [
+            want.linear.x,
+            want.linear.y,
+            want.linear.z,
+            want.angular.x,
+            want.angular.y,
+            want.angular.z,
+        ];
+        let have: Vec<f64> = floats(&m["linear"])
+            .into_iter()
+            .chain(floats(&m["angular"]))
+            .collect();
+        for (a, b) in want.iter().zip(&have) {
+            worst_twist = worst_twist.max((a - b).abs());
+        }
+        let (pc, tc) = (
+            floats(&m["pose_covariance"]),
+            floats(&m["twist_covariance"]),
+        );
+        for i in 0..36 {
+            let diag = i % 7 == 0;
+            assert_eq!(pc[i], if diag { 0.1 } else { 0.0 }, "pose covariance [{i}]");
+            let tw = if diag { 0.1 / (dt * dt) } else { 0.0 };
+            assert!(
+                (tc[i] - tw).abs() <= 1e-9 * tw.max(1.0),
+                "frame {k} twist covariance [{i}]: {} vs {tw}",
+                tc[i]
+            );
+        }
+    }
+    println!("twist against the published poses: worst {worst_twist:.3e} (tolerance 1e-9)");
+    assert!(worst_twist <= 1e-9);
+}
+
+/// Plays `file` into a node in this process; returns what the node printed and run's poses.
+fn play_into_node(k: u16, file: &Path, rate: &str, min_period: Duration) -> (Stopped, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(k);
+    let node = start_node(d, dir.path(), min_period);
+    let played = play(file, d, &["--rate", rate]);
+    let sent = played
+        .lines()
+        .filter(|l| l.starts_with("published "))
+        .count();
+    // Whatever the node has not taken yet is in its mailbox or on the wire: give it time.
+    std::thread::sleep(Duration::from_millis(300));
+    let stopped = node.stop_after(sent, Duration::from_secs(5));
+    let s = &stopped.summary;
+    println!("{}: {}", file.display(), s.line());
+    assert_eq!(
+        s.received as usize, sent,
+        "every cloud published was received"
+    );
+    assert_eq!(
+        s.received,
+        s.registered + s.dropped + s.malformed + s.empty,
+        "every received cloud is registered, dropped or skipped"
+    );
+    (stopped, played)
+}
+
+#[test]
+fn play_of_a_bag_and_an_mcap_feeds_a_node_that_publishes_runs_poses() {
+    let _lock = serial();
+    for (k, name) in [(1, "ouster.bag"), (2, "ouster.mcap")] {
+        let file = root().join("fixtures/bags").join(name);
+        let (stopped, _) = play_into_node(k, &file, "1", Duration::ZERO);
+        let dir = tempfile::tempdir().unwrap();
+        let expected = run_poses(&[&file.to_string_lossy()], dir.path());
+        assert_eq!(stopped.summary.dropped, 0);
+        assert_eq!(
+            stopped.poses, expected,
+            "{name}: node poses differ from run's"
+        );
+        assert!(
+            stopped.out.contains("deskewed"),
+            "{name}: per-point times reach the core"
+        );
+    }
+}
+
+#[test]
+fn ten_hz_keeps_up_and_fifty_hz_drops_the_older_clouds_and_counts_them() {
+    let _lock = serial();
+    let data = tempfile::tempdir().unwrap();
+    let urban = data.path().join("urban");
+    let mut err = Vec::new();
+    let argv = [
+        "kiss-odom",
+        "simulate",
+        "--out",
+        &urban.to_string_lossy(),
+        "--frames",
+        "100",
+    ];
+    let code = kiss_odom::cli::main_with(argv.iter().map(Into::into).collect(), &mut err);
+    assert_eq!(code, 0, "{}", String::from_utf8_lossy(&err));
+
+    // 10 Hz, the recorded pace of both: nothing dropped, every pose is run's.
+    for (k, path) in [(3, root().join(KITTI_DIR)), (4, urban.clone())] {
+        let (stopped, _) = play_into_node(k, &path, "1", Duration::ZERO);
+        let s = &stopped.summary;
+        assert_eq!(s.dropped, 0, "{}: dropped at 10 Hz", path.display());
+        let dir = tempfile::tempdir().unwrap();
+        assert_eq!(
+            stopped.poses,
+            run_poses(&[&path.to_string_lossy()], dir.path())
+        );
+    }
+
+    // 50 Hz into a node that takes a cloud at most every 100 ms (`--min-period 0.1`, a slow
+    // computer on any machine): clouds arrive while one is being handled and the older ones
+    // are replaced.
+    let (stopped, _) = play_into_node(5, &urban, "5", Duration::from_millis(100));
+    let s = &stopped.summary;
+    assert!(
+        s.dropped > 0,
+        "50 Hz on one thread should drop: {}",
+        s.line()
+    );
+    // `run` on exactly the registered clouds: a folder holding only those frames, numbered
+    // in order (a gap in the numbers would be a lost frame to `run`).
+    let times: Vec<f64> = std::fs::read_to_string(urban.join("times.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect();
+    let subset = data.path().join("registered");
+    for sub in ["velodyne", "timestamps"] {
+        std::fs::create_dir_all(subset.join(sub)).unwrap();
+    }
+    let stamps = registered_stamps(&stopped.out);
+    assert_eq!(stamps.len() as u64, s.registered);
+    for (j, st) in stamps.iter().enumerate() {
+        let t: f64 = st.parse().unwrap();
+        let i = times
+            .iter()
+            .position(|x| (x - t).abs() < 1e-6)
+            .expect("stamp of a frame");
+        for sub in ["velodyne", "timestamps"] {
+            let (from, to) = (format!("{sub}/{i:06}.bin"), format!("{sub}/{j:06}.bin"));
+            std::fs::copy(urban.join(from), subset.join(to)).unwrap();
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let expected = run_poses(&[&subset.to_string_lossy(), "--format", "bin"], dir.path());
+    assert_eq!(
+        stopped.poses, expected,
+        "poses differ from run on the registered clouds"
+    );
+    println!(
+        "50 Hz: {} of {} clouds registered, {} dropped",
+        s.registered, s.received, s.dropped
+    );
+}
+
+#[test]
+fn base_to_lidar_extrinsic_moves_the_poses_and_the_local_map_is_published_in_the_odom_frame() {
+    let _lock = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(6);
+    // LiDAR 1.5 m above the base and turned 90 degrees about z.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let params = NodeParams {
+        base_frame: "base_link".into(),
+        base_to_lidar: Some([0.0, 0.0, 1.5, 0.0, 0.0, h, h]),
+        publish_local_map: true,
+        local_map_period: 0.0,
+        ..NodeParams::default()
+    };
+    let e = params.extrinsic().unwrap();
+    let node = start_node_with(d, dir.path(), Duration::ZERO, params);
+    let dp = dds::participant(d).unwrap();
+    let mut maps = dds::cloud_reader(&dp, "/kiss/local_map").unwrap();
+    play(&root().join(KITTI_DIR), d, &["--rate", "2"]);
+    let stopped = node.stop_after(10, Duration::from_secs(10));
+    assert_eq!(stopped.summary.registered, 10);
+
+    // Base poses are E L E^-1 of run's LiDAR poses.
+    let run_dir = dir.path().join("run");
+    run_poses(&[&kitti()], &run_dir);
+    let lidar = read_kitti(&run_dir.join("poses_kitti.txt")).unwrap();
+    let node_file = dir.path().join("node_poses.txt");
+    let base = read_kitti(&node_file).unwrap();
+    let mut worst = 0.0f64;
+    for (l, b) in lidar.iter().zip(&base) {
+        let want = e * l * e.inverse();
+        worst = worst.max((want.translation.vector - b.translation.vector).norm());
+        worst = worst.max(want.rotation.angle_to(&b.rotation));
+    }
+    println!("base poses against E L E^-1: worst {worst:.3e} (tolerance 1e-9)");
+    assert!(worst <= 1e-9);
+    // The first base pose is the identity, and the base moves forward along the LiDAR's
+    // driving direction turned by the mount: KITTI drives along the LiDAR's x.
+    let last = base.last().unwrap().translation.vector;
+    assert!(last.y > 4.0 && last.x.abs() < 0.5, "{last:?}");
+
+    // The last map is the odometry's map after the last cloud, moved into the base's
+    // odometry frame: the same points, in the same order, as an odometry built here holds.
+    let mut last = None;
+    while let Ok(Some(sample)) = maps.take_next_sample() {
+        last = Some(sample.into_value());
+    }
+    let raw = last.expect("no local map received");
+    let cloud = parse_cdr(&raw.0).unwrap();
+    assert_eq!(cloud.frame_id, "odom_lidar");
+    assert_eq!(
+        cloud.stamp.to_string(),
+        *registered_stamps(&stopped.out).last().unwrap()
+    );
+    let published = decode(&cloud).unwrap().points;
+    let mut dataset = open(Path::new(&kitti()), Format::Auto, &OpenOptions::default()).unwrap();
+    let mut driver = Driver::new(&Settings::default()).unwrap();
+    while let Some(Item::Frame(f)) = dataset.frames.next_item().unwrap() {
+        driver.register(&f).unwrap();
+    }
+    let expected = driver.map_points();
+    let expected: Vec<[f64; 3]> = expected
+        .iter()
+        .map(|p| {
+            let v = e * Point3::from(*p);
+            [v.x, v.y, v.z]
+        })
+        .collect();
+    assert_eq!(published.len(), expected.len());
+    assert!(published == expected, "local map points differ");
+}

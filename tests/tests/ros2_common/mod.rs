@@ -1,0 +1,181 @@
+//! Helpers shared by the `ros2*.rs` tests: a node in a thread of the test process, the
+//! `kiss-odom` command as a separate process, `kiss-odom run` for the poses to compare with.
+
+#![allow(dead_code)]
+
+use kiss_odom::ros2::node::{self, NodeOptions, Summary};
+use kiss_odom::ros2::params::NodeParams;
+use kiss_odom::settings::Settings;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+/// One DDS test at a time in a test binary: they share two cores, and a 10 Hz test must not
+/// compete with a 50 Hz one.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+/// Takes the test lock (a failed test poisons nothing that matters here).
+pub fn serial() -> MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A DDS domain for test `k` (0..12) of this process: runs of the suite started by different
+/// processes do not hear each other.
+pub fn domain(k: u16) -> u16 {
+    assert!(k < 12);
+    20 + (std::process::id() % 16) as u16 * 12 + k
+}
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The shipped KITTI sample, relative to the repository root.
+pub const KITTI_DIR: &str = "fixtures/kitti-05-reduced";
+
+/// The shipped KITTI sample's path.
+pub fn kitti() -> String {
+    root().join(KITTI_DIR).to_string_lossy().into_owned()
+}
+
+/// The `kiss-odom` command (this package's copy of it).
+pub fn cli() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+}
+
+/// The node thread: its result, standard output and warnings.
+type NodeThread = std::thread::JoinHandle<(Result<Summary, String>, Vec<u8>, Vec<u8>)>;
+
+/// A node running in a thread of the test process.
+pub struct Node {
+    stop: Arc<AtomicBool>,
+    handle: NodeThread,
+    /// Where it writes its poses.
+    pub poses: PathBuf,
+}
+
+/// What a stopped node printed and counted.
+pub struct Stopped {
+    /// Counters.
+    pub summary: Summary,
+    /// Standard output (frame lines and the summary).
+    pub out: String,
+    /// Warnings.
+    pub err: String,
+    /// Poses written, KITTI lines.
+    pub poses: String,
+}
+
+/// Starts a node on `domain` with default parameters, `threads` core threads (None = all), and
+/// its poses written to `dir/poses.txt`.
+pub fn start_node(domain: u16, dir: &Path, min_period: Duration) -> Node {
+    start_node_with(domain, dir, min_period, NodeParams::default())
+}
+
+/// [`start_node`] with other node parameters.
+pub fn start_node_with(domain: u16, dir: &Path, min_period: Duration, params: NodeParams) -> Node {
+    let settings = Settings::default();
+    let poses = dir.join("node_poses.txt");
+    let opts = NodeOptions {
+        settings,
+        params,
+        domain,
+        poses: Some(poses.clone()),
+        min_period,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let handle = std::thread::spawn(move || {
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        let r = node::run(&opts, &flag, &mut out, &mut err).map_err(|e| format!("{e:#}"));
+        (r, out, err)
+    });
+    Node {
+        stop,
+        handle,
+        poses,
+    }
+}
+
+impl Node {
+    /// Poses written so far.
+    pub fn registered(&self) -> usize {
+        std::fs::read_to_string(&self.poses)
+            .map(|s| s.lines().count())
+            .unwrap_or(0)
+    }
+
+    /// Waits until `n` poses are written (or `timeout`), then stops the node.
+    pub fn stop_after(self, n: usize, timeout: Duration) -> Stopped {
+        wait_until(timeout, || self.registered() >= n);
+        self.stop()
+    }
+
+    /// Stops the node and collects what it printed.
+    pub fn stop(self) -> Stopped {
+        self.stop.store(true, Ordering::SeqCst);
+        let (r, out, err) = self.handle.join().expect("node thread");
+        let out = String::from_utf8_lossy(&out).into_owned();
+        let err = String::from_utf8_lossy(&err).into_owned();
+        let summary = r.unwrap_or_else(|e| panic!("node failed: {e}\n{out}\n{err}"));
+        let poses = std::fs::read_to_string(&self.poses).unwrap_or_default();
+        Stopped {
+            summary,
+            out,
+            err,
+            poses,
+        }
+    }
+}
+
+/// Polls `ok` every 20 ms until it holds or `timeout` passes; returns whether it held.
+pub fn wait_until(timeout: Duration, mut ok: impl FnMut() -> bool) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < timeout {
+        if ok() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    ok()
+}
+
+/// `kiss-odom run ARGS --out DIR` in-process; returns its `poses_kitti.txt`.
+pub fn run_poses(args: &[&str], out: &Path) -> String {
+    let mut argv: Vec<std::ffi::OsString> = vec!["kiss-odom".into(), "run".into()];
+    argv.extend(args.iter().map(|a| a.into()));
+    argv.extend(["--out".into(), out.as_os_str().to_owned(), "--quiet".into()]);
+    let mut err = Vec::new();
+    let code = kiss_odom::cli::main_with(argv, &mut err);
+    assert_eq!(code, 0, "run failed: {}", String::from_utf8_lossy(&err));
+    std::fs::read_to_string(out.join("poses_kitti.txt")).expect("poses_kitti.txt")
+}
+
+/// `kiss-odom ros2 --play PATH --domain D ARGS` as a separate process, to its end.
+pub fn play(path: &Path, domain: u16, args: &[&str]) -> String {
+    let out = std::process::Command::new(cli())
+        .arg("ros2")
+        .arg("--play")
+        .arg(path)
+        .args(["--domain", &domain.to_string()])
+        .args(args)
+        .output()
+        .expect("start kiss-odom ros2 --play");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "--play failed: {text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
+
+/// The stamps (`sec.nanosec`) of the clouds a node registered, from its frame lines.
+pub fn registered_stamps(out: &str) -> Vec<String> {
+    out.lines()
+        .filter(|l| l.starts_with("frame "))
+        .filter_map(|l| l.split_whitespace().nth(3).map(String::from))
+        .collect()
+}
