@@ -367,7 +367,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 18] {
+fn fields() -> [Field; 19] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -382,6 +382,7 @@ fn fields() -> [Field; 18] {
         field!(registration.kernel_scale, false),
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
+        field!(registration.degeneracy, false),
         field!(capacities.scan_points, true),
         field!(capacities.merge_points, true),
         field!(capacities.source_points, true),
