@@ -168,8 +168,9 @@ pub const ROTATION_RATIO: f64 = 0.002;
 
 /// Measures the `source` points (sensor frame) at `prediction` against `map` and decides what
 /// to hold, reading only voxels with at least `min_points` map points (see [`min_points`]).
-/// While no voxel near the points is that full (the first frames) the sparse ones are read;
-/// with no structured voxel at all nothing is measured and nothing held.
+/// While no voxel near the points is that full (the first frames) nothing is measured and
+/// nothing held: ICP runs as the reference's and gives the constant-velocity model its first
+/// velocity.
 pub fn weakness<T: Real, P: PointCodec<T>>(
     map: &MapView<'_, T, P>,
     source: &[[T; 3]],
@@ -178,22 +179,17 @@ pub fn weakness<T: Real, P: PointCodec<T>>(
     min_points: usize,
 ) -> Weakness<T> {
     let origin = Point::from(prediction.translation.vector);
-    let measure = |least| {
-        let points = source.iter().map(|p| prediction * Point::from(*p));
-        let n = source.len();
-        information(
-            map,
-            points,
-            n,
-            &origin,
-            max_distance,
-            Volumes::Flattest,
-            least,
-        )
-    };
-    measure(min_points)
-        .or_else(|| measure(0))
-        .map_or(Weakness::NONE, |info| decide(&info, prediction))
+    let points = source.iter().map(|p| prediction * Point::from(*p));
+    let info = information(
+        map,
+        points,
+        source.len(),
+        &origin,
+        max_distance,
+        Volumes::Flattest,
+        min_points,
+    );
+    info.map_or(Weakness::NONE, |info| decide(&info, prediction))
 }
 
 /// Map points a voxel needs before robust mode reads its shape: more than one sweep can put

@@ -79,8 +79,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
         // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
         let first_frame = map.view().is_empty();
+        // Robust mode holds weak directions at the prediction once there is one: the second
+        // frame's is standing still, whatever the sensor does.
         let weak = match cfg.degeneracy {
-            Degeneracy::Robust if !first_frame => weakness(
+            Degeneracy::Robust if !first_frame && self.frames >= 2 => weakness(
                 &map.view(),
                 source,
                 &prediction,

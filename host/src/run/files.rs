@@ -79,8 +79,9 @@ pub struct FrameRow {
     /// Observability ratio (empty on the first frame and when nothing was measured).
     pub observability: Option<f64>,
     /// Robust mode: the sensor axes held at the constant-velocity prediction, `|`-joined
-    /// (`tx|ty|yaw`); empty when none was.
-    pub held: String,
+    /// (`tx|ty|yaw`); empty when none was (the `held` flag column says whether any
+    /// direction was).
+    pub held_axes: String,
     /// Robust mode: weakest over strongest eigenvalue of the translation information.
     pub weak_t: Option<f64>,
     /// Robust mode: the same for rotation.
@@ -123,7 +124,7 @@ impl FrameRow {
             dropped_map_voxels_full: r.map(|r| r.dropped.map_voxels_full),
             dropped_map_points_full: r.map(|r| r.dropped.map_points_full),
             observability: r.and_then(|r| r.observability),
-            held: r.map_or_else(String::new, |r| r.held.to_string()),
+            held_axes: r.map_or_else(String::new, |r| r.held.to_string()),
             weak_t: r.and_then(|r| r.weak_ratios).map(|w| w[0]),
             weak_r: r.and_then(|r| r.weak_ratios).map(|w| w[1]),
             deskewed: r.is_some_and(|r| r.deskewed),
