@@ -6,7 +6,8 @@
 #
 # Writes $OUT/results.jsonl (one line per run and system) and prints the Markdown table
 # (bench/degeneracy_table.py). GenZ-ICP runs from a venv made here (target/genzvenv).
-# Every system runs on one thread; run it alone at `nice` on a shared machine.
+# Every system runs on one thread; run it alone at `nice` on a shared machine. REUSE_GENZ=1
+# re-runs only kiss-odom, keeping GenZ-ICP's poses of an earlier run in the same $OUT.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FRAMES=${1:-500}
@@ -48,7 +49,12 @@ ours() {  # ours NAME DATA MODE
 genz() {  # genz NAME DATA PRESET GT [ARGS]
   local o=$OUT/$1-genz.txt
   local info
-  info=$("$GENZ/bin/python" bench/genz_run.py "$2" "$o" --preset "$3" "${@:5}")
+  if [ -n "${REUSE_GENZ:-}" ] && [ -f "$o.json" ]; then
+    info=$(cat "$o.json")  # GenZ-ICP's poses do not depend on kiss-odom: keep an earlier run's
+  else
+    info=$("$GENZ/bin/python" bench/genz_run.py "$2" "$o" --preset "$3" "${@:5}")
+    echo "$info" > "$o.json"
+  fi
   record "$1" "genz-$3" "$o" "$4" \
     "$(python3 -c "import json,sys; j=json.loads(sys.argv[1]); print(json.dumps({'hz': j['frames'] / j['seconds']}))" "$info")"
 }

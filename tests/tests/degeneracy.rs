@@ -29,6 +29,14 @@ fn simulate(dir: &Path, profile: &str, frames: usize) {
     assert_eq!(code, 0, "simulate failed: {err}");
 }
 
+/// Simulates `frames` of `profile` in `dir` and runs reference and robust mode on them.
+fn both_modes(dir: &Path, profile: &str, frames: usize) -> (common::Run, common::Run) {
+    let data = dir.join(profile);
+    simulate(&data, profile, frames);
+    let mode = |m| run(&data, &dir.join(m), &["--threads", "1", "--degeneracy", m]);
+    (mode("reference"), mode("robust"))
+}
+
 /// The `held_axes` column of `frames.csv`.
 fn held(out: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
@@ -57,14 +65,7 @@ fn correction(poses: &[Matrix4<f64>], k: usize) -> [f64; 3] {
 #[test]
 fn the_corridor_axis_is_held_at_the_prediction_where_reference_mode_moves() {
     let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("corridor");
-    simulate(&data, "corridor", 60);
-    let reference = run(&data, &dir.path().join("ref"), &["--threads", "1"]);
-    let robust = run(
-        &data,
-        &dir.path().join("rob"),
-        &["--threads", "1", "--degeneracy", "robust"],
-    );
+    let (reference, robust) = both_modes(dir.path(), "corridor", 60);
     reference.succeeded_with_frames(60);
     robust.succeeded_with_frames(60);
     let held = held(&robust.out);
@@ -103,14 +104,7 @@ fn the_corridor_axis_is_held_at_the_prediction_where_reference_mode_moves() {
 #[test]
 fn an_urban_street_holds_nothing_and_gives_the_reference_poses() {
     let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("urban");
-    simulate(&data, "urban", 40);
-    let reference = run(&data, &dir.path().join("ref"), &["--threads", "1"]);
-    let robust = run(
-        &data,
-        &dir.path().join("rob"),
-        &["--threads", "1", "--degeneracy", "robust"],
-    );
+    let (reference, robust) = both_modes(dir.path(), "urban", 40);
     let read = |r: &common::Run| std::fs::read(r.out.join("poses_kitti.txt")).unwrap();
     assert!(held(&robust.out).iter().all(|h| h.is_empty()));
     assert_eq!(
