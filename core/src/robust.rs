@@ -155,8 +155,8 @@ impl<T: Real> Weakness<T> {
 }
 
 /// A translation direction is held when its information is below this fraction of the
-/// strongest translation's. Measured (BENCHMARKS.md, "Degenerate scenes"): the corridor's
-/// axis reads 0.02-0.03 (scan-pattern artefacts in sparsely filled voxels leak a little),
+/// strongest translation's. Read from `frames.csv` (`weak_t`) of generated runs: the
+/// corridor's axis reads 0.01-0.09 (scan-pattern artefacts in sparsely filled voxels leak a little),
 /// a lone plane's 1e-4, urban streets' weakest 0.25-0.6.
 pub const TRANSLATION_RATIO: f64 = 0.1;
 
