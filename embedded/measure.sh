@@ -3,7 +3,7 @@
 #
 #   embedded/measure.sh [case...]
 #
-# Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64
+# Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny
 # a53-full a53-small rv-small rv-small-f64 rv-full (default: all). Outputs go to embedded/target/measure/.
 # Frame times are ESTIMATES: instructions / (IPC x clock) with IPC = 1 on a 600 MHz Cortex-M7
 # (from the Cortex-M4F counts for an M7 whose FPU is single precision, from the m7 build for
@@ -14,7 +14,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 out="$here/target/measure"
 mkdir -p "$out"
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 a53-full a53-small rv-small rv-small-f64 rv-full)
+[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny a53-full a53-small rv-small rv-small-f64 rv-full)
 
 spec() {
   case "$1" in
@@ -24,6 +24,7 @@ spec() {
     m4-baseline) echo "thumbv7em:baseline" ;;
     m7-small) echo "m7:" ;;
     m7-small-f64) echo "m7:f64" ;;
+    m7-tiny) echo "m7:tiny" ;;
     a53-full) echo "aarch64:f64,exact,full" ;;
     a53-small) echo "aarch64:" ;;
     rv-small) echo "riscv32:" ;;

@@ -82,6 +82,19 @@ elif [ "$which" = host ]; then
 else
   tdir="$here/target/$which"
 fi
+# The tiny profile embeds sweeps of a generated VLP-16 drive (kiss-odom simulate, deterministic):
+# make them once, with the host tool of this repository (built for the host: without the
+# bare-metal code-generation flags this script may have exported above).
+if [[ ",$features," == *",tiny,"* ]]; then
+  vlp="${KISS_EMBED_VLP16:-$here/target/vlp16}"
+  if [ ! -f "$vlp/sim.toml" ]; then
+    (cd "$here/.." && env -u RUSTFLAGS -u CARGO_ENCODED_RUSTFLAGS -u CARGO_BUILD_TARGET \
+      cargo run --release -q -p kiss-odom -- simulate --out "$vlp" --frames 40 \
+      --seed 11 --beams 16 --columns 1800 --fov-up 15 --fov-down -15 --max-range 100 \
+      --overwrite) >&2 || { echo "error: cannot generate the VLP-16 sweeps" >&2; exit 96; }
+  fi
+  export KISS_EMBED_VLP16="$vlp"
+fi
 args=(--release --target "$triple" --target-dir "$tdir")
 [ -n "$features" ] && args+=(--features "$features")
 export DEFMT_LOG="${DEFMT_LOG:-info}"

@@ -86,6 +86,17 @@ impl<T: Real> Config<T> {
         }
     }
 
+    /// The parameters [`Capacities::TINY`] was sized for: a 16-beam sensor's sparse rings with
+    /// `r_max` 50 m, voxels of 2 m and at most 10 points each (the reference's defaults would be
+    /// 0.5 m voxels and 20 points, several times the memory, and no better on such data).
+    pub fn tiny() -> Self {
+        Self {
+            voxel_size: T::of(2.0),
+            max_points_per_voxel: 10,
+            ..Self::new(T::of(50.0))
+        }
+    }
+
     /// Checks that every parameter is finite and in its domain.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let pos = |x: T| x.is_finite() && x > T::zero();
@@ -146,14 +157,18 @@ pub struct Capacities {
 }
 
 impl Capacities {
-    /// Full scale, KITTI-like (HDL-64E or OS1-64/128 at `r_max` 100 m, 1 m voxels): margins of
-    /// about 2x over the high-water marks measured on kitti-mini and 500-frame simulated runs.
+    /// Full scale, KITTI-like (HDL-64E or OS1-64/128 at `r_max` 100 m, 1 m voxels). Margins
+    /// over the largest high-water marks of kitti-mini and generated 500-1000-frame urban and
+    /// fast drives (BENCHMARKS.md): scan 2.1x (127,109, KITTI 05; an OS1-128 sweep fits),
+    /// merge 2.4x (20,417, KITTI 01), source 2.6x (4,760, KITTI 01), map voxels 1.57x (18,318,
+    /// urban-1000) and map point slots 1.48x (155,444, fast-500), the map sized so that with
+    /// quantized points it stays under a third of the reference's.
     pub const FULL_SCALE: Self = Self {
         scan_points: 262_144,
         merge_points: 49_152,
         source_points: 12_288,
-        map_voxels: 36_864,
-        map_points: 262_144,
+        map_voxels: 28_672,
+        map_points: 229_376,
     };
 
     /// Microcontroller scale (a few MiB): `r_max` about 50 m, 1 m voxels, f32 and quantised
@@ -164,6 +179,20 @@ impl Capacities {
         source_points: 3_072,
         map_voxels: 8_192,
         map_points: 49_152,
+    };
+
+    /// A 16-beam sensor (VLP-16 class, about 29k points a sweep fed in pieces through
+    /// `begin_frame`/`push`/`finish`) in under 512 KiB with f32 and quantised map points: use it
+    /// with [`Config::tiny`] (`r_max` 50 m, 2 m voxels, `N_max` 10). 1.5x the high-water marks
+    /// of a 600-sweep generated VLP-16 urban run (merge 2,785, source 578, voxels 2,657, point
+    /// slots 18,272), no drop on three more such runs (BENCHMARKS.md). `scan_points` only
+    /// bounds one sweep's kept points, stored nowhere.
+    pub const TINY: Self = Self {
+        scan_points: 32_768,
+        merge_points: 4_224,
+        source_points: 896,
+        map_voxels: 4_032,
+        map_points: 27_456,
     };
 
     /// Checks that every capacity is usable.

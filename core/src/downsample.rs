@@ -12,7 +12,9 @@
 
 use crate::scalar::Real;
 use crate::storage::{view, words_for};
-use crate::voxel::{point_to_voxel, reference_hash, table_hash, VoxelKey};
+use crate::voxel::{
+    home_slot, next_slot, point_to_voxel, reference_hash, slots_for, table_hash, VoxelKey,
+};
 use crate::Point;
 
 const EMPTY: u32 = u32::MAX;
@@ -30,7 +32,12 @@ pub struct Downsampled {
 
 /// Scratch slots of the dedup grid for an output of `capacity` points (load at most 3/4).
 pub const fn grid_slots_for(capacity: usize) -> usize {
-    (capacity * 4).div_ceil(3).next_power_of_two()
+    slots_for(capacity)
+}
+
+/// Words of the grid's keys (12 bytes a slot) and of its indices (4 bytes a slot).
+const fn grid_words(slots: usize) -> (usize, usize) {
+    (words_for(slots * 12), words_for(slots * 4))
 }
 
 /// Scratch bytes [`reference_order`] needs for `points` points: two `u64` sort keys and a
@@ -43,9 +50,13 @@ pub const fn reference_order_bytes(points: usize) -> usize {
 /// grid (12-byte key and 4-byte index per slot), then, in the same words, the reference-order
 /// reconstruction.
 pub const fn scratch_words_for(capacity: usize) -> usize {
-    let grid = grid_slots_for(capacity) * 16;
-    let order = reference_order_bytes(capacity);
-    words_for(if grid > order { grid } else { order })
+    let (keys, vals) = grid_words(grid_slots_for(capacity));
+    let order = words_for(reference_order_bytes(capacity));
+    if keys + vals > order {
+        keys + vals
+    } else {
+        order
+    }
 }
 
 /// `u64` words of a cloud of `points` points of scalar `T`.
@@ -57,7 +68,6 @@ pub const fn cloud_words<T>(points: usize) -> usize {
 pub struct Dedup<'a, T> {
     keys: &'a mut [VoxelKey],
     vals: &'a mut [u32],
-    mask: usize,
     out: &'a mut [[T; 3]],
     voxel: T,
     kept: usize,
@@ -85,13 +95,12 @@ impl<'a, T: Real> Dedup<'a, T> {
         if scratch.len() < scratch_words_for(out.len()) || so_far.kept > out.len() {
             return None;
         }
-        let (kw, vw) = scratch.split_at_mut(slots * 12 / 8);
+        let (kw, vw) = scratch.split_at_mut(grid_words(slots).0);
         let keys = view::<VoxelKey>(kw, slots).ok()?;
         let vals = view::<u32>(vw, slots).ok()?;
         Some(Self {
             keys,
             vals,
-            mask: slots - 1,
             out,
             voxel,
             kept: so_far.kept,
@@ -103,7 +112,8 @@ impl<'a, T: Real> Dedup<'a, T> {
     #[inline]
     pub fn push(&mut self, p: &Point<T>) {
         let key = point_to_voxel(p, self.voxel);
-        let mut i = table_hash(&key) as usize & self.mask;
+        let slots = self.vals.len();
+        let mut i = home_slot(table_hash(&key), slots);
         loop {
             let v = self.vals[i];
             if v == EMPTY {
@@ -120,7 +130,7 @@ impl<'a, T: Real> Dedup<'a, T> {
             if self.keys[i] == key {
                 return;
             }
-            i = (i + 1) & self.mask;
+            i = next_slot(i, slots);
         }
     }
 

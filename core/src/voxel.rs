@@ -41,6 +41,33 @@ pub fn table_hash(k: &VoxelKey) -> u32 {
     h
 }
 
+/// Slots an open-addressing table needs for `n` entries at load at most 3/4 (at least one).
+pub const fn slots_for(n: usize) -> usize {
+    let s = (n * 4).div_ceil(3);
+    if s == 0 {
+        1
+    } else {
+        s
+    }
+}
+
+/// The home slot of `hash` in a table of `slots` slots: the high bits of the hash scaled to the
+/// table (a multiply, not a modulo), so a table needs no power-of-two size.
+#[inline]
+pub fn home_slot(hash: u32, slots: usize) -> usize {
+    ((u64::from(hash) * slots as u64) >> 32) as usize
+}
+
+/// The slot after `i` in a table of `slots` slots (wrapping at the end).
+#[inline]
+pub fn next_slot(i: usize, slots: usize) -> usize {
+    if i + 1 == slots {
+        0
+    } else {
+        i + 1
+    }
+}
+
 /// The 27 voxels searched for a nearest neighbour, in the reference's order (the centre first,
 /// then faces, edges and corners). The order decides which of two equidistant points wins.
 pub const NEIGHBOUR_SHIFTS: [[i32; 3]; 27] = [

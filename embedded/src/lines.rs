@@ -16,10 +16,11 @@ impl<T: Real + LowerExp> Display for FrameLine<'_, T> {
         let FrameLine(i, points, r) = *self;
         write!(
             f,
-            "frame {} status={} iterations={} correspondences={} points={} merge={} source={} map_voxels={} map_points={} sigma={:e} rms={:e}",
+            "frame {} status={} iterations={} work={} correspondences={} points={} merge={} source={} map_voxels={} map_points={} sigma={:e} rms={:e}",
             i,
             r.status,
             r.iterations,
+            r.work,
             r.correspondences,
             points,
             r.merge_points,

@@ -21,11 +21,15 @@ pub type Codec = kiss_odom_core::Exact;
 #[cfg(not(feature = "exact"))]
 pub type Codec = kiss_odom_core::Quantized;
 
-/// Capacities of this build (`full` feature: full scale; microcontroller scale otherwise).
+/// Capacities of this build (`full` feature: full scale; `tiny`: a 16-beam sensor in 512 KiB;
+/// microcontroller scale otherwise).
 #[cfg(feature = "full")]
 pub const CAPS: Capacities = Capacities::FULL_SCALE;
-/// Capacities of this build (`full` feature: full scale; microcontroller scale otherwise).
-#[cfg(not(feature = "full"))]
+/// Capacities of this build (see above).
+#[cfg(feature = "tiny")]
+pub const CAPS: Capacities = Capacities::TINY;
+/// Capacities of this build (see above).
+#[cfg(not(any(feature = "full", feature = "tiny")))]
 pub const CAPS: Capacities = Capacities::SMALL;
 
 /// Arena length in `u64` words, computed at compile time so the arena can be a `static`.
@@ -43,9 +47,14 @@ const CODEC_NAME: &str = if cfg!(feature = "exact") {
 };
 const CAPS_NAME: &str = if cfg!(feature = "full") {
     "full_scale"
+} else if cfg!(feature = "tiny") {
+    "tiny"
 } else {
     "small"
 };
+
+/// Points per push in the `tiny` profile: one VLP-16 data packet (12 blocks of 32 returns).
+const PACKET_POINTS: usize = 384;
 
 /// Where one frame sits in the embedded point data.
 pub struct FrameInfo {
@@ -57,6 +66,10 @@ pub struct FrameInfo {
     pub raw: usize,
     /// Points after the range crop.
     pub cropped: usize,
+    /// First and last capture time of the sweep (`tiny`; 0 otherwise).
+    pub t_min: f64,
+    /// See `t_min`.
+    pub t_max: f64,
 }
 
 /// What `build.rs` generated from kitti-mini.
@@ -70,24 +83,40 @@ struct Aligned<B: ?Sized>(B);
 
 static BYTES: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/frames.bin")));
 
+static STAMPS: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/stamps.bin")));
+
 /// The points of one embedded frame.
 pub fn points(f: &FrameInfo) -> &'static [[Scalar; 3]] {
     let all: &'static [[Scalar; 3]] = bytemuck::cast_slice(&BYTES.0);
     &all[f.start..f.start + f.len]
 }
 
+/// The per-point capture times of one embedded frame (`tiny` only).
+pub fn stamps(f: &FrameInfo) -> &'static [f64] {
+    let all: &'static [f64] = bytemuck::cast_slice(&STAMPS.0);
+    all.get(f.start..f.start + f.len).unwrap_or(&[])
+}
+
 /// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
 /// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels), in robust mode
 /// under the `robust` feature.
 pub fn config() -> Config<Scalar> {
+    let base = if cfg!(feature = "tiny") {
+        Config::tiny()
+    } else {
+        Config {
+            voxel_size: frames::VOXEL_SIZE as Scalar,
+            ..Config::new(frames::MAX_RANGE as Scalar)
+        }
+    };
     Config {
-        voxel_size: frames::VOXEL_SIZE as Scalar,
+        work_budget: frames::BUDGET,
         degeneracy: if cfg!(feature = "robust") {
             Degeneracy::Robust
         } else {
             Degeneracy::Reference
         },
-        ..Config::new(frames::MAX_RANGE as Scalar)
+        ..base
     }
 }
 
@@ -109,7 +138,7 @@ pub const EXIT_CONFIG_ERROR: i32 = 3;
 pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: &str) -> i32 {
     let cfg = config();
     out!(
-        "config scalar={} codec={} caps={} max_range={:e} voxel_size={:e} sequence={} first={} frames={} keep_every={}",
+        "config scalar={} codec={} caps={} max_range={:e} voxel_size={:e} sequence={} first={} frames={} keep_every={} budget={}",
         SCALAR_NAME,
         CODEC_NAME,
         CAPS_NAME,
@@ -118,7 +147,8 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
         frames::SEQUENCE,
         frames::FIRST,
         frames::FRAMES.len(),
-        frames::KEEP_EVERY
+        frames::KEEP_EVERY,
+        frames::BUDGET.unwrap_or(0)
     );
     let mut odom = match Odometry::<Scalar, Codec, _>::new(cfg, CAPS, state) {
         Ok(o) => o,
@@ -144,7 +174,16 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
         }
         kiss_frame_mark();
         let t0 = insns();
-        let result = odom.register_frame(pts, None);
+        let result = if cfg!(feature = "tiny") {
+            // Packet by packet, as a sensor delivers them: the sweep is never held whole.
+            let mut input = odom.begin_frame(Some((f.t_min, f.t_max)));
+            for (p, t) in pts.chunks(PACKET_POINTS).zip(stamps(f).chunks(PACKET_POINTS)) {
+                input.push(p, Some(t));
+            }
+            input.finish()
+        } else {
+            odom.register_frame(pts, None)
+        };
         let t1 = insns();
         kiss_frame_mark();
         let cost = t0.zip(t1).map(|(a, b)| b - a);

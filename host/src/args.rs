@@ -87,6 +87,12 @@ pub struct PipelineArgs {
     /// `robust` (held at the constant-velocity prediction) [default: reference].
     #[arg(long, value_enum)]
     pub degeneracy: Option<DegeneracyMode>,
+    /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
+    /// would spend more keeps its last complete iterate and is flagged `budget`. With the
+    /// capacities it bounds a frame's time on a given target (README "Deadlines") [default:
+    /// none, the reference's behaviour].
+    #[arg(long)]
+    pub budget: Option<u64>,
 }
 
 /// How the core runs.
@@ -137,6 +143,9 @@ pub enum Preset {
     Full,
     /// `Capacities::SMALL` (microcontroller budget).
     Small,
+    /// `Capacities::TINY` (a 16-beam sensor in 512 KiB); also sets the parameters it was sized
+    /// for (`Config::tiny`: max range 50 m, voxel 2 m, 10 points a voxel) unless given.
+    Tiny,
 }
 
 impl Preset {
@@ -145,6 +154,7 @@ impl Preset {
         match self {
             Preset::Full => Capacities::FULL_SCALE,
             Preset::Small => Capacities::SMALL,
+            Preset::Tiny => Capacities::TINY,
         }
     }
 }
@@ -160,6 +170,12 @@ pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Resul
     };
     if let Some(t) = threads {
         s.runtime.threads = t;
+    }
+    if c.capacities == Some(Preset::Tiny) {
+        let t = kiss_odom_core::Config::<f64>::tiny();
+        s.data.max_range = t.max_range;
+        s.mapping.voxel_size = Some(t.voxel_size);
+        s.mapping.max_points_per_voxel = t.max_points_per_voxel;
     }
     if let Some(r) = p.max_range {
         s.data.max_range = r;
@@ -178,6 +194,9 @@ pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Resul
     }
     if let Some(d) = p.degeneracy {
         s.registration.degeneracy = d;
+    }
+    if let Some(b) = p.budget {
+        s.registration.work_budget = Some(b);
     }
     if let Some(x) = c.scalar {
         s.runtime.scalar = x;

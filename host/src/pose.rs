@@ -3,7 +3,7 @@
 //! angle itself is the core's ([`kiss_odom_core::stages::rotation_angle`]).
 
 use kiss_odom_core::stages::rotation_angle;
-use kiss_odom_core::Real;
+use kiss_odom_core::{FrameReport, Real};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion};
 
 /// A pose in any scalar as `f64`. The quaternion is renormalised after widening, as every
@@ -20,6 +20,34 @@ pub fn widen<T: Real>(p: &Isometry3<T>) -> Isometry3<f64> {
             q.z.wide(),
         )),
     )
+}
+
+/// A frame report in any scalar as `f64` (its pose by [`widen`]).
+pub fn widen_report<T: Real>(r: &FrameReport<T>) -> FrameReport<f64> {
+    FrameReport {
+        index: r.index,
+        pose: widen(&r.pose),
+        status: r.status,
+        iterations: r.iterations,
+        work: r.work,
+        correspondences: r.correspondences,
+        sigma: r.sigma.wide(),
+        rms: r.rms.wide(),
+        model_error: r.model_error.wide(),
+        observability: r.observability.map(Real::wide),
+        held: r.held,
+        weak_ratios: r.weak_ratios.map(|w| w.map(Real::wide)),
+        input_points: r.input_points,
+        out_of_range: r.out_of_range,
+        merge_points: r.merge_points,
+        source_points: r.source_points,
+        map_voxels: r.map_voxels,
+        map_points: r.map_points,
+        pruned_voxels: r.pruned_voxels,
+        dropped: r.dropped,
+        deskewed: r.deskewed,
+        stamp_problem: r.stamp_problem,
+    }
 }
 
 /// A rotation matrix as a quaternion, without re-projection (as Sophus does when the

@@ -101,6 +101,9 @@ pub struct Registration {
     pub degeneracy_ratio: f64,
     /// `reference` or `robust`.
     pub degeneracy: DegeneracyMode,
+    /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
+    /// none, the reference's behaviour.
+    pub work_budget: Option<u64>,
 }
 
 /// Capacities of the core's buffers (see `kiss_odom_core::Capacities`).
@@ -189,6 +192,7 @@ impl Default for Registration {
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
             degeneracy: DegeneracyMode::Reference,
+            work_budget: None,
         }
     }
 }
@@ -259,6 +263,7 @@ impl Settings {
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
         c.degeneracy = self.registration.degeneracy.into();
+        c.work_budget = self.registration.work_budget;
         if let Err(e) = c.validate() {
             bail!("invalid configuration: {e}");
         }
@@ -367,7 +372,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 19] {
+fn fields() -> [Field; 20] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -383,6 +388,7 @@ fn fields() -> [Field; 19] {
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
         field!(registration.degeneracy, false),
+        field!(registration.work_budget, false),
         field!(capacities.scan_points, true),
         field!(capacities.merge_points, true),
         field!(capacities.source_points, true),

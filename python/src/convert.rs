@@ -5,7 +5,7 @@
 //! expected and what came.
 
 use kiss_odom_core::{Pose, Real};
-use nalgebra::{Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion};
+use nalgebra::{Matrix3, Matrix4, Quaternion, Translation3, UnitQuaternion};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -96,7 +96,7 @@ pub fn pose(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Pose<f64>> {
             "{what} is not a rigid transform (rotation block off by {defect:.1e}, last row {bottom:?})"
         )));
     }
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    let q = kiss_odom::pose::quaternion_of(&r);
     Ok(Pose::from_parts(
         Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
         q,

@@ -7,7 +7,7 @@
 
 use crate::convert::{self, narrow, Numpy};
 use kiss_odom::exec::Pool;
-use kiss_odom::pose::widen;
+use kiss_odom::pose::{widen, widen_report};
 use kiss_odom::settings::{Scalar, Settings, Storage};
 use kiss_odom_core::{
     Exact, Flag, FrameError, FrameReport, Odometry as Core, PointCodec, Quantized, Real,
@@ -121,30 +121,6 @@ fn one_frame<T: Numpy, P: PointCodec<T>>(
             deskewed.clear();
             Err(e)
         }
-    }
-}
-
-fn widen_report<T: Real>(r: &FrameReport<T>) -> FrameReport<f64> {
-    FrameReport {
-        index: r.index,
-        pose: widen(&r.pose),
-        status: r.status,
-        iterations: r.iterations,
-        correspondences: r.correspondences,
-        sigma: r.sigma.wide(),
-        rms: r.rms.wide(),
-        model_error: r.model_error.wide(),
-        observability: r.observability.map(|o| o.wide()),
-        input_points: r.input_points,
-        out_of_range: r.out_of_range,
-        merge_points: r.merge_points,
-        source_points: r.source_points,
-        map_voxels: r.map_voxels,
-        map_points: r.map_points,
-        pruned_voxels: r.pruned_voxels,
-        dropped: r.dropped,
-        deskewed: r.deskewed,
-        stamp_problem: r.stamp_problem,
     }
 }
 

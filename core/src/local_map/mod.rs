@@ -25,7 +25,7 @@ pub use search::Nearest;
 use crate::error::ConfigError;
 use crate::scalar::{sqrt_lt, Real};
 use crate::storage::{split_off, view, view_ref, words_for, Carver, Region, Storage};
-use crate::voxel::{point_to_voxel, table_hash, VoxelKey};
+use crate::voxel::{home_slot, next_slot, point_to_voxel, slots_for, table_hash, VoxelKey};
 use crate::{Point, Pose};
 use core::marker::PhantomData;
 
@@ -35,8 +35,8 @@ pub const BLOCK: usize = 4;
 
 const NONE: u32 = u32::MAX;
 
-/// Where the map's buffers sit, in `u64` words: the voxel table (a power of two of slots at
-/// load <= 3/4 of `voxels`) and the block pool (`points / BLOCK` blocks, rounded up).
+/// Where the map's buffers sit, in `u64` words: the voxel table (slots for `voxels` at load
+/// <= 3/4) and the block pool (`points / BLOCK` blocks, rounded up).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct MapLayout {
@@ -65,7 +65,7 @@ impl MapLayout {
         stored_size: usize,
         c: &mut Carver,
     ) -> Self {
-        let slots = (voxels * 4).div_ceil(3).next_power_of_two();
+        let slots = slots_for(voxels);
         let blocks = points.div_ceil(BLOCK);
         Self {
             slots,
@@ -163,7 +163,7 @@ pub(crate) struct MapState<T> {
     max_distance: T,
     max_points: u32,
     resolution: T,
-    mask: usize,
+    slots: usize,
     blocks: usize,
     max_voxels: usize,
     free: u32,
@@ -192,7 +192,7 @@ impl<T: Real> MapState<T> {
             max_distance,
             max_points: max_points_per_voxel,
             resolution: (voxel_size * voxel_size / T::of(max_points_per_voxel as f64)).sqrt_l(),
-            mask: layout.slots - 1,
+            slots: layout.slots,
             blocks: layout.blocks,
             max_voxels: max_voxels.min(layout.slots * 3 / 4),
             free: NONE,
@@ -270,7 +270,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapView<'a, T, P> {
     pub(crate) fn empty(st: &MapState<T>) -> Self {
         Self {
             st: MapState {
-                mask: 0,
+                slots: 1,
                 voxels: 0,
                 n_points: 0,
                 ..*st
@@ -326,16 +326,16 @@ impl<'a, T: Real, P: PointCodec<T>> MapView<'a, T, P> {
     /// wrong answer that tests catch rather than an endless loop.
     #[inline]
     pub(crate) fn find(&self, key: &VoxelKey) -> Option<usize> {
-        let mask = self.st.mask;
-        let mut i = table_hash(key) as usize & mask;
-        for _ in 0..=mask {
+        let slots = self.st.slots;
+        let mut i = home_slot(table_hash(key), slots);
+        for _ in 0..slots {
             if self.counts[i] == 0 {
                 return None;
             }
             if self.keys[i] == *key {
                 return Some(i);
             }
-            i = (i + 1) & mask;
+            i = next_slot(i, slots);
         }
         None
     }
@@ -357,7 +357,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapView<'a, T, P> {
 
     /// Every stored point, voxel by voxel in table order.
     pub fn for_each_point(&self, mut f: impl FnMut(&VoxelKey, Point<T>)) {
-        for slot in 0..=self.st.mask {
+        for slot in 0..self.st.slots {
             if self.counts[slot] != 0 {
                 let key = self.keys[slot];
                 self.for_each_in(slot, |p| {
@@ -459,16 +459,16 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
 
     fn add_point(&mut self, p: &Point<T>, st: &mut UpdateStats) {
         let key = point_to_voxel(p, self.st.voxel_size);
-        let mask = self.st.mask;
-        let mut i = table_hash(&key) as usize & mask;
+        let slots = self.st.slots;
+        let mut i = home_slot(table_hash(&key), slots);
         let mut probes = 0;
         while self.buf.counts[i] != 0 {
             if self.buf.keys[i] == key {
                 return self.append(i, &key, p, st);
             }
-            i = (i + 1) & mask;
+            i = next_slot(i, slots);
             probes += 1;
-            if probes > mask {
+            if probes >= slots {
                 // No empty slot (cannot happen below the 3/4 load cap): drop, never spin.
                 st.dropped_voxels += 1;
                 return;
@@ -531,7 +531,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         let max2 = self.st.max_distance * self.st.max_distance;
         let mut removed = 0;
         let mut i = 0;
-        while i <= self.st.mask {
+        while i < self.st.slots {
             // A removal shifts a later voxel into slot i: look at slot i again.
             while self.buf.counts[i] != 0 {
                 let key = self.buf.keys[i];
@@ -568,14 +568,14 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         self.st.voxels -= 1;
         self.buf.counts[hole] = 0;
         // Backward-shift deletion: pull later members of the probe run into the hole.
-        let mask = self.st.mask;
+        let slots = self.st.slots;
         let mut j = hole;
         loop {
-            j = (j + 1) & mask;
+            j = next_slot(j, slots);
             if self.buf.counts[j] == 0 {
                 return;
             }
-            let home = table_hash(&self.buf.keys[j]) as usize & mask;
+            let home = home_slot(table_hash(&self.buf.keys[j]), slots);
             let stays = if hole <= j {
                 hole < home && home <= j
             } else {

@@ -247,6 +247,7 @@ fn walk_with_steps<T: Real, P: PointCodec<T>>(
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per walk under Miri; no unsafe on this path")]
 fn kept_answers_equal_a_new_search_f64_exact() {
     let mut f = fixture();
     let scene = f.scene;
@@ -260,6 +261,7 @@ fn kept_answers_equal_a_new_search_f64_exact() {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per walk under Miri; no unsafe on this path")]
 fn kept_answers_equal_a_new_search_f32_quantized() {
     use crate::local_map::Quantized;
     const W: usize = LocalMap::<f32, Quantized, &mut [u64]>::words(VOXELS, POINTS);
@@ -279,6 +281,7 @@ fn kept_answers_equal_a_new_search_f32_quantized() {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per walk under Miri; no unsafe on this path")]
 fn kept_answers_equal_a_new_search_in_a_sparse_map() {
     // Isolated points far apart: a kept answer stays valid across voxel faces, until the point
     // it names drops out of the 27 voxels or a voxel that enters them holds a closer one.

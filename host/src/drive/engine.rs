@@ -6,7 +6,7 @@
 //! (outside the timed call), reports and poses are widened.
 
 use crate::exec::Pool;
-use crate::pose::widen;
+use crate::pose::{widen, widen_report};
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::Result;
 use kiss_odom_core::{
@@ -157,34 +157,6 @@ fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
         .iter()
         .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()])
         .collect()
-}
-
-/// The report in `f64`.
-fn widen_report<T: Real>(r: &FrameReport<T>) -> FrameReport<f64> {
-    FrameReport {
-        index: r.index,
-        pose: widen(&r.pose),
-        status: r.status,
-        iterations: r.iterations,
-        correspondences: r.correspondences,
-        sigma: r.sigma.wide(),
-        rms: r.rms.wide(),
-        model_error: r.model_error.wide(),
-        observability: r.observability.map(Real::wide),
-        held: r.held,
-        weak_ratios: r.weak_ratios.map(|w| w.map(Real::wide)),
-        work: r.work,
-        input_points: r.input_points,
-        out_of_range: r.out_of_range,
-        merge_points: r.merge_points,
-        source_points: r.source_points,
-        map_voxels: r.map_voxels,
-        map_points: r.map_points,
-        pruned_voxels: r.pruned_voxels,
-        dropped: r.dropped,
-        deskewed: r.deskewed,
-        stamp_problem: r.stamp_problem,
-    }
 }
 
 /// Times the core's call on already converted points.

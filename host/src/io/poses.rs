@@ -77,7 +77,7 @@ pub fn isometry_from_matrix(m: &Matrix4<f64>) -> Result<Isometry3<f64>> {
     let translation = Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]);
     Ok(Isometry3::from_parts(
         translation,
-        UnitQuaternion::from_rotation_matrix(&rotation),
+        crate::pose::quaternion_of(rotation.matrix()),
     ))
 }
 

@@ -1,6 +1,6 @@
 //! What `run` writes: `poses_kitti.txt`, `poses_tum.txt`, `frames.csv` (one typed row per
-//! frame, one 0/1 column per status flag), `summary.json`, `config.toml` and `trajectory.png`,
-//! each atomically (see [`crate::output`]).
+//! frame, one 0/1 column per status flag), `summary.json`, `config.toml`, `trajectory.png` and
+//! `diagnostics.png`, each atomically (see [`crate::output`]).
 
 use super::{Record, RunArgs};
 use crate::drive::{Driver, Outcome, Step};
@@ -15,13 +15,14 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// Every file `run` writes, the stale ones removed before it starts.
-pub const OUTPUTS: [&str; 6] = [
+pub const OUTPUTS: [&str; 7] = [
     "poses_kitti.txt",
     "poses_tum.txt",
     "frames.csv",
     "summary.json",
     "config.toml",
     "trajectory.png",
+    "diagnostics.png",
 ];
 
 /// What became of a frame, as `frames.csv` names it.
@@ -50,6 +51,8 @@ pub struct FrameRow {
     pub latency_ms: Option<f64>,
     /// ICP iterations.
     pub iterations: Option<u32>,
+    /// ICP's work units (`FrameReport::work`).
+    pub work: Option<u64>,
     /// Correspondences in the last iteration.
     pub correspondences: Option<u32>,
     /// The threshold's sigma the frame was registered with.
@@ -110,6 +113,7 @@ impl FrameRow {
             latency_ms: (kind != RowKind::Skipped)
                 .then(|| (o.latency.as_secs_f64() * 1e6).round() / 1e3),
             iterations: r.map(|r| r.iterations),
+            work: r.map(|r| r.work),
             correspondences: r.map(|r| r.correspondences),
             sigma: o.sigma,
             map_voxels: r.map(|r| r.map_voxels),
@@ -226,7 +230,8 @@ impl Run<'_> {
                 Ok(())
             })?;
         }
-        let (metrics, gt) = self.metrics()?;
+        let rows = self.info.ground_truth_for(&o.indices);
+        let metrics = self.metrics(&rows)?;
         if o.registered() > 0 {
             self.write_poses()?;
             let title = self
@@ -234,8 +239,15 @@ impl Run<'_> {
                 .path
                 .file_name()
                 .map_or_else(|| "trajectory".into(), |n| n.to_string_lossy().into_owned());
+            let gt = self.in_estimate_frame(&rows);
+            let paired: Vec<Isometry3<f64>> = gt.iter().flatten().copied().collect();
+            let paired = (!paired.is_empty()).then_some(paired.as_slice());
             crate::output::write_via_path(&dir.join("trajectory.png"), |p| {
-                crate::plot::trajectory_png(p, &o.poses, gt.as_deref(), &title)
+                crate::plot::trajectory_png(p, &o.poses, paired, &title)
+            })?;
+            let diagnostics = self.diagnostics(&gt);
+            crate::output::write_via_path(&dir.join("diagnostics.png"), |p| {
+                crate::plot::diagnostics_png(p, &diagnostics, &title)
             })?;
         }
         let summary = self.summary(metrics.filter(|_| o.registered() > 0));
@@ -271,15 +283,23 @@ impl Run<'_> {
         self.record.times.iter().all(Option::is_some)
     }
 
-    /// Metrics over the frames that have ground truth (the dataset layer warned about the
-    /// others), both trajectories re-based to the first of them; and the ground truth of those
-    /// frames in the estimate's frame, for the plot.
-    fn metrics(&self) -> Result<Scored> {
+    /// The frames' ground truth `rows` (re-based to the first frame that has one) in the
+    /// estimate's frame: placed at the estimate of that frame, for the plots.
+    fn in_estimate_frame(&self, rows: &[Option<Isometry3<f64>>]) -> Vec<Option<Isometry3<f64>>> {
+        let origin = rows
+            .iter()
+            .position(Option::is_some)
+            .map_or_else(Isometry3::identity, |first| self.record.poses[first]);
+        rows.iter().map(|g| g.map(|g| origin * g)).collect()
+    }
+
+    /// Metrics over the frames that have ground truth `rows` (the dataset layer warned about
+    /// the others), both trajectories re-based to the first of them.
+    fn metrics(&self, rows: &[Option<Isometry3<f64>>]) -> Result<Option<serde_json::Value>> {
         let o = self.record;
-        let rows = self.info.ground_truth_for(&o.indices);
         let paired: Vec<usize> = (0..rows.len()).filter(|&k| rows[k].is_some()).collect();
         let Some(&first) = paired.first() else {
-            return Ok((None, None));
+            return Ok(None);
         };
         let gt: Vec<Isometry3<f64>> = rows.iter().flatten().copied().collect();
         let base = o.poses[first].inverse();
@@ -293,9 +313,37 @@ impl Run<'_> {
                 }
             })
             .collect();
-        let metrics = serde_json::to_value(crate::metrics::evaluate(&est, &gt)?)?;
-        let origin = o.poses[first];
-        Ok((Some(metrics), Some(gt.iter().map(|p| origin * p).collect())))
+        Ok(Some(serde_json::to_value(crate::metrics::evaluate(
+            &est, &gt,
+        )?)?))
+    }
+
+    /// The frames of `diagnostics.png`: latency, iterations and flags from the rows, the
+    /// position error against ground truth `gt` over the distance it travelled.
+    fn diagnostics(&self, gt: &[Option<Isometry3<f64>>]) -> Vec<crate::plot::FramePoint> {
+        let o = self.record;
+        let mut travelled = 0.0;
+        let mut last: Option<nalgebra::Vector3<f64>> = None;
+        o.rows
+            .iter()
+            .zip(&o.poses)
+            .zip(gt)
+            .map(|((row, pose), g)| {
+                let error = g.map(|g| {
+                    let at = g.translation.vector;
+                    travelled += last.map_or(0.0, |l| (at - l).norm());
+                    last = Some(at);
+                    (travelled, (pose.translation.vector - at).norm())
+                });
+                crate::plot::FramePoint {
+                    index: row.index,
+                    latency_ms: row.latency_ms,
+                    iterations: row.iterations,
+                    status: row.status,
+                    error,
+                }
+            })
+            .collect()
     }
 
     fn summary(&self, metrics: Option<serde_json::Value>) -> Summary {
@@ -375,9 +423,6 @@ pub(super) fn print_summary(s: &Summary) {
     }
 }
 
-/// Metrics (JSON) and the ground truth they were computed on, in the estimate's frame.
-type Scored = (Option<serde_json::Value>, Option<Vec<Isometry3<f64>>>);
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -412,7 +457,7 @@ mod tests {
         assert_eq!(&header[..3], ["index", "source", "outcome"]);
         let first = lines.next().unwrap();
         assert!(
-            first.starts_with("7,\"a,b.bin\",skipped,,,,2.0,"),
+            first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,"),
             "{first}"
         );
         assert!(first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0"), "{first}");

@@ -2,7 +2,8 @@
 //! metrics against ground truth and a plot written to the output folder.
 //!
 //! The frames go through the [`Driver`]; this module decides what stops a run and what is
-//! written. The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
+//! written, and hands every outcome to the observers of [`crate::viz`] (`--rerun`,
+//! `--save-map`, `--save-cloud`). The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
 //! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
 //! in which no frame could be registered ends with exit 1 and its own reason, never an output
 //! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
@@ -17,6 +18,7 @@ pub use files::{FrameRow, Latency, RowKind, Summary, OUTPUTS};
 use crate::args::CommonArgs;
 use crate::drive::{Driver, Outcome, Selection, Step};
 use crate::io::{self, Item};
+use crate::viz::{Observer, Seen, ViewArgs};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::Flag;
@@ -43,6 +45,9 @@ pub struct RunArgs {
     /// Input, pipeline and core options.
     #[command(flatten)]
     pub common: CommonArgs,
+    /// Rerun recording and point-cloud exports.
+    #[command(flatten)]
+    pub view: ViewArgs,
 }
 
 /// Why the frame loop ended.
@@ -82,6 +87,9 @@ impl Record {
 pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     crate::output::remove_stale(&args.out, &OUTPUTS)?;
+    for path in crate::viz::files(&args.view) {
+        crate::output::remove_stale_file(path)?;
+    }
     let settings = args.common.settings(None)?;
     let mut dataset = io::open(
         &args.path,
@@ -93,6 +101,8 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
     )?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create output folder", args.out.display()))?;
+    // After the folder: a recording or cloud may be asked for inside it.
+    let mut observers = crate::viz::observers(&args.view)?;
     let mut driver = Driver::new(&settings)?;
     let mut record = Record {
         rows: Vec::new(),
@@ -118,7 +128,22 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
         }
     }
     if matches!(end, End::Finished) {
-        end = frame_loop(args, &mut driver, &mut dataset, &mut record, &mut warn);
+        end = frame_loop(
+            args,
+            &mut driver,
+            &mut dataset,
+            &mut record,
+            &mut observers,
+            &mut warn,
+        );
+    }
+    // The observers' files hold the frames processed, however the loop ended.
+    for observer in &mut observers {
+        match observer.finish(&driver) {
+            Ok(warnings) => warnings.iter().for_each(|w| warn(&mut record, &hidden, w)),
+            Err(e) if matches!(end, End::Finished) => end = End::Failed(e),
+            Err(e) => warn(&mut record, &hidden, &crate::cli::one_line(&e)),
+        }
     }
     let end = match end {
         End::Finished if record.rows.is_empty() => {
@@ -192,16 +217,20 @@ fn nothing_registered(r: &Record) -> String {
     )
 }
 
-/// Feeds the frames in range to the driver, recording each outcome, until the end, an error,
-/// a `--strict` stop or a signal.
+/// Feeds the frames in range to the driver, recording each outcome and showing it to the
+/// observers, until the end, an error, a `--strict` stop or a signal.
 fn frame_loop(
     args: &RunArgs,
     driver: &mut Driver,
     dataset: &mut io::Dataset,
     record: &mut Record,
+    observers: &mut [Box<dyn Observer>],
     warn: &mut dyn FnMut(&mut Record, &ProgressBar, &str),
 ) -> End {
     let info = &dataset.info;
+    // Ground truth in the estimate's frame: estimate times ground truth at the first frame
+    // that has both (as the metrics re-base them).
+    let mut gt_base: Option<Isometry3<f64>> = None;
     let mut frames = Selection::new(dataset.frames.as_mut(), args.common.input.range());
     let bar = progress_bar(frames.len_hint(), args.quiet);
     let mut core_s = 0.0;
@@ -224,7 +253,11 @@ fn frame_loop(
         if let (true, Some(first)) = (args.strict, problems.first()) {
             break End::Failed(anyhow!("{first} (--strict)"));
         }
-        let outcome = match driver.feed(item) {
+        let (outcome, frame) = match item {
+            Item::Frame(frame) => (driver.register(&frame), Some(frame)),
+            skipped => (driver.feed(skipped), None),
+        };
+        let outcome = match outcome {
             Ok(o) => o,
             Err(e) => break End::Failed(e),
         };
@@ -246,6 +279,23 @@ fn frame_loop(
             );
         }
         add(record, info, &outcome);
+        if !observers.is_empty() {
+            let ground_truth = info
+                .ground_truth
+                .as_ref()
+                .and_then(|g| g.get(outcome.meta.index))
+                .map(|g| *gt_base.get_or_insert(outcome.pose * g.inverse()) * g);
+            let seen = Seen {
+                driver,
+                outcome: &outcome,
+                points: frame.as_ref().map(|f| f.points.as_slice()),
+                time: record.times.last().copied().flatten(),
+                ground_truth,
+            };
+            if let Some(e) = observers.iter_mut().find_map(|o| o.frame(&seen).err()) {
+                break End::Failed(e);
+            }
+        }
         bar.inc(1);
         if core_s > 0.0 {
             let hz = record.registered() as f64 / core_s;

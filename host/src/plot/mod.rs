@@ -1,6 +1,6 @@
-//! Trajectory plots: the figure a run leaves next to its poses and metrics, a top view (x
-//! against y, same metres per pixel on both axes) of the estimate and, when known, the ground
-//! truth.
+//! Plots a run leaves next to its poses and metrics: `trajectory.png`, a top view (x against
+//! y, same metres per pixel on both axes) of the estimate and, when known, the ground truth;
+//! and `diagnostics.png` ([`diagnostics_png`]), the error, latency and iterations per frame.
 //!
 //! Text needs a TrueType font, which `plotters` (built with `ab_glyph`) does not ship: one is
 //! loaded from the usual system places the first time a plot is drawn. Without one the plot is
@@ -8,11 +8,16 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use nalgebra::Isometry3;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use std::ops::Range;
 use std::path::Path;
 use std::sync::OnceLock;
+
+mod diagnostics;
+
+pub use diagnostics::{diagnostics_png, FramePoint, MARKED};
 
 /// Colour of the estimated trajectory.
 pub const ESTIMATE_COLOR: RGBColor = RGBColor(31, 119, 180);
@@ -114,6 +119,22 @@ fn equal_scale_ranges(points: &[(f64, f64)], px_w: u32, px_h: u32) -> (Range<f64
     (cx - hw..cx + hw, cy - hh..cy + hh)
 }
 
+/// Fills `root` white and, when `text`, draws `title` on top: the area left for the chart.
+fn titled<'a>(
+    root: &DrawingArea<BitMapBackend<'a>, Shift>,
+    title: &str,
+    text: bool,
+) -> Result<DrawingArea<BitMapBackend<'a>, Shift>> {
+    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    if !text {
+        return Ok(root.clone());
+    }
+    // The top margin keeps the title's ascenders inside the image.
+    root.margin(10, 0, 0, 0)
+        .titled(title, ("sans-serif", 28))
+        .map_err(|e| anyhow!("{e}"))
+}
+
 fn render(
     path: &Path,
     estimate: &[Isometry3<f64>],
@@ -133,15 +154,7 @@ fn render(
 
     let draw_err = |e: &dyn std::fmt::Display| anyhow!("{e}");
     let root = BitMapBackend::new(path, (WIDTH, HEIGHT)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| draw_err(&e))?;
-    let area = if text {
-        // The top margin keeps the title's ascenders inside the image.
-        root.margin(10, 0, 0, 0)
-            .titled(title, ("sans-serif", 28))
-            .map_err(|e| draw_err(&e))?
-    } else {
-        root.clone()
-    };
+    let area = titled(&root, title, text)?;
     let (x_lab, y_lab) = if text {
         (X_LABEL_AREA, Y_LABEL_AREA)
     } else {
@@ -236,7 +249,7 @@ mod tests {
     }
 
     /// Width, height and RGB pixels of a PNG, after checking its signature and IHDR by hand.
-    fn decode(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
+    pub(super) fn decode(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
         let bytes = std::fs::read(path).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
         assert_eq!(&bytes[12..16], b"IHDR");
@@ -254,7 +267,7 @@ mod tests {
         (w, h, pixels)
     }
 
-    fn count(pixels: &[[u8; 3]], c: RGBColor) -> usize {
+    pub(super) fn count(pixels: &[[u8; 3]], c: RGBColor) -> usize {
         pixels.iter().filter(|p| **p == [c.0, c.1, c.2]).count()
     }
 

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Issue 14's host figures in one go: speed against the reference (f64, exact, 1 thread, poses
+# compared by the harness) on every kitti-mini sequence and a generated urban drive, with the
+# latency spread after frame 10 on the urban drive unbudgeted and budgeted, and the quantized
+# full-scale map against the reference's on kitti-mini 01 and the urban drive.
+#
+#   KISS_ODOM_PYTHON=target/refvenv/bin/python bench/issue14.sh > target/issue14.txt
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -q -p kiss-odom
+B=target/release/kiss-odom
+DATA=${DATA:-bench/data}; mkdir -p "$DATA"
+U="$DATA/urban-7-200"
+[ -f "$U/sim.toml" ] || $B simulate --out "$U" --frames 200 --seed 7 >/dev/null
+REPEATS=${REPEATS:-3}
+for s in 01 02 04 05; do
+  echo "== kitti-mini $s f64 exact"
+  $B bench ../shared/data/kitti-mini/sequences/$s --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 1
+done
+echo "== urban-7-200 f64 exact"
+$B bench "$U" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10
+echo "== urban-7-200 f64 exact, budget ${BUDGET:=300000} (no reference: it has no budget)"
+$B bench "$U" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10 --budget "$BUDGET" --no-reference
+for d in ../shared/data/kitti-mini/sequences/01 "$U"; do
+  echo "== $d f64 quantized (map bytes)"
+  $B bench "$d" --threads 1 --scalar f64 --storage quantized --repeats 1 --latency-from 1
+done
