@@ -4,6 +4,10 @@
 #
 #   bench/degeneracy.sh [FRAMES] [SEEDS]     (default 500 frames, seeds "1 2 3")
 #
+# PROFILES picks the runs (default "corridor plane tunnel field urban fast kitti"; `kitti` is
+# every kitti-mini sequence). GenZ-ICP runs its `corridor` preset on corridor, plane and tunnel,
+# `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini.
+#
 # Writes $OUT/results.jsonl (one line per run and system) and prints the Markdown table
 # (bench/degeneracy_table.py). GenZ-ICP runs from a venv made here (target/genzvenv).
 # Every system runs on one thread; run it alone at `nice` on a shared machine. REUSE_GENZ=1
@@ -12,6 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 FRAMES=${1:-500}
 SEEDS=${2:-"1 2 3"}
+PROFILES=${PROFILES:-"corridor plane tunnel field urban fast kitti"}
 GEN=${GEN:-/work/data-gen/degeneracy}
 OUT=${OUT:-$GEN/results-$FRAMES}
 KITTI=${KISS_ODOM_KITTI_MINI:-../shared/data/kitti-mini}
@@ -59,8 +64,8 @@ genz() {  # genz NAME DATA PRESET GT [ARGS]
     "$(python3 -c "import json,sys; j=json.loads(sys.argv[1]); print(json.dumps({'hz': j['frames'] / j['seconds']}))" "$info")"
 }
 
-for p in corridor plane urban fast; do
-  case $p in corridor | plane) preset=corridor ;; *) preset=outdoor ;; esac
+for p in $PROFILES; do
+  case $p in kitti) continue ;; corridor | plane | tunnel) preset=corridor ;; *) preset=outdoor ;; esac
   for s in $SEEDS; do
     d=$GEN/$p-$FRAMES-s$s
     [ -f "$d/poses.txt" ] || "$BIN" simulate --out "$d" --frames "$FRAMES" --seed "$s" --profile "$p" >/dev/null
@@ -71,7 +76,7 @@ for p in corridor plane urban fast; do
     genz "$name" "$d" "$preset" "$d/poses.txt"
   done
 done
-for sq in $(ls "$KITTI/sequences"); do
+for sq in $( [[ " $PROFILES " == *" kitti "* ]] && ls "$KITTI/sequences"); do
   d=$KITTI/sequences/$sq
   name=kitti-$sq
   echo "== $name" >&2
