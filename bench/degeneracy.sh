@@ -8,7 +8,8 @@
 # every kitti-mini sequence). GenZ-ICP runs its `corridor` preset on corridor, plane and tunnel,
 # `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini.
 #
-# Writes $OUT/results.jsonl (one line per run and system) and prints the Markdown table
+# Writes $OUT/results.jsonl (one line per run and system, with the estimated over the true
+# distance travelled) and prints the Markdown table
 # (bench/degeneracy_table.py). GenZ-ICP runs from a venv made here (target/genzvenv).
 # Every system runs on one thread; run it alone at `nice` on a shared machine. REUSE_GENZ=1
 # re-runs only kiss-odom, keeping GenZ-ICP's poses of an earlier run in the same $OUT.
@@ -34,10 +35,14 @@ mkdir -p "$OUT"
 record() {
   local m
   m=$("$BIN" eval "$3" "$4" --json)
-  python3 - "$1" "$2" "$5" "$m" >> "$OUT/results.jsonl" <<'PY'
-import json, sys
-name, system, extra, metrics = sys.argv[1:]
+  python3 - "$1" "$2" "$5" "$m" "$3" "$4" >> "$OUT/results.jsonl" <<'PY'
+import json, math, sys
+name, system, extra, metrics, poses, gt = sys.argv[1:]
+def path(f):  # length of the path through the positions of a KITTI pose file
+    p = [[float(v) for v in line.split()][3::4] for line in open(f) if line.strip()]
+    return sum(math.dist(a, b) for a, b in zip(p, p[1:]))
 row = {"run": name, "system": system, **json.loads(extra), **json.loads(metrics)}
+row["path_ratio"] = path(poses) / path(gt) if path(gt) > 0 else None
 print(json.dumps(row))
 PY
 }
