@@ -95,16 +95,11 @@ mod tests {
     use crate::simulate::trajectory::Trajectory;
     use crate::simulate::Profile;
 
-    /// Each solid's footprint centre along the route's x, sorted.
-    fn xs(solids: &[Solid]) -> Vec<f64> {
-        let mut x: Vec<f64> = solids
-            .iter()
-            .map(|s| match Footprint::of(&s.shape) {
-                Footprint::Rect(c, ..) | Footprint::Disc(c, _) => c[0],
-            })
-            .collect();
-        x.sort_by(f64::total_cmp);
-        x
+    /// The centre of a solid's footprint.
+    fn centre(solid: &Solid) -> [f64; 2] {
+        match Footprint::of(&solid.shape) {
+            Footprint::Rect(c, ..) | Footprint::Disc(c, _) => c,
+        }
     }
 
     #[test]
@@ -134,7 +129,8 @@ mod tests {
                 );
             }
             // Groups (a door frame is three boxes) 10-40 m apart over the whole route.
-            let x = xs(scene.solids());
+            let mut x: Vec<f64> = scene.solids().iter().map(|s| centre(s)[0]).collect();
+            x.sort_by(f64::total_cmp);
             let mut groups = vec![x[0]];
             for &xi in &x[1..] {
                 if xi - groups.last().unwrap() > 3.0 {
@@ -175,11 +171,7 @@ mod tests {
             let mut centres: Vec<[i64; 2]> = scene
                 .solids()
                 .iter()
-                .map(|s| match Footprint::of(&s.shape) {
-                    Footprint::Rect(c, ..) | Footprint::Disc(c, _) => {
-                        [(c[0] * 1e3) as i64, (c[1] * 1e3) as i64]
-                    }
-                })
+                .map(|s| centre(s).map(|v| (v * 1e3) as i64))
                 .collect();
             centres.sort_unstable();
             centres.dedup();
