@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::run;
+use common::{run, RunExt};
 use nalgebra::Matrix4;
 use std::ffi::OsString;
 use std::path::Path;

@@ -90,7 +90,7 @@ impl City<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{build, RouteIndex};
+    use super::super::{build, RouteIndex, Scene};
     use super::*;
     use crate::simulate::trajectory::Trajectory;
     use crate::simulate::Profile;
@@ -102,20 +102,26 @@ mod tests {
         }
     }
 
+    /// The scene of a minute of `profile` under `seed`, its planes counted and every solid
+    /// checked `clearance` from the route; and the route's length.
+    fn scene(profile: Profile, seed: u64, planes: usize, clearance: f64) -> (Scene, f64) {
+        let tr = Trajectory::generate(profile, seed, 60.0);
+        let (s0, s1) = tr.route().knot_span();
+        let scene = build(profile, seed, tr.route());
+        assert_eq!(scene.planes().count(), planes);
+        let index = RouteIndex::new(tr.route());
+        for solid in scene.solids() {
+            let fp = Footprint::of(&solid.shape);
+            assert!(index.clear(&fp, clearance), "{solid:?} is on the route");
+        }
+        (scene, s1 - s0)
+    }
+
     #[test]
     fn tunnel_walls_carry_sparse_structure_clear_of_the_route() {
         for seed in 0..3 {
-            let tr = Trajectory::generate(Profile::Tunnel, seed, 60.0);
-            let (s0, s1) = tr.route().knot_span();
-            let scene = build(Profile::Tunnel, seed, tr.route());
-            assert_eq!(scene.planes().count(), 4, "the corridor's planes stay");
-            let index = RouteIndex::new(tr.route());
+            let (scene, length) = scene(Profile::Tunnel, seed, 4, TUNNEL_CLEARANCE);
             for solid in scene.solids() {
-                let fp = Footprint::of(&solid.shape);
-                assert!(
-                    index.clear(&fp, TUNNEL_CLEARANCE),
-                    "{solid:?} is on the route"
-                );
                 // Against a wall: its outer face is inside the wall, its inner one proud of it.
                 let Shape::Box { centre, half, .. } = solid.shape else {
                     panic!("tunnel structure is boxes: {solid:?}");
@@ -147,7 +153,7 @@ mod tests {
                 groups.len()
             );
             assert!(
-                groups.len() as f64 >= (s1 - s0) / 41.0,
+                groups.len() as f64 >= length / 41.0,
                 "{} groups",
                 groups.len()
             );
@@ -158,15 +164,7 @@ mod tests {
     #[test]
     fn field_objects_are_sparse_and_clear_of_the_route() {
         for seed in 0..3 {
-            let tr = Trajectory::generate(Profile::Field, seed, 60.0);
-            let (s0, s1) = tr.route().knot_span();
-            let scene = build(Profile::Field, seed, tr.route());
-            assert_eq!(scene.planes().count(), 1, "the ground alone");
-            let index = RouteIndex::new(tr.route());
-            for solid in scene.solids() {
-                let fp = Footprint::of(&solid.shape);
-                assert!(index.clear(&fp, 2.9), "{solid:?} is on the route");
-            }
+            let (scene, length) = scene(Profile::Field, seed, 1, 2.9);
             // Trees are two solids (trunk and crown) on one footprint centre.
             let mut centres: Vec<[i64; 2]> = scene
                 .solids()
@@ -176,9 +174,9 @@ mod tests {
             centres.sort_unstable();
             centres.dedup();
             let n = centres.len() as f64;
-            println!("seed {seed}: {n} objects along {:.0} m", s1 - s0);
+            println!("seed {seed}: {n} objects along {length:.0} m");
             // One per 20-60 m of route, less the few too close to where it turns back.
-            assert!(n >= (s1 - s0) / 80.0 && n <= (s1 - s0) / 20.0 + 1.0);
+            assert!(n >= length / 80.0 && n <= length / 20.0 + 1.0);
         }
     }
 }
