@@ -4,8 +4,8 @@
 # character. Poses are printed with `{:e}`, the shortest decimal that reads back to the same
 # bits, so equal text is bit-identical; on a mismatch the largest pose difference is printed.
 #
-#   embedded/compare.sh [case...]     cases: thumbv7em thumbv7em-full m7 m7-f64 m7-tiny
-#                                            aarch64 aarch64-small riscv32 riscv32-f64
+#   embedded/compare.sh [case...]     cases: thumbv7em thumbv7em-full thumbv7em-robust m7 m7-f64
+#                                            m7-tiny aarch64 aarch64-small riscv32 riscv32-f64
 #                                            riscv32-full
 #                                     (default: thumbv7em m7-f64 m7-tiny aarch64 riscv32
 #                                     riscv32-f64)
@@ -36,6 +36,7 @@ for c in "${cases[@]}"; do
   case "$c" in
     thumbv7em) target=thumbv7em; features="" ;;
     thumbv7em-full) target=thumbv7em; features="full" ;;
+    thumbv7em-robust) target=thumbv7em; features="robust" ;;
     m7) target=m7; features="" ;;
     m7-f64) target=m7; features="f64" ;;
     m7-tiny) target=m7; features="tiny" ;;

@@ -9,6 +9,7 @@
 //! - deskewing moves every point to the end of the sweep, so poses are end-of-sweep poses.
 
 use crate::error::ConfigError;
+use crate::robust::Degeneracy;
 use crate::scalar::Real;
 
 /// Largest accepted `max_range` (m). The adaptive threshold squares distances of order
@@ -50,6 +51,10 @@ pub struct Config<T> {
     /// A frame is flagged degenerate when the weakest direction of the point-to-plane
     /// information (from map voxel normals) carries less than this fraction of the strongest.
     pub degeneracy_ratio: T,
+    /// What ICP does along directions the scene does not constrain: move as the reference
+    /// does ([`Degeneracy::Reference`], the default) or hold them at the constant-velocity
+    /// prediction ([`Degeneracy::Robust`]; see [`crate::FrameReport::held`]).
+    pub degeneracy: Degeneracy,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
     /// exceed it, ICP keeps its last complete iterate and the frame is flagged
@@ -76,6 +81,7 @@ impl<T: Real> Config<T> {
             kernel_scale: T::one(),
             max_correspondence_factor: T::of(3.0),
             degeneracy_ratio: T::of(0.02),
+            degeneracy: Degeneracy::Reference,
             work_budget: None,
         }
     }

@@ -63,6 +63,7 @@ mod odometry;
 mod preprocess;
 mod registration;
 mod report;
+mod robust;
 mod scalar;
 pub mod storage;
 mod threshold;
@@ -78,6 +79,7 @@ pub use local_map::{Exact, MapView, PointCodec, Quantized};
 pub use odometry::{FrameInput, Layout, Odometry};
 pub use registration::{Executor, Sequential};
 pub use report::{Dropped, Flag, FrameReport, HighWater, Status};
+pub use robust::{Degeneracy, Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
 pub use scalar::Real;
 pub use storage::{Storage, Words};
 
@@ -93,7 +95,9 @@ pub type Point<T> = nalgebra::Point3<T>;
 /// `Registration`, `AdaptiveThreshold`) call. Names and signatures here may change between
 /// versions without notice; applications use [`Odometry`].
 pub mod stages {
-    pub use crate::degeneracy::{observability, RING_SINE, SAMPLES};
+    pub use crate::degeneracy::{
+        information, observability, Information, Volumes, RING_SINE, SAMPLES,
+    };
     pub use crate::deskew::{Deskewer, TimeSpan};
     pub use crate::downsample::{
         cloud_words, grid_slots_for, reference_order, reference_order_bytes, robin_bucket_count,
@@ -109,6 +113,7 @@ pub mod stages {
         align_points_to_map, chunks_for, moved_points, work_words, Alignment, Chunk, IcpParams,
         CHUNK, SYSTEM_LEN,
     };
+    pub use crate::robust::{min_points, weakness, Hold, Weakness};
     pub use crate::scalar::{norm_lt, sqrt_lt};
     pub use crate::threshold::AdaptiveThreshold;
     pub use crate::voxel::{

@@ -13,6 +13,7 @@
 
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};
+use crate::robust::Hold;
 use crate::scalar::{sqrt_lt, Real};
 use crate::storage::{view, words_for};
 use crate::{Point, Pose};
@@ -67,9 +68,9 @@ impl Executor for Sequential {
     }
 }
 
-/// ICP stopping rule.
+/// ICP stopping rule, and the robust mode's hold.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct IcpParams<T> {
+pub struct IcpParams<T: Real> {
     /// `gamma`.
     pub convergence_criterion: T,
     /// Iteration cap.
@@ -77,6 +78,8 @@ pub struct IcpParams<T> {
     /// Work units (see [`crate::local_map::Nearest::work`]) the whole registration may spend;
     /// `None`: no limit. ICP stops with its last complete iterate before exceeding it.
     pub budget: Option<u64>,
+    /// Directions every step is projected off (robust mode, see `robust`); `None`: none.
+    pub hold: Option<Hold<T>>,
 }
 
 /// Outcome of one registration.
@@ -500,7 +503,7 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
             T::zero()
         };
         let dx = match solve(&sum) {
-            Some(dx) => dx,
+            Some(dx) => params.hold.map_or(dx, |h| h.step(&dx)),
             None => {
                 out.singular = true;
                 out.converged = true;

@@ -2,6 +2,7 @@
 //! they dropped.
 
 use crate::deskew::StampProblem;
+use crate::robust::Held;
 use crate::scalar::Real;
 use crate::Pose;
 
@@ -32,11 +33,14 @@ pub enum Flag {
     /// ICP stopped at the frame's work budget (`Config::work_budget`) with its last complete
     /// iterate.
     Budget = 1 << 8,
+    /// Robust mode held some directions at the constant-velocity prediction (see
+    /// [`FrameReport::held`]).
+    Held = 1 << 9,
 }
 
 impl Flag {
     /// Every flag, in bit order.
-    pub const ALL: [Flag; 9] = [
+    pub const ALL: [Flag; 10] = [
         Flag::TimestampsIgnored,
         Flag::IterationCap,
         Flag::NoCorrespondences,
@@ -46,6 +50,7 @@ impl Flag {
         Flag::ScanTruncated,
         Flag::Capacity,
         Flag::Budget,
+        Flag::Held,
     ];
 
     /// The flag's name in reports and `frames.csv` (`snake_case`).
@@ -60,6 +65,7 @@ impl Flag {
             Flag::ScanTruncated => "scan_truncated",
             Flag::Capacity => "capacity",
             Flag::Budget => "budget",
+            Flag::Held => "held",
         }
     }
 
@@ -238,6 +244,14 @@ pub struct FrameReport<T: Real> {
     /// Weakest over strongest direction of the point-to-plane information sampled from map
     /// voxel normals (translation and rotation, the smaller); `None` on the first frame.
     pub observability: Option<T>,
+    /// Robust mode only: the directions held at the constant-velocity prediction (none in
+    /// reference mode).
+    pub held: Held,
+    /// Robust mode only: weakest over strongest eigenvalue of the point-to-plane information
+    /// at the prediction, for translation and for rotation (directions below
+    /// `TRANSLATION_RATIO` and `ROTATION_RATIO` are held); `None` in reference mode, on the
+    /// first frame, or with nothing measured.
+    pub weak_ratios: Option<[T; 2]>,
     /// Points given.
     pub input_points: u32,
     /// Finite points outside the range shell.
@@ -288,6 +302,6 @@ mod tests {
         }
         assert_eq!(Flag::from_name("fine"), None);
         let all: Status = Flag::ALL.into_iter().collect();
-        assert_eq!(all.bits(), 0x1ff);
+        assert_eq!(all.bits(), 0x3ff);
     }
 }

@@ -5,7 +5,7 @@
 //! `frame` and `pose` lines must agree character for character; `cost` and the summary lines
 //! carry the per-target measurements.
 
-use kiss_odom_core::{Capacities, Config, FrameReport, Odometry, Words};
+use kiss_odom_core::{Capacities, Config, Degeneracy, FrameReport, Odometry, Words};
 
 /// Scalar of this build (`f64` feature; `f32` otherwise).
 #[cfg(feature = "f64")]
@@ -98,7 +98,8 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 }
 
 /// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
-/// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels).
+/// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels), in robust mode
+/// under the `robust` feature.
 pub fn config() -> Config<Scalar> {
     let base = if cfg!(feature = "tiny") {
         Config::tiny()
@@ -110,6 +111,11 @@ pub fn config() -> Config<Scalar> {
     };
     Config {
         work_budget: frames::BUDGET,
+        degeneracy: if cfg!(feature = "robust") {
+            Degeneracy::Robust
+        } else {
+            Degeneracy::Reference
+        },
         ..base
     }
 }

@@ -163,6 +163,7 @@ fn stages(c: &mut Criterion) {
         convergence_criterion: 0.0,
         max_iterations: 1,
         budget: None,
+        hold: None,
     };
     g.bench_function("icp_iteration", |b| {
         b.iter(|| {
@@ -182,6 +183,7 @@ fn stages(c: &mut Criterion) {
         convergence_criterion: cfg.convergence_criterion,
         max_iterations: cfg.max_iterations,
         budget: None,
+        hold: None,
     };
     let guess = rec.guesses[UNDER_TEST];
     g.bench_function("registration", |b| {

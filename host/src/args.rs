@@ -4,7 +4,7 @@
 //! Precedence is the same everywhere: defaults, then `--config FILE`, then flags.
 
 use crate::io::{Format, OpenOptions};
-use crate::settings::{Scalar, Settings, Storage};
+use crate::settings::{DegeneracyMode, Scalar, Settings, Storage};
 use anyhow::{bail, Result};
 use kiss_odom_core::Capacities;
 use std::path::{Path, PathBuf};
@@ -83,6 +83,10 @@ pub struct PipelineArgs {
     /// Do not deskew.
     #[arg(long, overrides_with = "deskew")]
     pub no_deskew: bool,
+    /// Registration along directions the scene does not constrain: `reference` (kiss-icp) or
+    /// `robust` (held at the constant-velocity prediction) [default: reference].
+    #[arg(long, value_enum)]
+    pub degeneracy: Option<DegeneracyMode>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
     /// would spend more keeps its last complete iterate and is flagged `budget`. With the
     /// capacities it bounds a frame's time on a given target (README "Deadlines") [default:
@@ -187,6 +191,9 @@ pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Resul
     }
     if p.no_deskew {
         s.data.deskew = false;
+    }
+    if let Some(d) = p.degeneracy {
+        s.registration.degeneracy = d;
     }
     if let Some(b) = p.budget {
         s.registration.work_budget = Some(b);

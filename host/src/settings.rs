@@ -3,7 +3,7 @@
 //! `--config` to repeat the run.
 
 use anyhow::{bail, Context, Result};
-use kiss_odom_core::{Capacities, Config, Real};
+use kiss_odom_core::{Capacities, Config, Degeneracy, Real};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -25,6 +25,27 @@ pub enum Storage {
     Exact,
     /// 16-bit offsets inside the voxel (6 bytes a point).
     Quantized,
+}
+
+/// Registration along directions the scene does not constrain (`kiss_odom_core::Degeneracy`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum DegeneracyMode {
+    /// As kiss-icp 1.3.0 (default).
+    #[default]
+    Reference,
+    /// Hold unconstrained directions at the constant-velocity prediction (corridors, tunnels,
+    /// open ground).
+    Robust,
+}
+
+impl From<DegeneracyMode> for Degeneracy {
+    fn from(m: DegeneracyMode) -> Self {
+        match m {
+            DegeneracyMode::Reference => Degeneracy::Reference,
+            DegeneracyMode::Robust => Degeneracy::Robust,
+        }
+    }
 }
 
 /// Sensor data handling (the reference's `data` section).
@@ -75,8 +96,11 @@ pub struct Registration {
     pub kernel_scale: f64,
     /// Correspondence threshold as a multiple of sigma.
     pub max_correspondence_factor: f64,
-    /// Observability ratio below which a frame is flagged degenerate.
+    /// Observability ratio below which a frame is flagged degenerate (and, in robust mode,
+    /// below which a direction is held).
     pub degeneracy_ratio: f64,
+    /// `reference` or `robust`.
+    pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
     /// none, the reference's behaviour.
     pub work_budget: Option<u64>,
@@ -167,6 +191,7 @@ impl Default for Registration {
             kernel_scale: 1.0,
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
+            degeneracy: DegeneracyMode::Reference,
             work_budget: None,
         }
     }
@@ -237,6 +262,7 @@ impl Settings {
         c.kernel_scale = T::of(self.registration.kernel_scale);
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
+        c.degeneracy = self.registration.degeneracy.into();
         c.work_budget = self.registration.work_budget;
         if let Err(e) = c.validate() {
             bail!("invalid configuration: {e}");
@@ -346,7 +372,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 19] {
+fn fields() -> [Field; 20] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -361,6 +387,7 @@ fn fields() -> [Field; 19] {
         field!(registration.kernel_scale, false),
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
+        field!(registration.degeneracy, false),
         field!(registration.work_budget, false),
         field!(capacities.scan_points, true),
         field!(capacities.merge_points, true),
@@ -386,6 +413,18 @@ mod tests {
         assert_eq!(back.data, s.data);
         assert_eq!(back.runtime, s.runtime);
         assert_eq!(back.capacities, s.capacities);
+    }
+
+    #[test]
+    fn degeneracy_mode_is_read_and_reaches_the_core() {
+        let s: Settings = toml::from_str("[registration]\ndegeneracy = \"robust\"\n").unwrap();
+        assert_eq!(
+            s.core_config::<f32>().unwrap().degeneracy,
+            Degeneracy::Robust
+        );
+        let d = Settings::default().core_config::<f64>().unwrap();
+        assert_eq!(d.degeneracy, Degeneracy::Reference);
+        assert!(toml::from_str::<Settings>("[registration]\ndegeneracy = \"on\"\n").is_err());
     }
 
     #[test]

@@ -264,6 +264,7 @@ impl Registration {
                 convergence_criterion,
                 max_iterations: max_num_iterations,
                 budget: None,
+                hold: None,
             },
             pool: Pool::new(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?,
         })

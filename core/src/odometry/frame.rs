@@ -14,6 +14,7 @@ use crate::lie::renormalize;
 use crate::local_map::{MapMut, PointCodec, UpdateStats};
 use crate::registration::{align_points_to_map, moved_points, Alignment, Executor, IcpParams};
 use crate::report::{Dropped, Flag, FrameReport, Status};
+use crate::robust::{min_points, weakness, Degeneracy, Weakness};
 use crate::scalar::Real;
 use crate::storage::Storage;
 use crate::{Point, Pose};
@@ -78,6 +79,18 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
         // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
         let first_frame = map.view().is_empty();
+        // Robust mode holds weak directions at the prediction once there is one: the second
+        // frame's is standing still, whatever the sensor does.
+        let weak = match cfg.degeneracy {
+            Degeneracy::Robust if !first_frame && self.frames >= 2 => weakness(
+                &map.view(),
+                source,
+                &prediction,
+                max_distance,
+                min_points(cfg.alpha),
+            ),
+            _ => Weakness::NONE,
+        };
         let icp = align_points_to_map(
             exec,
             source,
@@ -86,9 +99,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             &prediction,
             max_distance,
             cfg.kernel_scale * sigma,
-            &icp_params(&cfg, &prediction),
+            &icp_params(&cfg, &prediction, &weak),
         );
-        let (pose, finite) = finite_or(icp.pose, prediction);
+        let (pose, finite) = finite_or(weak.apply(&prediction, icp.pose), prediction);
         let observability = if first_frame {
             None
         } else {
@@ -115,6 +128,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             finite,
             first_frame,
             observability,
+            weak,
             model_error,
             update,
         };
@@ -156,6 +170,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             rms: f.icp.rms,
             model_error: f.model_error,
             observability: f.observability,
+            held: f.weak.held(),
+            weak_ratios: f.weak.ratio,
             input_points: (scan.input + dropped.truncated as usize) as u32,
             out_of_range: scan.out_of_range,
             merge_points: clouds.merge as u32,
@@ -177,6 +193,7 @@ struct Facts<T: Real> {
     finite: bool,
     first_frame: bool,
     observability: Option<T>,
+    weak: Weakness<T>,
     model_error: T,
     update: UpdateStats,
 }
@@ -219,12 +236,13 @@ fn downsample<T: Real>(
 /// 10 km, far under gamma = 1e-4, so results are the reference's; in f32 it passes gamma once
 /// `|t| + r_max` exceeds about 105 m, and without it ICP ran to the iteration cap on most frames
 /// beyond 600 m from the start (tests/tests/long_run.rs).
-fn icp_params<T: Real>(cfg: &Config<T>, prediction: &Pose<T>) -> IcpParams<T> {
+fn icp_params<T: Real>(cfg: &Config<T>, prediction: &Pose<T>, weak: &Weakness<T>) -> IcpParams<T> {
     let reach = prediction.translation.vector.norm() + cfg.max_range;
     IcpParams {
         convergence_criterion: cfg.convergence_criterion.max(T::of(8.0) * T::EPS * reach),
         max_iterations: cfg.max_iterations,
         budget: cfg.work_budget,
+        hold: weak.hold,
     }
 }
 
@@ -263,6 +281,7 @@ fn status<T: Real>(cfg: &Config<T>, scan: &Received, dropped: &Dropped, f: &Fact
         Flag::Degenerate,
         !f.first_frame && f.observability.is_none_or(|o| o < cfg.degeneracy_ratio),
     );
+    status.set(Flag::Held, f.weak.held().directions() > 0);
     status.set(Flag::InvalidPoints, dropped.non_finite > 0);
     status.set(Flag::ScanTruncated, dropped.truncated > 0);
     status.set(Flag::Capacity, dropped.capacity());

@@ -2,6 +2,7 @@ use super::*;
 use crate::local_map::{Exact, LocalMap};
 use crate::testutil::yard;
 use nalgebra::{Translation3, UnitQuaternion};
+use std::vec::Vec;
 
 const VOXELS: usize = 3000;
 const POINTS: usize = 8192;
@@ -9,10 +10,11 @@ const MAP_WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(VOXELS, POINT
 const N: usize = 6000;
 const WORK_WORDS: usize = work_words::<f64>(N);
 
+/// The map's and ICP's words (about 0.7 MB) live on the heap: a test thread's stack is 2 MiB.
 struct Fixture {
-    map: [u64; MAP_WORDS],
-    work: [u64; WORK_WORDS],
-    scene: [[f64; 3]; N],
+    map: Vec<u64>,
+    work: Vec<u64>,
+    scene: Vec<[f64; 3]>,
     n: usize,
 }
 
@@ -28,9 +30,9 @@ impl Fixture {
 
 fn fixture() -> Fixture {
     let mut f = Fixture {
-        map: [0; MAP_WORDS],
-        work: [0; WORK_WORDS],
-        scene: [[0.0; 3]; N],
+        map: std::vec![0; MAP_WORDS],
+        work: std::vec![0; WORK_WORDS],
+        scene: std::vec![[0.0; 3]; N],
         n: 0,
     };
     f.n = yard(&mut f.scene);
@@ -43,6 +45,7 @@ fn params() -> IcpParams<f64> {
         convergence_criterion: 1e-4,
         max_iterations: 500,
         budget: None,
+        hold: None,
     }
 }
 
@@ -53,9 +56,9 @@ fn register(
     guess: &Pose<f64>,
     exec: &impl Executor,
 ) -> Alignment<f64> {
-    let scene = f.scene;
+    let scene = f.scene.clone();
     let n = f.n;
-    let mut source = [[0.0; 3]; N];
+    let mut source = std::vec![[0.0; 3]; N];
     let inv = truth.inverse();
     for (s, p) in source.iter_mut().zip(scene[..n].iter()) {
         let q = inv * Point::from(*p);
@@ -101,9 +104,9 @@ fn a_rigid_transform_of_a_structured_scene_is_recovered_to_a_micrometre() {
 fn the_iteration_cap_stops_icp_and_is_reported() {
     let mut f = fixture();
     let truth = Pose::translation(0.4, 0.1, 0.0);
-    let scene = f.scene;
+    let scene = f.scene.clone();
     let n = f.n;
-    let mut source = [[0.0; 3]; N];
+    let mut source = std::vec![[0.0; 3]; N];
     for (s, p) in source.iter_mut().zip(scene[..n].iter()) {
         *s = [p[0] - 0.4, p[1] - 0.1, p[2]];
     }
@@ -112,6 +115,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
         convergence_criterion: 1e-4,
         max_iterations: 2,
         budget: None,
+        hold: None,
     };
     let a = align_points_to_map(
         &Sequential,
@@ -243,7 +247,7 @@ fn walk_with_steps<T: Real, P: PointCodec<T>>(
 #[cfg_attr(miri, ignore = "minutes per walk under Miri; no unsafe on this path")]
 fn kept_answers_equal_a_new_search_f64_exact() {
     let mut f = fixture();
-    let scene = f.scene;
+    let scene = f.scene.clone();
     let n = f.n;
     let (map, _) = f.map_and_work();
     for (i, tau) in [0.3, 1.0, 6.0].into_iter().enumerate() {

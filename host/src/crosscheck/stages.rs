@@ -517,6 +517,7 @@ fn map_and_registration(
         convergence_criterion: cfg.convergence_criterion,
         max_iterations: cfg.max_iterations,
         budget: None,
+        hold: None,
     };
     for ((what, g, sg), file) in runs.iter().zip(&reg_files) {
         let want = pose_of(&matrix_of(&read_json(file)?["pose"])?);

@@ -1,7 +1,7 @@
 //! `diagnostics.png`: what went wrong where, beside `trajectory.png`. Stacked panels: the
 //! position error against distance travelled (when there is ground truth), then the core's
 //! latency and ICP iterations per frame; frames the core flagged degenerate or stopped at the
-//! iteration cap are marked in every panel.
+//! iteration cap, stopped by the work budget or held by robust mode are marked in every panel.
 
 use super::{font_available, titled, ESTIMATE_COLOR};
 use anyhow::{anyhow, bail, Context, Result};
@@ -16,10 +16,11 @@ pub const WIDTH: u32 = 1000;
 pub const HEIGHT: u32 = 1000;
 
 /// The flags marked, each with its colour.
-pub const MARKED: [(Flag, RGBColor); 3] = [
+pub const MARKED: [(Flag, RGBColor); 4] = [
     (Flag::Degenerate, RGBColor(214, 39, 40)),
     (Flag::IterationCap, RGBColor(148, 103, 189)),
     (Flag::Budget, RGBColor(255, 127, 14)),
+    (Flag::Held, RGBColor(23, 190, 207)),
 ];
 
 /// One frame of the diagnostics.
@@ -178,6 +179,8 @@ mod tests {
                     Status::OK.with(Flag::IterationCap)
                 } else if i == 13 {
                     Status::OK.with(Flag::Budget)
+                } else if i == 17 {
+                    Status::OK.with(Flag::Held)
                 } else {
                     Status::OK
                 },

@@ -81,6 +81,14 @@ pub struct FrameRow {
     pub dropped_map_points_full: Option<u32>,
     /// Observability ratio (empty on the first frame and when nothing was measured).
     pub observability: Option<f64>,
+    /// Robust mode: the sensor axes held at the constant-velocity prediction, `|`-joined
+    /// (`tx|ty|yaw`); empty when none was (the `held` flag column says whether any
+    /// direction was).
+    pub held_axes: String,
+    /// Robust mode: weakest over strongest eigenvalue of the translation information.
+    pub weak_t: Option<f64>,
+    /// Robust mode: the same for rotation.
+    pub weak_r: Option<f64>,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
     /// The core's flags, written as one column each.
@@ -120,6 +128,9 @@ impl FrameRow {
             dropped_map_voxels_full: r.map(|r| r.dropped.map_voxels_full),
             dropped_map_points_full: r.map(|r| r.dropped.map_points_full),
             observability: r.and_then(|r| r.observability),
+            held_axes: r.map_or_else(String::new, |r| r.held.to_string()),
+            weak_t: r.and_then(|r| r.weak_ratios).map(|w| w[0]),
+            weak_r: r.and_then(|r| r.weak_ratios).map(|w| w[1]),
             deskewed: r.is_some_and(|r| r.deskewed),
             status: o.status().unwrap_or_default(),
         }
@@ -450,8 +461,8 @@ mod tests {
             first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,"),
             "{first}"
         );
-        assert!(first.ends_with(",false,0,0,0,0,0,0,0,0,0"), "{first}");
+        assert!(first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0"), "{first}");
         let second = lines.next().unwrap();
-        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0"), "{second}");
+        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0,0"), "{second}");
     }
 }

@@ -3,7 +3,8 @@
 //! posts and trees on both sides, every object kept clear of the whole route so that the path
 //! never runs into one (even where the route crosses itself). `corridor` is an infinite tunnel
 //! along the x axis (floor, walls, ceiling: nothing varies along the axis) and `plane` a lone
-//! ground plane; both are degenerate on purpose.
+//! ground plane; both are degenerate on purpose. `tunnel` and `field` add sparse structure to
+//! them (see `sparse`): weakly observable, as real tunnels and fields are.
 
 use super::rng::{Purpose, Stream};
 use super::scene::{Scene, Solid};
@@ -11,6 +12,8 @@ use super::shapes::{Plane, Shape};
 use super::trajectory::Route;
 use super::Profile;
 use nalgebra::{Point3, Vector3};
+
+mod sparse;
 
 /// Corridor half width (m): walls at `y = +-CORRIDOR_HALF_WIDTH`.
 pub const CORRIDOR_HALF_WIDTH: f64 = 4.5;
@@ -23,23 +26,21 @@ const GROUND: f32 = 0.2;
 /// Builds the scene of `profile` around `route`.
 pub fn build(profile: Profile, seed: u64, route: &Route) -> Scene {
     let ground = (Plane::new(Vector3::z(), Point3::origin()), GROUND);
+    let w = CORRIDOR_HALF_WIDTH;
+    let corridor = vec![
+        ground,
+        (
+            Plane::new(Vector3::z(), Point3::new(0.0, 0.0, CORRIDOR_HEIGHT)),
+            0.35,
+        ),
+        (Plane::new(Vector3::y(), Point3::new(0.0, w, 0.0)), 0.45),
+        (Plane::new(Vector3::y(), Point3::new(0.0, -w, 0.0)), 0.45),
+    ];
     match profile {
         Profile::Plane => Scene::new(vec![ground], Vec::new()),
-        Profile::Corridor => {
-            let w = CORRIDOR_HALF_WIDTH;
-            Scene::new(
-                vec![
-                    ground,
-                    (
-                        Plane::new(Vector3::z(), Point3::new(0.0, 0.0, CORRIDOR_HEIGHT)),
-                        0.35,
-                    ),
-                    (Plane::new(Vector3::y(), Point3::new(0.0, w, 0.0)), 0.45),
-                    (Plane::new(Vector3::y(), Point3::new(0.0, -w, 0.0)), 0.45),
-                ],
-                Vec::new(),
-            )
-        }
+        Profile::Field => Scene::new(vec![ground], City::new(route, seed).field()),
+        Profile::Corridor => Scene::new(corridor, Vec::new()),
+        Profile::Tunnel => Scene::new(corridor, City::new(route, seed).tunnel()),
         Profile::Urban | Profile::Fast => {
             Scene::new(vec![ground], City::new(route, seed).generate())
         }
@@ -60,6 +61,18 @@ impl Footprint {
         match *self {
             Footprint::Rect(c, h, _) => (c, h[0].hypot(h[1])),
             Footprint::Disc(c, r) => (c, r),
+        }
+    }
+
+    /// The footprint of `shape` seen from above.
+    #[cfg(test)]
+    fn of(shape: &Shape) -> Self {
+        match *shape {
+            Shape::Box { centre, half, rot } => {
+                Footprint::Rect([centre.x, centre.y], [half.x, half.y], rot)
+            }
+            Shape::Cylinder { centre, radius, .. } => Footprint::Disc(centre, radius),
+            Shape::Sphere { centre, radius } => Footprint::Disc([centre.x, centre.y], radius),
         }
     }
 
@@ -407,20 +420,9 @@ impl<'a> City<'a> {
             let lateral = side * self.rng.range(6.2, 6.8);
             let (radius, height) = (self.rng.range(0.1, 0.18), self.rng.range(5.0, 9.0));
             let (c, psi) = self.offset(s, lateral);
-            if !self
-                .index
-                .clear(&Footprint::Disc(c, radius), POLE_CLEARANCE)
-            {
+            if !self.pole(c, radius, height) {
                 continue;
             }
-            self.solids.push(Solid {
-                shape: Shape::Cylinder {
-                    centre: c,
-                    radius,
-                    z: [0.0, height],
-                },
-                reflectivity: 0.5,
-            });
             // A lamp arm reaching over the road, well above the sensor.
             let (ac, _) = self.offset(s, lateral - side * 0.9);
             self.add_box(ac, psi, [0.08, 0.9, 0.06], height - 0.3, 0.6, None);
@@ -439,28 +441,53 @@ impl<'a> City<'a> {
                 continue;
             }
             let (c, _) = self.offset(s, lateral);
-            if !self
-                .index
-                .clear(&Footprint::Disc(c, crown), CANOPY_CLEARANCE)
-            {
-                continue;
-            }
-            self.solids.push(Solid {
-                shape: Shape::Cylinder {
-                    centre: c,
-                    radius: trunk_r,
-                    z: [0.0, trunk_h],
-                },
-                reflectivity: 0.15,
-            });
-            self.solids.push(Solid {
-                shape: Shape::Sphere {
-                    centre: Point3::new(c[0], c[1], trunk_h + 0.6 * crown),
-                    radius: crown,
-                },
-                reflectivity: 0.3,
-            });
+            self.tree(c, [trunk_r, trunk_h], crown);
         }
+    }
+
+    /// Adds a pole at `c` if it keeps clear of the route; returns whether it did.
+    fn pole(&mut self, c: [f64; 2], radius: f64, height: f64) -> bool {
+        if !self
+            .index
+            .clear(&Footprint::Disc(c, radius), POLE_CLEARANCE)
+        {
+            return false;
+        }
+        self.solids.push(Solid {
+            shape: Shape::Cylinder {
+                centre: c,
+                radius,
+                z: [0.0, height],
+            },
+            reflectivity: 0.5,
+        });
+        true
+    }
+
+    /// Adds a tree (trunk radius and height, crown radius) at `c` if its crown keeps clear of
+    /// the route.
+    fn tree(&mut self, c: [f64; 2], [trunk_r, trunk_h]: [f64; 2], crown: f64) {
+        if !self
+            .index
+            .clear(&Footprint::Disc(c, crown), CANOPY_CLEARANCE)
+        {
+            return;
+        }
+        self.solids.push(Solid {
+            shape: Shape::Cylinder {
+                centre: c,
+                radius: trunk_r,
+                z: [0.0, trunk_h],
+            },
+            reflectivity: 0.15,
+        });
+        self.solids.push(Solid {
+            shape: Shape::Sphere {
+                centre: Point3::new(c[0], c[1], trunk_h + 0.6 * crown),
+                radius: crown,
+            },
+            reflectivity: 0.3,
+        });
     }
 }
 
@@ -489,15 +516,7 @@ mod tests {
                     continue;
                 }
                 low += 1;
-                let exact = match solid.shape {
-                    Shape::Box { centre, half, rot } => {
-                        Footprint::Rect([centre.x, centre.y], [half.x, half.y], rot)
-                    }
-                    Shape::Cylinder { centre, radius, .. } => Footprint::Disc(centre, radius),
-                    Shape::Sphere { centre, radius } => {
-                        Footprint::Disc([centre.x, centre.y], radius)
-                    }
-                };
+                let exact = Footprint::of(&solid.shape);
                 assert!(index.clear(&exact, 2.9), "solid {solid:?} is on the route");
             }
             println!(

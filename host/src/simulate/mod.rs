@@ -40,6 +40,12 @@ pub enum Profile {
     Fast,
     /// A lone ground plane, driven like urban: degenerate in x, y and yaw.
     Plane,
+    /// The corridor with sparse structure on its walls (pillars, door frames, cabinets every
+    /// 10-40 m): observable along the axis, but weakly, as a real tunnel is.
+    Tunnel,
+    /// The lone ground plane with sparse objects (poles, trees, boulders 20-60 m apart along
+    /// the route): observable in x, y and yaw, but weakly, as an open field is.
+    Field,
 }
 
 /// Most frames one run may ask for (a longer route means a larger scene in memory).

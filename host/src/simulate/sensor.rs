@@ -336,6 +336,8 @@ mod tests {
             Profile::Corridor,
             Profile::Fast,
             Profile::Plane,
+            Profile::Tunnel,
+            Profile::Field,
         ] {
             let sim = small(profile, 0.0);
             let f = sim.frame(4);

@@ -173,7 +173,7 @@ impl Route {
         let mut b = Builder::new(-ROUTE_BEFORE_START);
         let end = length + ROUTE_AFTER_END;
         match profile {
-            Profile::Urban | Profile::Plane => {
+            Profile::Urban | Profile::Plane | Profile::Field => {
                 b.straight(ROUTE_BEFORE_START + rng.range(30.0, 80.0));
                 while b.s < end {
                     let angle = if rng.chance(0.6) {
@@ -211,7 +211,7 @@ impl Route {
                     b.straight(straight);
                 }
             }
-            Profile::Corridor => {
+            Profile::Corridor | Profile::Tunnel => {
                 // A gentle weave: each S-bend is mirrored by the next, so the lateral offset
                 // returns exactly to zero and the route stays on the corridor's axis.
                 b.straight(ROUTE_BEFORE_START + 30.0);
@@ -527,13 +527,13 @@ impl MotionParams {
             height: 1.73,
         };
         match profile {
-            Profile::Urban | Profile::Plane => car,
+            Profile::Urban | Profile::Plane | Profile::Field => car,
             Profile::Fast => Self {
                 speed: (20.0, 30.0),
                 launch_tau: 1.0,
                 ..car
             },
-            Profile::Corridor => Self {
+            Profile::Corridor | Profile::Tunnel => Self {
                 speed: (3.0, 8.0),
                 ..car
             },
@@ -636,12 +636,14 @@ impl Trajectory {
 mod tests {
     use super::*;
 
-    fn profiles() -> [Profile; 4] {
+    fn profiles() -> [Profile; 6] {
         [
             Profile::Urban,
             Profile::Corridor,
             Profile::Fast,
             Profile::Plane,
+            Profile::Tunnel,
+            Profile::Field,
         ]
     }
 
