@@ -33,8 +33,10 @@ impl CaptureWriter {
     /// Creates `path` for `sensor`'s packets; `start_time` is the sequence time of the first.
     pub fn create(path: &Path, sensor: PacketSensor, start_time: f64) -> Result<Self> {
         let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        // Little-endian, as Wireshark and tcpdump write on the usual hosts.
         let header = PcapHeader {
             datalink: DataLink::ETHERNET,
+            endianness: pcap_file::Endianness::Little,
             ..PcapHeader::default()
         };
         let writer = PcapWriter::with_header(BufWriter::new(file), header)
