@@ -195,20 +195,7 @@ fn link(manifest: &std::path::Path, out: &std::path::Path, target: &str) {
 /// `timestamps/NNNNNN.bin` f64 per point), cropped at 1.2 x r_max (50 m) to spare flash; the
 /// odometry crops at r_max itself, after deskewing.
 fn tiny(out: &std::path::Path) {
-    for v in ["KISS_EMBED_VLP16", "KISS_EMBED_FIRST", "KISS_EMBED_FRAMES"] {
-        println!("cargo:rerun-if-env-changed={v}");
-    }
-    let dir = PathBuf::from(
-        env::var("KISS_EMBED_VLP16")
-            .expect("KISS_EMBED_VLP16: the generated VLP-16 folder (run.sh makes it)"),
-    );
-    let num = |name: &str, default: usize| -> usize {
-        env::var(name)
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(default)
-    };
-    let (first, n) = (num("KISS_EMBED_FIRST", 30), num("KISS_EMBED_FRAMES", 5));
+    let (dir, first, n) = generated("KISS_EMBED_VLP16");
     let wide = env::var_os("CARGO_FEATURE_F64").is_some();
     let (max_range, crop) = (50.0f64, 60.0f64);
     let (mut bin, mut stamps, mut ranges, mut start) = (Vec::new(), Vec::new(), String::new(), 0);
@@ -271,20 +258,7 @@ fn tiny(out: &std::path::Path) {
 /// --format pcap` folder: `packets.pcap`, and `sim.toml` for the packets per sweep), 1206 bytes
 /// each, in `packets.bin`. The pcap is the simulator's: Ethernet, IPv4 without options, UDP.
 fn packets(out: &std::path::Path) {
-    for v in ["KISS_EMBED_PCAP", "KISS_EMBED_FIRST", "KISS_EMBED_FRAMES"] {
-        println!("cargo:rerun-if-env-changed={v}");
-    }
-    let dir = PathBuf::from(
-        env::var("KISS_EMBED_PCAP")
-            .expect("KISS_EMBED_PCAP: the generated VLP-16 pcap folder (run.sh makes it)"),
-    );
-    let num = |name: &str, default: usize| -> usize {
-        env::var(name)
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(default)
-    };
-    let (first, n) = (num("KISS_EMBED_FIRST", 30), num("KISS_EMBED_FRAMES", 5));
+    let (dir, first, n) = generated("KISS_EMBED_PCAP");
     let toml = std::fs::read_to_string(dir.join("sim.toml")).expect("sim.toml");
     let per_sweep: usize = toml
         .lines()
@@ -345,4 +319,25 @@ fn packets(out: &std::path::Path) {
          pub const FRAMES: [FrameInfo; {n}] = [\n{ranges}];\n"
     );
     std::fs::write(out.join("frames.rs"), rs + &budget_line()).unwrap();
+}
+
+/// The generated folder named by `var` (`run.sh` makes it), and the sweeps to embed:
+/// `KISS_EMBED_FIRST` (default 30, past the drive's start) and `KISS_EMBED_FRAMES` (default 5).
+fn generated(var: &str) -> (PathBuf, usize, usize) {
+    for v in [var, "KISS_EMBED_FIRST", "KISS_EMBED_FRAMES"] {
+        println!("cargo:rerun-if-env-changed={v}");
+    }
+    let dir =
+        env::var(var).unwrap_or_else(|_| panic!("{var}: the generated folder (run.sh makes it)"));
+    let num = |name: &str, default: usize| -> usize {
+        env::var(name)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(default)
+    };
+    (
+        PathBuf::from(dir),
+        num("KISS_EMBED_FIRST", 30),
+        num("KISS_EMBED_FRAMES", 5),
+    )
 }
