@@ -9,8 +9,9 @@
 //!
 //! A Velodyne spins a whole number of packets per turn (the rate is rounded to make it so) and
 //! the turn starts 1.5 blocks after azimuth 0, so the packet whose last block passes azimuth 0
-//! is the last of each sweep: decoders cutting at 0 degrees see the simulator's sweeps. An
-//! Ouster's sweep is one frame id.
+//! is the last of each sweep: decoders cutting at 0 degrees see the simulator's sweeps (without
+//! a cut angle, `run` takes a full turn from the first packet: the same sweeps one packet
+//! later). An Ouster's sweep is one frame id.
 
 use super::rng::{key, Purpose, Stream};
 use super::sensor::Frame;
