@@ -1,7 +1,9 @@
 //! Build script: picks the linker script for the target and converts the embedded frames into
 //! `$OUT_DIR/frames.bin` (points), `$OUT_DIR/stamps.bin` (per-point times, `tiny` only) and
 //! `$OUT_DIR/frames.rs`: kitti-mini frames by the rule in `kitti.rs`, or with the `tiny`
-//! feature sweeps of a generated VLP-16 drive (`KISS_EMBED_VLP16`, made by `run.sh`).
+//! feature sweeps of a generated VLP-16 drive (`KISS_EMBED_VLP16`, made by `run.sh`), or with
+//! the `packets` feature that drive's UDP payloads (`$OUT_DIR/packets.bin`, from the pcap in
+//! `KISS_EMBED_PCAP`).
 //!
 //! Inputs (all optional):
 //! - `KISS_KITTI_MINI`: kitti-mini root (default `../shared/data/kitti-mini` beside the repo);
@@ -32,6 +34,9 @@ fn main() {
     link(&manifest, &out, &target);
 
     let full = env::var_os("CARGO_FEATURE_FULL").is_some();
+    if env::var_os("CARGO_FEATURE_PACKETS").is_some() {
+        return packets(&out);
+    }
     if env::var_os("CARGO_FEATURE_TINY").is_some() {
         return tiny(&out);
     }
@@ -152,10 +157,13 @@ fn main() {
 /// `KISS_EMBED_BUDGET` (optional): ICP's work budget per frame (`Config::work_budget`).
 fn budget_line() -> String {
     println!("cargo:rerun-if-env-changed=KISS_EMBED_BUDGET");
-    let budget = env::var("KISS_EMBED_BUDGET").ok().filter(|v| !v.is_empty()).map(|v| {
-        v.parse::<u64>()
-            .unwrap_or_else(|_| panic!("KISS_EMBED_BUDGET={v} is not a number"))
-    });
+    let budget = env::var("KISS_EMBED_BUDGET")
+        .ok()
+        .filter(|v| !v.is_empty())
+        .map(|v| {
+            v.parse::<u64>()
+                .unwrap_or_else(|_| panic!("KISS_EMBED_BUDGET={v} is not a number"))
+        });
     format!("/// ICP's work budget per frame (`KISS_EMBED_BUDGET`).\npub const BUDGET: Option<u64> = {budget:?};\n")
 }
 
@@ -187,16 +195,7 @@ fn link(manifest: &std::path::Path, out: &std::path::Path, target: &str) {
 /// `timestamps/NNNNNN.bin` f64 per point), cropped at 1.2 x r_max (50 m) to spare flash; the
 /// odometry crops at r_max itself, after deskewing.
 fn tiny(out: &std::path::Path) {
-    for v in ["KISS_EMBED_VLP16", "KISS_EMBED_FIRST", "KISS_EMBED_FRAMES"] {
-        println!("cargo:rerun-if-env-changed={v}");
-    }
-    let dir = PathBuf::from(
-        env::var("KISS_EMBED_VLP16").expect("KISS_EMBED_VLP16: the generated VLP-16 folder (run.sh makes it)"),
-    );
-    let num = |name: &str, default: usize| -> usize {
-        env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
-    };
-    let (first, n) = (num("KISS_EMBED_FIRST", 30), num("KISS_EMBED_FRAMES", 5));
+    let (dir, first, n) = generated("KISS_EMBED_VLP16");
     let wide = env::var_os("CARGO_FEATURE_F64").is_some();
     let (max_range, crop) = (50.0f64, 60.0f64);
     let (mut bin, mut stamps, mut ranges, mut start) = (Vec::new(), Vec::new(), String::new(), 0);
@@ -252,4 +251,93 @@ fn tiny(out: &std::path::Path) {
          pub const FRAMES: [FrameInfo; {n}] = [\n{ranges}];\n"
     );
     std::fs::write(out.join("frames.rs"), rs + &budget_line()).unwrap();
+}
+
+/// Profile `packets`: the UDP payloads of sweeps `KISS_EMBED_FIRST` (default 30) onwards of the
+/// generated VLP-16 recording in `KISS_EMBED_PCAP` (a `kiss-odom simulate --sensor vlp16
+/// --format pcap` folder: `packets.pcap`, and `sim.toml` for the packets per sweep), 1206 bytes
+/// each, in `packets.bin`. The pcap is the simulator's: Ethernet, IPv4 without options, UDP.
+fn packets(out: &std::path::Path) {
+    let (dir, first, n) = generated("KISS_EMBED_PCAP");
+    let toml = std::fs::read_to_string(dir.join("sim.toml")).expect("sim.toml");
+    let per_sweep: usize = toml
+        .lines()
+        .find_map(|l| l.strip_prefix("packets_per_sweep = "))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("sim.toml has no packets_per_sweep: not a --format pcap folder");
+    let pcap = dir.join("packets.pcap");
+    println!("cargo:rerun-if-changed={}", pcap.display());
+    let b = std::fs::read(&pcap).unwrap_or_else(|e| panic!("{}: {e}", pcap.display()));
+    const PAYLOAD: usize = 1206;
+    const HEADERS: usize = 14 + 20 + 8;
+    let (mut at, mut payloads) = (24, Vec::new());
+    while at + 16 <= b.len() {
+        let incl = u32::from_le_bytes(b[at + 8..at + 12].try_into().unwrap()) as usize;
+        let frame = &b[at + 16..at + 16 + incl];
+        assert_eq!(
+            incl,
+            HEADERS + PAYLOAD,
+            "{}: not a VLP-16 data packet",
+            pcap.display()
+        );
+        payloads.push(&frame[HEADERS..]);
+        at += 16 + incl;
+    }
+    let range = first * per_sweep..(first + n) * per_sweep;
+    let picked = payloads.get(range.clone()).unwrap_or_else(|| {
+        panic!(
+            "{} has {} packets, not {range:?}",
+            pcap.display(),
+            payloads.len()
+        )
+    });
+    std::fs::write(out.join("packets.bin"), picked.concat()).unwrap();
+    std::fs::write(out.join("frames.bin"), []).unwrap();
+    std::fs::write(out.join("stamps.bin"), []).unwrap();
+    let mut ranges = String::new();
+    for k in 0..n {
+        writeln!(
+            ranges,
+            "    FrameInfo {{ start: {}, len: {per_sweep}, raw: 0, cropped: 0, t_min: 0.0, t_max: 0.0 }},",
+            k * per_sweep
+        )
+        .unwrap();
+    }
+    let rs = format!(
+        "// Generated by build.rs from a kiss-odom simulate VLP-16 pcap; do not edit.\n\
+         /// Where the packets come from.\n\
+         pub const SEQUENCE: &str = \"vlp16-pcap\";\n\
+         /// Index of the first sweep.\n\
+         pub const FIRST: usize = {first};\n\
+         /// The odometry's `max_range`.\n\
+         pub const MAX_RANGE: f64 = 50.0;\n\
+         /// Map voxel size.\n\
+         pub const VOXEL_SIZE: f64 = 2.0;\n\
+         /// Every point is kept.\n\
+         pub const KEEP_EVERY: usize = 1;\n\
+         /// The simulator's sweeps, in packets (the program finds them itself, by azimuth).\n\
+         pub const FRAMES: [FrameInfo; {n}] = [\n{ranges}];\n"
+    );
+    std::fs::write(out.join("frames.rs"), rs + &budget_line()).unwrap();
+}
+
+/// The generated folder named by `var` (`run.sh` makes it), and the sweeps to embed:
+/// `KISS_EMBED_FIRST` (default 30, past the drive's start) and `KISS_EMBED_FRAMES` (default 5).
+fn generated(var: &str) -> (PathBuf, usize, usize) {
+    for v in [var, "KISS_EMBED_FIRST", "KISS_EMBED_FRAMES"] {
+        println!("cargo:rerun-if-env-changed={v}");
+    }
+    let dir =
+        env::var(var).unwrap_or_else(|_| panic!("{var}: the generated folder (run.sh makes it)"));
+    let num = |name: &str, default: usize| -> usize {
+        env::var(name)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(default)
+    };
+    (
+        PathBuf::from(dir),
+        num("KISS_EMBED_FIRST", 30),
+        num("KISS_EMBED_FRAMES", 5),
+    )
 }

@@ -4,7 +4,9 @@
 #   embedded/measure.sh [case...]
 #
 # Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny
-# a53-full a53-small rv-small rv-small-f64 rv-full (default: all). Outputs go to embedded/target/measure/.
+# m7-packets m7-packets-decode a53-full a53-small rv-small rv-small-f64 rv-full (default: all).
+# m7-packets streams a generated VLP-16 recording packet by packet through the decoder and the
+# core; m7-packets-decode runs its decoder alone; both add a per-packet line below the table. Outputs go to embedded/target/measure/.
 # Frame times are ESTIMATES: instructions / (IPC x clock) with IPC = 1 on a 600 MHz Cortex-M7
 # (from the Cortex-M4F counts for an M7 whose FPU is single precision, from the m7 build for
 # one with the double-precision FPU) and a 1.2 GHz Cortex-A53 (from the AArch64 counts); see
@@ -14,7 +16,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 out="$here/target/measure"
 mkdir -p "$out"
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny a53-full a53-small rv-small rv-small-f64 rv-full)
+[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny m7-packets m7-packets-decode a53-full a53-small rv-small rv-small-f64 rv-full)
 
 spec() {
   case "$1" in
@@ -25,6 +27,8 @@ spec() {
     m7-small) echo "m7:" ;;
     m7-small-f64) echo "m7:f64" ;;
     m7-tiny) echo "m7:tiny" ;;
+    m7-packets) echo "m7:packets" ;;
+    m7-packets-decode) echo "m7:packets,baseline" ;;
     a53-full) echo "aarch64:f64,exact,full" ;;
     a53-small) echo "aarch64:" ;;
     rv-small) echo "riscv32:" ;;
@@ -44,7 +48,7 @@ done
 echo "| case | target | scalar, codec, capacities | points/frame | .text | .rodata (frames) | .bss + .psram | state bytes | stack high-water | insns frame 0 | insns/frame 1-4 (mean, max) | est. ms/frame M7 600 MHz | est. ms/frame A53 1.2 GHz |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for c in "${cases[@]}"; do
-  [ "$c" = m4-baseline ] && continue
+  [ "$c" = m4-baseline ] || [ "$c" = m7-packets-decode ] && continue
   s="$(spec "$c")"
   awk -v c="$c" -v t="${s%%:*}" '
     /^size /{ for (i=2;i<=NF;i++) { split($i,kv,"="); sz[kv[1]]=kv[2] } }
@@ -70,3 +74,14 @@ if [ -f "$out/m4-baseline.txt" ] && [ -f "$out/m4-small.txt" ]; then
   echo "Cortex-M4F m4-small: program $f - baseline $b = $((f - b)) instructions for all frames;" \
        "the per-frame marks add up to $m (the rest is printing the frame lines)."
 fi
+for c in m7-packets m7-packets-decode; do
+  [ -f "$out/$c.txt" ] || continue
+  echo
+  # Sweeps 1-4 (sweep 0 has no map to register against).
+  awk -v c="$c" '
+    /^input /{ for (i=3;i<=NF;i++) { split($i,kv,"="); if (kv[1]=="packets") p[$2]=kv[2] } }
+    /^cost /{ split($3,kv,"="); q[$2]=kv[2] }
+    END { for (s in q) if (s>0) { n++; sum+=q[s]; pk+=p[s] }
+          printf "%s: %.2f M instructions per sweep (sweeps 1-%d, mean), %d packets per sweep, %.0f k instructions per packet\n",
+            c, sum/n/1e6, n, pk/n, sum/pk/1e3 }' "$out/$c.txt"
+done

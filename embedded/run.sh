@@ -95,6 +95,17 @@ if [[ ",$features," == *",tiny,"* ]]; then
   fi
   export KISS_EMBED_VLP16="$vlp"
 fi
+# The packets profile embeds the UDP payloads of a generated VLP-16 recording (the same drive).
+if [[ ",$features," == *",packets,"* ]]; then
+  pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"
+  if [ ! -f "$pcapdir/sim.toml" ]; then
+    (cd "$here/.." && env -u RUSTFLAGS -u CARGO_ENCODED_RUSTFLAGS -u CARGO_BUILD_TARGET \
+      cargo run --release -q -p kiss-odom -- simulate --out "$pcapdir" --frames 36 \
+      --seed 11 --sensor vlp16 --format pcap --max-range 100 --overwrite) >&2 \
+      || { echo "error: cannot generate the VLP-16 pcap" >&2; exit 96; }
+  fi
+  export KISS_EMBED_PCAP="$pcapdir"
+fi
 args=(--release --target "$triple" --target-dir "$tdir")
 [ -n "$features" ] && args+=(--features "$features")
 export DEFMT_LOG="${DEFMT_LOG:-info}"

@@ -26,6 +26,8 @@ macro_rules! out {
 
 #[cfg_attr(feature = "defmt", allow(dead_code))]
 mod lines;
+#[cfg(feature = "packets")]
+mod stream;
 mod workload;
 
 #[cfg(all(target_os = "none", feature = "defmt"))]

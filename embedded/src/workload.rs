@@ -5,7 +5,9 @@
 //! `frame` and `pose` lines must agree character for character; `cost` and the summary lines
 //! carry the per-target measurements.
 
-use kiss_odom_core::{Capacities, Config, Degeneracy, FrameReport, Odometry, Words};
+#[cfg(not(feature = "packets"))]
+use kiss_odom_core::FrameReport;
+use kiss_odom_core::{Capacities, Config, Degeneracy, Odometry, Words};
 
 /// Scalar of this build (`f64` feature; `f32` otherwise).
 #[cfg(feature = "f64")]
@@ -26,10 +28,10 @@ pub type Codec = kiss_odom_core::Quantized;
 #[cfg(feature = "full")]
 pub const CAPS: Capacities = Capacities::FULL_SCALE;
 /// Capacities of this build (see above).
-#[cfg(feature = "tiny")]
+#[cfg(any(feature = "tiny", feature = "packets"))]
 pub const CAPS: Capacities = Capacities::TINY;
 /// Capacities of this build (see above).
-#[cfg(not(any(feature = "full", feature = "tiny")))]
+#[cfg(not(any(feature = "full", feature = "tiny", feature = "packets")))]
 pub const CAPS: Capacities = Capacities::SMALL;
 
 /// Arena length in `u64` words, computed at compile time so the arena can be a `static`.
@@ -47,16 +49,18 @@ const CODEC_NAME: &str = if cfg!(feature = "exact") {
 };
 const CAPS_NAME: &str = if cfg!(feature = "full") {
     "full_scale"
-} else if cfg!(feature = "tiny") {
+} else if cfg!(any(feature = "tiny", feature = "packets")) {
     "tiny"
 } else {
     "small"
 };
 
+#[cfg(not(feature = "packets"))]
 /// Points per push in the `tiny` profile: one VLP-16 data packet (12 blocks of 32 returns).
 const PACKET_POINTS: usize = 384;
 
 /// Where one frame sits in the embedded point data.
+#[cfg_attr(feature = "packets", allow(dead_code))]
 pub struct FrameInfo {
     /// First point.
     pub start: usize,
@@ -79,19 +83,24 @@ pub mod frames {
 }
 
 #[repr(C, align(8))]
+#[cfg(not(feature = "packets"))]
 struct Aligned<B: ?Sized>(B);
 
+#[cfg(not(feature = "packets"))]
 static BYTES: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/frames.bin")));
 
+#[cfg(not(feature = "packets"))]
 static STAMPS: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/stamps.bin")));
 
 /// The points of one embedded frame.
+#[cfg(not(feature = "packets"))]
 pub fn points(f: &FrameInfo) -> &'static [[Scalar; 3]] {
     let all: &'static [[Scalar; 3]] = bytemuck::cast_slice(&BYTES.0);
     &all[f.start..f.start + f.len]
 }
 
 /// The per-point capture times of one embedded frame (`tiny` only).
+#[cfg(not(feature = "packets"))]
 pub fn stamps(f: &FrameInfo) -> &'static [f64] {
     let all: &'static [f64] = bytemuck::cast_slice(&STAMPS.0);
     all.get(f.start..f.start + f.len).unwrap_or(&[])
@@ -101,7 +110,7 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 /// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels), in robust mode
 /// under the `robust` feature.
 pub fn config() -> Config<Scalar> {
-    let base = if cfg!(feature = "tiny") {
+    let base = if cfg!(any(feature = "tiny", feature = "packets")) {
         Config::tiny()
     } else {
         Config {
@@ -157,45 +166,14 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
             return EXIT_CONFIG_ERROR;
         }
     };
-    let mut total: Option<u64> = Some(0);
-    for (i, f) in frames::FRAMES.iter().enumerate() {
-        let pts = points(f);
-        out!(
-            "input {} raw={} cropped={} kept={}",
-            i,
-            f.raw,
-            f.cropped,
-            f.len
-        );
-        if cfg!(feature = "baseline") {
-            core::hint::black_box(pts);
-            total = None;
-            continue;
-        }
-        kiss_frame_mark();
-        let t0 = insns();
-        let result = if cfg!(feature = "tiny") {
-            // Packet by packet, as a sensor delivers them: the sweep is never held whole.
-            let mut input = odom.begin_frame(Some((f.t_min, f.t_max)));
-            for (p, t) in pts.chunks(PACKET_POINTS).zip(stamps(f).chunks(PACKET_POINTS)) {
-                input.push(p, Some(t));
-            }
-            input.finish()
-        } else {
-            odom.register_frame(pts, None)
-        };
-        let t1 = insns();
-        kiss_frame_mark();
-        let cost = t0.zip(t1).map(|(a, b)| b - a);
-        total = total.zip(cost).map(|(a, b)| a + b);
-        match result {
-            Ok(r) => emit_frame(i, f, &r, cost, counter),
-            Err(e) => {
-                out!("error frame {}: {}", i, e);
-                return EXIT_FRAME_ERROR;
-            }
-        }
-    }
+    #[cfg(feature = "packets")]
+    let total = crate::stream::run(&mut odom, insns, counter);
+    #[cfg(not(feature = "packets"))]
+    let total = embedded_frames(&mut odom, insns, counter);
+    let total = match total {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
     let hw = odom.high_water();
     out!(
         "memory arena_words={} arena_bytes={} state_bytes={}",
@@ -220,9 +198,62 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
     0
 }
 
+/// Registers every embedded frame; the total instruction count where measured, or the exit
+/// status of the first failing frame.
+#[cfg(not(feature = "packets"))]
+fn embedded_frames<S: kiss_odom_core::Storage>(
+    odom: &mut Odometry<Scalar, Codec, S>,
+    insns: fn() -> Option<u64>,
+    counter: &str,
+) -> Result<Option<u64>, i32> {
+    let mut total: Option<u64> = Some(0);
+    for (i, f) in frames::FRAMES.iter().enumerate() {
+        let pts = points(f);
+        out!(
+            "input {} raw={} cropped={} kept={}",
+            i,
+            f.raw,
+            f.cropped,
+            f.len
+        );
+        if cfg!(feature = "baseline") {
+            core::hint::black_box(pts);
+            total = None;
+            continue;
+        }
+        kiss_frame_mark();
+        let t0 = insns();
+        let result = if cfg!(feature = "tiny") {
+            // Packet by packet, as a sensor delivers them: the sweep is never held whole.
+            let mut input = odom.begin_frame(Some((f.t_min, f.t_max)));
+            for (p, t) in pts
+                .chunks(PACKET_POINTS)
+                .zip(stamps(f).chunks(PACKET_POINTS))
+            {
+                input.push(p, Some(t));
+            }
+            input.finish()
+        } else {
+            odom.register_frame(pts, None)
+        };
+        let t1 = insns();
+        kiss_frame_mark();
+        let cost = t0.zip(t1).map(|(a, b)| b - a);
+        total = total.zip(cost).map(|(a, b)| a + b);
+        match result {
+            Ok(r) => emit_frame(i, f, &r, cost, counter),
+            Err(e) => {
+                out!("error frame {}: {}", i, e);
+                return Err(EXIT_FRAME_ERROR);
+            }
+        }
+    }
+    Ok(total)
+}
+
 /// Prints one frame: the report line, the pose line (see `lines`) and, where measured, the
 /// cost line.
-#[cfg(not(feature = "defmt"))]
+#[cfg(not(any(feature = "defmt", feature = "packets")))]
 fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64>, counter: &str) {
     out!("{}", crate::lines::FrameLine(i, f.len, r));
     out!("{}", crate::lines::PoseLine(i, &r.pose));
@@ -233,7 +264,7 @@ fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64
 
 /// defmt flavour of [`emit_frame`]: the same fields, binary-encoded (decode with
 /// `defmt-print -e ELF`).
-#[cfg(feature = "defmt")]
+#[cfg(all(feature = "defmt", not(feature = "packets")))]
 fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64>, _counter: &str) {
     defmt::info!(
         "frame {=usize} status={} iterations={=u32} correspondences={=u32} points={=usize} merge={=u32} source={=u32} map_voxels={=u32} map_points={=u32} dropped={}",

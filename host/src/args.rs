@@ -3,6 +3,7 @@
 //!
 //! Precedence is the same everywhere: defaults, then `--config FILE`, then flags.
 
+use crate::io::sensor_pcap::{SensorKind, SensorOptions};
 use crate::io::{Format, OpenOptions};
 use crate::settings::{DegeneracyMode, Scalar, Settings, Storage};
 use anyhow::{bail, Result};
@@ -44,6 +45,45 @@ pub struct InputArgs {
     /// Bag/MCAP topic (default: the only PointCloud2 topic).
     #[arg(long)]
     pub topic: Option<String>,
+    /// How to decode a sensor recording.
+    #[command(flatten)]
+    pub sensor: SensorArgs,
+}
+
+/// How to decode sensor packets (a pcap recording, `live`).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct SensorArgs {
+    /// The sensor of a pcap recording; `auto`: Ouster if `--meta` is given, else Velodyne
+    /// with the model the packets name.
+    #[arg(long, value_enum, default_value_t = SensorKind::Auto)]
+    pub sensor: SensorKind,
+    /// Ouster metadata JSON (as `ouster-cli` saves it beside a recording); Ouster needs it.
+    #[arg(long)]
+    pub meta: Option<PathBuf>,
+    /// Velodyne calibration (XML or YAML); models with published angles need none.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// UDP port of the sensor's data packets [default: Velodyne 2368 (else the port its
+    /// packets are on), Ouster the metadata's lidar port, else 7502].
+    #[arg(long)]
+    pub port: Option<u16>,
+    /// Velodyne: azimuth (degrees) where one sweep ends and the next begins [default: a full
+    /// turn from where the recording starts].
+    #[arg(long, allow_negative_numbers = true)]
+    pub cut_angle: Option<f64>,
+}
+
+impl SensorArgs {
+    /// The decoder's options.
+    pub fn options(&self) -> SensorOptions {
+        SensorOptions {
+            sensor: self.sensor,
+            port: self.port,
+            meta: self.meta.clone(),
+            calibration: self.calibration.clone(),
+            cut_angle_deg: self.cut_angle,
+        }
+    }
 }
 
 impl InputArgs {
@@ -58,6 +98,7 @@ impl InputArgs {
         OpenOptions {
             topic: self.topic.clone(),
             scan_points,
+            sensor: self.sensor.options(),
         }
     }
 }

@@ -19,9 +19,10 @@ mod stages;
 pub use report::{Outcome, Report, Row, Section, TableStyle};
 
 use crate::args::{CommonArgs, FrameRange, ReferenceArgs};
-use crate::io::{self, Format};
+use crate::io::{self, sensor_pcap::SensorKind, Format};
 use crate::settings::{Scalar, Settings};
 use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
 use nalgebra::Isometry3;
 use std::io::Write;
 use std::path::PathBuf;
@@ -232,6 +233,24 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
         (input.format != Format::Auto).then(|| lower(&input.format)),
     );
     flag("topic", input.topic.clone());
+    let sensor = &input.sensor;
+    flag(
+        "sensor",
+        (sensor.sensor != SensorKind::Auto)
+            .then(|| sensor.sensor.to_possible_value())
+            .flatten()
+            .map(|v| v.get_name().to_string()),
+    );
+    flag(
+        "meta",
+        sensor.meta.as_ref().map(|m| m.display().to_string()),
+    );
+    flag(
+        "calibration",
+        sensor.calibration.as_ref().map(|m| m.display().to_string()),
+    );
+    flag("port", sensor.port.map(|p| p.to_string()));
+    flag("cut-angle", sensor.cut_angle.map(|a| a.to_string()));
     flag(
         "only",
         args.only.map(|o| match o {

@@ -109,10 +109,11 @@ impl Run {
             .collect()
     }
 
-    /// The time column of `poses_tum.txt`.
+    /// The time column of `poses_tum.txt` (its `#` header line left out).
     pub fn tum_times(&self) -> Vec<f64> {
         self.lines("poses_tum.txt")
             .iter()
+            .filter(|l| !l.starts_with('#'))
             .map(|l| l.split(' ').next().unwrap().parse().unwrap())
             .collect()
     }

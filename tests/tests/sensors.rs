@@ -10,10 +10,12 @@
 
 use kiss_odom::io::ouster_meta;
 use kiss_odom::io::sensor_pcap::{self, SensorOptions, Sweep};
-use kiss_odom_sensors::Return;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+mod sensor_dump;
+use sensor_dump::{code, counts_of, read_dump, Key, RefPoint};
 
 const VELODYNE_TOL_M: f64 = 1e-4;
 const OUSTER_TOL_M: f64 = 1e-6;
@@ -143,36 +145,6 @@ fn rewrite(src: &Path, product: u8, mode: u8) -> Vec<u8> {
     b
 }
 
-/// One reference point.
-#[derive(Clone, Copy, Debug)]
-struct RefPoint {
-    sweep: u32,
-    ring: u16,
-    column: u16,
-    ret: u8,
-    dcol: u16,
-    xyz: [f64; 3],
-    t_ns: f64,
-}
-
-type Key = (u32, u16, u16, u8);
-
-impl RefPoint {
-    fn key(&self) -> Key {
-        (self.sweep, self.ring, self.column, self.ret)
-    }
-}
-
-/// The reference's return codes: velodyne-decoder's (1 strongest, 2 last, 3 both); for
-/// Ouster 1 for RANGE, 2 for RANGE2.
-fn code(r: Return) -> u8 {
-    match r {
-        Return::Strongest | Return::First => 1,
-        Return::Last | Return::Second => 2,
-        Return::Both => 3,
-    }
-}
-
 /// Our decoding, in the reference's terms.
 struct Ours {
     counts: Vec<usize>,
@@ -262,34 +234,6 @@ fn compare(
         "{name}: {worst_ns} ns > {TIME_TOL_NS} ns"
     );
     (worst_m, worst_ns)
-}
-
-fn read_dump(path: &Path) -> Vec<RefPoint> {
-    let bytes = std::fs::read(path).unwrap();
-    assert_eq!(bytes.len() % 48, 0, "{}", path.display());
-    let f = |r: &[u8], at: usize| f64::from_le_bytes(r[at..at + 8].try_into().unwrap());
-    let u16_at = |r: &[u8], at: usize| u16::from_le_bytes([r[at], r[at + 1]]);
-    bytes
-        .chunks_exact(48)
-        .map(|r| RefPoint {
-            sweep: u32::from_le_bytes(r[0..4].try_into().unwrap()),
-            ring: u16_at(r, 4),
-            column: u16_at(r, 6),
-            ret: r[8],
-            dcol: u16_at(r, 10),
-            xyz: [f(r, 16), f(r, 24), f(r, 32)],
-            t_ns: f(r, 40),
-        })
-        .collect()
-}
-
-fn counts_of(json: &serde_json::Value) -> Vec<usize> {
-    json["counts"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c.as_u64().unwrap() as usize)
-        .collect()
 }
 
 fn have_data() -> bool {

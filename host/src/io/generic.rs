@@ -251,6 +251,7 @@ impl FrameSource for FileSource {
             stamps: cloud.stamps,
             time,
             warnings: Vec::new(),
+            sweep: None,
         };
         if cloud.declared > frame.points.len() {
             let w = truncation_warning(frame.points.len(), cloud.declared);

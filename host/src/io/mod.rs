@@ -35,6 +35,8 @@ pub struct Frame {
     pub time: Option<f64>,
     /// Problems that did not stop the frame from being used (e.g. timestamps ignored).
     pub warnings: Vec<String>,
+    /// For a sweep decoded from sensor packets: its packet statistics and time span.
+    pub sweep: Option<sensor_pcap::SweepInfo>,
 }
 
 /// What a source yields.
@@ -107,6 +109,8 @@ pub enum Format {
     Bag,
     /// ROS 2 MCAP with `sensor_msgs/msg/PointCloud2`.
     Mcap,
+    /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `--port`).
+    Pcap,
 }
 
 /// Everything known about a dataset besides its frames.
@@ -159,12 +163,15 @@ pub struct OpenOptions {
     /// Most points read from one frame (the core's `Capacities::scan_points`, which ignores
     /// the rest anyway); a larger frame is truncated with a warning.
     pub scan_points: usize,
+    /// How to decode a sensor recording (pcap).
+    pub sensor: sensor_pcap::SensorOptions,
 }
 
 impl Default for OpenOptions {
     fn default() -> Self {
         Self {
             topic: None,
+            sensor: sensor_pcap::SensorOptions::default(),
             scan_points: kiss_odom_core::Capacities::FULL_SCALE.scan_points,
         }
     }
@@ -225,6 +232,7 @@ pub mod ply;
 pub mod pointcloud2;
 pub mod poses;
 pub mod rosbag;
+pub mod sensor_frames;
 pub mod sensor_pcap;
 pub mod velodyne_calib;
 

@@ -2,9 +2,9 @@
 //!
 //! `auto` picks KITTI only for the benchmark layout ([`kitti::detect`]), because KITTI scans
 //! get a correction no other data should get, and refuses a KITTI-shaped folder it cannot
-//! read as KITTI; bag and MCAP files are recognised by extension; anything else is the generic
-//! layout with the one frame format its files show (several is refused). An explicit format
-//! always wins.
+//! read as KITTI; bag, MCAP and pcap/pcapng files are recognised by extension; anything else
+//! is the generic layout with the one frame format its files show (several is refused). An
+//! explicit format always wins.
 
 use super::{generic, kitti, Dataset, Format, OpenOptions, TimeOrder};
 use anyhow::{bail, Result};
@@ -20,8 +20,10 @@ pub fn detect(path: &Path) -> Result<Format> {
         return match ext.to_ascii_lowercase().as_str() {
             "bag" => Ok(Format::Bag),
             "mcap" => Ok(Format::Mcap),
+            "pcap" | "pcapng" => Ok(Format::Pcap),
             _ => bail!(
-                "{}: cannot tell the format of this file (give a folder, a .bag or a .mcap)",
+                "{}: cannot tell the format of this file (give a folder, a .bag, an .mcap or \
+                 a .pcap)",
                 path.display()
             ),
         };
@@ -49,6 +51,7 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
         Format::Bin | Format::Ply | Format::Pcd => generic::open(path, Some(format), opts)?,
         Format::Bag => super::rosbag::open(path, opts)?,
         Format::Mcap => super::mcap::open(path, opts)?,
+        Format::Pcap => super::sensor_frames::open(path, opts)?,
         Format::Auto => bail!("{}: format detection failed", path.display()),
     };
     dataset.frames = Box::new(TimeOrder {
@@ -69,6 +72,10 @@ mod tests {
         let mcap = dir.path().join("run.mcap");
         std::fs::write(&bag, []).unwrap();
         std::fs::write(&mcap, []).unwrap();
+        for name in ["rec.pcap", "rec.PCAPNG"] {
+            std::fs::write(dir.path().join(name), []).unwrap();
+            assert_eq!(detect(&dir.path().join(name)).unwrap(), Format::Pcap);
+        }
         assert_eq!(detect(&bag).unwrap(), Format::Bag);
         assert_eq!(detect(&mcap).unwrap(), Format::Mcap);
         assert!(detect(&dir.path().join("missing")).is_err());

@@ -423,6 +423,7 @@ pub(crate) fn message_item(
                 stamps: d.stamps,
                 time: Some(cloud.stamp.seconds()),
                 warnings,
+                sweep: None,
             })
         }
         Err(e) => skipped(format!("stamp {}: {e}", cloud.stamp)),

@@ -9,7 +9,7 @@
 //! Damage confined to a packet is a counted skip in the sweep's statistics; a capture with no
 //! decodable packet, or cut in the middle, is an error naming the file and the reason.
 
-use super::pcap::{self, Capture};
+use super::pcap::{self, Capture, Datagram};
 use super::{ouster_meta, velodyne_calib, Frame};
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::velodyne::{self, Model};
@@ -82,11 +82,42 @@ pub struct Sweep {
     pub stats: SweepStats,
     /// Capture (host) time of the sweep's first packet, ns since the Unix epoch.
     pub capture_ns: u64,
+    /// Capture (host) time of the last packet that gave the sweep points.
+    pub last_capture_ns: u64,
+}
+
+/// What a frame decoded from sensor packets carries besides its points: the sweep's packet
+/// statistics (for `frames.csv`), the sensor-clock instants of its first and last point (the
+/// instants a pose can refer to, `--pose-time`) and when its last packet was captured.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SweepInfo {
+    /// Packet statistics.
+    pub stats: SweepStats,
+    /// Sensor-clock time of the sweep's first point, s.
+    pub start_s: f64,
+    /// Sensor-clock time of the sweep's last point, s.
+    pub end_s: f64,
+    /// Capture (host) time of the last packet that gave the sweep points, ns since the Unix
+    /// epoch.
+    pub last_capture_ns: u64,
 }
 
 impl Sweep {
     /// The sweep as a [`Frame`] for the odometry (times become the per-point stamps).
     pub fn into_frame(self, index: usize, name: String) -> Frame {
+        let (lo, hi) = self
+            .times
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t), hi.max(t))
+            });
+        let start = self.stats.start_ns as f64 * 1e-9;
+        let sweep = SweepInfo {
+            stats: self.stats,
+            start_s: start + if lo.is_finite() { lo } else { 0.0 },
+            end_s: start + if hi.is_finite() { hi } else { 0.0 },
+            last_capture_ns: self.last_capture_ns,
+        };
         Frame {
             index,
             name,
@@ -94,6 +125,7 @@ impl Sweep {
             stamps: Some(self.times),
             time: Some(self.capture_ns as f64 * 1e-9),
             warnings: Vec::new(),
+            sweep: Some(sweep),
         }
     }
 }
@@ -189,6 +221,7 @@ impl SweepSink for Collect {
     }
     fn points(&mut self, c: Chunk<'_>) {
         if let Some(s) = &mut self.current {
+            s.last_capture_ns = self.capture_ns;
             s.points.extend_from_slice(c.xyz);
             s.times.extend_from_slice(c.times);
             s.meta.extend_from_slice(c.meta);
@@ -202,10 +235,23 @@ impl SweepSink for Collect {
     }
 }
 
+/// Where datagrams come from: a capture file, or a socket (`kiss-odom live`).
+pub trait DatagramSource {
+    /// The next datagram, `Ok(None)` at the end, or an error naming the source when nothing
+    /// after it can be read.
+    fn next_datagram(&mut self) -> Result<Option<Datagram>>;
+}
+
+impl DatagramSource for Capture {
+    fn next_datagram(&mut self) -> Result<Option<Datagram>> {
+        Capture::next_datagram(self)
+    }
+}
+
 /// A recording being decoded, sweep by sweep.
 pub struct PcapSweeps {
     path: PathBuf,
-    capture: Capture,
+    capture: Box<dyn DatagramSource>,
     decoder: Decoder,
     sink: Collect,
     meta_path: Option<PathBuf>,
@@ -236,7 +282,16 @@ fn describe(seen: &BTreeMap<(u16, usize), u64>) -> String {
 
 /// Opens a recording (see the module doc).
 pub fn open(path: &Path, opts: &SensorOptions) -> Result<PcapSweeps> {
-    let capture = pcap::open(path)?;
+    decode(path, Box::new(pcap::open(path)?), opts)
+}
+
+/// Decodes the datagrams of `capture`, named `path` in messages; without `opts.port` a
+/// Velodyne's port is found by reading the file at `path`.
+pub fn decode(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+) -> Result<PcapSweeps> {
     let ouster = opts.meta.is_some() || opts.sensor == SensorKind::Ouster;
     let (decoder, port, sensor) = if ouster {
         let Some(meta_path) = &opts.meta else {
@@ -320,6 +375,11 @@ impl PcapSweeps {
     /// What was read so far; complete once the iterator has ended.
     pub fn report(&self) -> &PcapReport {
         &self.report
+    }
+
+    /// Whether the source has ended and every sweep was taken: the report is complete.
+    pub fn exhausted(&self) -> bool {
+        self.finished && self.sink.done.is_empty()
     }
 
     fn feed(&mut self, d: pcap::Datagram) {

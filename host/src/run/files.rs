@@ -9,6 +9,7 @@ use crate::settings::Settings;
 use crate::stats::percentile;
 use anyhow::Result;
 use kiss_odom_core::{Flag, Status};
+use kiss_odom_sensors::SweepStats;
 use nalgebra::Isometry3;
 use serde::ser::SerializeStruct;
 use serde::Serialize;
@@ -89,6 +90,18 @@ pub struct FrameRow {
     pub weak_t: Option<f64>,
     /// Robust mode: the same for rotation.
     pub weak_r: Option<f64>,
+    /// Sensor packets decoded into the sweep (empty for frames not decoded from packets).
+    pub packets: Option<u32>,
+    /// Packets the decoder found missing (timestamp gaps, missing columns or frame ids).
+    pub packets_lost: Option<u32>,
+    /// Packets late or repeated (dropped) and, Ouster, columns out of order.
+    pub packets_out_of_order: Option<u32>,
+    /// Packets refused as malformed.
+    pub packets_bad: Option<u32>,
+    /// Packets refused as another sensor's.
+    pub packets_other_sensor: Option<u32>,
+    /// Velodyne azimuth jumps the timestamps do not explain.
+    pub azimuth_jumps: Option<u32>,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
     /// The core's flags, written as one column each.
@@ -131,9 +144,26 @@ impl FrameRow {
             held_axes: r.map_or_else(String::new, |r| r.held.to_string()),
             weak_t: r.and_then(|r| r.weak_ratios).map(|w| w[0]),
             weak_r: r.and_then(|r| r.weak_ratios).map(|w| w[1]),
+            packets: None,
+            packets_lost: None,
+            packets_out_of_order: None,
+            packets_bad: None,
+            packets_other_sensor: None,
+            azimuth_jumps: None,
             deskewed: r.is_some_and(|r| r.deskewed),
             status: o.status().unwrap_or_default(),
         }
+    }
+
+    /// Fills the packet columns from a decoded sweep's statistics.
+    pub fn with_packets(mut self, s: &SweepStats) -> Self {
+        self.packets = Some(s.packets);
+        self.packets_lost = Some(s.lost_packets);
+        self.packets_out_of_order = Some(s.out_of_order);
+        self.packets_bad = Some(s.bad_packets);
+        self.packets_other_sensor = Some(s.other_sensor);
+        self.azimuth_jumps = Some(s.azimuth_jumps);
+        self
     }
 }
 
@@ -159,6 +189,38 @@ pub struct Latency {
     pub p99: f64,
     /// Worst frame.
     pub max: f64,
+}
+
+/// Sensor packets summed over the sweeps of a run (frames.csv has them per sweep).
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct PacketTotals {
+    /// Decoded.
+    pub decoded: u64,
+    /// Missing.
+    pub lost: u64,
+    /// Late or repeated (dropped), or Ouster columns out of order.
+    pub out_of_order: u64,
+    /// Refused as malformed.
+    pub bad: u64,
+    /// Refused as another sensor's.
+    pub other_sensor: u64,
+}
+
+impl PacketTotals {
+    /// The sums over `rows` that have packet columns; `None` when none has.
+    fn of(rows: &[FrameRow]) -> Option<Self> {
+        let mut t: Option<Self> = None;
+        for r in rows.iter().filter(|r| r.packets.is_some()) {
+            let t = t.get_or_insert_with(Self::default);
+            let n = |v: Option<u32>| u64::from(v.unwrap_or(0));
+            t.decoded += n(r.packets);
+            t.lost += n(r.packets_lost);
+            t.out_of_order += n(r.packets_out_of_order);
+            t.bad += n(r.packets_bad);
+            t.other_sensor += n(r.packets_other_sensor);
+        }
+        t
+    }
 }
 
 /// `summary.json`.
@@ -188,6 +250,10 @@ pub struct Summary {
     pub high_water: serde_json::Value,
     /// Warnings printed.
     pub warnings: usize,
+    /// Sensor packets over the run's sweeps (a pcap recording or `live`).
+    pub packets: Option<PacketTotals>,
+    /// `live`: time from a sweep's last packet to its pose (ms).
+    pub pose_latency_ms: Option<Latency>,
     /// Whether SIGINT or SIGTERM stopped the run (the outputs hold the frames before it).
     pub interrupted: bool,
     /// Why the run stopped early, if an error stopped it.
@@ -274,8 +340,36 @@ impl Run<'_> {
                 pose,
             })
             .collect();
-        let tum = io::poses::format_tum(&timed);
+        let tum = format!(
+            "# {}\n{}",
+            self.pose_instant(),
+            io::poses::format_tum(&timed)
+        );
         crate::output::write(&dir.join("poses_tum.txt"), tum.as_bytes())
+    }
+
+    /// The instant each pose refers to, for the TUM file's header.
+    fn pose_instant(&self) -> String {
+        let deskewed = self.record.rows.iter().any(|r| r.deskewed);
+        let times = if !self.tum_seconds() {
+            "frame numbers"
+        } else if self.record.sweeps {
+            "sensor clock, s"
+        } else {
+            "the frames' times, s"
+        };
+        if deskewed {
+            format!(
+                "time x y z qx qy qz qw: the sensor at the {} of each sweep (--pose-time); \
+                 times: {times}",
+                self.args.pose_time.name()
+            )
+        } else {
+            format!(
+                "time x y z qx qy qz qw: scans not deskewed, each pose is of its scan as a \
+                 whole; times: {times}"
+            )
+        }
     }
 
     /// Whether the TUM file's times are seconds (every frame has a time) or frame numbers.
@@ -386,6 +480,16 @@ impl Run<'_> {
                 "map_point_slots": [hw.map_point_slots, c.map_points],
             }),
             warnings: o.warnings,
+            packets: PacketTotals::of(&o.rows),
+            pose_latency_ms: (!o.pose_latency_ms.is_empty()).then(|| {
+                let mut v = o.pose_latency_ms.clone();
+                v.sort_by(f64::total_cmp);
+                Latency {
+                    p50: percentile(&v, 50.0),
+                    p99: percentile(&v, 99.0),
+                    max: v.last().copied().unwrap_or(0.0),
+                }
+            }),
             interrupted: self.interrupted.is_some(),
             stop_reason: self.stop.clone(),
             input: serde_json::json!({

@@ -13,14 +13,15 @@
 
 mod files;
 
-pub use files::{FrameRow, Latency, RowKind, Summary, OUTPUTS};
+pub use files::{FrameRow, Latency, PacketTotals, RowKind, Summary, OUTPUTS};
 
 use crate::args::CommonArgs;
 use crate::drive::{Driver, Outcome, Selection, Step};
-use crate::io::{self, Item};
+use crate::io::{self, sensor_pcap::SweepInfo, Item};
 use crate::viz::{Observer, Seen, ViewArgs};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use kiss_odom_core::stages::{se3_exp, se3_log};
 use kiss_odom_core::Flag;
 use nalgebra::Isometry3;
 use std::io::{IsTerminal, Write};
@@ -31,7 +32,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
     /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
-    /// .mcap file.
+    /// .mcap file, or a .pcap/.pcapng recording of Velodyne or Ouster packets.
     pub path: PathBuf,
     /// Output folder (created if missing); the outputs of an earlier run there are replaced.
     #[arg(long)]
@@ -42,12 +43,71 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// The instant within a deskewed sweep each pose refers to: the reference deskews to the
+    /// end; `start` and `middle` move the pose back along the frame's motion. The TUM file's
+    /// first line states it.
+    #[arg(long, value_enum, default_value_t = PoseTime::End)]
+    pub pose_time: PoseTime,
     /// Input, pipeline and core options.
     #[command(flatten)]
     pub common: CommonArgs,
     /// Rerun recording and point-cloud exports.
     #[command(flatten)]
     pub view: ViewArgs,
+}
+
+/// The instant within a sweep a pose refers to (`--pose-time`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PoseTime {
+    /// The end of the sweep (the reference's poses).
+    #[default]
+    End,
+    /// The start of the sweep.
+    Start,
+    /// The middle of the sweep.
+    Middle,
+}
+
+impl PoseTime {
+    /// The instant as a fraction of the sweep: 0 start, 1 end.
+    pub fn fraction(self) -> f64 {
+        match self {
+            Self::End => 1.0,
+            Self::Start => 0.0,
+            Self::Middle => 0.5,
+        }
+    }
+
+    /// `end`, `start` or `middle`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::End => "end",
+            Self::Start => "start",
+            Self::Middle => "middle",
+        }
+    }
+
+    /// The pose at this instant of a sweep whose end pose is `end`, `delta` being the motion
+    /// over the sweep (the previous pose to `end`): deskewing moved every point along
+    /// `Exp((s - 1) Log(delta))` to the end, so the sensor at fraction `s` is `end` times that.
+    pub fn pose(self, end: &Isometry3<f64>, delta: &Isometry3<f64>) -> Isometry3<f64> {
+        if self == Self::End {
+            return *end;
+        }
+        let xi = se3_log(delta) * (self.fraction() - 1.0);
+        end * se3_exp(&xi)
+    }
+}
+
+/// How the frames arrive.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Mode {
+    /// From a file, as fast as the core goes.
+    #[default]
+    Recorded,
+    /// From a sensor as it sweeps (`live`): each pose is printed as it comes, and the time
+    /// from a sweep's last packet to its pose is measured.
+    Live,
 }
 
 /// Why the frame loop ended.
@@ -72,6 +132,10 @@ pub(crate) struct Record {
     pub indices: Vec<usize>,
     /// Warnings printed (dataset, frames, threads).
     pub warnings: usize,
+    /// Whether the frames are sweeps decoded from sensor packets.
+    pub sweeps: bool,
+    /// `live`: time from each sweep's last packet to its pose (ms).
+    pub pose_latency_ms: Vec<f64>,
 }
 
 impl Record {
@@ -85,15 +149,25 @@ impl Record {
 
 /// Runs `kiss-odom run`.
 pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
+    let open = |opts: &io::OpenOptions| io::open(&args.path, args.common.input.format, opts);
+    execute_on(args, open, Mode::Recorded, err)
+}
+
+/// Runs `run` on the dataset `open` gives (the options ask for the settings' scan
+/// capacity): `kiss-odom run`, and `live` with a socket for a dataset.
+pub(crate) fn execute_on(
+    args: &RunArgs,
+    open: impl FnOnce(&io::OpenOptions) -> Result<io::Dataset>,
+    mode: Mode,
+    err: &mut dyn Write,
+) -> Result<i32> {
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     crate::output::remove_stale(&args.out, &OUTPUTS)?;
     for path in crate::viz::files(&args.view) {
         crate::output::remove_stale_file(path)?;
     }
     let settings = args.common.settings(None)?;
-    let mut dataset = io::open(
-        &args.path,
-        args.common.input.format,
+    let mut dataset = open(
         &args
             .common
             .input
@@ -110,6 +184,8 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
         times: Vec::new(),
         indices: Vec::new(),
         warnings: 0,
+        sweeps: false,
+        pose_latency_ms: Vec::new(),
     };
     let mut warn = |record: &mut Record, bar: &ProgressBar, text: &str| {
         bar.suspend(|| writeln!(err, "warning: {text}")).ok();
@@ -134,6 +210,7 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
             &mut dataset,
             &mut record,
             &mut observers,
+            mode,
             &mut warn,
         );
     }
@@ -225,6 +302,7 @@ fn frame_loop(
     dataset: &mut io::Dataset,
     record: &mut Record,
     observers: &mut [Box<dyn Observer>],
+    mode: Mode,
     warn: &mut dyn FnMut(&mut Record, &ProgressBar, &str),
 ) -> End {
     let info = &dataset.info;
@@ -239,7 +317,11 @@ fn frame_loop(
             break End::Interrupted(sig);
         }
         let item = match frames.next() {
-            None => break End::Finished,
+            // A live source ends when a signal arrives while it waits for packets.
+            None => match crate::interrupt::requested() {
+                Some(sig) => break End::Interrupted(sig),
+                None => break End::Finished,
+            },
             Some(Err(e)) => break End::Failed(e),
             Some(Ok(item)) => item,
         };
@@ -278,7 +360,18 @@ fn frame_loop(
                 &format!("{}: no usable point", outcome.meta.source),
             );
         }
-        add(record, info, &outcome);
+        let sweep = frame.as_ref().and_then(|f| f.sweep);
+        add(
+            record,
+            info,
+            &outcome,
+            sweep.as_ref(),
+            args.pose_time,
+            driver,
+        );
+        if mode == Mode::Live {
+            report_live(record, sweep.as_ref());
+        }
         if !observers.is_empty() {
             let ground_truth = info
                 .ground_truth
@@ -306,17 +399,61 @@ fn frame_loop(
     end
 }
 
-fn add(record: &mut Record, info: &io::DatasetInfo, o: &Outcome) {
+/// Records an outcome. A sweep decoded from packets gets its packet columns and the
+/// sensor-clock instant `pose_time` chooses; a deskewed frame's pose is moved to that instant
+/// along the motion the driver just estimated.
+fn add(
+    record: &mut Record,
+    info: &io::DatasetInfo,
+    o: &Outcome,
+    sweep: Option<&SweepInfo>,
+    pose_time: PoseTime,
+    driver: &Driver,
+) {
     let index = o.meta.index;
-    let time = o.meta.time.or_else(|| {
+    let mut time = o.meta.time.or_else(|| {
         info.frame_times
             .as_ref()
             .and_then(|t| t.get(index).copied())
     });
-    record.rows.push(FrameRow::of(o));
-    record.poses.push(o.pose);
+    let mut row = FrameRow::of(o);
+    if let Some(s) = sweep {
+        row = row.with_packets(&s.stats);
+        time = Some(s.start_s + pose_time.fraction() * (s.end_s - s.start_s));
+        record.sweeps = true;
+    }
+    let pose = match o.report() {
+        Some(r) if r.deskewed => pose_time.pose(&o.pose, &driver.last_delta()),
+        _ => o.pose,
+    };
+    record.rows.push(row);
+    record.poses.push(pose);
     record.times.push(time);
     record.indices.push(index);
+}
+
+/// `live`: prints the pose just recorded as a TUM line (flushed, for a pipe) and measures the
+/// time since its sweep's last packet.
+fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
+    let (Some(pose), Some(&index)) = (record.poses.last(), record.indices.last()) else {
+        return;
+    };
+    let time = record
+        .times
+        .last()
+        .copied()
+        .flatten()
+        .unwrap_or(index as f64);
+    let line = io::poses::format_tum(&[io::poses::TimedPose { time, pose: *pose }]);
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(line.as_bytes()).and_then(|()| out.flush());
+    if let Some(s) = sweep {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        let ms = now.saturating_sub(s.last_capture_ns) as f64 * 1e-6;
+        record.pose_latency_ms.push(ms);
+    }
 }
 
 fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {

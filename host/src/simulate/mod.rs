@@ -9,7 +9,9 @@
 //! random draw is keyed by indices ([`rng`]), so the bytes depend on the seed and parameters
 //! only, never on the thread count.
 
+pub mod capture;
 pub mod city;
+pub mod packets;
 pub mod rng;
 pub mod scene;
 pub mod sensor;
@@ -17,6 +19,7 @@ pub mod shapes;
 pub mod trajectory;
 pub mod writer;
 
+pub use packets::{PacketSensor, PacketSim};
 pub use scene::{Scene, Surface};
 pub use sensor::{Frame, Lidar};
 pub use trajectory::{PoseM, Trajectory};
@@ -46,6 +49,18 @@ pub enum Profile {
     /// The lone ground plane with sparse objects (poles, trees, boulders 20-60 m apart along
     /// the route): observable in x, y and yaw, but weakly, as an open field is.
     Field,
+}
+
+/// What `simulate` writes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// The generic layout only.
+    #[default]
+    Generic,
+    /// The generic layout (exact points) and the same sweeps as the sensor's packets in
+    /// `packets.pcap` (needs --sensor; an Ouster's metadata goes to `packets.json`).
+    Pcap,
 }
 
 /// Most frames one run may ask for (a longer route means a larger scene in memory).
@@ -218,6 +233,14 @@ pub struct SimulateArgs {
     /// Sequence time of the first point (s); every timestamp is offset by it.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub start_time: f64,
+    /// A real sensor's beams, firing timing and packets instead of the generic sensor (whose
+    /// --beams, --columns and --fov-* flags are then ignored); --rate-hz is rounded to the
+    /// sensor's (a whole number of packets per turn; 10 or 20 Hz for the OS1).
+    #[arg(long, value_enum)]
+    pub sensor: Option<PacketSensor>,
+    /// What to write.
+    #[arg(long, value_enum, default_value_t = Format::Generic)]
+    pub format: Format,
     /// Replace a dataset already in --out (removes only its frame files, poses, times and
     /// sim.toml). The new one appears only once complete.
     #[arg(long)]
@@ -227,6 +250,11 @@ pub struct SimulateArgs {
 impl SimulateArgs {
     /// The simulation parameters these flags ask for (not yet validated).
     pub fn params(&self) -> SimParams {
+        let rate_hz = match self.sensor {
+            // An invalid rate stays as given and fails validation or `rate_hz` later.
+            Some(s) => s.rate_hz(self.rate_hz).unwrap_or(self.rate_hz),
+            None => self.rate_hz,
+        };
         SimParams {
             profile: self.profile,
             seed: self.seed,
@@ -237,7 +265,7 @@ impl SimulateArgs {
                 columns: self.columns,
                 fov_up_deg: self.fov_up,
                 fov_down_deg: self.fov_down,
-                rate_hz: self.rate_hz,
+                rate_hz,
                 min_range: self.min_range,
                 max_range: self.max_range,
                 noise: self.noise,
@@ -259,7 +287,18 @@ struct Provenance<'a> {
     /// What the files mean, for a reader without this source at hand.
     layout: &'static str,
     sensor: &'a Lidar,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    packets: Option<PacketSummary>,
     scene: SceneSummary,
+}
+
+#[derive(Serialize)]
+struct PacketSummary {
+    /// The sensor whose beams, timing and packets were simulated.
+    sensor: PacketSensor,
+    packets_per_sweep: u64,
+    /// Whether `packets.pcap` was written.
+    pcap: bool,
 }
 
 #[derive(Serialize)]
@@ -273,10 +312,20 @@ struct SceneSummary {
 pub fn execute(args: &SimulateArgs) -> Result<i32> {
     let params = args.params();
     let clock = Instant::now();
+    if let Some(s) = args.sensor {
+        s.rate_hz(args.rate_hz).map_err(anyhow::Error::msg)?;
+    }
+    if args.format == Format::Pcap && args.sensor.is_none() {
+        bail!("--format pcap needs --sensor (vlp16, vlp32c or os1-64)");
+    }
     let sim = Simulation::new(params).context("invalid simulation parameters")?;
-    let end = sim
-        .trajectory
-        .arc_length(sim.sweeper.end_offset(params.frames - 1));
+    let packets = args.sensor.map(|s| PacketSim::new(&sim, s));
+    let last = params.frames - 1;
+    let end_offset = match &packets {
+        Some(p) => p.end_offset(last),
+        None => sim.sweeper.end_offset(last),
+    };
+    let end = sim.trajectory.arc_length(end_offset);
     let provenance = Provenance {
         generator: "kiss-odom simulate",
         version: env!("CARGO_PKG_VERSION"),
@@ -287,8 +336,18 @@ pub fn execute(args: &SimulateArgs) -> Result<i32> {
         layout: "velodyne/NNNNNN.bin: f32 LE x y z intensity, sensor frame at capture time; \
                  timestamps/NNNNNN.bin: f64 LE capture time (s) per point; poses.txt: 3x4 \
                  sensor pose at the end of each sweep (its last column) in the frame of the \
-                 first sweep's end; times.txt: end-of-sweep times (s)",
+                 first sweep's end; times.txt: end-of-sweep times (s); packets.pcap (if \
+                 written): the same sweeps as the sensor's UDP packets, exact points above \
+                 before range quantisation, in decoder order; packets.json: Ouster metadata",
         sensor: &params.sensor,
+        packets: packets
+            .as_ref()
+            .zip(args.sensor)
+            .map(|(p, sensor)| PacketSummary {
+                sensor,
+                packets_per_sweep: p.packets_per_sweep(),
+                pcap: args.format == Format::Pcap,
+            }),
         scene: SceneSummary {
             planes: sim.scene.planes().count(),
             solids: sim.scene.solids().len(),
@@ -296,6 +355,24 @@ pub fn execute(args: &SimulateArgs) -> Result<i32> {
         },
     };
     let mut out = writer::DatasetWriter::create(&args.out, args.overwrite, &provenance)?;
+    let mut capture = match (args.format, args.sensor) {
+        (Format::Pcap, Some(sensor)) => {
+            if sensor == PacketSensor::Os1 {
+                let path = out.staging().join(capture::META_NAME);
+                let meta =
+                    serde_json::to_string_pretty(&capture::ouster_metadata(params.sensor.rate_hz))?;
+                std::fs::write(&path, meta)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            let path = out.staging().join(capture::PCAP_NAME);
+            Some(capture::CaptureWriter::create(
+                &path,
+                sensor,
+                params.start_time,
+            )?)
+        }
+        _ => None,
+    };
     let bar = indicatif::ProgressBar::new(params.frames);
     bar.set_style(
         indicatif::ProgressStyle::with_template("simulate {bar:40} {pos}/{len} frames, eta {eta}")
@@ -312,10 +389,24 @@ pub fn execute(args: &SimulateArgs) -> Result<i32> {
             );
             return Ok(crate::interrupt::exit_status(sig));
         }
-        let frame = sim.frame(k);
+        let (frame, truth) = match &packets {
+            Some(p) => {
+                let sweep = p.sweep(k);
+                if let Some(c) = capture.as_mut() {
+                    for packet in &sweep.packets {
+                        c.write(packet)?;
+                    }
+                }
+                (sweep.frame, p.ground_truth(k))
+            }
+            None => (sim.frame(k), sim.ground_truth(k)),
+        };
         points += frame.points.len();
-        out.write_frame(&frame, &sim.ground_truth(k))?;
+        out.write_frame(&frame, &truth)?;
         bar.inc(1);
+    }
+    if let Some(c) = capture {
+        c.finish()?;
     }
     out.finish()?;
     bar.finish_and_clear();

@@ -6,6 +6,8 @@
 //! DIR/poses.txt              3x4 row-major end-of-sweep pose per frame, first one identity
 //! DIR/times.txt              end-of-sweep time per frame (s)
 //! DIR/sim.toml               the parameters used, for provenance
+//! DIR/packets.pcap           with --format pcap: the same sweeps as sensor packets
+//! DIR/packets.json           with --format pcap and an Ouster: its metadata
 //! ```
 //!
 //! Numbers in text files are written with Rust's shortest round-trip formatting, so parsing
@@ -21,7 +23,13 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 3] = ["poses.txt", "times.txt", "sim.toml"];
+const OWNED_FILES: [&str; 5] = [
+    "poses.txt",
+    "times.txt",
+    "sim.toml",
+    super::capture::PCAP_NAME,
+    super::capture::META_NAME,
+];
 const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
 
 /// Shortest text that parses back to exactly `x` (exponent form for very small or large).
@@ -122,6 +130,11 @@ impl DatasetWriter {
         })
     }
 
+    /// The staging folder, for files beside the frames (moved into place by [`Self::finish`]).
+    pub fn staging(&self) -> &Path {
+        self.staging.path()
+    }
+
     /// Writes one frame's scan and stamps and appends its ground truth.
     pub fn write_frame(&mut self, frame: &Frame, ground_truth: &PoseM) -> Result<()> {
         let name = frame_name(frame.index);
@@ -152,6 +165,9 @@ impl DatasetWriter {
         let names = OWNED_FILES.iter().chain(OWNED_DIRS.iter().rev());
         for name in names {
             let (from, to) = (self.staging.path().join(name), self.dir.join(name));
+            if !from.exists() {
+                continue; // an optional file (the capture, the metadata)
+            }
             fs::rename(&from, &to)
                 .with_context(|| format!("moving {} into place", to.display()))?;
         }

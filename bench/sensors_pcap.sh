@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Issue 19: `kiss-odom run` on generated sensor recordings (packets) against the same run on the
+# simulator's direct point output (the exact points the packets were made from), deskew on and
+# off. VLP-16 and OS1-64, urban and fast, 500 sweeps each, seeds 1-3. Prints a markdown table of
+# KITTI relative translation error and ATE against the simulator's ground truth, per drive and
+# the mean over the seeds (a single drive's error is a random walk that the packets' range
+# quantisation, 1-2 mm, already perturbs: compare means).
+#
+#   bench/sensors_pcap.sh        (DATA=target/sensors-pcap, FRAMES=500, SEEDS="1 2 3"; each
+#                                 drive, up to 1.2 GB, is removed after its runs unless KEEP=1)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -q -p kiss-odom
+B=target/release/kiss-odom
+DATA=${DATA:-target/sensors-pcap}; mkdir -p "$DATA"
+FRAMES=${FRAMES:-500}
+rows="$DATA/rows.tsv"; : > "$rows"
+for spec in "vlp16 urban" "vlp16 fast" "os1-64 urban" "os1-64 fast"; do
+  for seed in ${SEEDS:-1 2 3}; do
+    set -- $spec; d="$DATA/$1-$2-$seed"
+    [ -f "$d/sim.toml" ] || $B simulate --out "$d" --frames "$FRAMES" --seed "$seed" \
+      --profile "$2" --sensor "$1" --format pcap --overwrite >/dev/null
+    src=(--cut-angle 0); [ "$1" = os1-64 ] && src=(--meta "$d/packets.json")
+    for deskew in deskew no-deskew; do
+      $B run "$d/packets.pcap" "${src[@]}" --"$deskew" --out "$d.pcap.$deskew" -q >/dev/null
+      $B run "$d" --"$deskew" --out "$d.direct.$deskew" -q >/dev/null
+      for kind in pcap direct; do
+        m=$($B eval --json "$d.$kind.$deskew/poses_kitti.txt" "$d/poses.txt")
+        printf '%s\t%s\t%s\t%s\t%s\n' "$1 $2" "$seed" "$deskew" "$kind" "$(tr -d '\n ' <<< "$m")" >> "$rows"
+      done
+    done
+    [ "${KEEP:-0}" = 1 ] || rm -rf "$d"
+  done
+done
+python3 - "$rows" "$FRAMES" <<'P'
+import json, sys
+from collections import defaultdict
+rows, frames = sys.argv[1], sys.argv[2]
+r = defaultdict(dict)
+for line in open(rows):
+    drive, seed, deskew, kind, m = line.rstrip("\n").split("\t")
+    r[(drive, deskew, seed)][kind] = json.loads(m)
+print(f"| drive ({frames} sweeps) | deskew | seed | pcap: KITTI % / ATE m | direct points: KITTI % / ATE m | pcap / direct KITTI |")
+print("|---|---|---|---|---|---|")
+groups = defaultdict(list)
+for (drive, deskew, seed), v in r.items():
+    p, q = v["pcap"], v["direct"]
+    on = "on" if deskew == "deskew" else "off"
+    groups[(drive, on)].append((p, q))
+    print(f"| {drive} | {on} | {seed} | {p['kitti_t_err_pct']:.3f} / {p['ate_m']:.3f} | "
+          f"{q['kitti_t_err_pct']:.3f} / {q['ate_m']:.3f} | {p['kitti_t_err_pct'] / q['kitti_t_err_pct']:.3f} |")
+for (drive, on), v in groups.items():
+    mp = sum(p["kitti_t_err_pct"] for p, _ in v) / len(v)
+    mq = sum(q["kitti_t_err_pct"] for _, q in v) / len(v)
+    ap = sum(p["ate_m"] for p, _ in v) / len(v)
+    aq = sum(q["ate_m"] for _, q in v) / len(v)
+    print(f"| **{drive}, mean of {len(v)}** | {on} | | {mp:.3f} / {ap:.3f} | {mq:.3f} / {aq:.3f} | **{mp / mq:.3f}** |")
+P

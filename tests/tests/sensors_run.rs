@@ -1,0 +1,259 @@
+//! `kiss-odom run` on a sensor recording, end to end, against two independent results.
+//!
+//! - kiss-icp 1.3.0 (`tests/reference/driver.py pipeline`, the Python in `KISS_ODOM_PYTHON`)
+//!   fed the very points and per-point times our decoder gives, exported as f64: every frame's
+//!   pose within 1e-6 m, deskew on and off. Without the venv it prints SKIP.
+//! - ouster-sdk's own odometry on the OS-1-128 recording (the poses file beside it): without
+//!   deskewing within 0.02 m / 0.1 deg; with deskewing each `--pose-time` is measured against
+//!   it and the closest named. Needs only `../shared/data`.
+//!
+//! Also the run-level messages for bad recordings, and what `--pose-time` means: the start
+//! of a sweep is the end of the one before.
+
+mod common;
+
+use common::run;
+use kiss_odom::io::poses::read_kitti;
+use kiss_odom::io::sensor_pcap::{self, SensorKind, SensorOptions};
+use kiss_odom::pose::pose_difference;
+use nalgebra::Isometry3;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const REFERENCE_TOL_M: f64 = 1e-6;
+const OUSTER_SDK_TOL_M: f64 = 0.02;
+const OUSTER_SDK_TOL_DEG: f64 = 0.1;
+
+fn data() -> PathBuf {
+    common::repo().join("../shared/data/sensors")
+}
+
+fn os1_128() -> (PathBuf, PathBuf) {
+    let d = data().join("ouster");
+    (
+        d.join("OS-1-128_v2.3.0_1024x10_lb_n3.pcap"),
+        d.join("OS-1-128_v2.3.0_1024x10.json"),
+    )
+}
+
+fn have_data() -> bool {
+    let ok = os1_128().0.is_file();
+    if !ok {
+        eprintln!("SKIP: ../shared/data/sensors is not beside the repository");
+    }
+    ok
+}
+
+fn arg(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 test paths")
+}
+
+/// The poses `run` wrote.
+fn poses(out: &Path) -> Vec<Isometry3<f64>> {
+    read_kitti(&out.join("poses_kitti.txt")).unwrap()
+}
+
+/// Worst (m, deg) difference, frame by frame.
+fn worst(a: &[Isometry3<f64>], b: &[Isometry3<f64>]) -> (f64, f64) {
+    assert_eq!(a.len(), b.len(), "pose counts");
+    a.iter().zip(b).fold((0.0, 0.0), |(t, r), (a, b)| {
+        let (dt, dr) = pose_difference(a, b);
+        (f64::max(t, dt), f64::max(r, dr.to_degrees()))
+    })
+}
+
+/// `run` on the OS-1-128 recording with `extra` flags.
+fn run_os1(dir: &Path, name: &str, extra: &[&str]) -> Vec<Isometry3<f64>> {
+    let (pcap, meta) = os1_128();
+    let mut args = vec!["--meta", arg(&meta)];
+    args.extend_from_slice(extra);
+    let r = run(&pcap, &dir.join(name), &args);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    poses(&r.out)
+}
+
+/// The Python with kiss-icp 1.3.0, or why the comparison cannot run.
+fn reference_python() -> Result<String, String> {
+    let py = std::env::var("KISS_ODOM_PYTHON")
+        .map_err(|_| "KISS_ODOM_PYTHON is not set (a Python with kiss-icp 1.3.0)".to_string())?;
+    let ok = Command::new(&py)
+        .args(["-c", "import kiss_icp"])
+        .status()
+        .map_err(|e| format!("cannot run {py}: {e}"))?;
+    if !ok.success() {
+        return Err(format!("{py} cannot import kiss_icp"));
+    }
+    Ok(py)
+}
+
+#[test]
+fn run_on_the_os1_128_recording_equals_kiss_icp_fed_the_same_points_and_times() {
+    if !have_data() {
+        return;
+    }
+    let python = match reference_python() {
+        Ok(p) => p,
+        Err(why) => return eprintln!("SKIP: {why}"),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (pcap, meta) = os1_128();
+    let opts = SensorOptions {
+        sensor: SensorKind::Ouster,
+        meta: Some(meta),
+        ..SensorOptions::default()
+    };
+    // The decoder's sweeps, exported at full precision for the reference's generic loader.
+    let (sweeps, _) = sensor_pcap::read_all(&pcap, &opts).unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir_all(frames.join("velodyne")).unwrap();
+    std::fs::create_dir_all(frames.join("timestamps")).unwrap();
+    for (k, s) in sweeps.iter().enumerate() {
+        let xyz: Vec<u8> = s
+            .points
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let t: Vec<u8> = s.times.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(frames.join(format!("velodyne/{k:06}.bin")), xyz).unwrap();
+        std::fs::write(frames.join(format!("timestamps/{k:06}.bin")), t).unwrap();
+    }
+    let driver = common::repo().join("tests/reference/driver.py");
+    for deskew in ["--deskew", "--no-deskew"] {
+        let reference = dir.path().join(format!("ref{deskew}.txt"));
+        let status = Command::new(&python)
+            .arg(&driver)
+            .args(["pipeline", "--dataset", arg(&frames), "--format", "generic"])
+            .args(["--bin-layout", "f64x3", "--threads", "1", deskew])
+            .args(["--out", arg(&reference)])
+            .status()
+            .unwrap();
+        assert!(status.success(), "driver.py pipeline {deskew}");
+        let ours = run_os1(dir.path(), deskew, &[deskew, "--threads", "1"]);
+        let theirs = read_kitti(&reference).unwrap();
+        assert_eq!(ours.len(), sweeps.len(), "one pose per sweep");
+        let (dt, dr) = worst(&ours, &theirs);
+        println!(
+            "OS-1-128 {deskew}: {} frames, worst {dt:.2e} m / {dr:.2e} deg from kiss-icp 1.3.0 \
+             (tolerance {REFERENCE_TOL_M:.0e} m)",
+            ours.len()
+        );
+        assert!(dt <= REFERENCE_TOL_M, "{deskew}: {dt:e} m");
+    }
+}
+
+#[test]
+fn run_on_the_os1_128_recording_is_close_to_ouster_sdks_odometry() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sdk =
+        read_kitti(&data().join("ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")).unwrap();
+    let rigid = run_os1(dir.path(), "rigid", &["--no-deskew"]);
+    let (dt, dr) = worst(&rigid, &sdk);
+    println!(
+        "not deskewed: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses (tolerance \
+         {OUSTER_SDK_TOL_M} m / {OUSTER_SDK_TOL_DEG} deg)"
+    );
+    assert!(dt <= OUSTER_SDK_TOL_M && dr <= OUSTER_SDK_TOL_DEG);
+
+    let mut measured = Vec::new();
+    for instant in ["end", "middle", "start"] {
+        let p = run_os1(dir.path(), instant, &["--pose-time", instant]);
+        let (dt, dr) = worst(&p, &sdk);
+        println!("deskewed, --pose-time {instant}: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses");
+        measured.push((dt, dr, instant, p));
+    }
+    let best = measured.iter().min_by(|a, b| a.0.total_cmp(&b.0)).unwrap();
+    println!("closest to ouster-sdk's poses: --pose-time {}", best.2);
+    // The start of sweep k is the end of sweep k-1 (the motion the pose is moved back along
+    // is the one estimated from k-1 to k); the first frame has none.
+    let (end, start) = (&measured[0].3, &measured[2].3);
+    for k in 1..end.len() {
+        let (dt, dr) = pose_difference(&start[k], &end[k - 1]);
+        assert!(
+            dt < 1e-9 && dr < 1e-9,
+            "frame {k}: start {dt:e} m from the previous end"
+        );
+    }
+    let tum = std::fs::read_to_string(dir.path().join("middle/poses_tum.txt")).unwrap();
+    assert!(
+        tum.starts_with("# ") && tum.lines().next().unwrap().contains("middle of each sweep"),
+        "{tum}"
+    );
+}
+
+/// A column of `frames.csv` (no cell of these runs holds a comma).
+fn column(out: &Path, name: &str) -> Vec<String> {
+    let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let at = header.iter().position(|h| *h == name).unwrap();
+    lines
+        .map(|l| l.split(',').nth(at).unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn frames_csv_has_the_packet_statistics_of_each_sweep() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let pcap = data().join("velodyne/velodyne_vlp16.pcap");
+    let r = run(&pcap, &dir.path().join("out"), &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (sweeps, _) = sensor_pcap::read_all(&pcap, &SensorOptions::default()).unwrap();
+    let packets: Vec<String> = sweeps.iter().map(|s| s.stats.packets.to_string()).collect();
+    assert_eq!(column(&r.out, "packets"), packets);
+    let lost: Vec<String> = sweeps
+        .iter()
+        .map(|s| s.stats.lost_packets.to_string())
+        .collect();
+    assert_eq!(column(&r.out, "packets_lost"), lost);
+    assert_eq!(
+        r.summary()["packets"]["decoded"],
+        sweeps
+            .iter()
+            .map(|s| u64::from(s.stats.packets))
+            .sum::<u64>()
+    );
+}
+
+#[test]
+fn bad_recordings_stop_run_with_the_file_and_the_reason() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (pcap, meta) = os1_128();
+    let other_meta = data().join("ouster/OS-1-32-G_v2.1.1_1024x10.json");
+    let cut = dir.path().join("cut.pcap");
+    let bytes = std::fs::read(&pcap).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let cases: [(&Path, Vec<&str>, &str); 4] = [
+        (&cut, vec!["--meta", arg(&meta)], "cut in the middle"),
+        (
+            &pcap,
+            vec!["--meta", arg(&other_meta)],
+            "the metadata of this sensor",
+        ),
+        (
+            &pcap,
+            vec!["--meta", arg(&meta), "--port", "9999"],
+            "no packets on port 9999",
+        ),
+        (&pcap, vec![], "give its metadata JSON (--meta)"),
+    ];
+    for (k, (file, extra, reason)) in cases.iter().enumerate() {
+        let r = run(file, &dir.path().join(format!("out{k}")), extra);
+        assert_eq!(r.code, 1, "{extra:?}: {}", r.stderr);
+        let name = file.file_name().unwrap().to_str().unwrap();
+        assert!(
+            r.stderr.contains(name) && r.stderr.contains(reason),
+            "{extra:?}: {}",
+            r.stderr
+        );
+    }
+}
