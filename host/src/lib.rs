@@ -15,11 +15,13 @@ pub mod drive;
 pub mod exec;
 pub mod interrupt;
 pub mod io;
+pub mod live;
 pub mod memory;
 pub mod metrics;
 pub mod output;
 pub mod plot;
 pub mod pose;
+pub mod replay;
 #[cfg(feature = "ros2")]
 pub mod ros2;
 pub mod run;

@@ -507,6 +507,12 @@ pub(super) fn print_summary(s: &Summary) {
         s.latency_ms.max,
         s.state_bytes as f64 / (1 << 20) as f64
     );
+    if let Some(l) = s.pose_latency_ms {
+        println!(
+            "last packet to pose: p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms",
+            l.p50, l.p99, l.max
+        );
+    }
     if let Some(obj) = s.metrics.as_ref().and_then(|m| m.as_object()) {
         let parts: Vec<String> = obj
             .iter()

@@ -23,6 +23,7 @@ use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::stages::{se3_exp, se3_log};
 use kiss_odom_core::Flag;
+use kiss_odom_sensors::SweepEnd;
 use nalgebra::Isometry3;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -433,7 +434,7 @@ fn add(
 }
 
 /// `live`: prints the pose just recorded as a TUM line (flushed, for a pipe) and measures the
-/// time since its sweep's last packet.
+/// time since its sweep's last packet (for sweeps the sensor's data closed).
 fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
     let (Some(pose), Some(&index)) = (record.poses.last(), record.indices.last()) else {
         return;
@@ -447,7 +448,8 @@ fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
     let line = io::poses::format_tum(&[io::poses::TimedPose { time, pose: *pose }]);
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(line.as_bytes()).and_then(|()| out.flush());
-    if let Some(s) = sweep {
+    // A sweep the end of the stream closed was not done when its last packet came.
+    if let Some(s) = sweep.filter(|s| s.stats.end != SweepEnd::Finished) {
         let now = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos() as u64);
