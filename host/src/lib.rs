@@ -10,6 +10,7 @@
 pub mod args;
 pub mod bench;
 pub mod cli;
+pub mod convert;
 pub mod crosscheck;
 pub mod drive;
 pub mod exec;
