@@ -28,6 +28,9 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 /// Datagrams waiting for the decoder (about 4 s of an Ouster, 5 s of a Velodyne).
 const QUEUE: usize = 4096;
+/// Socket receive buffer asked for (the kernel caps it at `net.core.rmem_max`): a sweep of
+/// packets, so none is lost while the machine is busy elsewhere.
+const RECEIVE_BUFFER: usize = 8 << 20;
 /// How often a wait for packets checks for a signal.
 const POLL: Duration = Duration::from_millis(100);
 
@@ -83,7 +86,7 @@ struct Socket {
 impl Socket {
     fn open(addr: SocketAddr, idle: Option<Duration>) -> Result<Self> {
         let name = format!("udp://{addr}");
-        let socket = UdpSocket::bind(addr).with_context(|| format!("{name}: cannot listen"))?;
+        let socket = listen(addr).with_context(|| format!("{name}: cannot listen"))?;
         socket.set_read_timeout(Some(POLL))?;
         let port = socket.local_addr()?.port();
         let (tx, queue) = mpsc::sync_channel(QUEUE);
@@ -122,6 +125,15 @@ impl Drop for Socket {
             let _ = t.join();
         }
     }
+}
+
+/// A UDP socket bound to `addr` with a large receive buffer.
+fn listen(addr: SocketAddr) -> std::io::Result<UdpSocket> {
+    use socket2::{Domain, Protocol, Socket as Raw, Type};
+    let raw = Raw::new(Domain::for_address(addr), Type::DGRAM, Some(Protocol::UDP))?;
+    raw.set_recv_buffer_size(RECEIVE_BUFFER)?;
+    raw.bind(&addr.into())?;
+    Ok(raw.into())
 }
 
 /// The receiving thread: datagrams into the queue until told to stop.

@@ -26,6 +26,14 @@ fn recording() -> Option<(PathBuf, PathBuf)> {
     Some((pcap, d.join("OS-1-128_v2.3.0_1024x10.json")))
 }
 
+/// One test's processes at a time: the byte-equality at 1x assumes the receiver is not
+/// starved by the other tests' `live` processes.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LOCK.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_kiss-odom"))
 }
@@ -134,6 +142,7 @@ fn live_fed_by_replay_at_the_recorded_pace_gives_runs_poses_byte_for_byte() {
     let Some((pcap, meta)) = recording() else {
         return;
     };
+    let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let (ran, lived) = (dir.path().join("run"), dir.path().join("live"));
     run(&pcap, &meta, &ran);
@@ -161,6 +170,7 @@ fn at_five_times_the_pace_any_loss_is_counted_and_the_run_goes_on() {
     let Some((pcap, meta)) = recording() else {
         return;
     };
+    let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let (ran, lived) = (dir.path().join("run"), dir.path().join("live"));
     run(&pcap, &meta, &ran);
@@ -188,6 +198,7 @@ fn packets_missing_from_the_stream_are_counted_in_their_sweep() {
     let Some((pcap, meta)) = recording() else {
         return;
     };
+    let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     // Five lidar packets of the second sweep (64 a sweep) left out.
     let mut datagrams: Vec<_> = pcap::open(&pcap).unwrap().map(Result::unwrap).collect();
@@ -221,6 +232,7 @@ fn sigint_ends_live_with_its_outputs_written() {
     let Some((pcap, meta)) = recording() else {
         return;
     };
+    let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("live");
     let addr = free_address();
@@ -248,6 +260,7 @@ fn sigint_ends_live_with_its_outputs_written() {
 #[test]
 fn no_packets_on_the_port_is_an_error_naming_the_address() {
     let Some((_, meta)) = recording() else { return };
+    let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let addr = free_address();
     let out = dir.path().join("live");

@@ -94,6 +94,9 @@ pub struct FrameRow {
     pub packets_other_sensor: Option<u32>,
     /// Velodyne azimuth jumps the timestamps do not explain.
     pub azimuth_jumps: Option<u32>,
+    /// `live`: time from the sweep's last packet to its pose (ms); empty for a sweep the end
+    /// of the stream closed and for recordings.
+    pub pose_latency_ms: Option<f64>,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
     /// The core's flags, written as one column each.
@@ -139,6 +142,7 @@ impl FrameRow {
             packets_bad: None,
             packets_other_sensor: None,
             azimuth_jumps: None,
+            pose_latency_ms: None,
             deskewed: r.is_some_and(|r| r.deskewed),
             status: o.status().unwrap_or_default(),
         }
@@ -209,6 +213,18 @@ impl PacketTotals {
             t.other_sensor += n(r.packets_other_sensor);
         }
         t
+    }
+}
+
+impl Latency {
+    /// The statistics of `v`, `None` when it is empty.
+    pub fn of(mut v: Vec<f64>) -> Option<Self> {
+        v.sort_by(f64::total_cmp);
+        Some(Self {
+            p50: percentile(&v, 50.0),
+            p99: percentile(&v, 99.0),
+            max: *v.last()?,
+        })
     }
 }
 
@@ -452,11 +468,7 @@ impl Run<'_> {
             } else {
                 0.0
             },
-            latency_ms: Latency {
-                p50: percentile(&lat, 50.0),
-                p99: percentile(&lat, 99.0),
-                max: lat.last().copied().unwrap_or(0.0),
-            },
+            latency_ms: Latency::of(lat.clone()).unwrap_or_default(),
             peak_rss_bytes: crate::memory::peak_rss_bytes(),
             state_bytes: d.state_bytes(),
             skipped_frames: count(RowKind::Skipped),
@@ -470,15 +482,7 @@ impl Run<'_> {
             }),
             warnings: o.warnings,
             packets: PacketTotals::of(&o.rows),
-            pose_latency_ms: (!o.pose_latency_ms.is_empty()).then(|| {
-                let mut v = o.pose_latency_ms.clone();
-                v.sort_by(f64::total_cmp);
-                Latency {
-                    p50: percentile(&v, 50.0),
-                    p99: percentile(&v, 99.0),
-                    max: v.last().copied().unwrap_or(0.0),
-                }
-            }),
+            pose_latency_ms: Latency::of(o.rows.iter().filter_map(|r| r.pose_latency_ms).collect()),
             interrupted: self.interrupted.is_some(),
             stop_reason: self.stop.clone(),
             input: serde_json::json!({

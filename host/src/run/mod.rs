@@ -135,8 +135,6 @@ pub(crate) struct Record {
     pub warnings: usize,
     /// Whether the frames are sweeps decoded from sensor packets.
     pub sweeps: bool,
-    /// `live`: time from each sweep's last packet to its pose (ms).
-    pub pose_latency_ms: Vec<f64>,
 }
 
 impl Record {
@@ -186,7 +184,6 @@ pub(crate) fn execute_on(
         indices: Vec::new(),
         warnings: 0,
         sweeps: false,
-        pose_latency_ms: Vec::new(),
     };
     let mut warn = |record: &mut Record, bar: &ProgressBar, text: &str| {
         bar.suspend(|| writeln!(err, "warning: {text}")).ok();
@@ -453,8 +450,11 @@ fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
         let now = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos() as u64);
-        let ms = now.saturating_sub(s.last_capture_ns) as f64 * 1e-6;
-        record.pose_latency_ms.push(ms);
+        // Microseconds, as frames.csv's core latency.
+        let ms = (now.saturating_sub(s.last_capture_ns) as f64 * 1e-3).round() / 1e3;
+        if let Some(row) = record.rows.last_mut() {
+            row.pose_latency_ms = Some(ms);
+        }
     }
 }
 
