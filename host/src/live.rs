@@ -14,7 +14,7 @@ use crate::io::pcap::Datagram;
 use crate::io::sensor_frames::SweepFrames;
 use crate::io::sensor_pcap::{self, DatagramSource};
 use crate::io::{Dataset, DatasetInfo, Format};
-use crate::run::{Mode, PoseTime, RunArgs};
+use crate::run::{Mode, RunArgs, RunOptions};
 use crate::viz::ViewArgs;
 use anyhow::{anyhow, bail, Context, Result};
 use std::io::Write;
@@ -40,22 +40,13 @@ pub struct LiveArgs {
     /// Address to listen on, e.g. 0.0.0.0:2368 (Velodyne) or 0.0.0.0:7502 (Ouster).
     #[arg(long)]
     pub udp: SocketAddr,
-    /// Output folder, as `run`'s.
-    #[arg(long)]
-    pub out: PathBuf,
     /// End after this many seconds without a packet, once packets have come [default: run
     /// until SIGINT/SIGTERM]; without any packet in that time the run fails.
     #[arg(long)]
     pub idle_timeout: Option<f64>,
-    /// As `run --strict`.
-    #[arg(long)]
-    pub strict: bool,
-    /// No progress spinner.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// As `run --pose-time`.
-    #[arg(long, value_enum, default_value_t = PoseTime::End)]
-    pub pose_time: PoseTime,
+    /// Outputs and how the run goes, as `run`'s.
+    #[command(flatten)]
+    pub run: RunOptions,
     /// The sensor (`--port` is the one of `--udp`).
     #[command(flatten, next_help_heading = "Sensor")]
     pub sensor: SensorArgs,
@@ -222,10 +213,7 @@ pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
     };
     let run = RunArgs {
         path: PathBuf::from(format!("udp://{}", args.udp)),
-        out: args.out.clone(),
-        strict: args.strict,
-        quiet: args.quiet,
-        pose_time: args.pose_time,
+        run: args.run.clone(),
         common: CommonArgs {
             input: InputArgs {
                 format: Format::Pcap,

@@ -121,12 +121,15 @@ fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&read(dir, "summary.json")).unwrap()
 }
 
-/// `live` fed by `replay` at `rate`, ended by a 2 s silence.
-fn live_replay(pcap: &Path, meta: &Path, out: &Path, rate: &str) -> Output {
+/// `run` on `pcap` into `dir/run`, then `live` into `dir/live` fed by `replay` at `rate`
+/// and ended by a 2 s silence: the two folders and what `live` did.
+fn run_and_live(pcap: &Path, meta: &Path, dir: &Path, rate: &str) -> (PathBuf, PathBuf, Output) {
+    let (ran, lived) = (dir.join("run"), dir.join("live"));
+    run(pcap, meta, &ran);
     let addr = free_address();
-    let child = live(&addr, meta, out, &["--idle-timeout", "2"]);
+    let child = live(&addr, meta, &lived, &["--idle-timeout", "2"]);
     replay(pcap, &addr, rate);
-    finish(child)
+    (ran, lived, finish(child))
 }
 
 fn latency(dir: &Path) -> String {
@@ -144,9 +147,7 @@ fn live_fed_by_replay_at_the_recorded_pace_gives_runs_poses_byte_for_byte() {
     };
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
-    let (ran, lived) = (dir.path().join("run"), dir.path().join("live"));
-    run(&pcap, &meta, &ran);
-    let o = live_replay(&pcap, &meta, &lived, "1");
+    let (ran, lived, o) = run_and_live(&pcap, &meta, dir.path(), "1");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(
         summary(&lived)["packets"]["lost"],
@@ -172,9 +173,7 @@ fn at_five_times_the_pace_any_loss_is_counted_and_the_run_goes_on() {
     };
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
-    let (ran, lived) = (dir.path().join("run"), dir.path().join("live"));
-    run(&pcap, &meta, &ran);
-    let o = live_replay(&pcap, &meta, &lived, "5");
+    let (ran, lived, o) = run_and_live(&pcap, &meta, dir.path(), "5");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     let lost = summary(&lived)["packets"]["lost"].as_u64().unwrap();
@@ -210,9 +209,7 @@ fn packets_missing_from_the_stream_are_counted_in_their_sweep() {
     }
     let holed = dir.path().join("holed.pcap");
     pcap::write(&holed, &datagrams, 9000).unwrap();
-    let (ran, lived) = (dir.path().join("run"), dir.path().join("live"));
-    run(&holed, &meta, &ran);
-    let o = live_replay(&holed, &meta, &lived, "1");
+    let (ran, lived, o) = run_and_live(&holed, &meta, dir.path(), "1");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let lost = summary(&lived)["packets"]["lost"].as_u64().unwrap();
     assert!(lost >= 5, "{lost} lost");

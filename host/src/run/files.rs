@@ -285,7 +285,7 @@ impl Run<'_> {
     /// was read (its header comes with the first row), the pose files and the plot when a
     /// frame was registered.
     pub fn write(&self) -> Result<Summary> {
-        let dir = &self.args.out;
+        let dir = &self.args.run.out;
         let o = self.record;
         crate::output::write(
             &dir.join("config.toml"),
@@ -328,7 +328,7 @@ impl Run<'_> {
     }
 
     fn write_poses(&self) -> Result<()> {
-        let dir = &self.args.out;
+        let dir = &self.args.run.out;
         let o = self.record;
         let kitti = io::poses::format_kitti(&o.poses);
         crate::output::write(&dir.join("poses_kitti.txt"), kitti.as_bytes())?;
@@ -367,7 +367,7 @@ impl Run<'_> {
             format!(
                 "time x y z qx qy qz qw: the sensor at the {} of each sweep (--pose-time); \
                  times: {times}",
-                self.args.pose_time.name()
+                self.args.run.pose_time.name()
             )
         } else {
             format!(
