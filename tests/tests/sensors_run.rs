@@ -13,6 +13,7 @@
 mod common;
 
 use common::run;
+use kiss_odom::io::pcap::{self, Datagram};
 use kiss_odom::io::poses::read_kitti;
 use kiss_odom::io::sensor_pcap::{self, SensorKind, SensorOptions};
 use kiss_odom::pose::pose_difference;
@@ -323,4 +324,44 @@ fn convert_writes_the_decoded_sweeps_to_float32_rounding_and_run_reads_them_back
     let (dt, _) = worst_of(&poses(&r.out), &from_pcap);
     println!("run on the converted folder: worst {dt:.2e} m from run on the pcap");
     assert!(dt <= REFERENCE_TOL_M, "{dt:e} m");
+}
+
+#[test]
+fn a_second_sensor_on_the_port_is_a_warning_naming_the_file_and_strict_refuses_it() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let one = data().join("velodyne/velodyne_vlp16.pcap");
+    let mut d: Vec<Datagram> = pcap::open(&one).unwrap().map(Result::unwrap).collect();
+    let second: Vec<Datagram> = d
+        .iter()
+        .filter(|d| d.port == 2368 && d.payload.len() == 1206)
+        .map(|p| Datagram {
+            time_ns: p.time_ns + 300_000,
+            source: "192.168.1.202:2368".parse().unwrap(),
+            ..p.clone()
+        })
+        .collect();
+    d.extend(second);
+    d.sort_by_key(|p| p.time_ns);
+    let two = dir.path().join("two.pcap");
+    pcap::write(&two, &d, 9000).unwrap();
+    let alone = run(&one, &dir.path().join("alone"), &[]);
+    let r = run(&two, &dir.path().join("two"), &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("two.pcap: packets from 1 other sender(s)")
+            && r.stderr.contains("192.168.1.202:2368"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(
+        poses(&r.out),
+        poses(&alone.out),
+        "the first sender's sweeps"
+    );
+    let strict = run(&two, &dir.path().join("strict"), &["--strict"]);
+    assert_eq!(strict.code, 1, "{}", strict.stderr);
 }
