@@ -62,6 +62,8 @@ pub struct BenchArgs {
 pub struct OurRun {
     /// Seconds in the core's frame call, per frame.
     pub seconds: Vec<f64>,
+    /// The calling thread's CPU seconds in that call, per frame.
+    pub cpu_seconds: Vec<f64>,
     /// RSS when the run started (frames loaded).
     pub rss_before_bytes: Option<u64>,
     /// Peak RSS during the run.
@@ -96,10 +98,45 @@ pub struct SideStats {
     pub max_ms: f64,
     /// Worst single frame time over every timed run (ms), noise included.
     pub max_any_run_ms: f64,
+    /// The same percentiles of the calling thread's CPU time (ours, one thread): what the
+    /// frame costs without the time other processes took the core away.
+    pub cpu: Option<CpuSpread>,
     /// Largest peak RSS of a timed run.
     pub peak_rss_bytes: Option<u64>,
     /// Largest growth of RSS during a timed run (peak minus RSS at its start).
     pub rss_growth_bytes: Option<u64>,
+}
+
+/// Per-frame CPU-time percentiles (ms) of the per-frame median over runs.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct CpuSpread {
+    /// Median frame.
+    pub p50_ms: f64,
+    /// 99th percentile.
+    pub p99_ms: f64,
+    /// Worst frame.
+    pub max_ms: f64,
+}
+
+/// Each frame's median over the runs (ms), from frame `from` on, sorted.
+fn per_frame_medians(runs: &[&[f64]], from: usize) -> Vec<f64> {
+    let n = runs.first().map_or(0, |r| r.len());
+    let mut v: Vec<f64> = (from.min(n.saturating_sub(1))..n)
+        .map(|i| median(&runs.iter().map(|r| r[i]).collect::<Vec<_>>()) * 1e3)
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+impl CpuSpread {
+    fn of(runs: &[&[f64]], from: usize) -> Self {
+        let v = per_frame_medians(runs, from);
+        Self {
+            p50_ms: percentile(&v, 50.0),
+            p99_ms: percentile(&v, 99.0),
+            max_ms: v.last().copied().unwrap_or(0.0),
+        }
+    }
 }
 
 impl SideStats {
@@ -113,11 +150,8 @@ impl SideStats {
             .map(|(sec, _, _)| sec.len() as f64 / sec.iter().sum::<f64>().max(1e-12))
             .collect();
         s.fps = median(&s.fps_runs);
-        let n = runs[0].0.len();
-        let mut per_frame: Vec<f64> = (latency_from.min(n.saturating_sub(1))..n)
-            .map(|i| median(&runs.iter().map(|r| r.0[i]).collect::<Vec<_>>()) * 1e3)
-            .collect();
-        per_frame.sort_by(f64::total_cmp);
+        let seconds: Vec<&[f64]> = runs.iter().map(|r| r.0.as_slice()).collect();
+        let per_frame = per_frame_medians(&seconds, latency_from);
         s.p50_ms = percentile(&per_frame, 50.0);
         s.p99_ms = percentile(&per_frame, 99.0);
         s.max_ms = per_frame.last().copied().unwrap_or(0.0);
@@ -287,6 +321,7 @@ fn run_ours(settings: &Settings, frames: &Preloaded) -> Result<OurRun> {
     let n = frames.len();
     let mut run = OurRun {
         seconds: Vec::with_capacity(n),
+        cpu_seconds: Vec::with_capacity(n),
         rss_before_bytes: rss_before,
         peak_rss_bytes: None,
         poses: Vec::with_capacity(n),
@@ -299,6 +334,7 @@ fn run_ours(settings: &Settings, frames: &Preloaded) -> Result<OurRun> {
     for k in 0..n {
         let o = driver.register_preloaded(frames, k)?;
         run.seconds.push(o.latency.as_secs_f64());
+        run.cpu_seconds.push(o.cpu.as_secs_f64());
         run.iterations.push(o.report().map_or(0, |r| r.iterations));
         run.degraded_frames += usize::from(o.status().is_some_and(|s| !s.is_ok()));
         run.empty_frames += usize::from(o.step == Step::Empty);
@@ -385,7 +421,11 @@ fn measure(
         .iter()
         .map(|r| (r.seconds.clone(), r.rss_before_bytes, r.peak_rss_bytes))
         .collect();
-    let ours = SideStats::of(&triples_ours, args.latency_from);
+    let mut ours = SideStats::of(&triples_ours, args.latency_from);
+    if threads == 1 {
+        let cpu: Vec<&[f64]> = ours_runs.iter().map(|r| r.cpu_seconds.as_slice()).collect();
+        ours.cpu = Some(CpuSpread::of(&cpu, args.latency_from));
+    }
     let ref_stats = reference.as_ref().map(|_| {
         let t: Vec<_> = ref_runs
             .iter()
@@ -476,4 +516,25 @@ pub fn reference_map_estimate(voxels: usize, n_max: usize) -> usize {
     let chunk = (n_max * 24 + 8).div_ceil(16) * 16;
     let buckets = (2 * voxels).next_power_of_two();
     voxels * chunk + buckets * 48
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cpu_spread_takes_each_frames_median_over_runs_from_the_first_counted_frame() {
+        // Frame 0 is the warm-up and left out; frame 3's outlier in one run is voted down.
+        let a = [9.0, 0.125, 0.25, 0.375];
+        let b = [9.0, 0.375, 0.5, 4.0];
+        let c = [9.0, 0.25, 0.75, 0.5];
+        let s = CpuSpread::of(&[&a, &b, &c], 1);
+        // Medians (ms): 250, 500, 500.
+        assert_eq!(
+            per_frame_medians(&[&a, &b, &c], 1),
+            vec![250.0, 500.0, 500.0]
+        );
+        assert_eq!((s.p50_ms, s.max_ms), (500.0, 500.0));
+        assert_eq!(per_frame_medians(&[&a, &b, &c], 0).last(), Some(&9000.0));
+    }
 }

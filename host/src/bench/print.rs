@@ -47,6 +47,17 @@ pub(super) fn print_report(r: &Report) {
         )
     };
     row("kiss-odom", &r.ours);
+    if let Some(c) = &r.ours.cpu {
+        println!(
+            "kiss-odom, this thread's CPU time: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms, \
+             p99/p50 {:.2}, max/p50 {:.2}",
+            c.p50_ms,
+            c.p99_ms,
+            c.max_ms,
+            c.p99_ms / c.p50_ms,
+            c.max_ms / c.p50_ms
+        );
+    }
     if let Some(rs) = &r.reference {
         row("kiss-icp 1.3.0", rs);
     }

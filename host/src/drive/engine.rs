@@ -9,6 +9,7 @@ use crate::exec::Pool;
 use crate::pose::{widen, widen_report};
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::Result;
+use cpu_time::ThreadTime;
 use kiss_odom_core::{
     Capacities, Exact, FrameError, FrameReport, HighWater, Odometry, PointCodec, Quantized, Real,
 };
@@ -25,7 +26,23 @@ pub trait Feed {
 pub(super) struct Call {
     pub result: Result<FrameReport<f64>, FrameError>,
     pub latency: Duration,
+    /// The calling thread's CPU time in the call (all of it with one thread).
+    pub cpu: Duration,
     pub input_points: usize,
+}
+
+/// Wall-clock and calling-thread CPU time of a stretch of work.
+struct Stopwatch(Instant, ThreadTime);
+
+impl Stopwatch {
+    fn start() -> Self {
+        Self(Instant::now(), ThreadTime::now())
+    }
+
+    /// (wall, cpu) since the start.
+    fn stop(self) -> (Duration, Duration) {
+        (self.0.elapsed(), self.1.elapsed())
+    }
 }
 
 /// Frames converted to the core's scalar ahead of time.
@@ -161,12 +178,13 @@ fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
 
 /// Times the core's call on already converted points.
 fn timed<T: Real>(call: impl FnOnce() -> Result<FrameReport<T>, FrameError>, n: usize) -> Call {
-    let t0 = Instant::now();
+    let watch = Stopwatch::start();
     let result = call();
-    let latency = t0.elapsed();
+    let (latency, cpu) = watch.stop();
     Call {
         result: result.map(|r| widen_report(&r)),
         latency,
+        cpu,
         input_points: n,
     }
 }
@@ -176,15 +194,18 @@ struct CoreFeed<'a, 'o, T: Real, P: PointCodec<T>> {
     input: &'a mut kiss_odom_core::FrameInput<'o, T, P, Box<[u64]>>,
     buf: &'a mut Vec<[T; 3]>,
     latency: Duration,
+    cpu: Duration,
     points: usize,
 }
 
 impl<T: Real, P: PointCodec<T>> Feed for CoreFeed<'_, '_, T, P> {
     fn push(&mut self, points: &[[f64; 3]], stamps: Option<&[f64]>) {
         narrow(points, self.buf);
-        let t0 = Instant::now();
+        let watch = Stopwatch::start();
         self.input.push(self.buf, stamps);
-        self.latency += t0.elapsed();
+        let (wall, cpu) = watch.stop();
+        self.latency += wall;
+        self.cpu += cpu;
         self.points += points.len();
     }
 }
@@ -222,12 +243,14 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
             input: &mut input,
             buf: &mut self.points,
             latency: Duration::ZERO,
+            cpu: Duration::ZERO,
             points: 0,
         };
         fill(&mut feed);
-        let (latency, points) = (feed.latency, feed.points);
+        let (latency, cpu, points) = (feed.latency, feed.cpu, feed.points);
         let mut call = timed(|| input.finish_with(pool), points);
         call.latency += latency;
+        call.cpu += cpu;
         call
     }
 

@@ -79,6 +79,9 @@ pub struct Outcome {
     pub sigma: f64,
     /// Time in the core's frame call (zero when skipped).
     pub latency: Duration,
+    /// The calling thread's CPU time in that call: the whole call's with one thread, free of
+    /// other processes' share of the machine (zero when skipped).
+    pub cpu: Duration,
     /// Points given.
     pub input_points: usize,
     /// What the reader noticed about the frame that did not stop it being used.
@@ -211,6 +214,7 @@ impl Driver {
             pose: self.engine.pose(),
             sigma,
             latency: Duration::ZERO,
+            cpu: Duration::ZERO,
             input_points: 0,
             warnings: Vec::new(),
         }
@@ -293,6 +297,7 @@ impl Driver {
             pose: self.engine.pose(),
             sigma,
             latency: call.latency,
+            cpu: call.cpu,
             input_points: call.input_points,
             warnings: Vec::new(),
         })

@@ -178,6 +178,7 @@ fn empty_and_unreadable_frames_advance_on_the_constant_velocity_model() {
     );
     assert_eq!(skipped.step, Step::Skipped("x: unreadable".into()));
     assert_eq!(skipped.latency, Duration::ZERO);
+    assert_eq!(skipped.cpu, Duration::ZERO);
     for (o, before) in [(&empty, got[2].pose), (&skipped, empty.pose)] {
         let (t, r) = crate::pose::pose_difference(&o.pose, &(before * motion));
         assert!(

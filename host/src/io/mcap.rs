@@ -636,7 +636,7 @@ pub fn parse_cdr(body: &[u8]) -> Result<PointCloud2<'_>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::pointcloud2::fixture::{xyzt, xyzt_points, xyzt_times, RawCloud};
+    use crate::io::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
     use mcap::records::MessageHeader;
     use std::collections::BTreeMap;
 
@@ -735,12 +735,6 @@ mod tests {
         vec![0, 1, 0, 0, 3, 0, 0, 0, b'h', b'i', 0]
     }
 
-    fn save(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let p = dir.path().join(name);
-        std::fs::write(&p, bytes).unwrap();
-        p
-    }
-
     fn open_mcap(path: &Path, topic: Option<&str>) -> Result<Dataset> {
         open(
             path,
@@ -749,43 +743,6 @@ mod tests {
                 ..OpenOptions::default()
             },
         )
-    }
-
-    fn drain(src: &mut dyn FrameSource) -> (Vec<Item>, Option<String>) {
-        let mut items = Vec::new();
-        loop {
-            match src.next_item() {
-                Ok(Some(item)) => items.push(item),
-                Ok(None) => return (items, None),
-                Err(e) => {
-                    assert!(
-                        src.next_item().unwrap().is_none(),
-                        "stream continues after Err"
-                    );
-                    return (items, Some(format!("{e:#}")));
-                }
-            }
-        }
-    }
-
-    fn frame(item: &Item) -> &crate::io::Frame {
-        match item {
-            Item::Frame(f) => f,
-            Item::Skipped { reason, .. } => panic!("unexpected skip: {reason}"),
-        }
-    }
-
-    fn assert_frame_k(f: &crate::io::Frame, index: usize, k: u32) {
-        assert_eq!(f.index, index);
-        assert_eq!(f.points, xyzt_points(k, 6), "points of frame {k}");
-        assert_eq!(f.stamps.as_deref(), Some(&xyzt_times(6)[..]));
-        assert_eq!(f.time, Some(f64::from(1_700_000_000 + k) + 0.25));
-        assert!(
-            f.name
-                .ends_with(&format!(":/points@{}.250000000", 1_700_000_000 + k)),
-            "{}",
-            f.name
-        );
     }
 
     fn mixed_messages() -> Vec<(usize, Vec<u8>)> {

@@ -796,4 +796,53 @@ pub(crate) mod fixture {
     pub fn xyzt_times(n: usize) -> Vec<f64> {
         (0..n).map(|i| i as f64 / 16.0).collect()
     }
+
+    /// Writes `bytes` to `name` in `dir`.
+    pub fn save(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    /// Reads a container's stream to its end: the items, and the error that ended it, if any
+    /// (after which the stream must stay ended).
+    pub fn drain(src: &mut dyn crate::io::FrameSource) -> (Vec<crate::io::Item>, Option<String>) {
+        let mut items = Vec::new();
+        loop {
+            match src.next_item() {
+                Ok(Some(item)) => items.push(item),
+                Ok(None) => return (items, None),
+                Err(e) => {
+                    assert!(
+                        src.next_item().unwrap().is_none(),
+                        "stream continues after Err"
+                    );
+                    return (items, Some(format!("{e:#}")));
+                }
+            }
+        }
+    }
+
+    /// The frame an item holds; a skip fails the test.
+    pub fn frame(item: &crate::io::Item) -> &crate::io::Frame {
+        match item {
+            crate::io::Item::Frame(f) => f,
+            crate::io::Item::Skipped { reason, .. } => panic!("unexpected skip: {reason}"),
+        }
+    }
+
+    /// Checks that `f` is frame `k` of an [`xyzt`] stream of 6 points on `/points`, read at
+    /// stream position `index`.
+    pub fn assert_frame_k(f: &crate::io::Frame, index: usize, k: u32) {
+        assert_eq!(f.index, index);
+        assert_eq!(f.points, xyzt_points(k, 6), "points of frame {k}");
+        assert_eq!(f.stamps.as_deref(), Some(&xyzt_times(6)[..]));
+        assert_eq!(f.time, Some(f64::from(1_700_000_000 + k) + 0.25));
+        assert!(
+            f.name
+                .ends_with(&format!(":/points@{}.250000000", 1_700_000_000 + k)),
+            "{}",
+            f.name
+        );
+    }
 }

@@ -275,7 +275,7 @@ pub fn parse_ros1(body: &[u8]) -> Result<PointCloud2<'_>, String> {
 mod tests {
     use super::*;
     use crate::io::bagfile::MAGIC;
-    use crate::io::pointcloud2::fixture::{xyzt, xyzt_points, xyzt_times, RawCloud};
+    use crate::io::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
     use std::collections::{BTreeMap, BTreeSet};
 
     /// ROS 1 serialization of `c`, written field by field from the message definition.
@@ -502,12 +502,6 @@ mod tests {
         ros1_body(&xyzt(k, 6))
     }
 
-    fn save(dir: &tempfile::TempDir, name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let p = dir.path().join(name);
-        std::fs::write(&p, bytes).unwrap();
-        p
-    }
-
     fn open_bag(path: &Path, topic: Option<&str>) -> Result<Dataset> {
         open(
             path,
@@ -516,45 +510,6 @@ mod tests {
                 ..OpenOptions::default()
             },
         )
-    }
-
-    /// Reads the stream to its end: the items, and the error that ended it, if any.
-    fn drain(src: &mut dyn FrameSource) -> (Vec<Item>, Option<String>) {
-        let mut items = Vec::new();
-        loop {
-            match src.next_item() {
-                Ok(Some(item)) => items.push(item),
-                Ok(None) => return (items, None),
-                Err(e) => {
-                    assert!(
-                        src.next_item().unwrap().is_none(),
-                        "stream continues after Err"
-                    );
-                    return (items, Some(format!("{e:#}")));
-                }
-            }
-        }
-    }
-
-    fn frame(item: &Item) -> &crate::io::Frame {
-        match item {
-            Item::Frame(f) => f,
-            Item::Skipped { reason, .. } => panic!("unexpected skip: {reason}"),
-        }
-    }
-
-    /// Checks that `f` is frame `k` of [`cloud_msg`] at stream position `index`.
-    fn assert_frame_k(f: &crate::io::Frame, index: usize, k: u32) {
-        assert_eq!(f.index, index);
-        assert_eq!(f.points, xyzt_points(k, 6), "points of frame {k}");
-        assert_eq!(f.stamps.as_deref(), Some(&xyzt_times(6)[..]));
-        assert_eq!(f.time, Some(f64::from(1_700_000_000 + k) + 0.25));
-        assert!(
-            f.name
-                .ends_with(&format!(":/points@{}.250000000", 1_700_000_000 + k)),
-            "{}",
-            f.name
-        );
     }
 
     /// Five clouds on /points interleaved with strings on /chatter, two messages per chunk.

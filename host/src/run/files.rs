@@ -543,6 +543,7 @@ mod tests {
             pose: Isometry3::identity(),
             sigma: 2.0,
             latency: std::time::Duration::ZERO,
+            cpu: std::time::Duration::ZERO,
             input_points: 0,
             warnings: Vec::new(),
         };

@@ -5,18 +5,14 @@
 #![allow(dead_code)] // each test file uses its own share
 
 use kiss_odom::io::{bin, poses};
-pub use kiss_odom_tests::panic_text;
+#[allow(unused_imports)] // each test file uses its own share
+pub use kiss_odom_tests::{repo, run, Run};
 use nalgebra::Matrix4;
 use std::ffi::OsString;
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 // ------------------------------------------------------------------------------------------
 // Helpers: data
-
-pub fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// The bytes of KITTI sample scan `k` (x, y, z, intensity as little-endian f32).
 pub fn kitti_bytes(k: usize) -> Vec<u8> {
@@ -65,16 +61,6 @@ pub fn bin_folder(root: &Path, n: usize) -> PathBuf {
 // ------------------------------------------------------------------------------------------
 // Helpers: running the tool and reading what it wrote
 
-/// What one `kiss-odom run` did.
-pub struct Run {
-    /// Exit status.
-    pub code: i32,
-    /// Everything written to stderr.
-    pub stderr: String,
-    /// The output folder.
-    pub out: PathBuf,
-}
-
 /// A `frames.csv` row: the columns these tests look at.
 #[derive(Debug)]
 pub struct Row {
@@ -88,58 +74,44 @@ pub struct Row {
     pub flags: Vec<String>,
 }
 
-/// `kiss-odom run INPUT --out OUT --quiet EXTRA...` in-process.
-pub fn run(input: &Path, out: &Path, extra: &[&str]) -> Run {
-    let mut argv: Vec<OsString> = vec![
-        "run".into(),
-        input.into(),
-        "--out".into(),
-        out.into(),
-        "--quiet".into(),
-    ];
-    argv.extend(extra.iter().map(OsString::from));
-    let (code, stderr) = kiss_odom(argv);
-    Run {
-        code,
-        stderr,
-        out: out.to_path_buf(),
-    }
-}
-
-/// `kiss-odom ARGS...` in-process: the exit status and stderr. A panic anywhere inside is
-/// turned into a test failure that says which command panicked.
+/// `kiss-odom ARGS...` in-process: the exit status and stderr (see
+/// [`kiss_odom_tests::kiss_odom`]).
 pub fn kiss_odom(args: Vec<OsString>) -> (i32, String) {
-    let argv: Vec<OsString> = std::iter::once("kiss-odom".into()).chain(args).collect();
-    let shown = argv
-        .iter()
-        .map(|a| a.to_string_lossy())
-        .collect::<Vec<_>>()
-        .join(" ");
-    let mut err = Vec::new();
-    let code = catch_unwind(AssertUnwindSafe(|| {
-        kiss_odom::cli::main_with(argv, &mut err)
-    }))
-    .unwrap_or_else(|p| panic!("`{shown}` panicked: {}", panic_text(p.as_ref())));
-    (code, String::from_utf8(err).expect("stderr is UTF-8"))
+    let r = kiss_odom_tests::kiss_odom(&args, Path::new(""));
+    (r.code, r.stderr)
 }
 
-impl Run {
-    pub fn summary(&self) -> serde_json::Value {
-        let path = self.out.join("summary.json");
-        let text = std::fs::read_to_string(&path)
-            .unwrap_or_else(|e| panic!("{}: {e}\nstderr:\n{}", path.display(), self.stderr));
-        serde_json::from_str(&text).expect("summary.json is JSON")
-    }
-
+/// What these tests read from a run's outputs beyond [`Run`]'s own readers.
+pub trait RunExt {
     /// A whole-number field of `summary.json`.
-    pub fn count(&self, key: &str) -> u64 {
+    fn count(&self, key: &str) -> u64;
+    /// The rows of `frames.csv`.
+    fn rows(&self) -> Vec<Row>;
+    /// `poses_kitti.txt` as 4x4 matrices.
+    fn poses(&self) -> Vec<Matrix4<f64>>;
+    /// The `error: ` lines of stderr.
+    fn errors(&self) -> Vec<&str>;
+    /// The run failed with exit 1 and exactly one error line, the last line of stderr, that
+    /// names `file`; returns that line.
+    fn failed_naming(&self, file: &Path) -> &str;
+    /// Exit 0, every pose finite, and one `frames.csv` row per pose with the indices `0..n`.
+    fn succeeded_with_frames(&self, n: usize) {
+        self.succeeded_with_frames_from(0, n);
+    }
+    /// Exit 0, every pose finite, and one `frames.csv` row per pose with the indices
+    /// `first..first + n`.
+    fn succeeded_with_frames_from(&self, first: usize, n: usize);
+}
+
+impl RunExt for Run {
+    fn count(&self, key: &str) -> u64 {
         let s = self.summary();
         s[key]
             .as_u64()
             .unwrap_or_else(|| panic!("summary.json has no count {key}: {s:#}"))
     }
 
-    pub fn rows(&self) -> Vec<Row> {
+    fn rows(&self) -> Vec<Row> {
         let path = self.out.join("frames.csv");
         let text = std::fs::read_to_string(&path)
             .unwrap_or_else(|e| panic!("{}: {e}\nstderr:\n{}", path.display(), self.stderr));
@@ -177,29 +149,20 @@ impl Run {
             .collect()
     }
 
-    pub fn poses(&self) -> Vec<Matrix4<f64>> {
+    fn poses(&self) -> Vec<Matrix4<f64>> {
         let path = self.out.join("poses_kitti.txt");
         poses::read_kitti_matrices(&path)
             .unwrap_or_else(|e| panic!("{e:#}\nstderr:\n{}", self.stderr))
     }
 
-    pub fn warnings(&self) -> Vec<&str> {
-        self.stderr
-            .lines()
-            .filter(|l| l.starts_with("warning: "))
-            .collect()
-    }
-
-    pub fn errors(&self) -> Vec<&str> {
+    fn errors(&self) -> Vec<&str> {
         self.stderr
             .lines()
             .filter(|l| l.starts_with("error: "))
             .collect()
     }
 
-    /// The run failed with exit 1 and exactly one error line, the last line of stderr, that
-    /// names `file`; returns that line.
-    pub fn failed_naming(&self, file: &Path) -> &str {
+    fn failed_naming(&self, file: &Path) -> &str {
         assert_eq!(self.code, 1, "exit status; stderr:\n{}", self.stderr);
         let errors = self.errors();
         assert_eq!(errors.len(), 1, "one error line; stderr:\n{}", self.stderr);
@@ -218,14 +181,7 @@ impl Run {
         line
     }
 
-    /// Exit 0, every pose finite, and one `frames.csv` row per pose with the indices `0..n`.
-    pub fn succeeded_with_frames(&self, n: usize) {
-        self.succeeded_with_frames_from(0, n);
-    }
-
-    /// Exit 0, every pose finite, and one `frames.csv` row per pose with the indices
-    /// `first..first + n`.
-    pub fn succeeded_with_frames_from(&self, first: usize, n: usize) {
+    fn succeeded_with_frames_from(&self, first: usize, n: usize) {
         assert_eq!(self.code, 0, "exit status; stderr:\n{}", self.stderr);
         assert!(self.errors().is_empty(), "stderr:\n{}", self.stderr);
         let poses = self.poses();
