@@ -18,6 +18,14 @@ pub struct Cli {
 pub enum Command {
     /// Run odometry on a recording and write poses, metrics and a plot.
     Run(crate::run::RunArgs),
+    /// Odometry from a sensor on the network (Velodyne or Ouster UDP), poses as sweeps
+    /// complete, `run`'s outputs at the end (also on Ctrl-C).
+    Live(crate::live::LiveArgs),
+    /// Send a pcap recording as UDP at its recorded pace (to test `live` without a sensor).
+    Replay(crate::replay::ReplayArgs),
+    /// Write a recording (pcap, bag, MCAP, folder) as the generic layout: velodyne/*.bin
+    /// (f32 x y z intensity) and timestamps/*.bin (f64 per-point times).
+    Convert(crate::convert::ConvertArgs),
     /// Score an estimated trajectory against ground truth (KITTI 3x4 files).
     Eval(crate::metrics::EvalArgs),
     /// Generate a LiDAR dataset with exact ground truth by ray casting a synthetic scene.
@@ -51,6 +59,9 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
     };
     let result = match cli.command {
         Command::Run(a) => crate::run::execute(&a, err),
+        Command::Live(a) => crate::live::execute(&a, err),
+        Command::Replay(a) => crate::replay::execute(&a),
+        Command::Convert(a) => crate::convert::execute(&a, err),
         Command::Eval(a) => crate::metrics::execute(&a),
         Command::Simulate(a) => crate::simulate::execute(&a),
         Command::Crosscheck(a) => crate::crosscheck::execute(&a, err),

@@ -13,6 +13,7 @@
 mod common;
 
 use common::run;
+use kiss_odom::io::pcap::{self, Datagram};
 use kiss_odom::io::poses::read_kitti;
 use kiss_odom::io::sensor_pcap::{self, SensorKind, SensorOptions};
 use kiss_odom::pose::pose_difference;
@@ -54,7 +55,7 @@ fn poses(out: &Path) -> Vec<Isometry3<f64>> {
 }
 
 /// Worst (m, deg) difference, frame by frame.
-fn worst(a: &[Isometry3<f64>], b: &[Isometry3<f64>]) -> (f64, f64) {
+fn worst_of(a: &[Isometry3<f64>], b: &[Isometry3<f64>]) -> (f64, f64) {
     assert_eq!(a.len(), b.len(), "pose counts");
     a.iter().zip(b).fold((0.0, 0.0), |(t, r), (a, b)| {
         let (dt, dr) = pose_difference(a, b);
@@ -132,7 +133,7 @@ fn run_on_the_os1_128_recording_equals_kiss_icp_fed_the_same_points_and_times() 
         let ours = run_os1(dir.path(), deskew, &[deskew, "--threads", "1"]);
         let theirs = read_kitti(&reference).unwrap();
         assert_eq!(ours.len(), sweeps.len(), "one pose per sweep");
-        let (dt, dr) = worst(&ours, &theirs);
+        let (dt, dr) = worst_of(&ours, &theirs);
         println!(
             "OS-1-128 {deskew}: {} frames, worst {dt:.2e} m / {dr:.2e} deg from kiss-icp 1.3.0 \
              (tolerance {REFERENCE_TOL_M:.0e} m)",
@@ -151,7 +152,7 @@ fn run_on_the_os1_128_recording_is_close_to_ouster_sdks_odometry() {
     let sdk =
         read_kitti(&data().join("ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")).unwrap();
     let rigid = run_os1(dir.path(), "rigid", &["--no-deskew"]);
-    let (dt, dr) = worst(&rigid, &sdk);
+    let (dt, dr) = worst_of(&rigid, &sdk);
     println!(
         "not deskewed: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses (tolerance \
          {OUSTER_SDK_TOL_M} m / {OUSTER_SDK_TOL_DEG} deg)"
@@ -161,7 +162,7 @@ fn run_on_the_os1_128_recording_is_close_to_ouster_sdks_odometry() {
     let mut measured = Vec::new();
     for instant in ["end", "middle", "start"] {
         let p = run_os1(dir.path(), instant, &["--pose-time", instant]);
-        let (dt, dr) = worst(&p, &sdk);
+        let (dt, dr) = worst_of(&p, &sdk);
         println!("deskewed, --pose-time {instant}: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses");
         measured.push((dt, dr, instant, p));
     }
@@ -256,4 +257,111 @@ fn bad_recordings_stop_run_with_the_file_and_the_reason() {
             r.stderr
         );
     }
+}
+
+#[test]
+fn convert_writes_the_decoded_sweeps_to_float32_rounding_and_run_reads_them_back() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (pcap, meta) = os1_128();
+    let out = dir.path().join("converted");
+    let (code, stderr) = common::kiss_odom(
+        [
+            "convert",
+            arg(&pcap),
+            "--meta",
+            arg(&meta),
+            "--out",
+            arg(&out),
+            "--quiet",
+        ]
+        .map(Into::into)
+        .to_vec(),
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let opts = SensorOptions {
+        meta: Some(meta),
+        ..SensorOptions::default()
+    };
+    let (sweeps, _) = sensor_pcap::read_all(&pcap, &opts).unwrap();
+    let mut worst = 0.0f64;
+    for (k, s) in sweeps.iter().enumerate() {
+        let bytes = std::fs::read(out.join(format!("velodyne/{k:06}.bin"))).unwrap();
+        let rows: Vec<[f32; 4]> = bytes
+            .chunks_exact(16)
+            .map(|c| {
+                std::array::from_fn(|i| f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().unwrap()))
+            })
+            .collect();
+        assert_eq!(rows.len(), s.points.len(), "sweep {k}: point count");
+        for ((row, p), m) in rows.iter().zip(&s.points).zip(&s.meta) {
+            for i in 0..3 {
+                // Within half an f32 ulp of the decoded f64.
+                let d = (f64::from(row[i]) - p[i]).abs();
+                assert!(
+                    d <= p[i].abs() * f64::from(f32::EPSILON) / 2.0,
+                    "sweep {k}: {d:e} m"
+                );
+                worst = worst.max(d);
+            }
+            assert_eq!(row[3], f32::from(m.intensity), "sweep {k}: intensity");
+        }
+        let t = kiss_odom::io::generic::parse_timestamps(
+            &std::fs::read(out.join(format!("timestamps/{k:06}.bin"))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(t, s.times, "sweep {k}: times");
+    }
+    println!(
+        "convert: {} sweeps, worst {worst:.2e} m from the decoder (f32 rounding)",
+        sweeps.len()
+    );
+    let from_pcap = run_os1(dir.path(), "pcap", &[]);
+    let r = run(&out, &dir.path().join("folder"), &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (dt, _) = worst_of(&poses(&r.out), &from_pcap);
+    println!("run on the converted folder: worst {dt:.2e} m from run on the pcap");
+    assert!(dt <= REFERENCE_TOL_M, "{dt:e} m");
+}
+
+#[test]
+fn a_second_sensor_on_the_port_is_a_warning_naming_the_file_and_strict_refuses_it() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let one = data().join("velodyne/velodyne_vlp16.pcap");
+    let mut d: Vec<Datagram> = pcap::open(&one).unwrap().map(Result::unwrap).collect();
+    let second: Vec<Datagram> = d
+        .iter()
+        .filter(|d| d.port == 2368 && d.payload.len() == 1206)
+        .map(|p| Datagram {
+            time_ns: p.time_ns + 300_000,
+            source: "192.168.1.202:2368".parse().unwrap(),
+            ..p.clone()
+        })
+        .collect();
+    d.extend(second);
+    d.sort_by_key(|p| p.time_ns);
+    let two = dir.path().join("two.pcap");
+    pcap::write(&two, &d, 9000).unwrap();
+    let alone = run(&one, &dir.path().join("alone"), &[]);
+    let r = run(&two, &dir.path().join("two"), &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("two.pcap: packets from 1 other sender(s)")
+            && r.stderr.contains("192.168.1.202:2368"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(
+        poses(&r.out),
+        poses(&alone.out),
+        "the first sender's sweeps"
+    );
+    let strict = run(&two, &dir.path().join("strict"), &["--strict"]);
+    assert_eq!(strict.code, 1, "{}", strict.stderr);
 }

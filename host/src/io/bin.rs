@@ -90,9 +90,16 @@ pub fn read(path: &Path) -> Result<Vec<[f64; 3]>> {
 
 /// The `.bin` bytes of `points`, narrowed to `f32`, intensity 0.
 pub fn encode(points: &[[f64; 3]]) -> Vec<u8> {
+    encode_with_intensity(points, None)
+}
+
+/// The `.bin` bytes of `points`, narrowed to `f32`, with `intensity` (one per point; 0 for
+/// points it has none for).
+pub fn encode_with_intensity(points: &[[f64; 3]], intensity: Option<&[f32]>) -> Vec<u8> {
     let mut out = Vec::with_capacity(points.len() * POINT_BYTES);
-    for p in points {
-        for v in [p[0] as f32, p[1] as f32, p[2] as f32, 0.0] {
+    for (k, p) in points.iter().enumerate() {
+        let i = intensity.and_then(|i| i.get(k)).copied().unwrap_or(0.0);
+        for v in [p[0] as f32, p[1] as f32, p[2] as f32, i] {
             out.extend_from_slice(&v.to_le_bytes());
         }
     }

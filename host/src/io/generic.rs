@@ -251,6 +251,7 @@ impl FrameSource for FileSource {
             stamps: cloud.stamps,
             time,
             warnings: Vec::new(),
+            intensity: None,
             sweep: None,
         };
         if cloud.declared > frame.points.len() {

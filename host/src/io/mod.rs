@@ -35,6 +35,8 @@ pub struct Frame {
     pub time: Option<f64>,
     /// Problems that did not stop the frame from being used (e.g. timestamps ignored).
     pub warnings: Vec<String>,
+    /// Per-point intensity (reflectivity), where the reader keeps it (sensor recordings).
+    pub intensity: Option<Vec<f32>>,
     /// For a sweep decoded from sensor packets: its packet statistics and time span.
     pub sweep: Option<sensor_pcap::SweepInfo>,
 }

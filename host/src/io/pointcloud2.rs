@@ -423,6 +423,7 @@ pub(crate) fn message_item(
                 stamps: d.stamps,
                 time: Some(cloud.stamp.seconds()),
                 warnings,
+                intensity: None,
                 sweep: None,
             })
         }

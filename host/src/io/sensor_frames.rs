@@ -73,6 +73,9 @@ impl FrameSource for SweepFrames {
             if let Some(s) = &mut frame.stamps {
                 s.truncate(self.scan_points);
             }
+            if let Some(i) = &mut frame.intensity {
+                i.truncate(self.scan_points);
+            }
         }
         if self.sweeps.exhausted() {
             let file = &self.name;

@@ -125,6 +125,7 @@ impl Sweep {
             stamps: Some(self.times),
             time: Some(self.capture_ns as f64 * 1e-9),
             warnings: Vec::new(),
+            intensity: Some(self.meta.iter().map(|m| f32::from(m.intensity)).collect()),
             sweep: Some(sweep),
         }
     }

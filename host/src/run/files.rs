@@ -102,6 +102,9 @@ pub struct FrameRow {
     pub packets_other_sensor: Option<u32>,
     /// Velodyne azimuth jumps the timestamps do not explain.
     pub azimuth_jumps: Option<u32>,
+    /// `live`: time from the sweep's last packet to its pose (ms); empty for a sweep the end
+    /// of the stream closed and for recordings.
+    pub pose_latency_ms: Option<f64>,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
     /// The core's flags, written as one column each.
@@ -150,6 +153,7 @@ impl FrameRow {
             packets_bad: None,
             packets_other_sensor: None,
             azimuth_jumps: None,
+            pose_latency_ms: None,
             deskewed: r.is_some_and(|r| r.deskewed),
             status: o.status().unwrap_or_default(),
         }
@@ -223,6 +227,18 @@ impl PacketTotals {
     }
 }
 
+impl Latency {
+    /// The statistics of `v`, `None` when it is empty.
+    pub fn of(mut v: Vec<f64>) -> Option<Self> {
+        v.sort_by(f64::total_cmp);
+        Some(Self {
+            p50: percentile(&v, 50.0),
+            p99: percentile(&v, 99.0),
+            max: *v.last()?,
+        })
+    }
+}
+
 /// `summary.json`.
 #[derive(Debug, Serialize)]
 pub struct Summary {
@@ -280,7 +296,7 @@ impl Run<'_> {
     /// was read (its header comes with the first row), the pose files and the plot when a
     /// frame was registered.
     pub fn write(&self) -> Result<Summary> {
-        let dir = &self.args.out;
+        let dir = &self.args.run.out;
         let o = self.record;
         crate::output::write(
             &dir.join("config.toml"),
@@ -323,7 +339,7 @@ impl Run<'_> {
     }
 
     fn write_poses(&self) -> Result<()> {
-        let dir = &self.args.out;
+        let dir = &self.args.run.out;
         let o = self.record;
         let kitti = io::poses::format_kitti(&o.poses);
         crate::output::write(&dir.join("poses_kitti.txt"), kitti.as_bytes())?;
@@ -362,7 +378,7 @@ impl Run<'_> {
             format!(
                 "time x y z qx qy qz qw: the sensor at the {} of each sweep (--pose-time); \
                  times: {times}",
-                self.args.pose_time.name()
+                self.args.run.pose_time.name()
             )
         } else {
             format!(
@@ -463,11 +479,7 @@ impl Run<'_> {
             } else {
                 0.0
             },
-            latency_ms: Latency {
-                p50: percentile(&lat, 50.0),
-                p99: percentile(&lat, 99.0),
-                max: lat.last().copied().unwrap_or(0.0),
-            },
+            latency_ms: Latency::of(lat.clone()).unwrap_or_default(),
             peak_rss_bytes: crate::memory::peak_rss_bytes(),
             state_bytes: d.state_bytes(),
             skipped_frames: count(RowKind::Skipped),
@@ -481,15 +493,7 @@ impl Run<'_> {
             }),
             warnings: o.warnings,
             packets: PacketTotals::of(&o.rows),
-            pose_latency_ms: (!o.pose_latency_ms.is_empty()).then(|| {
-                let mut v = o.pose_latency_ms.clone();
-                v.sort_by(f64::total_cmp);
-                Latency {
-                    p50: percentile(&v, 50.0),
-                    p99: percentile(&v, 99.0),
-                    max: v.last().copied().unwrap_or(0.0),
-                }
-            }),
+            pose_latency_ms: Latency::of(o.rows.iter().filter_map(|r| r.pose_latency_ms).collect()),
             interrupted: self.interrupted.is_some(),
             stop_reason: self.stop.clone(),
             input: serde_json::json!({
@@ -518,6 +522,12 @@ pub(super) fn print_summary(s: &Summary) {
         s.latency_ms.max,
         s.state_bytes as f64 / (1 << 20) as f64
     );
+    if let Some(l) = s.pose_latency_ms {
+        println!(
+            "last packet to pose: p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms",
+            l.p50, l.p99, l.max
+        );
+    }
     if let Some(obj) = s.metrics.as_ref().and_then(|m| m.as_object()) {
         let parts: Vec<String> = obj
             .iter()

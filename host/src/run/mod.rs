@@ -23,6 +23,7 @@ use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::stages::{se3_exp, se3_log};
 use kiss_odom_core::Flag;
+use kiss_odom_sensors::SweepEnd;
 use nalgebra::Isometry3;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -34,6 +35,20 @@ pub struct RunArgs {
     /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
     /// .mcap file, or a .pcap/.pcapng recording of Velodyne or Ouster packets.
     pub path: PathBuf,
+    /// Outputs and how the run goes.
+    #[command(flatten)]
+    pub run: RunOptions,
+    /// Input, pipeline and core options.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Rerun recording and point-cloud exports.
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// What `run` and `live` share: where the outputs go and how the run goes.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunOptions {
     /// Output folder (created if missing); the outputs of an earlier run there are replaced.
     #[arg(long)]
     pub out: PathBuf,
@@ -48,12 +63,6 @@ pub struct RunArgs {
     /// first line states it.
     #[arg(long, value_enum, default_value_t = PoseTime::End)]
     pub pose_time: PoseTime,
-    /// Input, pipeline and core options.
-    #[command(flatten)]
-    pub common: CommonArgs,
-    /// Rerun recording and point-cloud exports.
-    #[command(flatten)]
-    pub view: ViewArgs,
 }
 
 /// The instant within a sweep a pose refers to (`--pose-time`).
@@ -134,8 +143,6 @@ pub(crate) struct Record {
     pub warnings: usize,
     /// Whether the frames are sweeps decoded from sensor packets.
     pub sweeps: bool,
-    /// `live`: time from each sweep's last packet to its pose (ms).
-    pub pose_latency_ms: Vec<f64>,
 }
 
 impl Record {
@@ -162,7 +169,7 @@ pub(crate) fn execute_on(
     err: &mut dyn Write,
 ) -> Result<i32> {
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
-    crate::output::remove_stale(&args.out, &OUTPUTS)?;
+    crate::output::remove_stale(&args.run.out, &OUTPUTS)?;
     for path in crate::viz::files(&args.view) {
         crate::output::remove_stale_file(path)?;
     }
@@ -173,8 +180,8 @@ pub(crate) fn execute_on(
             .input
             .open_options(settings.capacities()?.scan_points),
     )?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("{}: cannot create output folder", args.out.display()))?;
+    std::fs::create_dir_all(&args.run.out)
+        .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
     // After the folder: a recording or cloud may be asked for inside it.
     let mut observers = crate::viz::observers(&args.view)?;
     let mut driver = Driver::new(&settings)?;
@@ -185,7 +192,6 @@ pub(crate) fn execute_on(
         indices: Vec::new(),
         warnings: 0,
         sweeps: false,
-        pose_latency_ms: Vec::new(),
     };
     let mut warn = |record: &mut Record, bar: &ProgressBar, text: &str| {
         bar.suspend(|| writeln!(err, "warning: {text}")).ok();
@@ -198,7 +204,7 @@ pub(crate) fn execute_on(
     let mut end = End::Finished;
     for w in dataset_warnings(&dataset.info) {
         warn(&mut record, &hidden, w);
-        if args.strict {
+        if args.run.strict {
             end = End::Failed(anyhow!("{w} (--strict)"));
             break;
         }
@@ -273,7 +279,7 @@ pub(crate) fn execute_on(
             return Ok(crate::interrupt::exit_status(sig));
         }
     };
-    if !args.quiet {
+    if !args.run.quiet {
         files::print_summary(&summary);
     }
     Ok(0)
@@ -310,7 +316,7 @@ fn frame_loop(
     // that has both (as the metrics re-base them).
     let mut gt_base: Option<Isometry3<f64>> = None;
     let mut frames = Selection::new(dataset.frames.as_mut(), args.common.input.range());
-    let bar = progress_bar(frames.len_hint(), args.quiet);
+    let bar = progress_bar(frames.len_hint(), args.run.quiet);
     let mut core_s = 0.0;
     let end = loop {
         if let Some(sig) = crate::interrupt::requested() {
@@ -332,7 +338,7 @@ fn frame_loop(
         for p in &problems {
             warn(record, &bar, p);
         }
-        if let (true, Some(first)) = (args.strict, problems.first()) {
+        if let (true, Some(first)) = (args.run.strict, problems.first()) {
             break End::Failed(anyhow!("{first} (--strict)"));
         }
         let (outcome, frame) = match item {
@@ -344,7 +350,7 @@ fn frame_loop(
             Err(e) => break End::Failed(e),
         };
         if let Some(report) = outcome.report() {
-            if args.strict && report.status.contains(Flag::TimestampsIgnored) {
+            if args.run.strict && report.status.contains(Flag::TimestampsIgnored) {
                 break End::Failed(anyhow!(
                     "{}: timestamps unusable ({:?}), frame not deskewed (--strict)",
                     outcome.meta.source,
@@ -366,7 +372,7 @@ fn frame_loop(
             info,
             &outcome,
             sweep.as_ref(),
-            args.pose_time,
+            args.run.pose_time,
             driver,
         );
         if mode == Mode::Live {
@@ -433,7 +439,7 @@ fn add(
 }
 
 /// `live`: prints the pose just recorded as a TUM line (flushed, for a pipe) and measures the
-/// time since its sweep's last packet.
+/// time since its sweep's last packet (for sweeps the sensor's data closed).
 fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
     let (Some(pose), Some(&index)) = (record.poses.last(), record.indices.last()) else {
         return;
@@ -447,12 +453,16 @@ fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
     let line = io::poses::format_tum(&[io::poses::TimedPose { time, pose: *pose }]);
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(line.as_bytes()).and_then(|()| out.flush());
-    if let Some(s) = sweep {
+    // A sweep the end of the stream closed was not done when its last packet came.
+    if let Some(s) = sweep.filter(|s| s.stats.end != SweepEnd::Finished) {
         let now = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos() as u64);
-        let ms = now.saturating_sub(s.last_capture_ns) as f64 * 1e-6;
-        record.pose_latency_ms.push(ms);
+        // Microseconds, as frames.csv's core latency.
+        let ms = (now.saturating_sub(s.last_capture_ns) as f64 * 1e-3).round() / 1e3;
+        if let Some(row) = record.rows.last_mut() {
+            row.pose_latency_ms = Some(ms);
+        }
     }
 }
 
