@@ -58,10 +58,12 @@ fn signal(child: &Child, name: &str) {
     assert!(ok, "kill -{name}");
 }
 
+/// Lines of a text output, its `#` comment lines (the TUM file's header) left out.
 fn lines(path: &Path) -> usize {
     std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
         .lines()
+        .filter(|l| !l.starts_with('#'))
         .count()
 }
 
