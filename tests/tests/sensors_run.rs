@@ -185,17 +185,6 @@ fn run_on_the_os1_128_recording_is_close_to_ouster_sdks_odometry() {
     );
 }
 
-/// A column of `frames.csv` (no cell of these runs holds a comma).
-fn column(out: &Path, name: &str) -> Vec<String> {
-    let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let at = header.iter().position(|h| *h == name).unwrap();
-    lines
-        .map(|l| l.split(',').nth(at).unwrap().to_string())
-        .collect()
-}
-
 #[test]
 fn frames_csv_has_the_packet_statistics_of_each_sweep() {
     if !have_data() {
@@ -207,12 +196,12 @@ fn frames_csv_has_the_packet_statistics_of_each_sweep() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     let (sweeps, _) = sensor_pcap::read_all(&pcap, &SensorOptions::default()).unwrap();
     let packets: Vec<String> = sweeps.iter().map(|s| s.stats.packets.to_string()).collect();
-    assert_eq!(column(&r.out, "packets"), packets);
+    assert_eq!(r.column("packets"), packets);
     let lost: Vec<String> = sweeps
         .iter()
         .map(|s| s.stats.lost_packets.to_string())
         .collect();
-    assert_eq!(column(&r.out, "packets_lost"), lost);
+    assert_eq!(r.column("packets_lost"), lost);
     assert_eq!(
         r.summary()["packets"]["decoded"],
         sweeps

@@ -14,17 +14,6 @@ fn sample() -> PathBuf {
     repo().join("fixtures/kitti-05-reduced")
 }
 
-/// A column of `frames.csv` by name, one cell per frame.
-fn column(out: &Path, name: &str) -> Vec<String> {
-    let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let c = header.iter().position(|h| *h == name).unwrap();
-    lines
-        .map(|l| l.split(',').nth(c).unwrap().to_string())
-        .collect()
-}
-
 /// `tests/rerun/readback.py KIND PATH` in the venv, as JSON; `None` (after printing SKIP)
 /// without `KISS_ODOM_RERUN_PYTHON`.
 fn readback(kind: &str, path: &Path) -> Option<serde_json::Value> {
@@ -59,7 +48,7 @@ fn saved_map_has_the_last_frames_map_points_in_our_readers_and_others() {
         let map = dir.path().join(name);
         let r = run(&sample(), &out, &["--save-map", map.to_str().unwrap()]);
         r.succeeded_with_frames(10);
-        let expected: usize = column(&out, "map_points").last().unwrap().parse().unwrap();
+        let expected: usize = r.column("map_points").last().unwrap().parse().unwrap();
         let ours = match name {
             "map.ply" => kiss_odom::io::ply::read(&map),
             _ => kiss_odom::io::pcd::read(&map),
