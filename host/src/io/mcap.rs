@@ -137,6 +137,11 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     })
 }
 
+/// Most bytes handed to the mcap reader per read. The reader asks for what a record header
+/// declares and grows its buffer by that much before anything is read, so a damaged length
+/// field would cost gigabytes; in pieces, its buffer grows only by bytes the file really has.
+const READ_PIECE: usize = 1 << 16;
+
 fn reader_options(limit: u64) -> LinearReaderOptions {
     LinearReaderOptions::default()
         .with_validate_chunk_crcs(true)
@@ -208,7 +213,7 @@ fn read_summary(
     while let Some(event) = reader.next_event() {
         match event? {
             SummaryReadEvent::ReadRequest(need) => {
-                let n = input.read(reader.insert(need))?;
+                let n = input.read(reader.insert(need.min(READ_PIECE)))?;
                 reader.notify_read(n);
             }
             SummaryReadEvent::SeekRequest(to) => {
@@ -228,7 +233,7 @@ fn scan(input: &mut BufReader<File>, limit: u64) -> Catalog {
     while let Some(Ok(event)) = reader.next_event() {
         match event {
             LinearReadEvent::ReadRequest(need) => {
-                let n = input.read(reader.insert(need)).unwrap_or(0);
+                let n = input.read(reader.insert(need.min(READ_PIECE))).unwrap_or(0);
                 reader.notify_read(n);
             }
             LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data) {
@@ -457,7 +462,7 @@ impl McapSource {
                         LinearReadEvent::ReadRequest(need) => {
                             let n = self
                                 .input
-                                .read(reader.insert(need))
+                                .read(reader.insert(need.min(READ_PIECE)))
                                 .with_context(|| file.clone())?;
                             reader.notify_read(n);
                         }
