@@ -32,6 +32,36 @@ pub fn kitti_copy(dir: &Path, name: &str) -> PathBuf {
     to
 }
 
+/// The real sensor recordings beside the repository (`../shared/data/sensors`).
+pub fn sensor_data() -> PathBuf {
+    repo().join("../shared/data/sensors")
+}
+
+/// Whether `file` (relative to [`sensor_data`]) is there; prints SKIP otherwise.
+pub fn have_sensor_file(file: &str) -> bool {
+    let ok = sensor_data().join(file).is_file();
+    if !ok {
+        println!("SKIP: {} not found", sensor_data().join(file).display());
+    }
+    ok
+}
+
+/// Adds a second VLP-16 on the same port to a VLP-16 recording's datagrams: each of its data
+/// packets (port 2368, 1206 bytes) again, 0.3 ms later, from 192.168.1.202; in time order.
+pub fn add_second_vlp16(d: &mut Vec<kiss_odom::io::pcap::Datagram>) {
+    let second: Vec<_> = d
+        .iter()
+        .filter(|p| p.port == 2368 && p.payload.len() == 1206)
+        .map(|p| kiss_odom::io::pcap::Datagram {
+            time_ns: p.time_ns + 300_000,
+            source: "192.168.1.202:2368".parse().unwrap(),
+            ..p.clone()
+        })
+        .collect();
+    d.extend(second);
+    d.sort_by_key(|p| p.time_ns);
+}
+
 /// What one `kiss-odom` command did.
 pub struct Run {
     /// Exit status.

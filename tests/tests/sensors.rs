@@ -10,6 +10,7 @@
 
 use kiss_odom::io::ouster_meta;
 use kiss_odom::io::sensor_pcap::{self, SensorOptions, Sweep};
+use kiss_odom_tests::{have_sensor_file, repo, sensor_data as data};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -20,14 +21,6 @@ use sensor_dump::{code, counts_of, read_dump, Key, RefPoint};
 const VELODYNE_TOL_M: f64 = 1e-4;
 const OUSTER_TOL_M: f64 = 1e-6;
 const TIME_TOL_NS: f64 = 1000.0;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn data() -> PathBuf {
-    repo().join("../shared/data/sensors")
-}
 
 /// A recording the reference script decodes: name, pcap, metadata, cut angle, and for the
 /// Velodyne variants the product and return-mode bytes written into every data packet.
@@ -237,11 +230,7 @@ fn compare(
 }
 
 fn have_data() -> bool {
-    let ok = data().join("velodyne/velodyne_vlp16.pcap").is_file();
-    if !ok {
-        println!("SKIP: {} not found", data().display());
-    }
-    ok
+    have_sensor_file("velodyne/velodyne_vlp16.pcap")
 }
 
 #[test]

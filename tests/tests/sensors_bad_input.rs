@@ -5,16 +5,10 @@ use kiss_odom::io::pcap::{self, Datagram};
 use kiss_odom::io::sensor_pcap::{self, SensorOptions};
 use std::path::{Path, PathBuf};
 
-fn data() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/sensors")
-}
+use kiss_odom_tests::{add_second_vlp16, have_sensor_file, sensor_data as data};
 
 fn have_data() -> bool {
-    let ok = data().join("velodyne/velodyne_vlp16.pcap").is_file();
-    if !ok {
-        println!("SKIP: {} not found", data().display());
-    }
-    ok
+    have_sensor_file("velodyne/velodyne_vlp16.pcap")
 }
 
 fn datagrams(path: &Path) -> Vec<Datagram> {
@@ -208,19 +202,7 @@ fn two_sensors_on_one_port_decode_one_and_report_the_other() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let path = edited(dir.path(), "two.pcap", |d| {
-        let second: Vec<Datagram> = d
-            .iter()
-            .filter(|d| is_data(d))
-            .map(|p| Datagram {
-                time_ns: p.time_ns + 300_000,
-                source: "192.168.1.202:2368".parse().unwrap(),
-                ..p.clone()
-            })
-            .collect();
-        d.extend(second);
-        d.sort_by_key(|p| p.time_ns);
-    });
+    let path = edited(dir.path(), "two.pcap", add_second_vlp16);
     let (two, report) = sensor_pcap::read_all(&path, &SensorOptions::default()).unwrap();
     let (one, _) = sensor_pcap::read_all(
         &data().join("velodyne/velodyne_vlp16.pcap"),

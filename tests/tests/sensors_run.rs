@@ -17,6 +17,7 @@ use kiss_odom::io::pcap::{self, Datagram};
 use kiss_odom::io::poses::read_kitti;
 use kiss_odom::io::sensor_pcap::{self, SensorKind, SensorOptions};
 use kiss_odom::pose::pose_difference;
+use kiss_odom_tests::{add_second_vlp16, have_sensor_file, sensor_data as data};
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -24,10 +25,6 @@ use std::process::Command;
 const REFERENCE_TOL_M: f64 = 1e-6;
 const OUSTER_SDK_TOL_M: f64 = 0.02;
 const OUSTER_SDK_TOL_DEG: f64 = 0.1;
-
-fn data() -> PathBuf {
-    common::repo().join("../shared/data/sensors")
-}
 
 fn os1_128() -> (PathBuf, PathBuf) {
     let d = data().join("ouster");
@@ -38,11 +35,7 @@ fn os1_128() -> (PathBuf, PathBuf) {
 }
 
 fn have_data() -> bool {
-    let ok = os1_128().0.is_file();
-    if !ok {
-        eprintln!("SKIP: ../shared/data/sensors is not beside the repository");
-    }
-    ok
+    have_sensor_file("ouster/OS-1-128_v2.3.0_1024x10_lb_n3.pcap")
 }
 
 fn arg(p: &Path) -> &str {
@@ -323,17 +316,7 @@ fn a_second_sensor_on_the_port_is_a_warning_naming_the_file_and_strict_refuses_i
     let dir = tempfile::tempdir().unwrap();
     let one = data().join("velodyne/velodyne_vlp16.pcap");
     let mut d: Vec<Datagram> = pcap::open(&one).unwrap().map(Result::unwrap).collect();
-    let second: Vec<Datagram> = d
-        .iter()
-        .filter(|d| d.port == 2368 && d.payload.len() == 1206)
-        .map(|p| Datagram {
-            time_ns: p.time_ns + 300_000,
-            source: "192.168.1.202:2368".parse().unwrap(),
-            ..p.clone()
-        })
-        .collect();
-    d.extend(second);
-    d.sort_by_key(|p| p.time_ns);
+    add_second_vlp16(&mut d);
     let two = dir.path().join("two.pcap");
     pcap::write(&two, &d, 9000).unwrap();
     let alone = run(&one, &dir.path().join("alone"), &[]);
