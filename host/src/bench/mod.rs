@@ -100,16 +100,16 @@ pub struct SideStats {
     pub max_any_run_ms: f64,
     /// The same percentiles of the calling thread's CPU time (ours, one thread): what the
     /// frame costs without the time other processes took the core away.
-    pub cpu: Option<CpuSpread>,
+    pub cpu: Option<Spread>,
     /// Largest peak RSS of a timed run.
     pub peak_rss_bytes: Option<u64>,
     /// Largest growth of RSS during a timed run (peak minus RSS at its start).
     pub rss_growth_bytes: Option<u64>,
 }
 
-/// Per-frame CPU-time percentiles (ms) of the per-frame median over runs.
+/// Per-frame time percentiles (ms) of the per-frame median over runs (wall-clock or CPU).
 #[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct CpuSpread {
+pub struct Spread {
     /// Median frame.
     pub p50_ms: f64,
     /// 99th percentile.
@@ -128,7 +128,7 @@ fn per_frame_medians(runs: &[&[f64]], from: usize) -> Vec<f64> {
     v
 }
 
-impl CpuSpread {
+impl Spread {
     fn of(runs: &[&[f64]], from: usize) -> Self {
         let v = per_frame_medians(runs, from);
         Self {
@@ -151,10 +151,8 @@ impl SideStats {
             .collect();
         s.fps = median(&s.fps_runs);
         let seconds: Vec<&[f64]> = runs.iter().map(|r| r.0.as_slice()).collect();
-        let per_frame = per_frame_medians(&seconds, latency_from);
-        s.p50_ms = percentile(&per_frame, 50.0);
-        s.p99_ms = percentile(&per_frame, 99.0);
-        s.max_ms = per_frame.last().copied().unwrap_or(0.0);
+        let wall = Spread::of(&seconds, latency_from);
+        (s.p50_ms, s.p99_ms, s.max_ms) = (wall.p50_ms, wall.p99_ms, wall.max_ms);
         s.max_any_run_ms = runs
             .iter()
             .flat_map(|r| r.0.iter().skip(latency_from))
@@ -424,7 +422,7 @@ fn measure(
     let mut ours = SideStats::of(&triples_ours, args.latency_from);
     if threads == 1 {
         let cpu: Vec<&[f64]> = ours_runs.iter().map(|r| r.cpu_seconds.as_slice()).collect();
-        ours.cpu = Some(CpuSpread::of(&cpu, args.latency_from));
+        ours.cpu = Some(Spread::of(&cpu, args.latency_from));
     }
     let ref_stats = reference.as_ref().map(|_| {
         let t: Vec<_> = ref_runs
@@ -523,12 +521,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cpu_spread_takes_each_frames_median_over_runs_from_the_first_counted_frame() {
+    fn spread_takes_each_frames_median_over_runs_from_the_first_counted_frame() {
         // Frame 0 is the warm-up and left out; frame 3's outlier in one run is voted down.
         let a = [9.0, 0.125, 0.25, 0.375];
         let b = [9.0, 0.375, 0.5, 4.0];
         let c = [9.0, 0.25, 0.75, 0.5];
-        let s = CpuSpread::of(&[&a, &b, &c], 1);
+        let s = Spread::of(&[&a, &b, &c], 1);
         // Medians (ms): 250, 500, 500.
         assert_eq!(
             per_frame_medians(&[&a, &b, &c], 1),
