@@ -107,6 +107,25 @@ fn skip_frame_advances_by_the_constant_velocity_model() {
 }
 
 #[test]
+fn scan_motion_is_the_model_a_scan_was_deskewed_with_not_the_one_it_produced() {
+    let s = scans();
+    let caps = caps();
+    let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut odom =
+        Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps, &mut arena[..]).unwrap();
+    assert_eq!(*odom.scan_motion(), Pose::identity());
+    for frame in &s[..5] {
+        let before = *odom.last_delta();
+        odom.register_frame(frame, None).unwrap();
+        assert_eq!(*odom.scan_motion(), before);
+    }
+    // The sensor accelerates: the model a scan started from is not the motion it found.
+    assert!(gap(odom.scan_motion(), odom.last_delta()) > 1e-3);
+    odom.reset();
+    assert_eq!(*odom.scan_motion(), Pose::identity());
+}
+
+#[test]
 fn unusable_timestamps_are_ignored_reported_and_do_not_poison_the_pose() {
     let s = scans();
     let want = run::<f64, Exact>(Config::new(RANGE), caps(), &s);

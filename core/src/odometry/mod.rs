@@ -200,6 +200,12 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     pub fn last_delta(&self) -> &Pose<T> {
         &self.last_delta
     }
+    /// The motion the last registered scan was deskewed with: the constant-velocity model
+    /// (`last_delta`) as it stood before that scan was registered. Deskewing put the sensor at
+    /// fraction `s` of that sweep at `pose * Exp((s - 1) Log(scan_motion))`.
+    pub fn scan_motion(&self) -> &Pose<T> {
+        &self.scan_motion
+    }
     /// Replaces the latest pose, from which the next scan is predicted (kiss-icp's Python
     /// users assign `last_pose`, e.g. to start at a known pose). The map stays where it is.
     /// A pose with a non-finite entry is refused (`false`) and nothing changes.

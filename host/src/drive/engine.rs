@@ -107,6 +107,8 @@ pub(super) trait Engine: Send {
     fn pose(&self) -> Isometry3<f64>;
     /// The latest motion: from the previous pose to the latest, in the previous sensor frame.
     fn last_delta(&self) -> Isometry3<f64>;
+    /// The motion the latest frame was deskewed with (the model before it was registered).
+    fn scan_motion(&self) -> Isometry3<f64>;
     /// The next frame's prediction: the latest pose moved by the latest motion.
     fn prediction(&self) -> Isometry3<f64>;
     /// The threshold's current sigma.
@@ -277,6 +279,9 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     }
     fn last_delta(&self) -> Isometry3<f64> {
         widen(self.odom.last_delta())
+    }
+    fn scan_motion(&self) -> Isometry3<f64> {
+        widen(self.odom.scan_motion())
     }
     fn prediction(&self) -> Isometry3<f64> {
         widen(&(self.odom.last_pose() * self.odom.last_delta()))

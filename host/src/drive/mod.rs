@@ -316,6 +316,11 @@ impl Driver {
     pub fn last_delta(&self) -> Isometry3<f64> {
         self.engine.last_delta()
     }
+    /// The motion the latest frame was deskewed with: the constant-velocity model before that
+    /// frame was registered.
+    pub fn scan_motion(&self) -> Isometry3<f64> {
+        self.engine.scan_motion()
+    }
     /// The constant-velocity prediction of the next frame's pose (Eq. (1)): where ICP starts.
     pub fn prediction(&self) -> Isometry3<f64> {
         self.engine.prediction()

@@ -97,8 +97,11 @@ impl PoseTime {
     }
 
     /// The pose at this instant of a sweep whose end pose is `end`, `delta` being the motion
-    /// over the sweep (the previous pose to `end`): deskewing moved every point along
-    /// `Exp((s - 1) Log(delta))` to the end, so the sensor at fraction `s` is `end` times that.
+    /// the sweep was deskewed with (the constant-velocity model before registration):
+    /// deskewing moved every point along `Exp((s - 1) Log(delta))` to the end, so the sensor at
+    /// fraction `s` is `end` times that. The map's own frames keep that convention; the motion
+    /// registration finds afterwards does not (the first deskewed frame's pose is relative to
+    /// undeskewed sweeps, which sit at their middle).
     pub fn pose(self, end: &Isometry3<f64>, delta: &Isometry3<f64>) -> Isometry3<f64> {
         if self == Self::End {
             return *end;
@@ -407,7 +410,8 @@ fn frame_loop(
 
 /// Records an outcome. A sweep decoded from packets gets its packet columns and the
 /// sensor-clock instant `pose_time` chooses; a deskewed frame's pose is moved to that instant
-/// along the motion the driver just estimated.
+/// along the motion its points were deskewed with (not the motion registration then found:
+/// on the first deskewed frame the two differ by half a sweep, see [`PoseTime::pose`]).
 fn add(
     record: &mut Record,
     info: &io::DatasetInfo,
@@ -429,7 +433,7 @@ fn add(
         record.sweeps = true;
     }
     let pose = match o.report() {
-        Some(r) if r.deskewed => pose_time.pose(&o.pose, &driver.last_delta()),
+        Some(r) if r.deskewed => pose_time.pose(&o.pose, &driver.scan_motion()),
         _ => o.pose,
     };
     record.rows.push(row);
