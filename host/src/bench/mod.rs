@@ -118,10 +118,16 @@ pub struct Spread {
     pub max_ms: f64,
 }
 
+/// The first frame the latency figures count: `from`, or the last frame of a shorter run (so
+/// every figure is taken over at least one frame, never reported as 0).
+fn first_counted(from: usize, frames: usize) -> usize {
+    from.min(frames.saturating_sub(1))
+}
+
 /// Each frame's median over the runs (ms), from frame `from` on, sorted.
 fn per_frame_medians(runs: &[&[f64]], from: usize) -> Vec<f64> {
     let n = runs.first().map_or(0, |r| r.len());
-    let mut v: Vec<f64> = (from.min(n.saturating_sub(1))..n)
+    let mut v: Vec<f64> = (first_counted(from, n)..n)
         .map(|i| median(&runs.iter().map(|r| r[i]).collect::<Vec<_>>()) * 1e3)
         .collect();
     v.sort_by(f64::total_cmp);
@@ -155,7 +161,7 @@ impl SideStats {
         (s.p50_ms, s.p99_ms, s.max_ms) = (wall.p50_ms, wall.p99_ms, wall.max_ms);
         s.max_any_run_ms = runs
             .iter()
-            .flat_map(|r| r.0.iter().skip(latency_from))
+            .flat_map(|r| r.0.iter().skip(first_counted(latency_from, r.0.len())))
             .fold(0.0f64, |a, &b| a.max(b * 1e3));
         s.peak_rss_bytes = runs.iter().filter_map(|r| r.2).max();
         s.rss_growth_bytes = runs
@@ -206,7 +212,8 @@ pub struct Report {
     pub storage: Storage,
     /// Timed runs per side.
     pub repeats: usize,
-    /// First frame in the latency statistics.
+    /// First frame in the latency statistics (`--latency-from`, or the last frame of a shorter
+    /// dataset).
     pub latency_from: usize,
     /// Ours.
     pub ours: SideStats,
@@ -484,7 +491,7 @@ fn measure(
         scalar: settings.runtime.scalar,
         storage: settings.runtime.map_storage,
         repeats: args.repeats,
-        latency_from: args.latency_from,
+        latency_from: first_counted(args.latency_from, n),
         ours,
         reference: ref_stats,
         speed_ratio,
@@ -534,5 +541,18 @@ mod tests {
         );
         assert_eq!((s.p50_ms, s.max_ms), (500.0, 500.0));
         assert_eq!(per_frame_medians(&[&a, &b, &c], 0).last(), Some(&9000.0));
+    }
+
+    #[test]
+    fn latency_from_past_the_last_frame_counts_the_last_frame_not_nothing() {
+        let run = |t: &[f64]| (t.to_vec(), None, None);
+        let s = SideStats::of(&[run(&[0.5, 0.25]), run(&[0.5, 0.125])], 10);
+        // Both figures from frame 1 alone: median 187.5 ms, worst single run 250 ms.
+        assert_eq!(
+            (s.p50_ms, s.max_ms, s.max_any_run_ms),
+            (187.5, 187.5, 250.0)
+        );
+        let s = SideStats::of(&[run(&[0.5, 0.25]), run(&[0.5, 0.125])], 0);
+        assert_eq!(s.max_any_run_ms, 500.0);
     }
 }
