@@ -6,16 +6,19 @@
 # the mean over the seeds (a single drive's error is a random walk that the packets' range
 # quantisation, 1-2 mm, already perturbs: compare means).
 #
-#   bench/sensors_pcap.sh        (DATA=target/sensors-pcap, FRAMES=500, SEEDS="1 2 3"; each
-#                                 drive, up to 1.2 GB, is removed after its runs unless KEEP=1)
+#   bench/sensors_pcap.sh        (DATA=target/sensors-pcap, FRAMES=500, SEEDS="1 2 3",
+#                                 SPECS="vlp16 urban,vlp16 fast,os1-64 urban,os1-64 fast"; each
+#                                 drive, up to 1.2 GB, is removed after its runs unless KEEP=1;
+#                                 ROWS=... appends to an earlier run's rows.tsv instead)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
 DATA=${DATA:-target/sensors-pcap}; mkdir -p "$DATA"
 FRAMES=${FRAMES:-500}
-rows="$DATA/rows.tsv"; : > "$rows"
-for spec in "vlp16 urban" "vlp16 fast" "os1-64 urban" "os1-64 fast"; do
+rows=${ROWS:-$DATA/rows.tsv}; [ -n "${ROWS:-}" ] || : > "$rows"
+IFS=, read -ra specs <<< "${SPECS:-vlp16 urban,vlp16 fast,os1-64 urban,os1-64 fast}"
+for spec in "${specs[@]}"; do
   for seed in ${SEEDS:-1 2 3}; do
     set -- $spec; d="$DATA/$1-$2-$seed"
     [ -f "$d/sim.toml" ] || $B simulate --out "$d" --frames "$FRAMES" --seed "$seed" \
