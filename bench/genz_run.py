@@ -31,12 +31,18 @@ def main():
     ap.add_argument("--no-deskew", action="store_true")
     ap.add_argument("--max-range", type=float, default=100.0)
     ap.add_argument("--min-range", type=float, default=0.0)
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a mapping field of the preset, e.g. voxel_size=1.0")
     args = ap.parse_args()
 
     config = load_config(Path(args.preset + ".yaml"))
     config.data.deskew = not args.no_deskew
     config.data.max_range = args.max_range
     config.data.min_range = args.min_range
+    for kv in args.set:
+        key, value = kv.split("=", 1)
+        kind = type(getattr(config.mapping, key))
+        setattr(config.mapping, key, kind(float(value)) if kind is int else kind(value))
     odom = GenZICP(config)
 
     frames = sorted((args.data / "velodyne").glob("*.bin"))
@@ -57,7 +63,8 @@ def main():
         spent += time.perf_counter() - t0
         poses.append(odom.last_pose[:3].reshape(-1))
     np.savetxt(args.out, np.array(poses), fmt="%.17g")
-    print(json.dumps({"frames": len(frames), "seconds": spent, "preset": args.preset}))
+    print(json.dumps({"frames": len(frames), "seconds": spent, "preset": args.preset,
+                      "set": args.set}))
 
 
 if __name__ == "__main__":
