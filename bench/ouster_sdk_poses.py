@@ -7,38 +7,41 @@ with its nominal fraction of the sweep, `linspace(0, 1, W, endpoint=False)`) and
 points to kiss-icp 0.2.10's `KissICP` with its default configuration, deskew on and off, and
 prints the worst position difference from the file.
 
-  export (in a venv with ouster-sdk 1.0.1):  python ouster_sdk_poses.py export OUT.npz
+  export (in a venv with ouster-sdk 1.0.1, decoding with tests/sensors/dump_reference.py):
+                                             python ouster_sdk_poses.py export OUT.npz
   run    (in a venv with kiss-icp 0.2.10):   python ouster_sdk_poses.py run OUT.npz
 
 bench/ouster_sdk_poses.sh makes both venvs and runs the two steps.
 """
+import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "sensors" / "ouster"
-PCAP = DATA / "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"
-META = DATA / "OS-1-128_v2.3.0_1024x10.json"
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO.parent / "shared" / "data" / "sensors" / "ouster"
+PCAP = "OS-1-128_v2.3.0_1024x10_lb_n3.pcap"
+META = "OS-1-128_v2.3.0_1024x10.json"
 POSES = DATA / "OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt"
 
 
 def export(out):
-    from ouster.sdk import open_source
-    from ouster.sdk.core import ChanField, XYZLut
+    # ouster-sdk's decoding as the decoder tests compare it (no-return pixels dropped, points in
+    # row-major image order, as kiss-icp 0.2.10's boolean mask gave them).
+    sys.path.insert(0, str(REPO / "tests" / "sensors"))
+    from dump_reference import ouster
 
-    src = open_source(str(PCAP), meta=[str(META)])
-    lut = XYZLut(src.sensor_info[0])
+    rec, counts, _ = ouster(PCAP, META)
+    width = json.loads((DATA / META).read_text())["data_format"]["columns_per_frame"]
+    nominal = np.linspace(0, 1.0, width, endpoint=False)
     arrays = {}
-    for k, frame in enumerate(src):
-        scan = frame[0] if isinstance(frame, list) else list(frame)[0]
-        rng = scan.field(ChanField.RANGE)
-        keep = rng != 0
-        arrays[f"xyz{k}"] = lut(rng)[keep]
-        nominal = np.linspace(0, 1.0, scan.w, endpoint=False)
-        arrays[f"t{k}"] = np.tile(nominal, (scan.h, 1))[keep]
+    for k in range(len(counts)):
+        sweep = rec[rec["sweep"] == k]
+        arrays[f"xyz{k}"] = np.stack([sweep["x"], sweep["y"], sweep["z"]], axis=1)
+        arrays[f"t{k}"] = nominal[sweep["column"]]
     np.savez(out, **arrays)
-    print(f"{len(arrays) // 2} sweeps exported to {out}")
+    print(f"{len(counts)} sweeps exported to {out}")
 
 
 def run(npz):
