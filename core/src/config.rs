@@ -52,8 +52,10 @@ pub struct Config<T> {
     /// information (from map voxel normals) carries less than this fraction of the strongest.
     pub degeneracy_ratio: T,
     /// What ICP does along directions the scene does not constrain: move as the reference
-    /// does ([`Degeneracy::Reference`], the default) or hold them at the constant-velocity
-    /// prediction ([`Degeneracy::Robust`]; see [`crate::FrameReport::held`]).
+    /// does ([`Degeneracy::Reference`], the default), let point-to-plane terms leave them to
+    /// the scene's sparse structure ([`Degeneracy::Robust`], see [`Config::robust`]) or hold
+    /// them at the constant-velocity prediction ([`Degeneracy::Hold`]; see
+    /// [`crate::FrameReport::held`]).
     pub degeneracy: Degeneracy,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
@@ -83,6 +85,21 @@ impl<T: Real> Config<T> {
             degeneracy_ratio: T::of(0.02),
             degeneracy: Degeneracy::Reference,
             work_budget: None,
+        }
+    }
+
+    /// Robust mode ([`Degeneracy::Robust`]) with the parameters it was measured with
+    /// (BENCHMARKS.md section 12): voxels of `r_max / 200` (point-to-plane terms need a
+    /// neighbourhood finer than a tunnel's features; on `r_max / 100` GenZ-ICP and robust
+    /// mode both lose the tunnel) and the paper's Geman-McClure scale `sigma / 3` (Eq. (10);
+    /// with kiss-icp's `sigma` the far ground's ring-to-ring matches outweigh the few poles of
+    /// an open field). The map needs about 4x the voxels of the reference's for the same range.
+    pub fn robust(max_range: T) -> Self {
+        Self {
+            voxel_size: max_range / T::of(200.0),
+            kernel_scale: T::one() / T::of(3.0),
+            degeneracy: Degeneracy::Robust,
+            ..Self::new(max_range)
         }
     }
 
@@ -171,6 +188,20 @@ impl Capacities {
         map_points: 229_376,
     };
 
+    /// Full scale for robust mode ([`Config::robust`]: `r_max` 100 m, 0.5 m voxels): an open
+    /// field's ground fills four times the voxels of [`Capacities::FULL_SCALE`]'s 1 m map.
+    /// Margins over the largest high-water marks of generated 500-frame field runs and
+    /// kitti-mini (BENCHMARKS.md section 12): merge 1.6x (39,917, KITTI 01), source 1.9x
+    /// (12,588, KITTI 01), map voxels 1.5x (108,776, field-3), map point slots 1.8x (577,594,
+    /// field-3).
+    pub const ROBUST: Self = Self {
+        scan_points: 262_144,
+        merge_points: 65_536,
+        source_points: 24_576,
+        map_voxels: 163_840,
+        map_points: 1_048_576,
+    };
+
     /// Microcontroller scale (a few MiB): `r_max` about 50 m, 1 m voxels, f32 and quantised
     /// map points.
     pub const SMALL: Self = Self {
@@ -210,5 +241,30 @@ impl Capacities {
         } else {
             Err(ConfigError::Capacity)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robust_is_the_reference_with_half_the_voxel_a_third_of_the_kernel_and_planes() {
+        let (r, n) = (Config::<f64>::robust(80.0), Config::<f64>::new(80.0));
+        assert_eq!(r.degeneracy, Degeneracy::Robust);
+        assert_eq!((r.voxel_size, n.voxel_size), (0.4, 0.8));
+        assert_eq!(r.kernel_scale, 1.0 / 3.0);
+        let back = Config {
+            voxel_size: n.voxel_size,
+            kernel_scale: n.kernel_scale,
+            degeneracy: n.degeneracy,
+            ..r
+        };
+        assert_eq!(back, n);
+        assert!(r.validate().is_ok());
+        assert!(Capacities::ROBUST.validate().is_ok());
+        // Four times the full-scale map, as the halved voxel size needs over open ground.
+        let full = Capacities::FULL_SCALE;
+        assert!(Capacities::ROBUST.map_voxels >= 4 * full.map_voxels);
     }
 }

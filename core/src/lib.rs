@@ -111,7 +111,7 @@ pub mod stages {
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
         align_points_to_map, chunks_for, moved_points, work_words, Alignment, Chunk, IcpParams,
-        CHUNK, SYSTEM_LEN,
+        CHUNK, MIN_POINTS, PLANARITY, SYSTEM_LEN,
     };
     pub use crate::robust::{min_points, weakness, Hold, Weakness};
     pub use crate::scalar::{norm_lt, sqrt_lt};

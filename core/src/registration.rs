@@ -11,6 +11,9 @@
 //! system is summed in point order and the partials are added in chunk order, so the result is
 //! bit-identical whichever [`Executor`] ran the chunks and on how many threads.
 
+use planes::{accumulate_plane, normal_at, PLANAR};
+pub use planes::{MIN_POINTS, PLANARITY};
+
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};
 use crate::robust::Hold;
@@ -22,9 +25,12 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 /// Source points per chunk: the unit of parallel work and of the fixed reduction order (chunk
 /// sums are added in chunk order whatever the thread count).
 pub const CHUNK: usize = 64;
-/// Scalars in one chunk's partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`)
-/// + correspondence count + sum of squared residuals.
-pub const SYSTEM_LEN: usize = 29;
+/// Scalars in one partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`) +
+/// correspondence count + sum of squared residuals.
+const TERMS: usize = 29;
+/// Scalars in one chunk's partial linear systems: the point-to-point terms', then the
+/// point-to-plane terms' (robust mode only, see `planes`; zero otherwise).
+pub const SYSTEM_LEN: usize = 2 * TERMS;
 /// Scalars per point kept from its last search: the answer's `x, y, z` (infinite: none), and the
 /// search's `others` and `face` bounds less the distance the point moved since (and a rounding
 /// allowance per step).
@@ -68,7 +74,7 @@ impl Executor for Sequential {
     }
 }
 
-/// ICP stopping rule, and the robust mode's hold.
+/// ICP stopping rule, and hold mode's hold.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IcpParams<T: Real> {
     /// `gamma`.
@@ -78,8 +84,11 @@ pub struct IcpParams<T: Real> {
     /// Work units (see [`crate::local_map::Nearest::work`]) the whole registration may spend;
     /// `None`: no limit. ICP stops with its last complete iterate before exceeding it.
     pub budget: Option<u64>,
-    /// Directions every step is projected off (robust mode, see `robust`); `None`: none.
+    /// Directions every step is projected off (hold mode, see `robust`); `None`: none.
     pub hold: Option<Hold<T>>,
+    /// Point-to-plane terms where the map is planar (robust mode, see `planes`); `false`:
+    /// point-to-point everywhere, as the reference.
+    pub planes: bool,
 }
 
 /// Outcome of one registration.
@@ -96,7 +105,8 @@ pub struct Alignment<T: Real> {
     /// Whether a normal-equation system could not be solved (fewer than 3 usable
     /// correspondences); the correction of that iteration is zero.
     pub singular: bool,
-    /// RMS point-to-point residual of the last iteration's correspondences (m).
+    /// RMS residual of the last iteration's correspondences (m): point-to-point, or along the
+    /// normal for point-to-plane terms.
     pub rms: T,
     /// Work spent, in units (see [`IcpParams::budget`]).
     pub work: u64,
@@ -144,8 +154,28 @@ fn accumulate<T: Real>(acc: &mut [T; SYSTEM_LEN], s: &Vector3<T>, r: &Vector3<T>
     acc[28] += r.norm_squared();
 }
 
-/// Solves `H dx = -g` from summed chunk systems; `None` if `H` is not positive definite.
-fn solve<T: Real>(sum: &[T; SYSTEM_LEN]) -> Option<Vector6<T>> {
+/// The system ICP solves from the summed chunk systems: the point-to-point one as it is when
+/// there are no planar terms (the reference), else `(1 - a) point + a plane`, `a` the share of
+/// planar correspondences (GenZ-ICP's weight, see `planes`).
+fn combine<T: Real>(sum: &[T; SYSTEM_LEN]) -> [T; TERMS] {
+    let mut out = [T::zero(); TERMS];
+    let (point, plane) = sum.split_at(PLANAR);
+    let planar = plane[27];
+    if planar <= T::zero() {
+        out.copy_from_slice(point);
+        return out;
+    }
+    let a = planar / (planar + point[27]);
+    for (o, (p, q)) in out.iter_mut().zip(point.iter().zip(plane)).take(27) {
+        *o = (T::one() - a) * *p + a * *q;
+    }
+    out[27] = point[27] + planar;
+    out[28] = point[28] + plane[28];
+    out
+}
+
+/// Solves `H dx = -g` from a combined system; `None` if `H` is not positive definite.
+fn solve<T: Real>(sum: &[T; TERMS]) -> Option<Vector6<T>> {
     let mut h = Matrix6::zeros();
     for r in 0..6 {
         for c in r..6 {
@@ -240,6 +270,7 @@ fn correspond<T: Real, P: PointCodec<T>>(
     kernel: T,
     slack: T,
     share: u64,
+    planes: bool,
 ) {
     let k2 = kernel * kernel;
     let acc = c.system;
@@ -272,8 +303,22 @@ fn correspond<T: Real, P: PointCodec<T>>(
                 used += u64::from(work);
                 if let Some((q, d2)) = found {
                     let r = moved - q.coords;
-                    let denom = kernel + d2;
-                    accumulate(acc, &moved, &r, k2 / (denom * denom));
+                    let normal = if planes {
+                        normal_at(map, &Point::from(moved))
+                    } else {
+                        None
+                    };
+                    match normal {
+                        Some(n) => {
+                            let rn = n.dot(&r);
+                            let denom = kernel + rn * rn;
+                            accumulate_plane(acc, &moved, &n, rn, k2 / (denom * denom));
+                        }
+                        None => {
+                            let denom = kernel + d2;
+                            accumulate(acc, &moved, &r, k2 / (denom * denom));
+                        }
+                    }
                 }
             }
             Err(spent) => {
@@ -410,7 +455,8 @@ fn run_iteration<T: Real, P: PointCodec<T>, E: Executor>(
         }
         exec.for_each(chunks, &|c| {
             if let Some(c) = parts(c) {
-                correspond(c, map, rot, tr, max_distance, kernel, slack, share);
+                let planes = params.planes;
+                correspond(c, map, rot, tr, max_distance, kernel, slack, share, planes);
             }
         });
         let spent: u64 = chunks
@@ -487,14 +533,15 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
             out.budget_spent = true;
             break;
         }
-        let mut sum = [T::zero(); SYSTEM_LEN];
+        let mut parts_sum = [T::zero(); SYSTEM_LEN];
         for c in chunks.iter_mut() {
             if let Some(c) = parts(c) {
-                for (a, b) in sum.iter_mut().zip(c.system.iter()) {
+                for (a, b) in parts_sum.iter_mut().zip(c.system.iter()) {
                     *a += *b;
                 }
             }
         }
+        let sum = combine(&parts_sum);
         out.iterations += 1;
         out.correspondences = sum[27].wide() as u32;
         out.rms = if sum[27] > T::zero() {
@@ -525,5 +572,6 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     out
 }
 
+mod planes;
 #[cfg(test)]
 mod tests;

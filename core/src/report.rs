@@ -33,7 +33,7 @@ pub enum Flag {
     /// ICP stopped at the frame's work budget (`Config::work_budget`) with its last complete
     /// iterate.
     Budget = 1 << 8,
-    /// Robust mode held some directions at the constant-velocity prediction (see
+    /// Hold mode held some directions at the constant-velocity prediction (see
     /// [`FrameReport::held`]).
     Held = 1 << 9,
 }
@@ -244,12 +244,12 @@ pub struct FrameReport<T: Real> {
     /// Weakest over strongest direction of the point-to-plane information sampled from map
     /// voxel normals (translation and rotation, the smaller); `None` on the first frame.
     pub observability: Option<T>,
-    /// Robust mode only: the directions held at the constant-velocity prediction (none in
-    /// reference mode).
+    /// Hold mode only: the directions held at the constant-velocity prediction (none in
+    /// the other modes).
     pub held: Held,
-    /// Robust mode only: weakest over strongest eigenvalue of the point-to-plane information
+    /// Hold mode only: weakest over strongest eigenvalue of the point-to-plane information
     /// at the prediction, for translation and for rotation (directions below
-    /// `TRANSLATION_RATIO` and `ROTATION_RATIO` are held); `None` in reference mode, on the
+    /// `TRANSLATION_RATIO` and `ROTATION_RATIO` are held); `None` in the other modes, on the
     /// first frame, or with nothing measured.
     pub weak_ratios: Option<[T; 2]>,
     /// Points given.

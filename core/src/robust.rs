@@ -1,9 +1,11 @@
-//! Robust registration for degenerate scenes (opt-in: [`Degeneracy::Robust`]).
+//! Registration modes for degenerate scenes ([`Degeneracy`]) and the hold of weak directions
+//! ([`Degeneracy::Hold`], issue 17's candidate (a), kept for comparison; robust mode itself,
+//! [`Degeneracy::Robust`], is point-to-plane terms, see `registration::planes`).
 //!
 //! Step 4 (Sec. III-E) moves the pose along every direction its point-to-point normal
 //! equations allow, and those equations cannot tell a corridor from a street (see
 //! `degeneracy`): in a tunnel or over a lone ground plane ICP slides along the directions the
-//! scene does not constrain. In robust mode, before ICP, the point-to-plane information of the
+//! scene does not constrain. In hold mode, before ICP, the point-to-plane information of the
 //! registration points at the constant-velocity prediction is measured from the shapes of
 //! well-filled map voxels (`degeneracy::information`) and taken in the predicted sensor frame.
 //! Translation directions weaker than [`TRANSLATION_RATIO`] of the strongest translation, and
@@ -33,16 +35,21 @@ pub enum Degeneracy {
     /// As kiss-icp 1.3.0: ICP moves the pose along every direction (bit-identical to it).
     #[default]
     Reference,
-    /// Directions the scene does not constrain are held at the constant-velocity prediction
-    /// (see the module doc); for tunnels, corridors, long walls, open ground.
+    /// Point-to-plane terms wherever the map around a registration point is planar, from the
+    /// second frame on (GenZ-ICP's, see `registration::planes`), so sparse structure moves the
+    /// pose along walls and ground; for tunnels, corridors, long walls, open ground. Nothing is
+    /// held.
     Robust,
+    /// Issue 17's candidate (a), kept for comparison: directions the scene does not constrain
+    /// are held at the constant-velocity prediction (see the module doc).
+    Hold,
 }
 
 /// Names of the predicted sensor frame's axes in twist order, as [`Held`] and `frames.csv`
 /// give them: translations along x, y, z, then rotations about x (roll), y (pitch), z (yaw).
 pub const AXES: [&str; 6] = ["tx", "ty", "tz", "roll", "pitch", "yaw"];
 
-/// What robust mode held in a frame: how many eigen-directions, and which sensor axes lie
+/// What hold mode held in a frame: how many eigen-directions, and which sensor axes lie
 /// mostly (at least half their squared length) in the held subspace.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -92,7 +99,7 @@ impl core::fmt::Display for Held {
     }
 }
 
-/// The projection robust mode applies in one frame.
+/// The projection hold mode applies in one frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hold<T: Real> {
     /// Projector on ICP's steps (twists about the world origin, left-multiplied).
@@ -122,7 +129,7 @@ impl<T: Real> Hold<T> {
     }
 }
 
-/// Robust mode's finding for a frame: the hold (if any direction is weak) and, for translation
+/// Hold mode's finding for a frame: the hold (if any direction is weak) and, for translation
 /// and rotation, the weakest over the strongest eigenvalue of the information.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Weakness<T: Real> {
@@ -192,7 +199,7 @@ pub fn weakness<T: Real, P: PointCodec<T>>(
     info.map_or(Weakness::NONE, |info| decide(&info, prediction))
 }
 
-/// Map points a voxel needs before robust mode reads its shape: more than one sweep can put
+/// Map points a voxel needs before hold mode reads its shape: more than one sweep can put
 /// there. A sweep adds at most `(1 / alpha)^2` points to a voxel's worth of surface (one per
 /// `alpha v` merge voxel), and what a single sweep leaves, sparse at range, is one ring arc or
 /// scan column whose shape is the scan pattern's, not the scene's (a column on a wall seen at
@@ -281,7 +288,7 @@ fn hold_of<T: Real>(body: Matrix6<T>, held: Held, prediction: &Pose<T>) -> Hold<
 }
 
 /// Eigenvalues and eigenvectors (columns) of the symmetric `a` by cyclic Jacobi rotations.
-fn jacobi_eigen<T: Real>(mut a: Matrix3<T>) -> (Vector3<T>, Matrix3<T>) {
+pub(crate) fn jacobi_eigen<T: Real>(mut a: Matrix3<T>) -> (Vector3<T>, Matrix3<T>) {
     let mut v = Matrix3::identity();
     let scale = a.iter().fold(T::zero(), |m, x| m.max(x.abs()));
     let tiny = T::EPS * T::EPS * scale * scale;

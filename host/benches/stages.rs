@@ -164,6 +164,7 @@ fn stages(c: &mut Criterion) {
         max_iterations: 1,
         budget: None,
         hold: None,
+        planes: false,
     };
     g.bench_function("icp_iteration", |b| {
         b.iter(|| {
@@ -184,6 +185,7 @@ fn stages(c: &mut Criterion) {
         max_iterations: cfg.max_iterations,
         budget: None,
         hold: None,
+        planes: false,
     };
     let guess = rec.guesses[UNDER_TEST];
     g.bench_function("registration", |b| {

@@ -125,7 +125,8 @@ pub struct PipelineArgs {
     #[arg(long, overrides_with = "deskew")]
     pub no_deskew: bool,
     /// Registration along directions the scene does not constrain: `reference` (kiss-icp) or
-    /// `robust` (held at the constant-velocity prediction) [default: reference].
+    /// `robust` (held at the constant-velocity prediction) or `planes` (point-to-plane terms
+    /// where robust mode finds a weak direction) [default: reference].
     #[arg(long, value_enum)]
     pub degeneracy: Option<DegeneracyMode>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that

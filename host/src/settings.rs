@@ -37,6 +37,9 @@ pub enum DegeneracyMode {
     /// Hold unconstrained directions at the constant-velocity prediction (corridors, tunnels,
     /// open ground).
     Robust,
+    /// Point-to-plane terms where the map is planar, in frames `robust` finds weak (issue 17's
+    /// candidate (b)).
+    Planes,
 }
 
 impl From<DegeneracyMode> for Degeneracy {
@@ -44,6 +47,7 @@ impl From<DegeneracyMode> for Degeneracy {
         match m {
             DegeneracyMode::Reference => Degeneracy::Reference,
             DegeneracyMode::Robust => Degeneracy::Robust,
+            DegeneracyMode::Planes => Degeneracy::Planes,
         }
     }
 }

@@ -265,6 +265,7 @@ impl Registration {
                 max_iterations: max_num_iterations,
                 budget: None,
                 hold: None,
+                planes: false,
             },
             pool: Pool::new(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?,
         })

@@ -455,6 +455,7 @@ fn registration_converges_to_the_reference_pose() {
         max_iterations: reg["max_iterations"].as_u64().unwrap() as u32,
         budget: None,
         hold: None,
+        planes: false,
     };
     let map = registration_map(&m, &input, input.len());
     let mut worst = (0.0f64, 0.0f64);

@@ -187,6 +187,45 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
 }
 
 impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
+    /// Number of points and their covariance in the 27 voxels around `p` (GenZ-ICP's
+    /// neighbourhood), visited in `NEIGHBOUR_SHIFTS` order; `None` without any point.
+    pub fn neighbourhood_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
+        let key = point_to_voxel(p, self.st.voxel_size);
+        let mut slots = [usize::MAX; 27];
+        for (k, s) in NEIGHBOUR_SHIFTS.iter().enumerate() {
+            let nk = [
+                key[0].wrapping_add(s[0]),
+                key[1].wrapping_add(s[1]),
+                key[2].wrapping_add(s[2]),
+            ];
+            if let Some(slot) = self.find(&nk) {
+                slots[k] = slot;
+            }
+        }
+        let mut n = 0usize;
+        let mut mean = nalgebra::Vector3::zeros();
+        for &slot in slots.iter().filter(|&&s| s != usize::MAX) {
+            self.for_each_in(slot, |q| {
+                mean += q.coords;
+                n += 1;
+                true
+            });
+        }
+        if n == 0 {
+            return None;
+        }
+        mean /= T::of(n as f64);
+        let mut cov = nalgebra::Matrix3::zeros();
+        for &slot in slots.iter().filter(|&&s| s != usize::MAX) {
+            self.for_each_in(slot, |q| {
+                let d = q.coords - mean;
+                cov += d * d.transpose();
+                true
+            });
+        }
+        Some((n, cov / T::of(n as f64)))
+    }
+
     /// Number of points and their covariance in the voxel holding `p`, if it exists.
     pub fn voxel_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
         let slot = self.find(&point_to_voxel(p, self.st.voxel_size))?;

@@ -79,10 +79,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
         // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
         let first_frame = map.view().is_empty();
-        // Robust mode holds weak directions at the prediction once there is one: the second
-        // frame's is standing still, whatever the sensor does.
+        // Hold mode looks for weak directions once there is a prediction: the second frame's
+        // is standing still, whatever the sensor does.
         let weak = match cfg.degeneracy {
-            Degeneracy::Robust if !first_frame && self.frames >= 2 => weakness(
+            Degeneracy::Hold if !first_frame && self.frames >= 2 => weakness(
                 &map.view(),
                 source,
                 &prediction,
@@ -91,6 +91,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             ),
             _ => Weakness::NONE,
         };
+        // Robust mode's plane terms from the first registration on: the second sweep's rings
+        // land elsewhere on the ground as soon as the sensor pitches.
+        let planes = cfg.degeneracy == Degeneracy::Robust;
         let icp = align_points_to_map(
             exec,
             source,
@@ -99,7 +102,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             &prediction,
             max_distance,
             cfg.kernel_scale * sigma,
-            &icp_params(&cfg, &prediction, &weak),
+            &icp_params(&cfg, &prediction, &weak, planes),
         );
         let (pose, finite) = finite_or(weak.apply(&prediction, icp.pose), prediction);
         let observability = if first_frame {
@@ -236,13 +239,19 @@ fn downsample<T: Real>(
 /// 10 km, far under gamma = 1e-4, so results are the reference's; in f32 it passes gamma once
 /// `|t| + r_max` exceeds about 105 m, and without it ICP ran to the iteration cap on most frames
 /// beyond 600 m from the start (tests/tests/long_run.rs).
-fn icp_params<T: Real>(cfg: &Config<T>, prediction: &Pose<T>, weak: &Weakness<T>) -> IcpParams<T> {
+fn icp_params<T: Real>(
+    cfg: &Config<T>,
+    prediction: &Pose<T>,
+    weak: &Weakness<T>,
+    planes: bool,
+) -> IcpParams<T> {
     let reach = prediction.translation.vector.norm() + cfg.max_range;
     IcpParams {
         convergence_criterion: cfg.convergence_criterion.max(T::of(8.0) * T::EPS * reach),
         max_iterations: cfg.max_iterations,
         budget: cfg.work_budget,
         hold: weak.hold,
+        planes,
     }
 }
 

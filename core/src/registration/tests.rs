@@ -46,6 +46,7 @@ fn params() -> IcpParams<f64> {
         max_iterations: 500,
         budget: None,
         hold: None,
+        planes: false,
     }
 }
 
@@ -116,6 +117,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
         max_iterations: 2,
         budget: None,
         hold: None,
+        planes: false,
     };
     let a = align_points_to_map(
         &Sequential,

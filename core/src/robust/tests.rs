@@ -19,7 +19,7 @@ fn prediction<T: Real>() -> Pose<T> {
 }
 
 /// The correction `prediction^-1 pose`'s twist along the corridor (world x seen from the
-/// predicted sensor), in m: what robust mode holds.
+/// predicted sensor), in m: what hold mode holds.
 fn along_axis<T: Real>(prediction: &Pose<T>, pose: &Pose<T>) -> T {
     let xi = se3_log(&(prediction.inverse() * pose));
     let axis = prediction.rotation.inverse() * Vector3::x();
@@ -116,7 +116,7 @@ const MAP_WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(VOXELS, POINT
 const N: usize = 6000;
 const WORK_WORDS: usize = crate::registration::work_words::<f64>(N);
 
-/// On a structured yard, robust mode ends within the prediction's error along what it holds of
+/// On a structured yard, hold mode ends within the prediction's error along what it holds of
 /// the reference's pose (the yard's floor outweighs its walls, so its weakest translation reads
 /// below `TRANSLATION_RATIO` and may be held), and both within a micrometre elsewhere.
 #[test]
@@ -149,6 +149,7 @@ fn a_structured_yard_gives_the_reference_pose_within_the_prediction_error() {
             max_iterations: 500,
             budget: None,
             hold,
+            planes: false,
         };
         align_points_to_map(
             &Sequential,

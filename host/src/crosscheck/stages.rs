@@ -518,6 +518,7 @@ fn map_and_registration(
         max_iterations: cfg.max_iterations,
         budget: None,
         hold: None,
+        planes: false,
     };
     for ((what, g, sg), file) in runs.iter().zip(&reg_files) {
         let want = pose_of(&matrix_of(&read_json(file)?["pose"])?);
