@@ -107,8 +107,8 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 }
 
 /// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
-/// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels), in robust mode
-/// under the `robust` feature.
+/// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels); under the
+/// `robust` feature, robust mode with its kernel (`Config::robust`) on those voxels.
 pub fn config() -> Config<Scalar> {
     let base = if cfg!(any(feature = "tiny", feature = "packets")) {
         Config::tiny()
@@ -118,12 +118,18 @@ pub fn config() -> Config<Scalar> {
             ..Config::new(frames::MAX_RANGE as Scalar)
         }
     };
+    let robust = Config::<Scalar>::robust(frames::MAX_RANGE as Scalar);
     Config {
         work_budget: frames::BUDGET,
         degeneracy: if cfg!(feature = "robust") {
-            Degeneracy::Robust
+            robust.degeneracy
         } else {
             Degeneracy::Reference
+        },
+        kernel_scale: if cfg!(feature = "robust") {
+            robust.kernel_scale
+        } else {
+            base.kernel_scale
         },
         ..base
     }

@@ -124,9 +124,10 @@ pub struct PipelineArgs {
     /// Do not deskew.
     #[arg(long, overrides_with = "deskew")]
     pub no_deskew: bool,
-    /// Registration along directions the scene does not constrain: `reference` (kiss-icp) or
-    /// `robust` (held at the constant-velocity prediction) or `planes` (point-to-plane terms
-    /// where robust mode finds a weak direction) [default: reference].
+    /// Registration along directions the scene does not constrain: `reference` (kiss-icp),
+    /// `robust` (point-to-plane terms where the map is planar, for tunnels, corridors and open
+    /// ground; unless given, voxel size max_range/200, kernel_scale 1/3 and larger map
+    /// capacities) or `hold` (held at the constant-velocity prediction) [default: reference].
     #[arg(long, value_enum)]
     pub degeneracy: Option<DegeneracyMode>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that

@@ -34,12 +34,12 @@ pub enum DegeneracyMode {
     /// As kiss-icp 1.3.0 (default).
     #[default]
     Reference,
-    /// Hold unconstrained directions at the constant-velocity prediction (corridors, tunnels,
-    /// open ground).
+    /// Point-to-plane terms where the map is planar (tunnels, corridors, long walls, open
+    /// ground); with its own defaults for the voxel size, kernel and capacities.
     Robust,
-    /// Point-to-plane terms where the map is planar, in frames `robust` finds weak (issue 17's
-    /// candidate (b)).
-    Planes,
+    /// Hold unconstrained directions at the constant-velocity prediction (issue 17's candidate
+    /// (a), kept for comparison).
+    Hold,
 }
 
 impl From<DegeneracyMode> for Degeneracy {
@@ -47,7 +47,7 @@ impl From<DegeneracyMode> for Degeneracy {
         match m {
             DegeneracyMode::Reference => Degeneracy::Reference,
             DegeneracyMode::Robust => Degeneracy::Robust,
-            DegeneracyMode::Planes => Degeneracy::Planes,
+            DegeneracyMode::Hold => Degeneracy::Hold,
         }
     }
 }
@@ -68,7 +68,7 @@ pub struct Data {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Mapping {
-    /// Voxel size `v` (m); omitted means `max_range / 100`.
+    /// Voxel size `v` (m); omitted means `max_range / 100` (`max_range / 200` in robust mode).
     pub voxel_size: Option<f64>,
     /// `N_max`.
     pub max_points_per_voxel: u32,
@@ -96,14 +96,15 @@ pub struct Registration {
     pub max_num_iterations: u32,
     /// `gamma`.
     pub convergence_criterion: f64,
-    /// Geman-McClure scale as a multiple of sigma (reference 1, paper 1/3).
-    pub kernel_scale: f64,
+    /// Geman-McClure scale as a multiple of sigma (reference 1, paper 1/3); omitted means 1
+    /// (1/3 in robust mode).
+    pub kernel_scale: Option<f64>,
     /// Correspondence threshold as a multiple of sigma.
     pub max_correspondence_factor: f64,
     /// Observability ratio below which a frame is flagged degenerate (and, in robust mode,
     /// below which a direction is held).
     pub degeneracy_ratio: f64,
-    /// `reference` or `robust`.
+    /// `reference`, `robust` or `hold`.
     pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
     /// none, the reference's behaviour.
@@ -192,7 +193,7 @@ impl Default for Registration {
         Self {
             max_num_iterations: 500,
             convergence_criterion: 1e-4,
-            kernel_scale: 1.0,
+            kernel_scale: None,
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
             degeneracy: DegeneracyMode::Reference,
@@ -240,14 +241,49 @@ impl Settings {
     pub fn to_toml(&self) -> Result<String> {
         let mut s = self.clone();
         s.mapping.voxel_size = Some(self.voxel_size());
+        s.registration.kernel_scale = Some(self.kernel_scale());
+        s.capacities = self.caps().into();
         Ok(toml::to_string(&s)?)
     }
 
-    /// `v`: explicit, or `max_range / 100` as in the paper.
+    /// `v`: explicit, or `max_range / 100` as in the paper (`Config::robust`'s
+    /// `max_range / 200` in robust mode).
     pub fn voxel_size(&self) -> f64 {
         self.mapping
             .voxel_size
-            .unwrap_or(self.data.max_range / 100.0)
+            .unwrap_or_else(|| self.mode_defaults().voxel_size)
+    }
+
+    /// The Geman-McClure scale over sigma: explicit, or 1 as kiss-icp (`Config::robust`'s 1/3
+    /// in robust mode).
+    pub fn kernel_scale(&self) -> f64 {
+        self.registration
+            .kernel_scale
+            .unwrap_or_else(|| self.mode_defaults().kernel_scale)
+    }
+
+    /// The core's defaults for the degeneracy mode and range.
+    fn mode_defaults(&self) -> Config<f64> {
+        match self.registration.degeneracy {
+            DegeneracyMode::Robust => Config::robust(self.data.max_range),
+            _ => Config::new(self.data.max_range),
+        }
+    }
+
+    /// The capacities given, where the defaults (`FULL_SCALE`) become `Capacities::ROBUST` in
+    /// robust mode (its finer map needs more voxels).
+    fn caps(&self) -> Capacities {
+        let c = &self.capacities;
+        if self.registration.degeneracy == DegeneracyMode::Robust && *c == Caps::default() {
+            return Capacities::ROBUST;
+        }
+        Capacities {
+            scan_points: c.scan_points,
+            merge_points: c.merge_points,
+            source_points: c.source_points,
+            map_voxels: c.map_voxels,
+            map_points: c.map_points,
+        }
     }
 
     /// The core's configuration in scalar `T`; [`Self::validate`] names the setting at fault.
@@ -263,7 +299,7 @@ impl Settings {
         c.convergence_criterion = T::of(self.registration.convergence_criterion);
         c.max_iterations = self.registration.max_num_iterations;
         c.deskew = self.data.deskew;
-        c.kernel_scale = T::of(self.registration.kernel_scale);
+        c.kernel_scale = T::of(self.kernel_scale());
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
         c.degeneracy = self.registration.degeneracy.into();
@@ -276,14 +312,7 @@ impl Settings {
 
     /// The core's capacities.
     pub fn capacities(&self) -> Result<Capacities> {
-        let c = &self.capacities;
-        let caps = Capacities {
-            scan_points: c.scan_points,
-            merge_points: c.merge_points,
-            source_points: c.source_points,
-            map_voxels: c.map_voxels,
-            map_points: c.map_points,
-        };
+        let caps = self.caps();
         if let Err(e) = caps.validate() {
             bail!("invalid capacities: {e}");
         }
@@ -324,10 +353,16 @@ impl Settings {
     /// take (it takes the range, voxel size and deskewing; capacities and the degeneracy ratio
     /// are ours alone and do not change poses).
     pub fn changed_beyond_reference(&self) -> Vec<&'static str> {
-        let defaults = Settings::default();
+        // A kernel scale written out (as `run` does) is not a change when it is the default's.
+        let resolved = |s: &Settings| {
+            let mut s = s.clone();
+            s.registration.kernel_scale = Some(s.kernel_scale());
+            s
+        };
+        let (this, defaults) = (resolved(self), resolved(&Settings::default()));
         fields()
             .iter()
-            .filter(|f| !f.reference_takes && (f.show)(self) != (f.show)(&defaults))
+            .filter(|f| !f.reference_takes && (f.show)(&this) != (f.show)(&defaults))
             .map(|f| f.name)
             .collect()
     }
@@ -428,7 +463,52 @@ mod tests {
         );
         let d = Settings::default().core_config::<f64>().unwrap();
         assert_eq!(d.degeneracy, Degeneracy::Reference);
+        let h: Settings = toml::from_str("[registration]\ndegeneracy = \"hold\"\n").unwrap();
+        assert_eq!(h.core_config::<f64>().unwrap().degeneracy, Degeneracy::Hold);
         assert!(toml::from_str::<Settings>("[registration]\ndegeneracy = \"on\"\n").is_err());
+    }
+
+    #[test]
+    fn robust_mode_brings_its_defaults_and_keeps_what_is_given() {
+        let robust = |text: &str| {
+            let s: Settings =
+                toml::from_str(&format!("[registration]\ndegeneracy = \"robust\"\n{text}"))
+                    .unwrap();
+            (s.core_config::<f64>().unwrap(), s.capacities().unwrap())
+        };
+        let (c, caps) = robust("");
+        assert_eq!(c, Config::robust(100.0));
+        assert_eq!((c.voxel_size, c.kernel_scale), (0.5, 1.0 / 3.0));
+        assert_eq!(caps, Capacities::ROBUST);
+        let (c, caps) = robust(
+            "kernel_scale = 1.0\n[mapping]\nvoxel_size = 0.7\n[capacities]\nmap_voxels = 5000\n",
+        );
+        assert_eq!((c.voxel_size, c.kernel_scale), (0.7, 1.0));
+        assert_eq!(caps.map_voxels, 5000);
+        assert_eq!(caps.map_points, Capacities::FULL_SCALE.map_points);
+        // Reference mode keeps kiss-icp's.
+        let d = Settings::default();
+        assert_eq!(d.core_config::<f64>().unwrap(), Config::new(100.0));
+        assert_eq!(d.capacities().unwrap(), Capacities::FULL_SCALE);
+        // Written out, the robust defaults are explicit and load back to the same.
+        let s: Settings = toml::from_str("[registration]\ndegeneracy = \"robust\"\n").unwrap();
+        let back: Settings = toml::from_str(&s.to_toml().unwrap()).unwrap();
+        assert_eq!(
+            back.core_config::<f64>().unwrap(),
+            s.core_config::<f64>().unwrap()
+        );
+        assert_eq!(back.capacities().unwrap(), Capacities::ROBUST);
+    }
+
+    #[test]
+    fn a_written_default_kernel_is_no_change_from_the_reference() {
+        let mut s = Settings::default();
+        s.registration.kernel_scale = Some(1.0);
+        assert!(s.changed_beyond_reference().is_empty());
+        s.registration.kernel_scale = Some(0.5);
+        assert_eq!(s.changed_beyond_reference(), ["registration.kernel_scale"]);
+        let written: Settings = toml::from_str(&Settings::default().to_toml().unwrap()).unwrap();
+        assert!(written.changed_beyond_reference().is_empty());
     }
 
     #[test]
@@ -446,7 +526,7 @@ mod tests {
             edit(&mut s);
             format!("{:#}", s.validate().unwrap_err())
         };
-        let m = msg(|s| s.registration.kernel_scale = 0.0);
+        let m = msg(|s| s.registration.kernel_scale = Some(0.0));
         assert!(m.starts_with("registration.kernel_scale = 0.0: "), "{m}");
         let m = msg(|s| s.data.min_range = 200.0);
         assert!(m.starts_with("data.min_range = 200.0: "), "{m}");

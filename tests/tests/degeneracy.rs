@@ -1,11 +1,13 @@
-//! Robust mode (`--degeneracy robust`, issue 17) end to end on generated data: in the corridor
-//! it holds the axis (`frames.csv` says so) and the pose along it is the constant-velocity
-//! prediction, where reference mode moves; on an urban street it holds nothing and gives the
-//! reference's poses bit for bit.
+//! The degeneracy modes (issue 17) end to end on generated data. Robust mode
+//! (`--degeneracy robust`, point-to-plane terms) follows a tunnel and an open field from a
+//! standing start where reference mode stays stuck or turns away, and holds nothing. Hold mode
+//! (`--degeneracy hold`): in the corridor it holds the axis (`frames.csv` says so) and the pose
+//! along it is the constant-velocity prediction, where reference mode moves; on an urban street
+//! it holds nothing and gives the reference's poses bit for bit.
 
 mod common;
 
-use common::{run, RunExt};
+use common::{distance, run, RunExt};
 use nalgebra::Matrix4;
 use std::ffi::OsString;
 use std::path::Path;
@@ -29,12 +31,58 @@ fn simulate(dir: &Path, profile: &str, frames: usize) {
     assert_eq!(code, 0, "simulate failed: {err}");
 }
 
-/// Simulates `frames` of `profile` in `dir` and runs reference and robust mode on them.
-fn both_modes(dir: &Path, profile: &str, frames: usize) -> (common::Run, common::Run) {
+/// Simulates `frames` of `profile` in `dir` and runs reference mode and `other` on them.
+fn both_modes(dir: &Path, profile: &str, frames: usize, other: &str) -> (common::Run, common::Run) {
     let data = dir.join(profile);
     simulate(&data, profile, frames);
     let mode = |m| run(&data, &dir.join(m), &["--threads", "1", "--degeneracy", m]);
-    (mode("reference"), mode("robust"))
+    (mode("reference"), mode(other))
+}
+
+/// Worst position error of a run's poses against the simulator's (m).
+fn worst_error(data: &Path, r: &common::Run) -> f64 {
+    let truth = kiss_odom::io::poses::read_kitti_matrices(&data.join("poses.txt")).unwrap();
+    let est = r.poses();
+    assert_eq!(truth.len(), est.len());
+    est.iter()
+        .zip(&truth)
+        .map(|(e, t)| distance(t, e))
+        .fold(0.0, f64::max)
+}
+
+/// Robust mode on `profile` from a standing start: its worst position error, and reference
+/// mode's, over `frames`.
+fn robust_and_reference(profile: &str, frames: usize) -> (f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let (reference, robust) = both_modes(dir.path(), profile, frames, "robust");
+    reference.succeeded_with_frames(frames);
+    robust.succeeded_with_frames(frames);
+    assert!(
+        held(&robust.out).iter().all(|h| h.is_empty()),
+        "robust mode holds nothing"
+    );
+    let data = dir.path().join(profile);
+    (worst_error(&data, &robust), worst_error(&data, &reference))
+}
+
+#[test]
+fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
+    let (robust, reference) = robust_and_reference("tunnel", 80);
+    println!(
+        "tunnel, 80 frames: worst position error robust {robust:.3} m (tol: a fifth of \
+         reference mode's), reference {reference:.3} m"
+    );
+    assert!(robust < 0.2 * reference);
+}
+
+#[test]
+fn robust_mode_follows_an_open_field_where_reference_mode_turns_away() {
+    let (robust, reference) = robust_and_reference("field", 80);
+    println!(
+        "field, 80 frames: worst position error robust {robust:.3} m (tol: half of reference \
+         mode's), reference {reference:.3} m"
+    );
+    assert!(robust < 0.5 * reference);
 }
 
 /// The `held_axes` column of `frames.csv`.
@@ -63,9 +111,9 @@ fn correction(poses: &[Matrix4<f64>], k: usize) -> [f64; 3] {
 }
 
 #[test]
-fn the_corridor_axis_is_held_at_the_prediction_where_reference_mode_moves() {
+fn hold_mode_holds_the_corridor_axis_at_the_prediction_where_reference_mode_moves() {
     let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), "corridor", 60);
+    let (reference, robust) = both_modes(dir.path(), "corridor", 60, "hold");
     reference.succeeded_with_frames(60);
     robust.succeeded_with_frames(60);
     let held = held(&robust.out);
@@ -102,14 +150,14 @@ fn the_corridor_axis_is_held_at_the_prediction_where_reference_mode_moves() {
 }
 
 #[test]
-fn an_urban_street_holds_nothing_and_gives_the_reference_poses() {
+fn on_an_urban_street_hold_mode_holds_nothing_and_gives_the_reference_poses() {
     let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), "urban", 40);
+    let (reference, robust) = both_modes(dir.path(), "urban", 40, "hold");
     let read = |r: &common::Run| std::fs::read(r.out.join("poses_kitti.txt")).unwrap();
     assert!(held(&robust.out).iter().all(|h| h.is_empty()));
     assert_eq!(
         read(&reference),
         read(&robust),
-        "robust mode changed an urban run"
+        "hold mode changed an urban run"
     );
 }
