@@ -237,11 +237,11 @@ impl Settings {
         toml::from_str(&text).with_context(|| format!("{}: invalid configuration", path.display()))
     }
 
-    /// The TOML text of these settings, with the voxel size made explicit.
+    /// The TOML text of these settings, with the voxel size and capacities made explicit (an
+    /// omitted kernel scale stays omitted: it follows the degeneracy mode).
     pub fn to_toml(&self) -> Result<String> {
         let mut s = self.clone();
         s.mapping.voxel_size = Some(self.voxel_size());
-        s.registration.kernel_scale = Some(self.kernel_scale());
         s.capacities = self.caps().into();
         Ok(toml::to_string(&s)?)
     }
@@ -452,6 +452,10 @@ mod tests {
         assert_eq!(back.data, s.data);
         assert_eq!(back.runtime, s.runtime);
         assert_eq!(back.capacities, s.capacities);
+        // An omitted kernel stays omitted (it follows the mode), so the text loads back to the
+        // same settings as the ones written: the Python bindings compare them.
+        assert_eq!(back.registration, s.registration);
+        assert_eq!(back.registration.kernel_scale, None);
     }
 
     #[test]
