@@ -205,7 +205,10 @@ pub fn weakness<T: Real, P: PointCodec<T>>(
 /// scan column whose shape is the scan pattern's, not the scene's (a column on a wall seen at
 /// grazing incidence looks like a plane across the corridor).
 pub fn min_points<T: Real>(alpha: T) -> usize {
-    let per_sweep = (T::one() / alpha).powi(2).wide();
+    // A product, not `powi`: `powi` is not correctly rounded (nor the same on every target;
+    // Miri perturbs it), and `(1 / 0.5)^2` must be 4 exactly.
+    let inv = T::one() / alpha;
+    let per_sweep = (inv * inv).wide();
     if per_sweep.is_finite() && per_sweep < 1e6 {
         per_sweep as usize + 1
     } else {
