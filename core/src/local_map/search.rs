@@ -191,20 +191,34 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
     /// neighbourhood), visited in `NEIGHBOUR_SHIFTS` order; `None` without any point.
     pub fn neighbourhood_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
         let key = point_to_voxel(p, self.st.voxel_size);
-        let mut slots = [usize::MAX; 27];
-        for (k, s) in NEIGHBOUR_SHIFTS.iter().enumerate() {
+        let mut slots = [0usize; 27];
+        let mut found = 0;
+        for s in NEIGHBOUR_SHIFTS.iter() {
             let nk = [
                 key[0].wrapping_add(s[0]),
                 key[1].wrapping_add(s[1]),
                 key[2].wrapping_add(s[2]),
             ];
             if let Some(slot) = self.find(&nk) {
-                slots[k] = slot;
+                slots[found] = slot;
+                found += 1;
             }
         }
+        self.covariance_of(&slots[..found])
+    }
+
+    /// Number of points and their covariance in the voxel holding `p`, if it exists.
+    pub fn voxel_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
+        let slot = self.find(&point_to_voxel(p, self.st.voxel_size))?;
+        self.covariance_of(&[slot])
+    }
+
+    /// Number of points and their covariance (mean first, then the spread about it) over the
+    /// voxels in `slots`, in that order; `None` without any point.
+    fn covariance_of(&self, slots: &[usize]) -> Option<(usize, nalgebra::Matrix3<T>)> {
         let mut n = 0usize;
         let mut mean = nalgebra::Vector3::zeros();
-        for &slot in slots.iter().filter(|&&s| s != usize::MAX) {
+        for &slot in slots {
             self.for_each_in(slot, |q| {
                 mean += q.coords;
                 n += 1;
@@ -216,32 +230,13 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
         }
         mean /= T::of(n as f64);
         let mut cov = nalgebra::Matrix3::zeros();
-        for &slot in slots.iter().filter(|&&s| s != usize::MAX) {
+        for &slot in slots {
             self.for_each_in(slot, |q| {
                 let d = q.coords - mean;
                 cov += d * d.transpose();
                 true
             });
         }
-        Some((n, cov / T::of(n as f64)))
-    }
-
-    /// Number of points and their covariance in the voxel holding `p`, if it exists.
-    pub fn voxel_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
-        let slot = self.find(&point_to_voxel(p, self.st.voxel_size))?;
-        let n = self.counts[slot] as usize;
-        let mut mean = nalgebra::Vector3::zeros();
-        self.for_each_in(slot, |q| {
-            mean += q.coords;
-            true
-        });
-        mean /= T::of(n as f64);
-        let mut cov = nalgebra::Matrix3::zeros();
-        self.for_each_in(slot, |q| {
-            let d = q.coords - mean;
-            cov += d * d.transpose();
-            true
-        });
         Some((n, cov / T::of(n as f64)))
     }
 }
