@@ -158,6 +158,9 @@ impl<T: Real> Config<T> {
 /// - `map_voxels`: occupied `v` voxels within `r_max` of the sensor: the surface area of the
 ///   scene inside the range sphere over `v^2`; about 16k on KITTI at 100 m and 1 m voxels.
 /// - `map_points`: points in those voxels, at most `N_max` each; KITTI averages 5-8 per voxel.
+/// - `plane_terms`: room for robust mode's point-to-plane terms ([`Degeneracy::Robust`] needs
+///   it): per source point a cached plane (6 scalars), per 64 of them a second partial system
+///   (29 scalars). `false` keeps the reference's storage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Capacities {
@@ -171,6 +174,8 @@ pub struct Capacities {
     pub map_voxels: usize,
     /// Points in the local map (all voxels together).
     pub map_points: usize,
+    /// Room for point-to-plane terms, which robust mode needs (see the sizing rules).
+    pub plane_terms: bool,
 }
 
 impl Capacities {
@@ -186,6 +191,7 @@ impl Capacities {
         source_points: 12_288,
         map_voxels: 28_672,
         map_points: 229_376,
+        plane_terms: false,
     };
 
     /// Full scale for robust mode ([`Config::robust`]: `r_max` 100 m, 0.5 m voxels): an open
@@ -200,6 +206,7 @@ impl Capacities {
         source_points: 24_576,
         map_voxels: 163_840,
         map_points: 1_048_576,
+        plane_terms: true,
     };
 
     /// Microcontroller scale (a few MiB): `r_max` about 50 m, 1 m voxels, f32 and quantised
@@ -210,6 +217,7 @@ impl Capacities {
         source_points: 3_072,
         map_voxels: 8_192,
         map_points: 49_152,
+        plane_terms: false,
     };
 
     /// A 16-beam sensor (VLP-16 class, about 29k points a sweep fed in pieces through
@@ -224,6 +232,7 @@ impl Capacities {
         source_points: 896,
         map_voxels: 4_032,
         map_points: 27_456,
+        plane_terms: false,
     };
 
     /// Checks that every capacity is usable.

@@ -21,6 +21,9 @@ pub enum ConfigError {
     Capacity,
     /// The arena is shorter than [`crate::Capacities::arena_words`]: give it that many words.
     ArenaTooSmall,
+    /// Robust mode needs [`crate::Capacities::plane_terms`]: set it (or use
+    /// [`crate::Capacities::ROBUST`]).
+    PlaneTerms,
 }
 
 /// Why a frame produced no pose. The odometry state is unchanged; the caller can drop the
@@ -46,6 +49,7 @@ impl core::fmt::Display for ConfigError {
             Self::Iterations => "convergence_criterion must be >= 0 and max_iterations >= 1",
             Self::Capacity => "every capacity must be non-zero and below 2^30",
             Self::ArenaTooSmall => "arena shorter than Capacities::arena_words",
+            Self::PlaneTerms => "robust mode needs Capacities::plane_terms",
         };
         f.write_str(s)
     }

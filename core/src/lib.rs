@@ -17,7 +17,7 @@
 //! ```
 //! use kiss_odom_core::{Capacities, Config, Exact, Odometry, Words};
 //! const CAPS: Capacities = Capacities { scan_points: 1000, merge_points: 512,
-//!     source_points: 128, map_voxels: 1024, map_points: 4096 };
+//!     source_points: 128, map_voxels: 1024, map_points: 4096, plane_terms: false };
 //! const N: usize = CAPS.arena_words::<f64, Exact>();
 //! let mut words = Words::<N>::new();
 //! let mut odom = Odometry::<f64, Exact, _>::new(Config::new(50.0), CAPS, &mut words).unwrap();
@@ -110,8 +110,9 @@ pub mod stages {
     pub use crate::local_map::{LocalMap, MapLayout, UpdateStats, BLOCK};
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
-        align_points_to_map, chunks_for, moved_points, work_words, Alignment, Chunk, IcpParams,
-        CHUNK, MIN_POINTS, PLANARITY, SYSTEM_LEN,
+        align_points_to_map, chunk_len, chunks_for, moved_points, work_words, Alignment, Chunk,
+        IcpParams, PlaneChunk, CHUNK, CHUNK_LEN, MIN_POINTS, PLANARITY, PLANE_CHUNK_LEN,
+        SYSTEM_LEN,
     };
     pub use crate::robust::{min_points, weakness, Hold, Weakness};
     pub use crate::scalar::{norm_lt, sqrt_lt};

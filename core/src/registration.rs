@@ -11,15 +11,16 @@
 //! system is summed in point order and the partials are added in chunk order, so the result is
 //! bit-identical whichever [`Executor`] ran the chunks and on how many threads.
 
-use planes::{accumulate_plane, normal_at, PLANAR};
+use planes::{accumulate_plane, Cached, CACHED};
 pub use planes::{MIN_POINTS, PLANARITY};
 
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};
 use crate::robust::Hold;
 use crate::scalar::{sqrt_lt, Real};
-use crate::storage::{view, words_for};
+use crate::storage::{view, view_ref, words_for};
 use crate::{Point, Pose};
+use bytemuck::Pod;
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// Source points per chunk: the unit of parallel work and of the fixed reduction order (chunk
@@ -27,31 +28,46 @@ use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 pub const CHUNK: usize = 64;
 /// Scalars in one partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`) +
 /// correspondence count + sum of squared residuals.
-const TERMS: usize = 29;
-/// Scalars in one chunk's partial linear systems: the point-to-point terms', then the
-/// point-to-plane terms' (robust mode only, see `planes`; zero otherwise).
-pub const SYSTEM_LEN: usize = 2 * TERMS;
+pub const SYSTEM_LEN: usize = 29;
 /// Scalars per point kept from its last search: the answer's `x, y, z` (infinite: none), and the
 /// search's `others` and `face` bounds less the distance the point moved since (and a rounding
 /// allowance per step).
 const KEPT: usize = 5;
 /// Scalars in one chunk: its points (`3 * CHUNK`), what each kept (`KEPT * CHUNK`), its partial
 /// system, its point count and where it stands in the current iteration (see `Parts::progress`).
-const CHUNK_LEN: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN + 4;
+pub const CHUNK_LEN: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN + 4;
+/// Where a chunk's point count sits.
+const COUNT: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN;
+/// Scalars in one chunk of robust mode: a [`Chunk`], then the partial system of its
+/// point-to-plane terms and each point's cached plane (see `planes`).
+pub const PLANE_CHUNK_LEN: usize = CHUNK_LEN + SYSTEM_LEN + CACHED * CHUNK;
 
 /// One chunk of ICP work: up to [`CHUNK`] source points, moved in place from iteration to
 /// iteration, the neighbour each found and how long that holds, and the partial normal
 /// equations they gave in the last iteration.
 pub type Chunk<T> = [T; CHUNK_LEN];
 
+/// One chunk of robust mode's ICP work: a [`Chunk`] and its point-to-plane part.
+pub type PlaneChunk<T> = [T; PLANE_CHUNK_LEN];
+
+/// Scalars in one chunk of the layout `planes` picks.
+pub const fn chunk_len(planes: bool) -> usize {
+    if planes {
+        PLANE_CHUNK_LEN
+    } else {
+        CHUNK_LEN
+    }
+}
+
 /// Chunks for `points` source points.
 pub const fn chunks_for(points: usize) -> usize {
     points.div_ceil(CHUNK)
 }
 
-/// `u64` words of ICP work space for `points` source points of scalar `T`.
-pub const fn work_words<T>(points: usize) -> usize {
-    words_for(chunks_for(points) * CHUNK_LEN * core::mem::size_of::<T>())
+/// `u64` words of ICP work space for `points` source points of scalar `T`, with room for
+/// point-to-plane terms (robust mode) if `planes`.
+pub const fn work_words<T>(points: usize, planes: bool) -> usize {
+    words_for(chunks_for(points) * chunk_len(planes) * core::mem::size_of::<T>())
 }
 
 /// Runs ICP's per-chunk work, possibly in parallel. The core cuts the work into [`Chunk`]s and
@@ -157,14 +173,12 @@ fn accumulate<T: Real>(acc: &mut [T; SYSTEM_LEN], s: &Vector3<T>, r: &Vector3<T>
 /// The system ICP solves from the summed chunk systems: the point-to-point one as it is when
 /// there are no planar terms (the reference), else `(1 - a) point + a plane`, `a` the share of
 /// planar correspondences (GenZ-ICP's weight, see `planes`).
-fn combine<T: Real>(sum: &[T; SYSTEM_LEN]) -> [T; TERMS] {
-    let mut out = [T::zero(); TERMS];
-    let (point, plane) = sum.split_at(PLANAR);
+fn combine<T: Real>(point: &[T; SYSTEM_LEN], plane: &[T; SYSTEM_LEN]) -> [T; SYSTEM_LEN] {
     let planar = plane[27];
     if planar <= T::zero() {
-        out.copy_from_slice(point);
-        return out;
+        return *point;
     }
+    let mut out = [T::zero(); SYSTEM_LEN];
     let a = planar / (planar + point[27]);
     for (o, (p, q)) in out.iter_mut().zip(point.iter().zip(plane)).take(27) {
         *o = (T::one() - a) * *p + a * *q;
@@ -175,7 +189,7 @@ fn combine<T: Real>(sum: &[T; SYSTEM_LEN]) -> [T; TERMS] {
 }
 
 /// Solves `H dx = -g` from a combined system; `None` if `H` is not positive definite.
-fn solve<T: Real>(sum: &[T; TERMS]) -> Option<Vector6<T>> {
+fn solve<T: Real>(sum: &[T; SYSTEM_LEN]) -> Option<Vector6<T>> {
     let mut h = Matrix6::zeros();
     for r in 0..6 {
         for c in r..6 {
@@ -201,33 +215,63 @@ struct Parts<'c, T> {
     /// In the current iteration: work units spent in the last round, points answered, and 1 if
     /// the next point was already moved when its share ran out (0 otherwise).
     progress: &'c mut [T; 3],
+    /// Robust mode's point-to-plane part; `None` in the reference's layout.
+    planes: Option<PlaneParts<'c, T>>,
 }
 
-#[inline]
-fn parts<T: Real>(c: &mut Chunk<T>) -> Option<Parts<'_, T>> {
-    let (points, rest) = c.split_first_chunk_mut::<{ 3 * CHUNK }>()?;
-    let (kept, rest) = rest.split_first_chunk_mut::<{ KEPT * CHUNK }>()?;
-    let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
-    let (count, rest) = rest.split_first_mut()?;
-    Some(Parts {
-        points,
-        kept,
-        system,
-        count,
-        progress: rest.first_chunk_mut::<3>()?,
-    })
+/// A [`PlaneChunk`]'s own parts.
+struct PlaneParts<'c, T> {
+    /// The point-to-plane terms' partial system.
+    system: &'c mut [T; SYSTEM_LEN],
+    /// Per point: the plane last read for it (see `planes::Cached`).
+    cached: &'c mut [T; CACHED * CHUNK],
 }
 
-/// Copies `source` into the chunks of `work` (as many as fit), nothing kept; returns the
-/// chunks in use.
-fn load<'w, T: Real>(source: &[[T; 3]], work: &'w mut [u64]) -> &'w mut [Chunk<T>] {
-    let fit = (work.len() * 8) / (CHUNK_LEN * core::mem::size_of::<T>());
+/// A chunk of ICP work in one of the two layouts ([`Chunk`], [`PlaneChunk`]).
+trait WorkChunk<T>: Pod + Send {
+    fn parts(&mut self) -> Option<Parts<'_, T>>;
+}
+
+impl<T: Real> WorkChunk<T> for Chunk<T> {
+    #[inline]
+    fn parts(&mut self) -> Option<Parts<'_, T>> {
+        let (points, rest) = self.split_first_chunk_mut::<{ 3 * CHUNK }>()?;
+        let (kept, rest) = rest.split_first_chunk_mut::<{ KEPT * CHUNK }>()?;
+        let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
+        let (count, rest) = rest.split_first_mut()?;
+        Some(Parts {
+            points,
+            kept,
+            system,
+            count,
+            progress: rest.first_chunk_mut::<3>()?,
+            planes: None,
+        })
+    }
+}
+
+impl<T: Real> WorkChunk<T> for PlaneChunk<T> {
+    #[inline]
+    fn parts(&mut self) -> Option<Parts<'_, T>> {
+        let (base, rest) = self.split_first_chunk_mut::<CHUNK_LEN>()?;
+        let (system, rest) = rest.split_first_chunk_mut::<SYSTEM_LEN>()?;
+        let cached = rest.first_chunk_mut::<{ CACHED * CHUNK }>()?;
+        let mut parts = base.parts()?;
+        parts.planes = Some(PlaneParts { system, cached });
+        Some(parts)
+    }
+}
+
+/// Copies `source` into the chunks of `work` (as many as fit), nothing kept or cached; returns
+/// the chunks in use.
+fn load<'w, T: Real, C: WorkChunk<T>>(source: &[[T; 3]], work: &'w mut [u64]) -> &'w mut [C] {
+    let fit = (work.len() * 8) / core::mem::size_of::<C>();
     let n = chunks_for(source.len()).min(fit);
-    let Ok(chunks) = view::<Chunk<T>>(work, n) else {
+    let Ok(chunks) = view::<C>(work, n) else {
         return &mut [];
     };
     for (c, pts) in chunks.iter_mut().zip(source.chunks(CHUNK)) {
-        if let Some(c) = parts(c) {
+        if let Some(c) = c.parts() {
             for (dst, p) in c.points.chunks_exact_mut(3).zip(pts) {
                 dst.copy_from_slice(p);
             }
@@ -235,20 +279,26 @@ fn load<'w, T: Real>(source: &[[T; 3]], work: &'w mut [u64]) -> &'w mut [Chunk<T
                 k[3] = -T::one();
             }
             *c.count = T::of(pts.len() as f64);
+            if let Some(pl) = c.planes {
+                pl.cached.chunks_exact_mut(CACHED).for_each(Cached::clear);
+            }
         }
     }
     chunks
 }
 
-/// The points ICP moved, in source order (world frame, as the last iteration left them).
-pub fn moved_points<T: Real>(work: &mut [u64], n: usize) -> impl Iterator<Item = Point<T>> + '_ {
-    let chunks = view::<Chunk<T>>(work, chunks_for(n)).unwrap_or_default();
-    chunks.iter_mut().flat_map(|c| {
-        let (points, count) = match parts(c) {
-            Some(c) => (&c.points[..], c.count.wide() as usize),
-            None => (&[][..], 0),
-        };
-        points
+/// The points ICP moved, in source order (world frame, as the last iteration left them), from
+/// work laid out for `planes` as [`align_points_to_map`] left it.
+pub fn moved_points<T: Real>(
+    work: &[u64],
+    n: usize,
+    planes: bool,
+) -> impl Iterator<Item = Point<T>> + '_ {
+    let len = chunk_len(planes);
+    let scalars = view_ref::<T>(work, chunks_for(n) * len).unwrap_or_default();
+    scalars.chunks_exact(len).flat_map(|c| {
+        let count = c.get(COUNT).map_or(0, |n| n.wide() as usize);
+        c[..3 * CHUNK]
             .chunks_exact(3)
             .take(count)
             .map(|p| Point::new(p[0], p[1], p[2]))
@@ -270,10 +320,9 @@ fn correspond<T: Real, P: PointCodec<T>>(
     kernel: T,
     slack: T,
     share: u64,
-    planes: bool,
 ) {
     let k2 = kernel * kernel;
-    let acc = c.system;
+    let (acc, mut planes) = (c.system, c.planes);
     let n = c.count.wide() as usize;
     let start = c.progress[1].wide() as usize;
     let pending = c.progress[2] > T::zero();
@@ -283,6 +332,9 @@ fn correspond<T: Real, P: PointCodec<T>>(
     }
     if start == 0 && !pending {
         *acc = [T::zero(); SYSTEM_LEN];
+        if let Some(pl) = planes.as_mut() {
+            *pl.system = [T::zero(); SYSTEM_LEN];
+        }
     }
     let mut used = 0u64;
     let points = c
@@ -301,23 +353,22 @@ fn correspond<T: Real, P: PointCodec<T>>(
         match closest_from(kept, map, &before, &moved, max_distance, slack, cap) {
             Ok((found, work)) => {
                 used += u64::from(work);
-                if let Some((q, d2)) = found {
-                    let r = moved - q.coords;
-                    let normal = if planes {
-                        normal_at(map, &Point::from(moved))
-                    } else {
-                        None
-                    };
-                    match normal {
-                        Some(n) => {
-                            let rn = n.dot(&r);
-                            let denom = kernel + rn * rn;
-                            accumulate_plane(acc, &moved, &n, rn, k2 / (denom * denom));
-                        }
-                        None => {
-                            let denom = kernel + d2;
-                            accumulate(acc, &moved, &r, k2 / (denom * denom));
-                        }
+                let Some((q, d2)) = found else { continue };
+                let r = moved - q.coords;
+                let plane = planes.as_mut().and_then(|pl| {
+                    let cached = pl.cached.get_mut(k * CACHED..(k + 1) * CACHED)?;
+                    let n = Cached::normal(cached, map, &Point::from(moved))?;
+                    Some((&mut *pl.system, n))
+                });
+                match plane {
+                    Some((sys, n)) => {
+                        let rn = n.dot(&r);
+                        let denom = kernel + rn * rn;
+                        accumulate_plane(sys, &moved, &n, rn, k2 / (denom * denom));
+                    }
+                    None => {
+                        let denom = kernel + d2;
+                        accumulate(acc, &moved, &r, k2 / (denom * denom));
                     }
                 }
             }
@@ -421,9 +472,9 @@ fn rerank<T: Real>(
 /// same way whichever thread runs which chunk), until all are done (`true`) or a round makes no
 /// progress (`false`). Without a budget one round does it all.
 #[allow(clippy::too_many_arguments)]
-fn run_iteration<T: Real, P: PointCodec<T>, E: Executor>(
+fn run_iteration<T: Real, P: PointCodec<T>, E: Executor, C: WorkChunk<T>>(
     exec: &E,
-    chunks: &mut [Chunk<T>],
+    chunks: &mut [C],
     map: &MapView<'_, T, P>,
     (rot, tr): &(Matrix3<T>, Vector3<T>),
     max_distance: T,
@@ -433,14 +484,14 @@ fn run_iteration<T: Real, P: PointCodec<T>, E: Executor>(
     out: &mut Alignment<T>,
 ) -> bool {
     for c in chunks.iter_mut() {
-        if let Some(c) = parts(c) {
+        if let Some(c) = c.parts() {
             *c.progress = [T::zero(); 3];
         }
     }
     loop {
         let open = chunks
             .iter_mut()
-            .filter_map(parts)
+            .filter_map(C::parts)
             .filter(|c| c.progress[1] < *c.count)
             .count() as u64;
         if open == 0 {
@@ -454,14 +505,13 @@ fn run_iteration<T: Real, P: PointCodec<T>, E: Executor>(
             return false;
         }
         exec.for_each(chunks, &|c| {
-            if let Some(c) = parts(c) {
-                let planes = params.planes;
-                correspond(c, map, rot, tr, max_distance, kernel, slack, share, planes);
+            if let Some(c) = c.parts() {
+                correspond(c, map, rot, tr, max_distance, kernel, slack, share);
             }
         });
         let spent: u64 = chunks
             .iter_mut()
-            .filter_map(parts)
+            .filter_map(C::parts)
             .map(|c| c.progress[0].wide() as u64)
             .sum();
         out.work += spent;
@@ -472,9 +522,29 @@ fn run_iteration<T: Real, P: PointCodec<T>, E: Executor>(
     }
 }
 
+/// The chunks' partial systems summed in chunk order, combined (see [`combine`]).
+fn summed<T: Real, C: WorkChunk<T>>(chunks: &mut [C]) -> [T; SYSTEM_LEN] {
+    let mut point = [T::zero(); SYSTEM_LEN];
+    let mut plane = [T::zero(); SYSTEM_LEN];
+    for c in chunks.iter_mut() {
+        if let Some(c) = c.parts() {
+            for (a, b) in point.iter_mut().zip(c.system.iter()) {
+                *a += *b;
+            }
+            if let Some(pl) = c.planes {
+                for (a, b) in plane.iter_mut().zip(pl.system.iter()) {
+                    *a += *b;
+                }
+            }
+        }
+    }
+    combine(&point, &plane)
+}
+
 /// Registers `source` (sensor frame) to `map` starting from `initial_guess` (the reference's
 /// `AlignPointsToMap`), moving a copy of the points in `work`, which needs
-/// [`work_words`]`::<T>(source.len())` words (points beyond what fits are not used).
+/// [`work_words`]`::<T>(source.len(), params.planes)` words (points beyond what fits are not
+/// used).
 #[allow(clippy::too_many_arguments)]
 pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     exec: &E,
@@ -499,77 +569,89 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     if map.is_empty() {
         return out;
     }
-    let chunks = load(source, work);
-    // Points and their neighbours stay within |t| + max |p| (plus a few voxels) of the origin:
-    // the rounding allowance is taken on twice that.
-    let extent = source
-        .iter()
-        .map(|p| Vector3::new(p[0], p[1], p[2]).norm_squared())
-        .fold(T::zero(), |a, b| a.max(b))
-        .sqrt_l();
-    let reach = T::of(2.0) * (extent + initial_guess.translation.vector.norm())
-        + T::of(4.0) * map.voxel_size();
-    let slack = slack_for(reach);
-    let mut step: (Matrix3<T>, Vector3<T>) = (
-        initial_guess.rotation.to_rotation_matrix().into_inner(),
-        initial_guess.translation.vector,
-    );
-    let mut t_icp = Pose::identity();
-    out.converged = false;
-    for _ in 0..params.max_iterations {
-        if !run_iteration(
-            exec,
-            chunks,
-            map,
-            &step,
-            max_distance,
-            kernel,
-            slack,
-            params,
-            &mut out,
-        ) {
-            // An iteration that cannot finish within the budget is abandoned: the pose stays the
-            // last complete iterate.
-            out.budget_spent = true;
-            break;
-        }
-        let mut parts_sum = [T::zero(); SYSTEM_LEN];
-        for c in chunks.iter_mut() {
-            if let Some(c) = parts(c) {
-                for (a, b) in parts_sum.iter_mut().zip(c.system.iter()) {
-                    *a += *b;
-                }
+    let icp = Icp {
+        exec,
+        map,
+        initial_guess,
+        max_distance,
+        kernel,
+        params,
+    };
+    if params.planes {
+        icp.run(load::<T, PlaneChunk<T>>(source, work), source, &mut out);
+    } else {
+        icp.run(load::<T, Chunk<T>>(source, work), source, &mut out);
+    }
+    out
+}
+
+/// One registration's inputs.
+struct Icp<'a, 'm, T: Real, P: PointCodec<T>, E> {
+    exec: &'a E,
+    map: &'a MapView<'m, T, P>,
+    initial_guess: &'a Pose<T>,
+    max_distance: T,
+    kernel: T,
+    params: &'a IcpParams<T>,
+}
+
+impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
+    /// Gauss-Newton over the loaded `chunks` of `source`, into `out`.
+    fn run<C: WorkChunk<T>>(&self, chunks: &mut [C], source: &[[T; 3]], out: &mut Alignment<T>) {
+        let (initial_guess, params) = (self.initial_guess, self.params);
+        // Points and their neighbours stay within |t| + max |p| (plus a few voxels) of the
+        // origin: the rounding allowance is taken on twice that.
+        let extent = source
+            .iter()
+            .map(|p| Vector3::new(p[0], p[1], p[2]).norm_squared())
+            .fold(T::zero(), |a, b| a.max(b))
+            .sqrt_l();
+        let reach = T::of(2.0) * (extent + initial_guess.translation.vector.norm())
+            + T::of(4.0) * self.map.voxel_size();
+        let slack = slack_for(reach);
+        let mut step: (Matrix3<T>, Vector3<T>) = (
+            initial_guess.rotation.to_rotation_matrix().into_inner(),
+            initial_guess.translation.vector,
+        );
+        let mut t_icp = Pose::identity();
+        out.converged = false;
+        for _ in 0..params.max_iterations {
+            let (d, k) = (self.max_distance, self.kernel);
+            if !run_iteration(self.exec, chunks, self.map, &step, d, k, slack, params, out) {
+                // An iteration that cannot finish within the budget is abandoned: the pose
+                // stays the last complete iterate.
+                out.budget_spent = true;
+                break;
             }
-        }
-        let sum = combine(&parts_sum);
-        out.iterations += 1;
-        out.correspondences = sum[27].wide() as u32;
-        out.rms = if sum[27] > T::zero() {
-            (sum[28] / sum[27]).sqrt_l()
-        } else {
-            T::zero()
-        };
-        let dx = match solve(&sum) {
-            Some(dx) => params.hold.map_or(dx, |h| h.step(&dx)),
-            None => {
-                out.singular = true;
+            let sum = summed(chunks);
+            out.iterations += 1;
+            out.correspondences = sum[27].wide() as u32;
+            out.rms = if sum[27] > T::zero() {
+                (sum[28] / sum[27]).sqrt_l()
+            } else {
+                T::zero()
+            };
+            let dx = match solve(&sum) {
+                Some(dx) => params.hold.map_or(dx, |h| h.step(&dx)),
+                None => {
+                    out.singular = true;
+                    out.converged = true;
+                    break;
+                }
+            };
+            let estimation = se3_exp(&dx);
+            t_icp = estimation * t_icp;
+            step = (
+                estimation.rotation.to_rotation_matrix().into_inner(),
+                estimation.translation.vector,
+            );
+            if dx.norm() < params.convergence_criterion {
                 out.converged = true;
                 break;
             }
-        };
-        let estimation = se3_exp(&dx);
-        t_icp = estimation * t_icp;
-        step = (
-            estimation.rotation.to_rotation_matrix().into_inner(),
-            estimation.translation.vector,
-        );
-        if dx.norm() < params.convergence_criterion {
-            out.converged = true;
-            break;
         }
+        out.pose = t_icp * initial_guess;
     }
-    out.pose = t_icp * initial_guess;
-    out
 }
 
 mod planes;

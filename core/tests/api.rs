@@ -5,9 +5,11 @@
 mod common;
 
 use common::*;
-use kiss_odom_core::stages::{preprocess, scratch_words_for, voxel_downsample};
+use kiss_odom_core::stages::{
+    chunks_for, preprocess, scratch_words_for, voxel_downsample, CHUNK, SYSTEM_LEN,
+};
 use kiss_odom_core::{
-    Capacities, Config, Exact, FrameReport, Odometry, Pose, Quantized, Storage, Words,
+    Capacities, Config, ConfigError, Exact, FrameReport, Odometry, Pose, Quantized, Storage, Words,
 };
 
 const RANGE: f64 = 40.0;
@@ -98,6 +100,7 @@ fn const_constructed_words_hold_a_whole_odometry() {
         source_points: 16_384,
         map_voxels: 16_384,
         map_points: 262_144,
+        plane_terms: false,
     };
     const N: usize = CAPS.arena_words::<f32, Quantized>();
     // Boxed only so the test thread's stack need not hold it; firmware puts it in a `static`.
@@ -295,4 +298,27 @@ fn the_last_frame_is_available_as_kiss_icp_returns_it() {
 
 fn widen(p: &Pose<f32>) -> Pose<f64> {
     nalgebra::convert(*p)
+}
+
+#[test]
+fn robust_mode_needs_room_for_plane_terms_and_only_it_pays_for_them() {
+    let (robust, caps) = (Config::<f64>::robust(RANGE), caps());
+    let with = Capacities {
+        plane_terms: true,
+        ..caps
+    };
+    let mut words = vec![0u64; with.arena_words::<f64, Exact>()];
+    let without = Odometry::<f64, Exact, _>::new(robust, caps, &mut words[..]).err();
+    assert_eq!(without, Some(ConfigError::PlaneTerms));
+    let mut odom = Odometry::<f64, Exact, _>::new(robust, with, &mut words[..]).unwrap();
+    for scan in scans().iter().take(3) {
+        assert!(odom.register_frame(scan, None).is_ok());
+    }
+    // The room: per 64 source points a second partial system and 64 cached planes (a voxel key
+    // and a normal each), nothing else; reference and hold mode do without it.
+    let extra = with.arena_words::<f64, Exact>() - caps.arena_words::<f64, Exact>();
+    let per_chunk = SYSTEM_LEN + 6 * CHUNK;
+    assert_eq!(extra, chunks_for(caps.source_points) * per_chunk);
+    let mut fewer = vec![0u64; caps.arena_words::<f64, Exact>()];
+    assert!(Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps, &mut fewer[..]).is_ok());
 }

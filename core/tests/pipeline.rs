@@ -188,6 +188,7 @@ fn full_buffers_drop_by_their_documented_rules_and_say_so() {
         source_points: 300,
         map_voxels: 900,
         map_points: 2_000,
+        plane_terms: false,
     };
     let s = scans();
     let mut arena = vec![0u64; tiny.arena_words::<f64, Exact>()];

@@ -132,7 +132,7 @@ proptest! {
             let q = inv * p;
             source.push([q.x, q.y, q.z]);
         });
-        let mut work = vec![0u64; work_words::<f64>(source.len())];
+        let mut work = vec![0u64; work_words::<f64>(source.len(), false)];
         // The second frame of a run: identity guess, the threshold's seed sigma = 2 m, so the
         // correspondence gate is 3 sigma = 6 m and the kernel sigma = 2 m.
         let params = IcpParams { convergence_criterion: GAMMA, max_iterations: 500, budget: None, hold: None, planes: false };
@@ -290,6 +290,7 @@ fn caps_up_to(
             source_points,
             map_voxels,
             map_points,
+            plane_terms: false,
         },
     )
 }

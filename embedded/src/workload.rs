@@ -25,14 +25,17 @@ pub type Codec = kiss_odom_core::Quantized;
 
 /// Capacities of this build (`full` feature: full scale; `tiny`: a 16-beam sensor in 512 KiB;
 /// microcontroller scale otherwise).
+/// The `robust` feature adds room for point-to-plane terms.
+pub const CAPS: Capacities = Capacities {
+    plane_terms: cfg!(feature = "robust"),
+    ..SIZES
+};
 #[cfg(feature = "full")]
-pub const CAPS: Capacities = Capacities::FULL_SCALE;
-/// Capacities of this build (see above).
+const SIZES: Capacities = Capacities::FULL_SCALE;
 #[cfg(any(feature = "tiny", feature = "packets"))]
-pub const CAPS: Capacities = Capacities::TINY;
-/// Capacities of this build (see above).
+const SIZES: Capacities = Capacities::TINY;
 #[cfg(not(any(feature = "full", feature = "tiny", feature = "packets")))]
-pub const CAPS: Capacities = Capacities::SMALL;
+const SIZES: Capacities = Capacities::SMALL;
 
 /// Arena length in `u64` words, computed at compile time so the arena can be a `static`.
 pub const ARENA_WORDS: usize = CAPS.arena_words::<Scalar, Codec>();

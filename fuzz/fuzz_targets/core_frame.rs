@@ -8,7 +8,8 @@
 use arbitrary::{Result, Unstructured};
 use kiss_odom_core::stages::BLOCK;
 use kiss_odom_core::{
-    Capacities, Config, Exact, FrameError, Odometry, PointCodec, Pose, Quantized, Real,
+    Capacities, Config, ConfigError, Degeneracy, Exact, FrameError, Odometry, PointCodec, Pose,
+    Quantized, Real,
 };
 use libfuzzer_sys::fuzz_target;
 use nalgebra::{Point3, Translation3, UnitQuaternion, Vector3};
@@ -61,6 +62,7 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.convergence_criterion = T::of(pick(u, &[1e-4, 0.0, 1e-2])?);
     c.initial_threshold = T::of(pick(u, &[2.0, 0.1, 50.0, 1e-6])?);
     c.kernel_scale = T::of(pick(u, &[1.0, 1.0 / 3.0, 10.0])?);
+    c.degeneracy = *u.choose(&[Degeneracy::Reference, Degeneracy::Robust, Degeneracy::Hold])?;
     Ok(c)
 }
 
@@ -71,6 +73,7 @@ fn caps(u: &mut Unstructured) -> Result<Capacities> {
         source_points: usize::from(u.arbitrary::<u16>()? % 128 + 1),
         map_voxels: usize::from(u.arbitrary::<u16>()? % 256 + 1),
         map_points: usize::from(u.arbitrary::<u16>()? % 1024 + 1),
+        plane_terms: u.arbitrary()?,
     })
 }
 
@@ -101,6 +104,11 @@ fn run<T: Real, P: PointCodec<T>>(u: &mut Unstructured) -> Result<()> {
         return Ok(());
     }
     let mut arena = vec![0u64; caps.arena_words::<T, P>()];
+    if config.degeneracy == Degeneracy::Robust && !caps.plane_terms {
+        let e = Odometry::<T, P, _>::new(config, caps, &mut arena[..]).err();
+        assert_eq!(e, Some(ConfigError::PlaneTerms));
+        return Ok(());
+    }
     let mut odom = Odometry::<T, P, _>::new(config, caps, &mut arena[..]).expect("valid config");
     let unit = config.voxel_size.wide();
     let mut last: Vec<[f64; 3]> = Vec::new();

@@ -158,7 +158,7 @@ fn stages(c: &mut Criterion) {
             found
         })
     });
-    let mut work = vec![0u64; work_words::<f64>(caps.source_points)];
+    let mut work = vec![0u64; work_words::<f64>(caps.source_points, false)];
     let one = IcpParams {
         convergence_criterion: 0.0,
         max_iterations: 1,

@@ -271,7 +271,7 @@ impl Settings {
     }
 
     /// The capacities given, where the defaults (`FULL_SCALE`) become `Capacities::ROBUST` in
-    /// robust mode (its finer map needs more voxels).
+    /// robust mode (its finer map needs more voxels); room for plane terms in robust mode only.
     fn caps(&self) -> Capacities {
         let c = &self.capacities;
         if self.registration.degeneracy == DegeneracyMode::Robust && *c == Caps::default() {
@@ -283,6 +283,7 @@ impl Settings {
             source_points: c.source_points,
             map_voxels: c.map_voxels,
             map_points: c.map_points,
+            plane_terms: self.registration.degeneracy == DegeneracyMode::Robust,
         }
     }
 
@@ -469,6 +470,7 @@ mod tests {
         assert_eq!(d.degeneracy, Degeneracy::Reference);
         let h: Settings = toml::from_str("[registration]\ndegeneracy = \"hold\"\n").unwrap();
         assert_eq!(h.core_config::<f64>().unwrap().degeneracy, Degeneracy::Hold);
+        assert!(!h.capacities().unwrap().plane_terms);
         assert!(toml::from_str::<Settings>("[registration]\ndegeneracy = \"on\"\n").is_err());
     }
 
@@ -489,6 +491,7 @@ mod tests {
         );
         assert_eq!((c.voxel_size, c.kernel_scale), (0.7, 1.0));
         assert_eq!(caps.map_voxels, 5000);
+        assert!(caps.plane_terms, "robust mode needs room for its plane terms");
         assert_eq!(caps.map_points, Capacities::FULL_SCALE.map_points);
         // Reference mode keeps kiss-icp's.
         let d = Settings::default();

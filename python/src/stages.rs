@@ -283,7 +283,7 @@ impl Registration {
         let guess = convert::pose(initial_guess, "initial_guess")?;
         let (src, map) = (&points.points, &voxel_map.map);
         let pose: Pose<f64> = py.detach(|| {
-            let mut work = vec![0u64; work_words::<f64>(src.len())];
+            let mut work = vec![0u64; work_words::<f64>(src.len(), self.params.planes)];
             align_points_to_map(
                 &self.pool,
                 src,

@@ -460,7 +460,7 @@ fn registration_converges_to_the_reference_pose() {
     let map = registration_map(&m, &input, input.len());
     let mut worst = (0.0f64, 0.0f64);
     for run in reg["runs"].as_array().unwrap() {
-        let mut work = vec![0u64; work_words::<f64>(scan.len())];
+        let mut work = vec![0u64; work_words::<f64>(scan.len(), params.planes)];
         let al = align_points_to_map(
             &Sequential,
             &scan,

@@ -108,7 +108,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         let observability = if first_frame {
             None
         } else {
-            let moved = moved_points::<T>(parts.icp, clouds.source);
+            let moved = moved_points::<T>(parts.icp, clouds.source, planes);
             let origin = Point::from(pose.translation.vector);
             observability(&map.view(), moved, clouds.source, &origin, max_distance)
         };

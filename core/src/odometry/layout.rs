@@ -22,7 +22,8 @@ pub struct Layout {
     pub source: Region,
     /// The dedup grid of either downsampling, then the reference-order reconstruction.
     pub scratch: Region,
-    /// ICP's chunks: the source points it moves and their partial normal equations.
+    /// ICP's chunks: the source points it moves and their partial normal equations (and, with
+    /// [`Capacities::plane_terms`], their planes and point-to-plane equations).
     pub icp: Region,
     /// The local map's table and point pool.
     pub map: MapLayout,
@@ -37,7 +38,7 @@ impl Layout {
         let merge = c.take(cloud_words::<T>(caps.merge_points));
         let source = c.take(cloud_words::<T>(caps.source_points));
         let scratch = c.take(scratch_words_for(caps.merge_points));
-        let icp = c.take(work_words::<T>(caps.source_points));
+        let icp = c.take(work_words::<T>(caps.source_points, caps.plane_terms));
         let map = MapLayout::carve(
             caps.map_voxels,
             caps.map_points,

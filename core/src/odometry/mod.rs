@@ -28,6 +28,7 @@ use crate::local_map::{Exact, MapMut, MapState, MapView, PointCodec};
 use crate::preprocess::{preprocess, Preprocessed};
 use crate::registration::{Executor, Sequential};
 use crate::report::{FrameReport, HighWater};
+use crate::robust::Degeneracy;
 use crate::scalar::Real;
 use crate::storage::Storage;
 use crate::threshold::AdaptiveThreshold;
@@ -39,7 +40,7 @@ use core::marker::PhantomData;
 /// ```
 /// use kiss_odom_core::{Capacities, Config, Exact, Odometry};
 /// let caps = Capacities { scan_points: 1000, merge_points: 512, source_points: 128,
-///                         map_voxels: 1024, map_points: 4096 };
+///                         map_voxels: 1024, map_points: 4096, plane_terms: false };
 /// let mut words = [0u64; 1 << 16];
 /// assert!(caps.arena_words::<f64, Exact>() <= words.len());
 /// let mut odom = Odometry::<f64, Exact, _>::new(Config::new(50.0), caps, &mut words[..]).unwrap();
@@ -71,6 +72,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     pub fn new(config: Config<T>, caps: Capacities, mut storage: S) -> Result<Self, ConfigError> {
         config.validate()?;
         caps.validate()?;
+        if config.degeneracy == Degeneracy::Robust && !caps.plane_terms {
+            return Err(ConfigError::PlaneTerms);
+        }
         let layout = Layout::new::<T, P>(&caps);
         let words = storage.as_mut();
         if words.len() < layout.words {

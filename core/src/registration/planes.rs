@@ -16,13 +16,17 @@
 //! neighbourhood; one voxel far out holds one ring's arc): at least [`MIN_POINTS`] of them,
 //! covariance eigenvalues `l0 <= l1 <= l2` with `l0 < PLANARITY (l0 + l1 + l2)` (GenZ-ICP's test
 //! and threshold; a ring's arc passes it, and its normal is then the arc's flatter side). It is
-//! computed per query (no memory kept; a cyclic Jacobi eigen-decomposition, so every target
-//! gives the same bits).
+//! read with a cyclic Jacobi eigen-decomposition, so every target gives the same bits. It
+//! depends only on the voxel holding `s` (the map does not change during a registration), so
+//! each source point keeps the last one it read with that voxel's key ([`Cached`]) and reads
+//! again only when it moves into another voxel: the same normals as reading every time, a plane
+//! fit a point and voxel instead of a point and iteration.
 
-use super::{SYSTEM_LEN, TERMS};
+use super::SYSTEM_LEN;
 use crate::local_map::{MapView, PointCodec};
 use crate::robust::jacobi_eigen;
 use crate::scalar::Real;
+use crate::voxel::point_to_voxel;
 use crate::Point;
 use nalgebra::Vector3;
 
@@ -33,8 +37,42 @@ pub const PLANARITY: f64 = 0.2;
 /// Map points a neighbourhood needs before its shape is read (GenZ-ICP's).
 pub const MIN_POINTS: usize = 5;
 
-/// Offset of the planar partial system in a chunk's system: after the point-to-point one.
-pub(super) const PLANAR: usize = TERMS;
+/// Scalars per source point of [`Cached`].
+pub(super) const CACHED: usize = 6;
+
+/// A source point's last plane: the key of the voxel it was read for (as scalars, exact within
+/// 2^24 voxels of the origin in f32; infinite: none yet) and the unit normal (zero: not
+/// planar).
+pub(super) struct Cached;
+
+impl Cached {
+    /// Nothing read yet.
+    pub(super) fn clear<T: Real>(cached: &mut [T]) {
+        cached.fill(T::zero());
+        if let Some(k) = cached.first_mut() {
+            *k = T::one() / T::zero();
+        }
+    }
+
+    /// The normal of the map around `s` (see [`normal_at`]), from `cached` when `s` is in the
+    /// voxel it was read for, else read and kept in `cached` (`CACHED` scalars).
+    #[inline]
+    pub(super) fn normal<T: Real, P: PointCodec<T>>(
+        cached: &mut [T],
+        map: &MapView<'_, T, P>,
+        s: &Point<T>,
+    ) -> Option<Vector3<T>> {
+        let key = point_to_voxel(s, map.voxel_size()).map(|k| T::of(f64::from(k)));
+        let (at, normal) = cached.split_first_chunk_mut::<3>()?;
+        let normal = normal.first_chunk_mut::<3>()?;
+        if *at != key {
+            *at = key;
+            *normal = normal_at(map, s).map_or([T::zero(); 3], |n| [n.x, n.y, n.z]);
+        }
+        let n = Vector3::from(*normal);
+        (n != Vector3::zeros()).then_some(n)
+    }
+}
 
 /// The unit normal of the map around `s` if it is planar (see the module doc).
 pub(super) fn normal_at<T: Real, P: PointCodec<T>>(
@@ -58,8 +96,8 @@ pub(super) fn normal_at<T: Real, P: PointCodec<T>>(
     planar.then(|| vectors.column(idx[0]).into_owned())
 }
 
-/// Adds one weighted point-to-plane term (`J = [n, s x n]`, residual `n . r`) to the planar
-/// half of `acc`, as `accumulate` adds a point-to-point one to the other half.
+/// Adds one weighted point-to-plane term (`J = [n, s x n]`, residual `n . r`) to `acc`, the
+/// point-to-plane partial system, as `accumulate` adds a point-to-point one to its own.
 #[inline]
 pub(super) fn accumulate_plane<T: Real>(
     acc: &mut [T; SYSTEM_LEN],
@@ -70,7 +108,7 @@ pub(super) fn accumulate_plane<T: Real>(
 ) {
     let c = s.cross(n);
     let j = [n.x, n.y, n.z, c.x, c.y, c.z];
-    let mut k = PLANAR;
+    let mut k = 0;
     for r in 0..6 {
         for col in r..6 {
             acc[k] += w * j[r] * j[col];
@@ -78,10 +116,10 @@ pub(super) fn accumulate_plane<T: Real>(
         }
     }
     for (r, jr) in j.iter().enumerate() {
-        acc[PLANAR + 21 + r] += w * *jr * rn;
+        acc[21 + r] += w * *jr * rn;
     }
-    acc[PLANAR + 27] += T::one();
-    acc[PLANAR + 28] += rn * rn;
+    acc[27] += T::one();
+    acc[28] += rn * rn;
 }
 
 #[cfg(test)]

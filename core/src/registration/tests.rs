@@ -8,7 +8,7 @@ const VOXELS: usize = 3000;
 const POINTS: usize = 8192;
 const MAP_WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(VOXELS, POINTS);
 const N: usize = 6000;
-const WORK_WORDS: usize = work_words::<f64>(N);
+const WORK_WORDS: usize = work_words::<f64>(N, false);
 
 /// The map's and ICP's words (about 0.7 MB) live on the heap: a test thread's stack is 2 MiB.
 struct Fixture {

@@ -114,7 +114,7 @@ const VOXELS: usize = 3000;
 const POINTS: usize = 8192;
 const MAP_WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(VOXELS, POINTS);
 const N: usize = 6000;
-const WORK_WORDS: usize = crate::registration::work_words::<f64>(N);
+const WORK_WORDS: usize = crate::registration::work_words::<f64>(N, false);
 
 /// On a structured yard, hold mode ends within the prediction's error along what it holds of
 /// the reference's pose (the yard's floor outweighs its walls, so its weakest translation reads

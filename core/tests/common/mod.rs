@@ -111,6 +111,7 @@ pub fn caps() -> Capacities {
         source_points: 16_384,
         map_voxels: 16_384,
         map_points: 262_144,
+        plane_terms: false,
     }
 }
 

@@ -363,6 +363,7 @@ fn memory(driver: &Driver, max_input_points: usize) -> Memory {
         source_points: hw.source_points.max(1),
         map_voxels: hw.map_voxels.max(1),
         map_points: hw.map_point_slots.max(1),
+        plane_terms: caps.plane_terms,
     };
     Memory {
         state_bytes: driver.state_bytes(),

@@ -522,7 +522,7 @@ fn map_and_registration(
     };
     for ((what, g, sg), file) in runs.iter().zip(&reg_files) {
         let want = pose_of(&matrix_of(&read_json(file)?["pose"])?);
-        let mut work = vec![0u64; work_words::<f64>(source_b.len())];
+        let mut work = vec![0u64; work_words::<f64>(source_b.len(), false)];
         let al = align_points_to_map(
             &Sequential,
             source_b,

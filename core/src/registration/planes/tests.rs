@@ -38,21 +38,20 @@ fn a_planar_voxel_gives_a_point_to_plane_term_along_its_normal() {
     let off = 1.0 - n.dot(&want).abs();
     std::println!("normal {n:?}, 1 - |n . want| = {off:.1e} (tolerance 1e-9)");
     assert!(off < 1e-9);
-    // The term: rank one, J = [n, s x n], in the planar half only.
+    // The term: rank one, J = [n, s x n], into the point-to-plane system.
     let mut acc = [0.0; SYSTEM_LEN];
     let s = Vector3::new(0.4, 0.5, 0.6);
     accumulate_plane(&mut acc, &s, &n, 0.05, 2.0);
     let j = [n.x, n.y, n.z, s.cross(&n).x, s.cross(&n).y, s.cross(&n).z];
-    assert!(acc[..PLANAR].iter().all(|v| *v == 0.0));
-    let mut k = PLANAR;
+    let mut k = 0;
     for r in 0..6 {
         for c in r..6 {
             assert!((acc[k] - 2.0 * j[r] * j[c]).abs() < 1e-15);
             k += 1;
         }
-        assert!((acc[PLANAR + 21 + r] - 2.0 * j[r] * 0.05).abs() < 1e-15);
+        assert!((acc[21 + r] - 2.0 * j[r] * 0.05).abs() < 1e-15);
     }
-    assert_eq!(acc[PLANAR + 27], 1.0);
+    assert_eq!(acc[27], 1.0);
 }
 
 #[test]
@@ -161,7 +160,7 @@ fn plane_terms_let_sparse_structure_move_a_corridor_s_free_axis() {
             [q.x, q.y, q.z]
         })
         .collect();
-    let mut work = std::vec![0u64; work_words::<f64>(source.len())];
+    let mut work = std::vec![0u64; work_words::<f64>(source.len(), true)];
     let mut along = |planes| {
         let params = IcpParams {
             convergence_criterion: 1e-6,
@@ -195,4 +194,63 @@ fn plane_terms_let_sparse_structure_move_a_corridor_s_free_axis() {
         "point-to-point ICP was expected to stay near the guess"
     );
     assert!(plane < 1e-3);
+}
+
+#[test]
+fn a_point_reads_its_plane_once_per_voxel_and_again_in_another() {
+    // A floor (z = 0.5) under x < 3 and a wall (x = 8.5) beyond x = 6: 1 m voxels, so the
+    // 27-voxel neighbourhoods around (1.5, 2.5, 0.5) and (8.5, 2.5, 1.5) see one plane each.
+    let mut scene = grid(
+        [-2.0, -1.0, 0.5],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        20,
+        0.25,
+    );
+    scene.extend(grid(
+        [8.5, -1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        20,
+        0.25,
+    ));
+    let floor = Point::new(1.5, 2.5, 0.5);
+    let wall = Point::new(8.5, 2.5, 1.5);
+    let mut cached = [0.0; CACHED];
+    Cached::clear(&mut cached);
+    with_map(&scene, |m| {
+        let at = |p: &Point<f64>| normal_at(m, p).map(|n| n.z.abs().max(n.x.abs()));
+        assert!(at(&floor) > Some(0.999) && at(&wall) > Some(0.999));
+        // The first read fills the cache with the floor voxel's key and the floor's normal.
+        let n = Cached::normal(&mut cached, m, &floor).expect("the floor is a plane");
+        assert!(n.z.abs() > 0.999, "{n:?}");
+        assert_eq!(cached[..3], [1.0, 2.0, 0.0]);
+        // Elsewhere in that voxel the kept normal is the answer, exactly.
+        let again = Cached::normal(&mut cached, m, &Point::new(1.9, 2.1, 0.2));
+        assert_eq!(again, Some(n));
+        // In another voxel it is read again: the wall's normal, the wall voxel's key.
+        let w = Cached::normal(&mut cached, m, &wall).expect("the wall is a plane");
+        assert!(w.x.abs() > 0.999, "{w:?}");
+        assert_eq!(cached[..3], [8.0, 2.0, 1.0]);
+        // Far from both: no plane, and that is kept too (a zero normal).
+        assert_eq!(
+            Cached::normal(&mut cached, m, &Point::new(40.5, 40.5, 40.5)),
+            None
+        );
+        assert_eq!(cached[3..], [0.0; 3]);
+    });
+}
+
+#[test]
+fn an_unread_cache_matches_no_voxel() {
+    let mut cached = [7.0f64; CACHED];
+    Cached::clear(&mut cached);
+    assert!(cached[0].is_infinite());
+    assert_eq!(cached[1..], [0.0; 5]);
+    // The first read of a point in voxel (0, 0, 0) cannot be taken from the cleared cache.
+    let patch = grid([0.1, 0.1, 0.2], [1.0, 0.0, 0.0], [0.0, 0.8, 0.6], 4, 0.25);
+    let n = with_map(&patch, |m| {
+        Cached::normal(&mut cached, m, &Point::new(0.35, 0.3, 0.35))
+    });
+    assert!(n.is_some() && cached[0] == 0.0);
 }
