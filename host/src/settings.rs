@@ -491,7 +491,10 @@ mod tests {
         );
         assert_eq!((c.voxel_size, c.kernel_scale), (0.7, 1.0));
         assert_eq!(caps.map_voxels, 5000);
-        assert!(caps.plane_terms, "robust mode needs room for its plane terms");
+        assert!(
+            caps.plane_terms,
+            "robust mode needs room for its plane terms"
+        );
         assert_eq!(caps.map_points, Capacities::FULL_SCALE.map_points);
         // Reference mode keeps kiss-icp's.
         let d = Settings::default();
