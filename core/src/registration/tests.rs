@@ -299,3 +299,21 @@ fn kept_answers_equal_a_new_search_in_a_sparse_map() {
         assert!(kept * 4 > steps, "too few kept answers to test anything");
     }
 }
+
+#[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
+fn a_short_work_area_registers_the_chunks_that_fit() {
+    // Room for 10 chunks of the scene's points: ICP uses those 640 points, and only those.
+    let mut f = fixture();
+    let truth = Pose::translation(0.2, -0.1, 0.0);
+    f.work.truncate(work_words::<f64>(10 * CHUNK, false));
+    let a = register(&mut f, &truth, &Pose::identity(), &Sequential);
+    let (et, er) = errors(&a.pose, &truth);
+    std::println!(
+        "{} correspondences of {} points; error {et:.1e} m, {er:.1e} rad (tolerance 1e-6)",
+        a.correspondences,
+        f.n
+    );
+    assert!(a.correspondences > 0 && a.correspondences as usize <= 10 * CHUNK);
+    assert!(et < 1e-6 && er < 1e-6);
+}
