@@ -317,3 +317,42 @@ fn a_short_work_area_registers_the_chunks_that_fit() {
     assert!(a.correspondences > 0 && a.correspondences as usize <= 10 * CHUNK);
     assert!(et < 1e-6 && er < 1e-6);
 }
+
+#[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
+fn the_moved_points_are_the_source_at_the_registered_pose_in_either_layout() {
+    let mut f = fixture();
+    let truth = Pose::translation(0.2, -0.1, 0.05);
+    let inv = truth.inverse();
+    let source: Vec<[f64; 3]> = f.scene[..f.n]
+        .iter()
+        .map(|p| (inv * Point::from(*p)).coords.into())
+        .collect();
+    let (map, _) = f.map_and_work();
+    for planes in [false, true] {
+        let mut work = std::vec![0u64; work_words::<f64>(source.len(), planes)];
+        let params = IcpParams { planes, ..params() };
+        let a = align_points_to_map(
+            &Sequential,
+            &source,
+            &mut work,
+            &map.view(),
+            &Pose::identity(),
+            6.0,
+            2.0,
+            &params,
+        );
+        let moved: Vec<Point<f64>> = moved_points::<f64>(&work, source.len(), planes).collect();
+        assert_eq!(moved.len(), source.len(), "planes: {planes}");
+        // The last iteration moved them by the last step, which is below gamma.
+        let worst = moved
+            .iter()
+            .zip(&source)
+            .map(|(m, s)| (m - a.pose * Point::from(*s)).norm())
+            .fold(0.0, f64::max);
+        std::println!(
+            "planes {planes}: worst |moved - pose * source| {worst:.1e} m (tolerance 1e-3)"
+        );
+        assert!(worst < 1e-3);
+    }
+}
