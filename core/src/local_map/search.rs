@@ -16,7 +16,7 @@
 
 use super::{MapView, PointCodec};
 use crate::scalar::{norm_lt, sqrt_lt, Real};
-use crate::voxel::{point_to_voxel, NEIGHBOUR_SHIFTS};
+use crate::voxel::{point_to_voxel, VoxelKey, NEIGHBOUR_SHIFTS};
 
 /// Each neighbour offset's position in the reference's visiting order, indexed by
 /// `(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)`.
@@ -187,10 +187,12 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
 }
 
 impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
-    /// Number of points and their covariance in the 27 voxels around `p` (GenZ-ICP's
+    /// Number of points and their covariance in the 27 voxels around the voxel `key` (GenZ-ICP's
     /// neighbourhood), visited in `NEIGHBOUR_SHIFTS` order; `None` without any point.
-    pub fn neighbourhood_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
-        let key = point_to_voxel(p, self.st.voxel_size);
+    pub fn neighbourhood_covariance(
+        &self,
+        key: &VoxelKey,
+    ) -> Option<(usize, nalgebra::Matrix3<T>)> {
         let mut slots = [0usize; 27];
         let mut found = 0;
         for s in NEIGHBOUR_SHIFTS.iter() {

@@ -4,7 +4,7 @@
 use super::planes::{Cached, CACHED};
 use super::CHUNK;
 use crate::scalar::Real;
-use crate::storage::{view, view_ref, words_for};
+use crate::storage::{view, words_for};
 use crate::Point;
 use bytemuck::Pod;
 
@@ -18,8 +18,6 @@ pub(super) const KEPT: usize = 5;
 /// Scalars in one chunk: its points (`3 * CHUNK`), what each kept (`KEPT * CHUNK`), its partial
 /// system, its point count and where it stands in the current iteration (see `Parts::progress`).
 pub const CHUNK_LEN: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN + 4;
-/// Where a chunk's point count sits.
-const COUNT: usize = (3 + KEPT) * CHUNK + SYSTEM_LEN;
 /// Scalars in one chunk of robust mode: a [`Chunk`], then the partial system of its
 /// point-to-plane terms and each point's cached plane (see `planes`).
 pub const PLANE_CHUNK_LEN: usize = CHUNK_LEN + SYSTEM_LEN + CACHED * CHUNK;
@@ -140,17 +138,33 @@ pub(super) fn load<'w, T: Real, C: WorkChunk<T>>(
 }
 
 /// The points ICP moved, in source order (world frame, as the last iteration left them), from
-/// work laid out for `planes` as [`super::align_points_to_map`] left it.
+/// work laid out for `planes` as [`super::align_points_to_map`] left it. It takes the words
+/// mutably only to read them through [`WorkChunk::parts`], the one statement of each layout.
 pub fn moved_points<T: Real>(
-    work: &[u64],
+    work: &mut [u64],
     n: usize,
     planes: bool,
 ) -> impl Iterator<Item = Point<T>> + '_ {
-    let len = chunk_len(planes);
-    let scalars = view_ref::<T>(work, chunks_for(n) * len).unwrap_or_default();
-    scalars.chunks_exact(len).flat_map(|c| {
-        let count = c.get(COUNT).map_or(0, |n| n.wide() as usize);
-        c[..3 * CHUNK]
+    let (reference, robust) = if planes {
+        (None, Some(moved_in::<T, PlaneChunk<T>>(work, n)))
+    } else {
+        (Some(moved_in::<T, Chunk<T>>(work, n)), None)
+    };
+    reference
+        .into_iter()
+        .flatten()
+        .chain(robust.into_iter().flatten())
+}
+
+/// [`moved_points`] of work in the layout `C`.
+fn moved_in<T: Real, C: WorkChunk<T>>(
+    work: &mut [u64],
+    n: usize,
+) -> impl Iterator<Item = Point<T>> + '_ {
+    let chunks = view::<C>(work, chunks_for(n)).unwrap_or_default();
+    chunks.iter_mut().filter_map(C::parts).flat_map(|c| {
+        let (points, count): (&[T; 3 * CHUNK], usize) = (c.points, c.count.wide() as usize);
+        points
             .chunks_exact(3)
             .take(count)
             .map(|p| Point::new(p[0], p[1], p[2]))

@@ -26,7 +26,7 @@ use super::SYSTEM_LEN;
 use crate::local_map::{MapView, PointCodec};
 use crate::robust::jacobi_eigen;
 use crate::scalar::Real;
-use crate::voxel::point_to_voxel;
+use crate::voxel::{point_to_voxel, VoxelKey};
 use crate::Point;
 use nalgebra::Vector3;
 
@@ -62,12 +62,13 @@ impl Cached {
         map: &MapView<'_, T, P>,
         s: &Point<T>,
     ) -> Option<Vector3<T>> {
-        let key = point_to_voxel(s, map.voxel_size()).map(|k| T::of(f64::from(k)));
+        let voxel = point_to_voxel(s, map.voxel_size());
+        let key = voxel.map(|k| T::of(f64::from(k)));
         let (at, normal) = cached.split_first_chunk_mut::<3>()?;
         let normal = normal.first_chunk_mut::<3>()?;
         if *at != key {
             *at = key;
-            *normal = normal_at(map, s).map_or([T::zero(); 3], |n| [n.x, n.y, n.z]);
+            *normal = normal_around(map, &voxel).map_or([T::zero(); 3], |n| [n.x, n.y, n.z]);
         }
         let n = Vector3::from(*normal);
         (n != Vector3::zeros()).then_some(n)
@@ -75,11 +76,20 @@ impl Cached {
 }
 
 /// The unit normal of the map around `s` if it is planar (see the module doc).
+#[cfg(test)]
 pub(super) fn normal_at<T: Real, P: PointCodec<T>>(
     map: &MapView<'_, T, P>,
     s: &Point<T>,
 ) -> Option<Vector3<T>> {
-    let (n, cov) = map.neighbourhood_covariance(s)?;
+    normal_around(map, &point_to_voxel(s, map.voxel_size()))
+}
+
+/// The unit normal of the map in the 27 voxels around `voxel` if it is planar.
+fn normal_around<T: Real, P: PointCodec<T>>(
+    map: &MapView<'_, T, P>,
+    voxel: &VoxelKey,
+) -> Option<Vector3<T>> {
+    let (n, cov) = map.neighbourhood_covariance(voxel)?;
     if n < MIN_POINTS {
         return None;
     }

@@ -342,7 +342,7 @@ fn the_moved_points_are_the_source_at_the_registered_pose_in_either_layout() {
             2.0,
             &params,
         );
-        let moved: Vec<Point<f64>> = moved_points::<f64>(&work, source.len(), planes).collect();
+        let moved: Vec<Point<f64>> = moved_points::<f64>(&mut work, source.len(), planes).collect();
         assert_eq!(moved.len(), source.len(), "planes: {planes}");
         // The last iteration moved them by the last step, which is below gamma.
         let worst = moved
