@@ -6,7 +6,9 @@
 #
 # PROFILES picks the runs (default "corridor plane tunnel field urban fast kitti"; `kitti` is
 # every kitti-mini sequence). GenZ-ICP runs its `corridor` preset on corridor, plane and tunnel,
-# `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini.
+# `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini; robust mode runs with
+# every frame with plane terms and r_max / 200 voxels (--plane-gate 1 --voxel-size 0.5) where
+# GenZ-ICP has its corridor preset, with its defaults elsewhere.
 #
 # Writes $OUT/results.jsonl (one line per run and system, with the estimated over the true
 # distance travelled) and prints the Markdown table
@@ -47,13 +49,13 @@ print(json.dumps(row))
 PY
 }
 
-ours() {  # ours NAME DATA MODE
+ours() {  # ours NAME DATA MODE [ARGS]
   local o=$OUT/$1-$3
-  "$BIN" run "$2" --threads 1 --quiet --degeneracy "$3" --out "$o" >/dev/null
+  "$BIN" run "$2" --threads 1 --quiet --degeneracy "$3" --out "$o" "${@:4}" >/dev/null
   local gt
   gt=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['input']['ground_truth'])" "$o/summary.json")
   record "$1" "$3" "$o/poses_kitti.txt" "$gt" \
-    "$(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print(json.dumps({'hz': s['hz'], 'held_frames': s['degraded_frames'].get('held', 0)}))" "$o/summary.json")"
+    "$(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); d=s['degraded_frames']; print(json.dumps({'hz': s['hz'], 'held_frames': d.get('held', 0), 'plane_frames': d.get('planes', 0)}))" "$o/summary.json")"
 }
 
 genz() {  # genz NAME DATA PRESET GT [ARGS]
@@ -70,14 +72,18 @@ genz() {  # genz NAME DATA PRESET GT [ARGS]
 }
 
 for p in $PROFILES; do
-  case $p in kitti) continue ;; corridor | plane | tunnel) preset=corridor ;; *) preset=outdoor ;; esac
+  case $p in
+    kitti) continue ;;
+    corridor | plane | tunnel) preset=corridor fine=(--plane-gate 1 --voxel-size 0.5) ;;
+    *) preset=outdoor fine=() ;;
+  esac
   for s in $SEEDS; do
     d=$GEN/$p-$FRAMES-s$s
     [ -f "$d/poses.txt" ] || "$BIN" simulate --out "$d" --frames "$FRAMES" --seed "$s" --profile "$p" >/dev/null
     name=$p-s$s
     echo "== $name" >&2
     ours "$name" "$d" reference
-    ours "$name" "$d" robust
+    ours "$name" "$d" robust "${fine[@]}"
     genz "$name" "$d" "$preset" "$d/poses.txt"
   done
 done

@@ -52,11 +52,19 @@ pub struct Config<T> {
     /// information (from map voxel normals) carries less than this fraction of the strongest.
     pub degeneracy_ratio: T,
     /// What ICP does along directions the scene does not constrain: move as the reference
-    /// does ([`Degeneracy::Reference`], the default), let point-to-plane terms leave them to
-    /// the scene's sparse structure ([`Degeneracy::Robust`], see [`Config::robust`]) or hold
-    /// them at the constant-velocity prediction ([`Degeneracy::Hold`]; see
-    /// [`crate::FrameReport::held`]).
+    /// does ([`Degeneracy::Reference`], the default), register the frames the reference finds
+    /// degenerate again with point-to-plane terms ([`Degeneracy::Robust`], see
+    /// [`Config::plane_gate`]) or hold them at the constant-velocity prediction
+    /// ([`Degeneracy::Hold`]; see [`crate::FrameReport::held`]).
     pub degeneracy: Degeneracy,
+    /// Robust mode's gate: a frame whose reference registration leaves an observability
+    /// (see [`crate::FrameReport::observability`]) below this is registered again from the
+    /// prediction with point-to-plane terms where the map is planar, and flagged
+    /// [`crate::Flag::Planes`]; every other frame keeps the reference's pose, bit for bit.
+    /// 0.015 (BENCHMARKS.md section 12: tunnel and field frames 0-0.015, the weakest frames of
+    /// urban and fast runs 0.0125-0.024). 1 or more: every frame with plane terms, without the
+    /// reference registration first (observability is at most 1).
+    pub plane_gate: T,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
     /// exceed it, ICP keeps its last complete iterate and the frame is flagged
@@ -84,20 +92,19 @@ impl<T: Real> Config<T> {
             max_correspondence_factor: T::of(3.0),
             degeneracy_ratio: T::of(0.02),
             degeneracy: Degeneracy::Reference,
+            plane_gate: T::of(0.015),
             work_budget: None,
         }
     }
 
-    /// Robust mode ([`Degeneracy::Robust`]) with the parameters it was measured with
-    /// (BENCHMARKS.md section 12): voxels of `r_max / 200` (point-to-plane terms need a
-    /// neighbourhood finer than a tunnel's features; on `r_max / 100` GenZ-ICP and robust
-    /// mode both lose the tunnel) and the paper's Geman-McClure scale `sigma / 3` (Eq. (10);
-    /// with kiss-icp's `sigma` the far ground's ring-to-ring matches outweigh the few poles of
-    /// an open field). The map needs about 4x the voxels of the reference's for the same range.
+    /// Robust mode ([`Degeneracy::Robust`]) with the reference's other defaults: on a scene
+    /// that is not degenerate its poses are the reference's. Its point-to-plane terms read
+    /// planes from the map's voxels, so the voxel size must resolve the structure that
+    /// constrains the free directions: `r_max / 100` does over open ground; in a tunnel whose
+    /// features stand 0.2-0.8 m proud of its walls, 0.2 m voxels do (GenZ-ICP's corridor preset;
+    /// BENCHMARKS.md section 12).
     pub fn robust(max_range: T) -> Self {
         Self {
-            voxel_size: max_range / T::of(200.0),
-            kernel_scale: T::one() / T::of(3.0),
             degeneracy: Degeneracy::Robust,
             ..Self::new(max_range)
         }
@@ -136,6 +143,7 @@ impl<T: Real> Config<T> {
             || !pos(self.kernel_scale)
             || !pos(self.max_correspondence_factor)
             || !nonneg(self.degeneracy_ratio)
+            || !nonneg(self.plane_gate)
         {
             return Err(ConfigError::Threshold);
         }
@@ -194,8 +202,9 @@ impl Capacities {
         plane_terms: false,
     };
 
-    /// Full scale for robust mode ([`Config::robust`]: `r_max` 100 m, 0.5 m voxels): an open
-    /// field's ground fills four times the voxels of [`Capacities::FULL_SCALE`]'s 1 m map.
+    /// Full scale for robust mode ([`Config::robust`], `r_max` 100 m) down to 0.5 m voxels (its
+    /// tunnel setting, `plane_gate` 1 and `r_max / 200`): an open field's ground then fills four
+    /// times the voxels of [`Capacities::FULL_SCALE`]'s 1 m map.
     /// Margins over the largest high-water marks of generated 500-frame field runs and
     /// kitti-mini (BENCHMARKS.md section 12): merge 1.6x (39,917, KITTI 01), source 1.9x
     /// (12,588, KITTI 01), map voxels 1.5x (108,776, field-3), map point slots 1.8x (577,594,
@@ -258,21 +267,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn robust_is_the_reference_with_half_the_voxel_a_third_of_the_kernel_and_planes() {
+    fn robust_is_the_reference_with_planes_and_its_gate_is_checked() {
         let (r, n) = (Config::<f64>::robust(80.0), Config::<f64>::new(80.0));
         assert_eq!(r.degeneracy, Degeneracy::Robust);
-        assert_eq!((r.voxel_size, n.voxel_size), (0.4, 0.8));
-        assert_eq!(r.kernel_scale, 1.0 / 3.0);
-        let back = Config {
-            voxel_size: n.voxel_size,
-            kernel_scale: n.kernel_scale,
-            degeneracy: n.degeneracy,
-            ..r
-        };
-        assert_eq!(back, n);
+        assert_eq!(n.plane_gate, 0.015);
+        assert_eq!(
+            Config {
+                degeneracy: n.degeneracy,
+                ..r
+            },
+            n
+        );
         assert!(r.validate().is_ok());
         assert!(Capacities::ROBUST.validate().is_ok());
-        // Four times the full-scale map, as the halved voxel size needs over open ground.
+        for bad in [-0.1, f64::NAN, f64::INFINITY] {
+            let c = Config {
+                plane_gate: bad,
+                ..r
+            };
+            assert_eq!(
+                c.validate(),
+                Err(ConfigError::Threshold),
+                "plane_gate {bad}"
+            );
+        }
+        // Room for a finer map than the full-scale one (a tunnel's 0.2 m voxels).
         let full = Capacities::FULL_SCALE;
         assert!(Capacities::ROBUST.map_voxels >= 4 * full.map_voxels);
     }

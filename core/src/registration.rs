@@ -17,7 +17,7 @@ pub use chunk::{
 };
 use chunk::{load, Parts, WorkChunk, KEPT};
 use planes::{accumulate_plane, Cached, CACHED};
-pub use planes::{MIN_POINTS, PLANARITY};
+pub use planes::{MIN_POINTS, PLANARITY, PLANE_KERNEL_SCALE};
 
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};

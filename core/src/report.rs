@@ -36,11 +36,14 @@ pub enum Flag {
     /// Hold mode held some directions at the constant-velocity prediction (see
     /// [`FrameReport::held`]).
     Held = 1 << 9,
+    /// Robust mode registered the scan with point-to-plane terms where the map is planar: the
+    /// reference registration found it degenerate (see `Config::plane_gate`).
+    Planes = 1 << 10,
 }
 
 impl Flag {
     /// Every flag, in bit order.
-    pub const ALL: [Flag; 10] = [
+    pub const ALL: [Flag; 11] = [
         Flag::TimestampsIgnored,
         Flag::IterationCap,
         Flag::NoCorrespondences,
@@ -51,6 +54,7 @@ impl Flag {
         Flag::Capacity,
         Flag::Budget,
         Flag::Held,
+        Flag::Planes,
     ];
 
     /// The flag's name in reports and `frames.csv` (`snake_case`).
@@ -66,6 +70,7 @@ impl Flag {
             Flag::Capacity => "capacity",
             Flag::Budget => "budget",
             Flag::Held => "held",
+            Flag::Planes => "planes",
         }
     }
 
@@ -302,6 +307,6 @@ mod tests {
         }
         assert_eq!(Flag::from_name("fine"), None);
         let all: Status = Flag::ALL.into_iter().collect();
-        assert_eq!(all.bits(), 0x3ff);
+        assert_eq!(all.bits(), 0x7ff);
     }
 }

@@ -35,10 +35,11 @@ pub enum Degeneracy {
     /// As kiss-icp 1.3.0: ICP moves the pose along every direction (bit-identical to it).
     #[default]
     Reference,
-    /// Point-to-plane terms wherever the map around a registration point is planar, from the
-    /// second frame on (GenZ-ICP's, see `registration::planes`), so sparse structure moves the
-    /// pose along walls and ground; for tunnels, corridors, long walls, open ground. Nothing is
-    /// held.
+    /// The reference, except on frames whose registration the reference leaves degenerate
+    /// (observability below `Config::plane_gate`): those are registered again with
+    /// point-to-plane terms wherever the map around a registration point is planar (GenZ-ICP's,
+    /// see `registration::planes`), so sparse structure moves the pose along walls and ground;
+    /// for tunnels, corridors, long walls, open ground. Nothing is held.
     Robust,
     /// Issue 17's candidate (a), kept for comparison: directions the scene does not constrain
     /// are held at the constant-velocity prediction (see the module doc).

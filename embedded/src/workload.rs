@@ -111,7 +111,8 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 
 /// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
 /// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels); under the
-/// `robust` feature, robust mode with its kernel (`Config::robust`) on those voxels.
+/// `robust` feature, robust mode with plane terms on every frame (`plane_gate` 1, its tunnel
+/// setting: the most work a frame of robust mode's plane registration takes) on those voxels.
 pub fn config() -> Config<Scalar> {
     let base = if cfg!(any(feature = "tiny", feature = "packets")) {
         Config::tiny()
@@ -121,18 +122,17 @@ pub fn config() -> Config<Scalar> {
             ..Config::new(frames::MAX_RANGE as Scalar)
         }
     };
-    let robust = Config::<Scalar>::robust(frames::MAX_RANGE as Scalar);
     Config {
         work_budget: frames::BUDGET,
         degeneracy: if cfg!(feature = "robust") {
-            robust.degeneracy
+            Degeneracy::Robust
         } else {
             Degeneracy::Reference
         },
-        kernel_scale: if cfg!(feature = "robust") {
-            robust.kernel_scale
+        plane_gate: if cfg!(feature = "robust") {
+            1.0
         } else {
-            base.kernel_scale
+            base.plane_gate
         },
         ..base
     }

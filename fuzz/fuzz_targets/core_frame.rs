@@ -63,6 +63,7 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.initial_threshold = T::of(pick(u, &[2.0, 0.1, 50.0, 1e-6])?);
     c.kernel_scale = T::of(pick(u, &[1.0, 1.0 / 3.0, 10.0])?);
     c.degeneracy = *u.choose(&[Degeneracy::Reference, Degeneracy::Robust, Degeneracy::Hold])?;
+    c.plane_gate = T::of(pick(u, &[0.015, 0.0, 1.0, 0.5])?);
     Ok(c)
 }
 

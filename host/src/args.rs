@@ -125,11 +125,17 @@ pub struct PipelineArgs {
     #[arg(long, overrides_with = "deskew")]
     pub no_deskew: bool,
     /// Registration along directions the scene does not constrain: `reference` (kiss-icp),
-    /// `robust` (point-to-plane terms where the map is planar, for tunnels, corridors and open
-    /// ground; unless given, voxel size max_range/200, kernel_scale 1/3 and larger map
-    /// capacities) or `hold` (held at the constant-velocity prediction) [default: reference].
+    /// `robust` (the reference, but frames it leaves degenerate are registered again with
+    /// point-to-plane terms where the map is planar, flagged `planes`: for open ground, and
+    /// with --plane-gate 1 --voxel-size 0.5 for tunnels and corridors) or `hold` (held at the
+    /// constant-velocity prediction) [default: reference].
     #[arg(long, value_enum)]
     pub degeneracy: Option<DegeneracyMode>,
+    /// Robust mode registers a frame again with plane terms when the reference registration's
+    /// observability is below this; 1: every frame, without the reference registration
+    /// [default: 0.015].
+    #[arg(long)]
+    pub plane_gate: Option<f64>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
     /// would spend more keeps its last complete iterate and is flagged `budget`. With the
     /// capacities it bounds a frame's time on a given target (README "Deadlines") [default:
@@ -237,6 +243,9 @@ pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Resul
     }
     if let Some(d) = p.degeneracy {
         s.registration.degeneracy = d;
+    }
+    if let Some(g) = p.plane_gate {
+        s.registration.plane_gate = g;
     }
     if let Some(b) = p.budget {
         s.registration.work_budget = Some(b);

@@ -96,14 +96,16 @@ pub struct Registration {
     pub max_num_iterations: u32,
     /// `gamma`.
     pub convergence_criterion: f64,
-    /// Geman-McClure scale as a multiple of sigma (reference 1, paper 1/3); omitted means 1
-    /// (1/3 in robust mode).
+    /// Geman-McClure scale as a multiple of sigma (reference 1, paper 1/3); omitted means 1.
     pub kernel_scale: Option<f64>,
     /// Correspondence threshold as a multiple of sigma.
     pub max_correspondence_factor: f64,
-    /// Observability ratio below which a frame is flagged degenerate (and, in robust mode,
+    /// Observability ratio below which a frame is flagged degenerate (and, in hold mode,
     /// below which a direction is held).
     pub degeneracy_ratio: f64,
+    /// Robust mode registers a frame again with plane terms when the reference registration's
+    /// observability is below this (`Config::plane_gate`); 1 or more: every frame.
+    pub plane_gate: f64,
     /// `reference`, `robust` or `hold`.
     pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
@@ -196,6 +198,7 @@ impl Default for Registration {
             kernel_scale: None,
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
+            plane_gate: Config::<f64>::new(100.0).plane_gate,
             degeneracy: DegeneracyMode::Reference,
             work_budget: None,
         }
@@ -246,16 +249,15 @@ impl Settings {
         Ok(toml::to_string(&s)?)
     }
 
-    /// `v`: explicit, or `max_range / 100` as in the paper (`Config::robust`'s
-    /// `max_range / 200` in robust mode).
+    /// `v`: explicit, or `max_range / 100` as in the paper (in every mode).
     pub fn voxel_size(&self) -> f64 {
         self.mapping
             .voxel_size
             .unwrap_or_else(|| self.mode_defaults().voxel_size)
     }
 
-    /// The Geman-McClure scale over sigma: explicit, or 1 as kiss-icp (`Config::robust`'s 1/3
-    /// in robust mode).
+    /// The Geman-McClure scale over sigma of the reference's registration: explicit, or 1 as
+    /// kiss-icp (robust mode's plane terms use `PLANE_KERNEL_SCALE`).
     pub fn kernel_scale(&self) -> f64 {
         self.registration
             .kernel_scale
@@ -271,7 +273,8 @@ impl Settings {
     }
 
     /// The capacities given, where the defaults (`FULL_SCALE`) become `Capacities::ROBUST` in
-    /// robust mode (its finer map needs more voxels); room for plane terms in robust mode only.
+    /// robust mode (room for the finer voxels a tunnel needs); room for plane terms in robust
+    /// mode only.
     fn caps(&self) -> Capacities {
         let c = &self.capacities;
         if self.registration.degeneracy == DegeneracyMode::Robust && *c == Caps::default() {
@@ -303,6 +306,7 @@ impl Settings {
         c.kernel_scale = T::of(self.kernel_scale());
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
+        c.plane_gate = T::of(self.registration.plane_gate);
         c.degeneracy = self.registration.degeneracy.into();
         c.work_budget = self.registration.work_budget;
         if let Err(e) = c.validate() {
@@ -412,7 +416,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 20] {
+fn fields() -> [Field; 21] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -427,6 +431,7 @@ fn fields() -> [Field; 20] {
         field!(registration.kernel_scale, false),
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
+        field!(registration.plane_gate, false),
         field!(registration.degeneracy, false),
         field!(registration.work_budget, false),
         field!(capacities.scan_points, true),
@@ -484,12 +489,18 @@ mod tests {
         };
         let (c, caps) = robust("");
         assert_eq!(c, Config::robust(100.0));
-        assert_eq!((c.voxel_size, c.kernel_scale), (0.5, 1.0 / 3.0));
+        assert_eq!(
+            (c.voxel_size, c.kernel_scale, c.plane_gate),
+            (1.0, 1.0, 0.015)
+        );
         assert_eq!(caps, Capacities::ROBUST);
         let (c, caps) = robust(
-            "kernel_scale = 1.0\n[mapping]\nvoxel_size = 0.7\n[capacities]\nmap_voxels = 5000\n",
+            "kernel_scale = 0.5\nplane_gate = 1.0\n[mapping]\nvoxel_size = 0.7\n[capacities]\nmap_voxels = 5000\n",
         );
-        assert_eq!((c.voxel_size, c.kernel_scale), (0.7, 1.0));
+        assert_eq!(
+            (c.voxel_size, c.kernel_scale, c.plane_gate),
+            (0.7, 0.5, 1.0)
+        );
         assert_eq!(caps.map_voxels, 5000);
         assert!(
             caps.plane_terms,

@@ -1,6 +1,9 @@
 //! The degeneracy modes (issue 17) end to end on generated data. Robust mode
-//! (`--degeneracy robust`, point-to-plane terms) follows a tunnel and an open field from a
-//! standing start where reference mode stays stuck or turns away, and holds nothing. Hold mode
+//! (`--degeneracy robust`: frames the reference leaves degenerate registered again with
+//! point-to-plane terms) follows an open field from a standing start where reference mode turns
+//! away, and with its tunnel setting (plane terms on every frame, finer voxels) a tunnel where
+//! reference mode stays stuck; it flags those frames `planes` and holds nothing. On an urban
+//! street it registers nothing again and gives the reference's poses bit for bit. Hold mode
 //! (`--degeneracy hold`): in the corridor it holds the axis (`frames.csv` says so) and the pose
 //! along it is the constant-velocity prediction, where reference mode moves; on an urban street
 //! it holds nothing and gives the reference's poses bit for bit.
@@ -31,12 +34,33 @@ fn simulate(dir: &Path, profile: &str, frames: usize) {
     assert_eq!(code, 0, "simulate failed: {err}");
 }
 
-/// Simulates `frames` of `profile` in `dir` and runs reference mode and `other` on them.
-fn both_modes(dir: &Path, profile: &str, frames: usize, other: &str) -> (common::Run, common::Run) {
+/// Simulates `frames` of `profile` in `dir` and runs reference mode and `other` (with `args`)
+/// on them.
+fn both_modes(
+    dir: &Path,
+    profile: &str,
+    frames: usize,
+    other: &str,
+    args: &[&str],
+) -> (common::Run, common::Run) {
     let data = dir.join(profile);
     simulate(&data, profile, frames);
-    let mode = |m| run(&data, &dir.join(m), &["--threads", "1", "--degeneracy", m]);
-    (mode("reference"), mode(other))
+    let mode = |m, more: &[&str]| {
+        let argv: Vec<&str> = ["--threads", "1", "--degeneracy", m]
+            .into_iter()
+            .chain(more.iter().copied())
+            .collect();
+        run(&data, &dir.join(m), &argv)
+    };
+    (mode("reference", &[]), mode(other, args))
+}
+
+/// Frames of a run flagged `planes` (registered again with plane terms).
+fn plane_frames(r: &common::Run) -> usize {
+    r.rows()
+        .iter()
+        .filter(|row| row.flags.iter().any(|f| f == "planes"))
+        .count()
 }
 
 /// Worst position error of a run's poses against the simulator's (m).
@@ -50,24 +74,43 @@ fn worst_error(data: &Path, r: &common::Run) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Robust mode on `profile` from a standing start: its worst position error, and reference
-/// mode's, over `frames`.
-fn robust_and_reference(profile: &str, frames: usize) -> (f64, f64) {
+/// Robust mode (with `args`) on `profile` from a standing start: `measure` of its run and of
+/// reference mode's over `frames`; most frames are registered with plane terms.
+fn robust_and_reference(
+    profile: &str,
+    frames: usize,
+    args: &[&str],
+    measure: fn(&Path, &common::Run) -> f64,
+) -> (f64, f64) {
     let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), profile, frames, "robust");
+    let (reference, robust) = both_modes(dir.path(), profile, frames, "robust", args);
     reference.succeeded_with_frames(frames);
     robust.succeeded_with_frames(frames);
     assert!(
         held(&robust.out).iter().all(|h| h.is_empty()),
         "robust mode holds nothing"
     );
+    let planes = plane_frames(&robust);
+    println!("{profile}: {planes} of {frames} frames registered with plane terms");
+    assert!(planes > frames / 2 && plane_frames(&reference) == 0);
     let data = dir.path().join(profile);
-    (worst_error(&data, &robust), worst_error(&data, &reference))
+    (measure(&data, &robust), measure(&data, &reference))
+}
+
+/// Position RMSE after a rigid alignment (m), as `kiss-odom eval` reports it.
+fn ate(data: &Path, r: &common::Run) -> f64 {
+    let read = kiss_odom::io::poses::read_kitti;
+    let truth = read(&data.join("poses.txt")).unwrap();
+    let est = read(&r.out.join("poses_kitti.txt")).unwrap();
+    kiss_odom::metrics::absolute_trajectory_error(&est, &truth)
+        .unwrap()
+        .ate_m
 }
 
 #[test]
 fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
-    let (robust, reference) = robust_and_reference("tunnel", 80);
+    let tunnel = ["--plane-gate", "1", "--voxel-size", "0.5"];
+    let (robust, reference) = robust_and_reference("tunnel", 80, &tunnel, worst_error);
     println!(
         "tunnel, 80 frames: worst position error robust {robust:.3} m (tol: a fifth of \
          reference mode's), reference {reference:.3} m"
@@ -77,10 +120,10 @@ fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
 
 #[test]
 fn robust_mode_follows_an_open_field_where_reference_mode_turns_away() {
-    let (robust, reference) = robust_and_reference("field", 80);
+    let (robust, reference) = robust_and_reference("field", 80, &[], ate);
     println!(
-        "field, 80 frames: worst position error robust {robust:.3} m (tol: half of reference \
-         mode's), reference {reference:.3} m"
+        "field, 80 frames: ATE robust {robust:.3} m (tol: half of reference mode's), \
+         reference {reference:.3} m"
     );
     assert!(robust < 0.5 * reference);
 }
@@ -113,7 +156,7 @@ fn correction(poses: &[Matrix4<f64>], k: usize) -> [f64; 3] {
 #[test]
 fn hold_mode_holds_the_corridor_axis_at_the_prediction_where_reference_mode_moves() {
     let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), "corridor", 60, "hold");
+    let (reference, robust) = both_modes(dir.path(), "corridor", 60, "hold", &[]);
     reference.succeeded_with_frames(60);
     robust.succeeded_with_frames(60);
     let held = held(&robust.out);
@@ -152,12 +195,25 @@ fn hold_mode_holds_the_corridor_axis_at_the_prediction_where_reference_mode_move
 #[test]
 fn on_an_urban_street_hold_mode_holds_nothing_and_gives_the_reference_poses() {
     let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), "urban", 40, "hold");
+    let (reference, robust) = both_modes(dir.path(), "urban", 40, "hold", &[]);
     let read = |r: &common::Run| std::fs::read(r.out.join("poses_kitti.txt")).unwrap();
     assert!(held(&robust.out).iter().all(|h| h.is_empty()));
     assert_eq!(
         read(&reference),
         read(&robust),
         "hold mode changed an urban run"
+    );
+}
+
+#[test]
+fn on_an_urban_street_robust_mode_registers_nothing_again_and_gives_the_reference_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let (reference, robust) = both_modes(dir.path(), "urban", 40, "robust", &[]);
+    let read = |r: &common::Run| std::fs::read(r.out.join("poses_kitti.txt")).unwrap();
+    assert_eq!(plane_frames(&robust), 0);
+    assert_eq!(
+        read(&reference),
+        read(&robust),
+        "robust mode changed an urban run"
     );
 }

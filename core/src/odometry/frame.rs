@@ -12,7 +12,9 @@ use crate::downsample::{reference_order, Dedup, Downsampled};
 use crate::error::FrameError;
 use crate::lie::renormalize;
 use crate::local_map::{MapMut, PointCodec, UpdateStats};
-use crate::registration::{align_points_to_map, moved_points, Alignment, Executor, IcpParams};
+use crate::registration::{
+    align_points_to_map, moved_points, Alignment, Executor, IcpParams, PLANE_KERNEL_SCALE,
+};
 use crate::report::{Dropped, Flag, FrameReport, Status};
 use crate::robust::{min_points, weakness, Degeneracy, Weakness};
 use crate::scalar::Real;
@@ -91,27 +93,55 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             ),
             _ => Weakness::NONE,
         };
-        // Robust mode's plane terms from the first registration on: the second sweep's rings
-        // land elsewhere on the ground as soon as the sensor pitches.
-        let planes = cfg.degeneracy == Degeneracy::Robust;
-        let icp = align_points_to_map(
-            exec,
-            source,
-            parts.icp,
-            &map.view(),
-            &prediction,
-            max_distance,
-            cfg.kernel_scale * sigma,
-            &icp_params(&cfg, &prediction, &weak, planes),
-        );
-        let (pose, finite) = finite_or(weak.apply(&prediction, icp.pose), prediction);
-        let observability = if first_frame {
-            None
-        } else {
-            let moved = moved_points::<T>(parts.icp, clouds.source, planes);
-            let origin = Point::from(pose.translation.vector);
-            observability(&map.view(), moved, clouds.source, &origin, max_distance)
+        // Robust mode: the reference's registration, and where it leaves the pose degenerate,
+        // a second one from the prediction with point-to-plane terms where the map is planar
+        // (or only that one, when every frame passes the gate).
+        let robust = cfg.degeneracy == Degeneracy::Robust;
+        let always = robust && !first_frame && cfg.plane_gate >= T::one();
+        let mut register = |planes: bool| {
+            let kernel = if planes {
+                T::of(PLANE_KERNEL_SCALE)
+            } else {
+                cfg.kernel_scale
+            };
+            let icp = align_points_to_map(
+                exec,
+                source,
+                &mut *parts.icp,
+                &map.view(),
+                &prediction,
+                max_distance,
+                kernel * sigma,
+                &icp_params(&cfg, &prediction, &weak, planes),
+            );
+            let (pose, finite) = finite_or(weak.apply(&prediction, icp.pose), prediction);
+            let observability = if first_frame {
+                None
+            } else {
+                let moved = moved_points::<T>(parts.icp, clouds.source, planes);
+                let origin = Point::from(pose.translation.vector);
+                observability(&map.view(), moved, clouds.source, &origin, max_distance)
+            };
+            Registered {
+                icp,
+                pose,
+                finite,
+                observability,
+                planes,
+            }
         };
+        let mut reg = register(always);
+        let degenerate = reg.observability.is_none_or(|o| o < cfg.plane_gate);
+        if robust && !reg.planes && !first_frame && degenerate {
+            reg = register(true);
+        }
+        let Registered {
+            icp,
+            pose,
+            finite,
+            observability,
+            planes,
+        } = reg;
 
         // Eq. (13): the model deviation is a sample of the adaptive threshold (Sec. III-D).
         let deviation = prediction.inverse() * pose;
@@ -132,6 +162,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             first_frame,
             observability,
             weak,
+            planes,
             model_error,
             update,
         };
@@ -189,6 +220,15 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     }
 }
 
+/// One registration of step 4 and what it left.
+struct Registered<T: Real> {
+    icp: Alignment<T>,
+    pose: Pose<T>,
+    finite: bool,
+    observability: Option<T>,
+    planes: bool,
+}
+
 /// What the steps found, for the report.
 struct Facts<T: Real> {
     sigma: T,
@@ -197,6 +237,8 @@ struct Facts<T: Real> {
     first_frame: bool,
     observability: Option<T>,
     weak: Weakness<T>,
+    /// Registered with robust mode's plane terms.
+    planes: bool,
     model_error: T,
     update: UpdateStats,
 }
@@ -291,6 +333,7 @@ fn status<T: Real>(cfg: &Config<T>, scan: &Received, dropped: &Dropped, f: &Fact
         !f.first_frame && f.observability.is_none_or(|o| o < cfg.degeneracy_ratio),
     );
     status.set(Flag::Held, f.weak.held().directions() > 0);
+    status.set(Flag::Planes, f.planes);
     status.set(Flag::InvalidPoints, dropped.non_finite > 0);
     status.set(Flag::ScanTruncated, dropped.truncated > 0);
     status.set(Flag::Capacity, dropped.capacity());

@@ -34,6 +34,11 @@ use nalgebra::Vector3;
 /// their sum (GenZ-ICP's `planarity_threshold` in all its presets).
 pub const PLANARITY: f64 = 0.2;
 
+/// The Geman-McClure scale of a registration with plane terms, over `sigma`: the paper's
+/// `sigma / 3` (Eq. (10); GenZ-ICP's too). With kiss-icp's `sigma` the far ground's
+/// ring-to-ring matches outweigh an open field's few poles (BENCHMARKS.md section 12).
+pub const PLANE_KERNEL_SCALE: f64 = 1.0 / 3.0;
+
 /// Map points a neighbourhood needs before its shape is read (GenZ-ICP's).
 pub const MIN_POINTS: usize = 5;
 

@@ -16,11 +16,12 @@ pub const WIDTH: u32 = 1000;
 pub const HEIGHT: u32 = 1000;
 
 /// The flags marked, each with its colour.
-pub const MARKED: [(Flag, RGBColor); 4] = [
+pub const MARKED: [(Flag, RGBColor); 5] = [
     (Flag::Degenerate, RGBColor(214, 39, 40)),
     (Flag::IterationCap, RGBColor(148, 103, 189)),
     (Flag::Budget, RGBColor(255, 127, 14)),
     (Flag::Held, RGBColor(23, 190, 207)),
+    (Flag::Planes, RGBColor(140, 86, 75)),
 ];
 
 /// One frame of the diagnostics.
@@ -181,6 +182,8 @@ mod tests {
                     Status::OK.with(Flag::Budget)
                 } else if i == 17 {
                     Status::OK.with(Flag::Held)
+                } else if i == 19 {
+                    Status::OK.with(Flag::Planes)
                 } else {
                     Status::OK
                 },

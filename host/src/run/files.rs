@@ -575,8 +575,11 @@ mod tests {
             first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,"),
             "{first}"
         );
-        assert!(first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0"), "{first}");
+        assert!(
+            first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0,0"),
+            "{first}"
+        );
         let second = lines.next().unwrap();
-        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0,0"), "{second}");
+        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0,0,0"), "{second}");
     }
 }
