@@ -355,8 +355,9 @@ impl Settings {
     }
 
     /// The pipeline settings away from their defaults that the reference's driver does not
-    /// take (it takes the range, voxel size and deskewing; capacities and the degeneracy ratio
-    /// are ours alone and do not change poses).
+    /// take (it takes the range, voxel size and deskewing; capacities, the degeneracy ratio and
+    /// the plane gate are ours alone and do not change poses outside hold and robust mode, which
+    /// `degeneracy` names).
     pub fn changed_beyond_reference(&self) -> Vec<&'static str> {
         // A kernel scale written out (as `run` does) is not a change when it is the default's.
         let resolved = |s: &Settings| {
@@ -431,7 +432,7 @@ fn fields() -> [Field; 21] {
         field!(registration.kernel_scale, false),
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
-        field!(registration.plane_gate, false),
+        field!(registration.plane_gate, true),
         field!(registration.degeneracy, false),
         field!(registration.work_budget, false),
         field!(capacities.scan_points, true),
