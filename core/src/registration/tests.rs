@@ -356,3 +356,29 @@ fn the_moved_points_are_the_source_at_the_registered_pose_in_either_layout() {
         assert!(worst < 1e-3);
     }
 }
+
+/// Every scalar of a chunk belongs to one of its parts, in either layout: the layouts are no
+/// longer than what `parts` hands out (a longer one would only waste the arena).
+#[test]
+fn a_chunk_is_exactly_its_parts_in_either_layout() {
+    fn fill_parts<C: WorkChunk<f64>>(c: &mut C) {
+        let Some(p) = c.parts() else {
+            panic!("a chunk has its parts")
+        };
+        p.points.fill(1.0);
+        p.kept.fill(1.0);
+        p.system.fill(1.0);
+        *p.count = 1.0;
+        p.progress.fill(1.0);
+        if let Some(pl) = p.planes {
+            pl.system.fill(1.0);
+            pl.cached.fill(1.0);
+        }
+    }
+    let mut reference: Chunk<f64> = [f64::NAN; CHUNK_LEN];
+    fill_parts(&mut reference);
+    assert!(reference.iter().all(|v| *v == 1.0), "reference layout");
+    let mut robust: PlaneChunk<f64> = [f64::NAN; PLANE_CHUNK_LEN];
+    fill_parts(&mut robust);
+    assert!(robust.iter().all(|v| *v == 1.0), "robust layout");
+}
