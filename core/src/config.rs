@@ -101,8 +101,8 @@ impl<T: Real> Config<T> {
     /// that is not degenerate its poses are the reference's. Its point-to-plane terms read
     /// planes from the map's voxels, so the voxel size must resolve the structure that
     /// constrains the free directions: `r_max / 100` does over open ground; in a tunnel whose
-    /// features stand 0.2-0.8 m proud of its walls, 0.2 m voxels do (GenZ-ICP's corridor preset;
-    /// BENCHMARKS.md section 12).
+    /// features stand 0.2-0.8 m proud of its walls it does not, and its tunnel setting is
+    /// `plane_gate` 1 with `r_max / 200` voxels (BENCHMARKS.md section 12).
     pub fn robust(max_range: T) -> Self {
         Self {
             degeneracy: Degeneracy::Robust,

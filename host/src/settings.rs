@@ -68,7 +68,7 @@ pub struct Data {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Mapping {
-    /// Voxel size `v` (m); omitted means `max_range / 100` (`max_range / 200` in robust mode).
+    /// Voxel size `v` (m); omitted means `max_range / 100`.
     pub voxel_size: Option<f64>,
     /// `N_max`.
     pub max_points_per_voxel: u32,
@@ -241,7 +241,7 @@ impl Settings {
     }
 
     /// The TOML text of these settings, with the voxel size and capacities made explicit (an
-    /// omitted kernel scale stays omitted: it follows the degeneracy mode).
+    /// omitted kernel scale stays omitted).
     pub fn to_toml(&self) -> Result<String> {
         let mut s = self.clone();
         s.mapping.voxel_size = Some(self.voxel_size());
@@ -253,7 +253,7 @@ impl Settings {
     pub fn voxel_size(&self) -> f64 {
         self.mapping
             .voxel_size
-            .unwrap_or_else(|| self.mode_defaults().voxel_size)
+            .unwrap_or_else(|| Config::new(self.data.max_range).voxel_size)
     }
 
     /// The Geman-McClure scale over sigma of the reference's registration: explicit, or 1 as
@@ -261,15 +261,7 @@ impl Settings {
     pub fn kernel_scale(&self) -> f64 {
         self.registration
             .kernel_scale
-            .unwrap_or_else(|| self.mode_defaults().kernel_scale)
-    }
-
-    /// The core's defaults for the degeneracy mode and range.
-    fn mode_defaults(&self) -> Config<f64> {
-        match self.registration.degeneracy {
-            DegeneracyMode::Robust => Config::robust(self.data.max_range),
-            _ => Config::new(self.data.max_range),
-        }
+            .unwrap_or_else(|| Config::new(self.data.max_range).kernel_scale)
     }
 
     /// The capacities given, where the defaults (`FULL_SCALE`) become `Capacities::ROBUST` in
@@ -459,7 +451,7 @@ mod tests {
         assert_eq!(back.data, s.data);
         assert_eq!(back.runtime, s.runtime);
         assert_eq!(back.capacities, s.capacities);
-        // An omitted kernel stays omitted (it follows the mode), so the text loads back to the
+        // An omitted kernel stays omitted, so the text loads back to the
         // same settings as the ones written: the Python bindings compare them.
         assert_eq!(back.registration, s.registration);
         assert_eq!(back.registration.kernel_scale, None);
