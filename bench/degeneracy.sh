@@ -7,8 +7,9 @@
 # PROFILES picks the runs (default "corridor plane tunnel field urban fast kitti"; `kitti` is
 # every kitti-mini sequence). GenZ-ICP runs its `corridor` preset on corridor, plane and tunnel,
 # `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini; robust mode runs with
-# every frame with plane terms and r_max / 200 voxels (--plane-gate 1 --voxel-size 0.5) where
-# GenZ-ICP has its corridor preset, with its defaults elsewhere.
+# its vehicle prior everywhere (--lateral-prior 1: every run is a car's) and its tunnel setting
+# where GenZ-ICP has its corridor preset: every frame with plane terms, r_max / 200 voxels and
+# the hold prior (--plane-gate 1 --voxel-size 0.5 --prediction-prior 0.01).
 #
 # Writes $OUT/results.jsonl (one line per run and system, with the estimated over the true
 # distance travelled) and prints the Markdown table
@@ -74,8 +75,9 @@ genz() {  # genz NAME DATA PRESET GT [ARGS]
 for p in $PROFILES; do
   case $p in
     kitti) continue ;;
-    corridor | plane | tunnel) preset=corridor fine=(--plane-gate 1 --voxel-size 0.5) ;;
-    *) preset=outdoor fine=() ;;
+    corridor | plane | tunnel)
+      preset=corridor fine=(--lateral-prior 1 --plane-gate 1 --voxel-size 0.5 --prediction-prior 0.01) ;;
+    *) preset=outdoor fine=(--lateral-prior 1) ;;
   esac
   for s in $SEEDS; do
     d=$GEN/$p-$FRAMES-s$s
@@ -92,7 +94,7 @@ for sq in $( [[ " $PROFILES " == *" kitti "* ]] && ls "$KITTI/sequences"); do
   name=kitti-$sq
   echo "== $name" >&2
   ours "$name" "$d" reference
-  ours "$name" "$d" robust
+  ours "$name" "$d" robust --lateral-prior 1
   gt=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['input']['ground_truth'])" "$OUT/$name-reference/summary.json")
   genz "$name" "$d" kitti "$gt" --no-deskew
 done

@@ -65,6 +65,16 @@ pub struct Config<T> {
     /// urban and fast runs 0.0125-0.024). 1 or more: every frame with plane terms, without the
     /// reference registration first (observability is at most 1).
     pub plane_gate: T,
+    /// Robust mode's hold prior: in a registration with plane terms, from the third frame, the
+    /// position is pulled to the constant-velocity prediction with this weight per
+    /// correspondence, so what no correspondence constrains stays at the prediction (see
+    /// `stages::MotionPrior`). 0 (the default): none.
+    pub prediction_prior: T,
+    /// Robust mode's vehicle prior: the same, for no motion along the sensor's `y` axis (a
+    /// car-like vehicle with the sensor's `x` axis forward does not slide sideways). In a
+    /// corridor, a turn's motion across it then fixes the motion along it. 0 (the default):
+    /// none; robust mode's tunnel setting uses 1 with a hold of 0.01 (BENCHMARKS.md section 12).
+    pub lateral_prior: T,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
     /// exceed it, ICP keeps its last complete iterate and the frame is flagged
@@ -93,6 +103,8 @@ impl<T: Real> Config<T> {
             degeneracy_ratio: T::of(0.02),
             degeneracy: Degeneracy::Reference,
             plane_gate: T::of(0.015),
+            prediction_prior: T::zero(),
+            lateral_prior: T::zero(),
             work_budget: None,
         }
     }
@@ -144,6 +156,8 @@ impl<T: Real> Config<T> {
             || !pos(self.max_correspondence_factor)
             || !nonneg(self.degeneracy_ratio)
             || !nonneg(self.plane_gate)
+            || !nonneg(self.prediction_prior)
+            || !nonneg(self.lateral_prior)
         {
             return Err(ConfigError::Threshold);
         }
@@ -271,6 +285,7 @@ mod tests {
         let (r, n) = (Config::<f64>::robust(80.0), Config::<f64>::new(80.0));
         assert_eq!(r.degeneracy, Degeneracy::Robust);
         assert_eq!(n.plane_gate, 0.015);
+        assert_eq!((n.prediction_prior, n.lateral_prior), (0.0, 0.0));
         assert_eq!(
             Config {
                 degeneracy: n.degeneracy,
@@ -281,16 +296,28 @@ mod tests {
         assert!(r.validate().is_ok());
         assert!(Capacities::ROBUST.validate().is_ok());
         for bad in [-0.1, f64::NAN, f64::INFINITY] {
-            let c = Config {
+            let gate = Config {
                 plane_gate: bad,
                 ..r
             };
-            assert_eq!(
-                c.validate(),
-                Err(ConfigError::Threshold),
-                "plane_gate {bad}"
-            );
+            let hold = Config {
+                prediction_prior: bad,
+                ..r
+            };
+            let lateral = Config {
+                lateral_prior: bad,
+                ..r
+            };
+            for (c, name) in [(gate, "plane_gate"), (hold, "hold"), (lateral, "lateral")] {
+                assert_eq!(c.validate(), Err(ConfigError::Threshold), "{name} {bad}");
+            }
         }
+        let priors = Config {
+            prediction_prior: 0.01,
+            lateral_prior: 1.0,
+            ..r
+        };
+        assert!(priors.validate().is_ok());
         // Room for a finer map than the full-scale one (a tunnel's 0.2 m voxels).
         let full = Capacities::FULL_SCALE;
         assert!(Capacities::ROBUST.map_voxels >= 4 * full.map_voxels);

@@ -111,8 +111,8 @@ pub mod stages {
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
         align_points_to_map, chunk_len, chunks_for, moved_points, work_words, Alignment, Chunk,
-        IcpParams, PlaneChunk, CHUNK, CHUNK_LEN, MIN_POINTS, PLANARITY, PLANE_CHUNK_LEN,
-        PLANE_KERNEL_SCALE, SYSTEM_LEN,
+        IcpParams, MotionPrior, PlaneChunk, CHUNK, CHUNK_LEN, MIN_POINTS, PLANARITY,
+        PLANE_CHUNK_LEN, PLANE_KERNEL_SCALE, SYSTEM_LEN,
     };
     pub use crate::robust::{min_points, weakness, Hold, Weakness};
     pub use crate::scalar::{norm_lt, sqrt_lt};

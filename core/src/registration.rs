@@ -18,6 +18,7 @@ pub use chunk::{
 use chunk::{load, Parts, WorkChunk, KEPT};
 use planes::{accumulate_plane, Cached, CACHED};
 pub use planes::{MIN_POINTS, PLANARITY, PLANE_KERNEL_SCALE};
+pub use prior::MotionPrior;
 
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};
@@ -64,6 +65,9 @@ pub struct IcpParams<T: Real> {
     /// Point-to-plane terms where the map is planar (robust mode, see `planes`); `false`:
     /// point-to-point everywhere, as the reference.
     pub planes: bool,
+    /// Soft terms for what the correspondences leave free (robust mode, see `prior`);
+    /// `None`: none, as the reference.
+    pub prior: Option<MotionPrior<T>>,
 }
 
 /// Outcome of one registration.
@@ -480,7 +484,11 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
                 out.budget_spent = true;
                 break;
             }
-            let sum = summed(chunks);
+            let mut sum = summed(chunks);
+            if let Some(prior) = &params.prior {
+                let (t, count) = ((t_icp * initial_guess).translation.vector, sum[27]);
+                prior.add(&mut sum, &t, count);
+            }
             out.iterations += 1;
             out.correspondences = sum[27].wide() as u32;
             out.rms = if sum[27] > T::zero() {
@@ -513,5 +521,6 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
 
 mod chunk;
 mod planes;
+mod prior;
 #[cfg(test)]
 mod tests;

@@ -113,3 +113,49 @@ fn a_frame_is_registered_again_only_below_the_gate() {
         "robust() is robust mode"
     );
 }
+
+fn with_priors(config: Config<f64>, hold: f64, lateral: f64) -> Config<f64> {
+    Config {
+        prediction_prior: hold,
+        lateral_prior: lateral,
+        ..config
+    }
+}
+
+#[test]
+fn the_motion_prior_acts_on_frames_with_plane_terms_from_the_third_on() {
+    let s = scans();
+    let reference = reports(Config::new(RANGE), &s);
+    // No frame registered with plane terms (a gate of 0), or not robust mode: no effect.
+    for config in [robust(0.0), Config::new(RANGE)] {
+        let r = reports(with_priors(config, 0.01, 1.0), &s);
+        assert_eq!(poses(&r), poses(&reference));
+    }
+    let planes_only = poses(&reports(robust(1.0), &s));
+    let planes_worst = (0..FRAMES)
+        .map(|i| error_at(&planes_only[i], i))
+        .fold(0.0, f64::max);
+    for (hold, lateral) in [(0.01, 0.0), (0.0, 1.0), (0.01, 1.0)] {
+        let r = reports(with_priors(robust(1.0), hold, lateral), &s);
+        let p = poses(&r);
+        // Frame 1 has plane terms but no velocity yet: no prior.
+        assert_eq!(p[..2], planes_only[..2], "hold {hold}, lateral {lateral}");
+        for i in 2..FRAMES {
+            assert_ne!(
+                p[i], planes_only[i],
+                "frame {i}, hold {hold}, lateral {lateral}"
+            );
+        }
+        let worst = (0..FRAMES).map(|i| error_at(&p[i], i)).fold(0.0, f64::max);
+        println!("hold {hold}, lateral {lateral}: worst translation error {worst:.2e} m");
+        if lateral == 0.0 {
+            println!("  (allowed 2e-2)");
+            assert!(worst < 2e-2);
+        } else {
+            // This street's sensor slides sideways (its heading lags its motion by up to 0.07
+            // rad): the vehicle prior's assumption does not hold, and it costs accuracy.
+            println!("  (more than plane terms alone: {planes_worst:.2e} m)");
+            assert!(worst > planes_worst);
+        }
+    }
+}

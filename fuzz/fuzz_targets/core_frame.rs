@@ -64,6 +64,8 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.kernel_scale = T::of(pick(u, &[1.0, 1.0 / 3.0, 10.0])?);
     c.degeneracy = *u.choose(&[Degeneracy::Reference, Degeneracy::Robust, Degeneracy::Hold])?;
     c.plane_gate = T::of(pick(u, &[0.015, 0.0, 1.0, 0.5])?);
+    c.prediction_prior = T::of(pick(u, &[0.0, 0.01, 1e3])?);
+    c.lateral_prior = T::of(pick(u, &[0.0, 1.0, 1e-3])?);
     Ok(c)
 }
 

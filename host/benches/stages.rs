@@ -165,6 +165,7 @@ fn stages(c: &mut Criterion) {
         budget: None,
         hold: None,
         planes: false,
+        prior: None,
     };
     g.bench_function("icp_iteration", |b| {
         b.iter(|| {
@@ -186,6 +187,7 @@ fn stages(c: &mut Criterion) {
         budget: None,
         hold: None,
         planes: false,
+        prior: None,
     };
     let guess = rec.guesses[UNDER_TEST];
     g.bench_function("registration", |b| {

@@ -136,6 +136,15 @@ pub struct PipelineArgs {
     /// [default: 0.015].
     #[arg(long)]
     pub plane_gate: Option<f64>,
+    /// Robust mode: weight per correspondence pulling a registration with plane terms to the
+    /// constant-velocity prediction, so what the scene leaves free stays there [default: 0].
+    #[arg(long)]
+    pub prediction_prior: Option<f64>,
+    /// Robust mode: weight per correspondence against sideways motion along the sensor's y
+    /// axis, for a car-like vehicle with the sensor's x axis forward; in a corridor a turn
+    /// then tells how far it went [default: 0].
+    #[arg(long)]
+    pub lateral_prior: Option<f64>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
     /// would spend more keeps its last complete iterate and is flagged `budget`. With the
     /// capacities it bounds a frame's time on a given target (README "Deadlines") [default:
@@ -246,6 +255,12 @@ pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Resul
     }
     if let Some(g) = p.plane_gate {
         s.registration.plane_gate = g;
+    }
+    if let Some(w) = p.prediction_prior {
+        s.registration.prediction_prior = w;
+    }
+    if let Some(w) = p.lateral_prior {
+        s.registration.lateral_prior = w;
     }
     if let Some(b) = p.budget {
         s.registration.work_budget = Some(b);

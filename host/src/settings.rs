@@ -106,6 +106,12 @@ pub struct Registration {
     /// Robust mode registers a frame again with plane terms when the reference registration's
     /// observability is below this (`Config::plane_gate`); 1 or more: every frame.
     pub plane_gate: f64,
+    /// Robust mode's hold prior per correspondence: registrations with plane terms are pulled
+    /// to the constant-velocity prediction (`Config::prediction_prior`); 0: none.
+    pub prediction_prior: f64,
+    /// Robust mode's vehicle prior per correspondence: no sideways motion along the sensor's
+    /// y axis (`Config::lateral_prior`); 0: none.
+    pub lateral_prior: f64,
     /// `reference`, `robust` or `hold`.
     pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
@@ -199,6 +205,8 @@ impl Default for Registration {
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
             plane_gate: Config::<f64>::new(100.0).plane_gate,
+            prediction_prior: Config::<f64>::new(100.0).prediction_prior,
+            lateral_prior: Config::<f64>::new(100.0).lateral_prior,
             degeneracy: DegeneracyMode::Reference,
             work_budget: None,
         }
@@ -299,6 +307,8 @@ impl Settings {
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
         c.plane_gate = T::of(self.registration.plane_gate);
+        c.prediction_prior = T::of(self.registration.prediction_prior);
+        c.lateral_prior = T::of(self.registration.lateral_prior);
         c.degeneracy = self.registration.degeneracy.into();
         c.work_budget = self.registration.work_budget;
         if let Err(e) = c.validate() {
@@ -409,7 +419,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 21] {
+fn fields() -> [Field; 23] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -425,6 +435,8 @@ fn fields() -> [Field; 21] {
         field!(registration.max_correspondence_factor, false),
         field!(registration.degeneracy_ratio, true),
         field!(registration.plane_gate, true),
+        field!(registration.prediction_prior, true),
+        field!(registration.lateral_prior, true),
         field!(registration.degeneracy, false),
         field!(registration.work_budget, false),
         field!(capacities.scan_points, true),

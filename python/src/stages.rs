@@ -266,6 +266,7 @@ impl Registration {
                 budget: None,
                 hold: None,
                 planes: false,
+                prior: None,
             },
             pool: Pool::new(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?,
         })

@@ -128,6 +128,76 @@ fn robust_mode_follows_an_open_field_where_reference_mode_turns_away() {
     assert!(robust < 0.5 * reference);
 }
 
+/// Length of the path from frame `from` on (m).
+fn path_from(poses: &[Matrix4<f64>], from: usize) -> f64 {
+    poses[from..]
+        .windows(2)
+        .map(|w| distance(&w[0], &w[1]))
+        .sum()
+}
+
+#[test]
+fn with_the_vehicle_prior_robust_mode_learns_a_bare_corridors_speed_from_its_turns() {
+    // The bare corridor says nothing about motion along its axis; the vehicle starts at rest,
+    // so every method stands still until the first turn. There a car-like vehicle's motion
+    // across the corridor tells its motion along it: once through the turn, robust mode with
+    // the vehicle prior travels about the true distance (at the speed it learnt: how the speed
+    // changes on a straight, nothing tells), while reference mode stays stuck and plane terms
+    // alone step along the axis at random.
+    let frames = 160;
+    let tunnel = ["--plane-gate", "1", "--voxel-size", "0.5"];
+    let vehicle = ["--lateral-prior", "1", "--prediction-prior", "0.01"];
+    let dir = tempfile::tempdir().unwrap();
+    let with: Vec<&str> = tunnel.iter().chain(&vehicle).copied().collect();
+    let (reference, robust) = both_modes(dir.path(), "corridor", frames, "robust", &with);
+    let without = run(
+        &dir.path().join("corridor"),
+        &dir.path().join("without"),
+        &[
+            "--threads",
+            "1",
+            "--degeneracy",
+            "robust",
+            tunnel[0],
+            tunnel[1],
+            tunnel[2],
+            tunnel[3],
+        ],
+    );
+    for r in [&reference, &robust, &without] {
+        r.succeeded_with_frames(frames);
+    }
+    let truth =
+        kiss_odom::io::poses::read_kitti_matrices(&dir.path().join("corridor/poses.txt")).unwrap();
+    // The first frame whose heading left the axis by 10 mrad.
+    let turn = truth
+        .iter()
+        .position(|m| m[(1, 0)].abs() > 0.01)
+        .expect("the route turns within the run");
+    let from = turn + 20;
+    assert!(
+        from + 30 < frames,
+        "the turn at frame {turn} leaves frames to measure"
+    );
+    let true_path = path_from(&truth, from);
+    let ratio = |r: &common::Run| path_from(&r.poses(), from) / true_path;
+    let (with, reference, without) = (ratio(&robust), ratio(&reference), ratio(&without));
+    println!(
+        "corridor, turn at frame {turn}, frames {from}-{frames} ({true_path:.1} m): distance \
+         over the true one with the vehicle prior {with:.3} (tol 0.7-1.3), reference mode \
+         {reference:.3}, plane terms alone {without:.3}"
+    );
+    assert!((0.7..1.3).contains(&with));
+    assert!(
+        reference < 0.5,
+        "reference mode stays stuck in a bare corridor"
+    );
+    assert!(
+        (without - 1.0).abs() > 2.0 * (with - 1.0).abs(),
+        "the prior is what makes the difference"
+    );
+}
+
 /// The `held_axes` column of `frames.csv`.
 fn held(out: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();

@@ -456,6 +456,7 @@ fn registration_converges_to_the_reference_pose() {
         budget: None,
         hold: None,
         planes: false,
+        prior: None,
     };
     let map = registration_map(&m, &input, input.len());
     let mut worst = (0.0f64, 0.0f64);

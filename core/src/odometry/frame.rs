@@ -13,7 +13,8 @@ use crate::error::FrameError;
 use crate::lie::renormalize;
 use crate::local_map::{MapMut, PointCodec, UpdateStats};
 use crate::registration::{
-    align_points_to_map, moved_points, Alignment, Executor, IcpParams, PLANE_KERNEL_SCALE,
+    align_points_to_map, moved_points, Alignment, Executor, IcpParams, MotionPrior,
+    PLANE_KERNEL_SCALE,
 };
 use crate::report::{Dropped, Flag, FrameReport, Status};
 use crate::robust::{min_points, weakness, Degeneracy, Weakness};
@@ -98,6 +99,12 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         // (or only that one, when every frame passes the gate).
         let robust = cfg.degeneracy == Degeneracy::Robust;
         let always = robust && !first_frame && cfg.plane_gate >= T::one();
+        // Its motion prior, once there is a velocity (as hold mode's).
+        let priors = cfg.prediction_prior > T::zero() || cfg.lateral_prior > T::zero();
+        let prior = (robust && priors && self.frames >= 2).then(|| {
+            let (hold, sideways) = (cfg.prediction_prior, cfg.lateral_prior);
+            MotionPrior::new(&self.last_pose, &prediction, hold, sideways)
+        });
         let mut register = |planes: bool| {
             let kernel = if planes {
                 T::of(PLANE_KERNEL_SCALE)
@@ -112,7 +119,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
                 &prediction,
                 max_distance,
                 kernel * sigma,
-                &icp_params(&cfg, &prediction, &weak, planes),
+                &icp_params(&cfg, &prediction, &weak, planes, prior.filter(|_| planes)),
             );
             let (pose, finite) = finite_or(weak.apply(&prediction, icp.pose), prediction);
             let observability = if first_frame {
@@ -286,6 +293,7 @@ fn icp_params<T: Real>(
     prediction: &Pose<T>,
     weak: &Weakness<T>,
     planes: bool,
+    prior: Option<MotionPrior<T>>,
 ) -> IcpParams<T> {
     let reach = prediction.translation.vector.norm() + cfg.max_range;
     IcpParams {
@@ -294,6 +302,7 @@ fn icp_params<T: Real>(
         budget: cfg.work_budget,
         hold: weak.hold,
         planes,
+        prior,
     }
 }
 

@@ -47,6 +47,7 @@ fn params() -> IcpParams<f64> {
         budget: None,
         hold: None,
         planes: false,
+        prior: None,
     }
 }
 
@@ -118,6 +119,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
         budget: None,
         hold: None,
         planes: false,
+        prior: None,
     };
     let a = align_points_to_map(
         &Sequential,

@@ -150,6 +150,7 @@ fn a_structured_yard_gives_the_reference_pose_within_the_prediction_error() {
             budget: None,
             hold,
             planes: false,
+            prior: None,
         };
         align_points_to_map(
             &Sequential,

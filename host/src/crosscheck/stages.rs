@@ -519,6 +519,7 @@ fn map_and_registration(
         budget: None,
         hold: None,
         planes: false,
+        prior: None,
     };
     for ((what, g, sg), file) in runs.iter().zip(&reg_files) {
         let want = pose_of(&matrix_of(&read_json(file)?["pose"])?);

@@ -168,6 +168,7 @@ fn plane_terms_let_sparse_structure_move_a_corridor_s_free_axis() {
             budget: None,
             hold: None,
             planes,
+            prior: None,
         };
         with_map(&scene, |m| {
             let a = align_points_to_map(
