@@ -114,7 +114,9 @@ impl<T: Real> Config<T> {
     /// planes from the map's voxels, so the voxel size must resolve the structure that
     /// constrains the free directions: `r_max / 100` does over open ground; in a tunnel whose
     /// features stand 0.2-0.8 m proud of its walls it does not, and its tunnel setting is
-    /// `plane_gate` 1 with `r_max / 200` voxels (BENCHMARKS.md section 12).
+    /// `plane_gate` 1 with `r_max / 200` voxels, for a car-like vehicle with the motion prior
+    /// (`lateral_prior` 1, `prediction_prior` 0.01; over open ground `lateral_prior` 1):
+    /// BENCHMARKS.md section 12.
     pub fn robust(max_range: T) -> Self {
         Self {
             degeneracy: Degeneracy::Robust,

@@ -127,7 +127,8 @@ pub struct PipelineArgs {
     /// Registration along directions the scene does not constrain: `reference` (kiss-icp),
     /// `robust` (the reference, but frames it leaves degenerate are registered again with
     /// point-to-plane terms where the map is planar, flagged `planes`: for open ground, and
-    /// with --plane-gate 1 --voxel-size 0.5 for tunnels and corridors) or `hold` (held at the
+    /// with --plane-gate 1 --voxel-size 0.5 for tunnels and corridors; on a car add
+    /// --lateral-prior 1, and in tunnels --prediction-prior 0.01) or `hold` (held at the
     /// constant-velocity prediction) [default: reference].
     #[arg(long, value_enum)]
     pub degeneracy: Option<DegeneracyMode>,
