@@ -99,9 +99,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         // (or only that one, when every frame passes the gate).
         let robust = cfg.degeneracy == Degeneracy::Robust;
         let always = robust && !first_frame && cfg.plane_gate >= T::one();
-        // Its motion prior, once there is a velocity (as hold mode's).
-        let priors = cfg.prediction_prior > T::zero() || cfg.lateral_prior > T::zero();
-        let prior = (robust && priors && self.frames >= 2).then(|| {
+        // Its motion prior, once there is a velocity (as hold mode's); a term of weight 0 adds
+        // nothing.
+        let prior = (robust && self.frames >= 2).then(|| {
             let (hold, sideways) = (cfg.prediction_prior, cfg.lateral_prior);
             MotionPrior::new(&self.last_pose, &prediction, hold, sideways)
         });
