@@ -111,8 +111,9 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 
 /// The odometry configuration: the reference defaults for `MAX_RANGE` with `VOXEL_SIZE`
 /// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels); under the
-/// `robust` feature, robust mode with plane terms on every frame (`plane_gate` 1, its tunnel
-/// setting: the most work a frame of robust mode's plane registration takes) on those voxels.
+/// `robust` feature, robust mode with plane terms on every frame and the motion prior
+/// (`plane_gate` 1, `lateral_prior` 1, `prediction_prior` 0.01: its tunnel setting, the most
+/// work a frame of robust mode's plane registration takes) on those voxels.
 pub fn config() -> Config<Scalar> {
     let base = if cfg!(any(feature = "tiny", feature = "packets")) {
         Config::tiny()
@@ -122,19 +123,20 @@ pub fn config() -> Config<Scalar> {
             ..Config::new(frames::MAX_RANGE as Scalar)
         }
     };
-    Config {
+    let base = Config {
         work_budget: frames::BUDGET,
-        degeneracy: if cfg!(feature = "robust") {
-            Degeneracy::Robust
-        } else {
-            Degeneracy::Reference
-        },
-        plane_gate: if cfg!(feature = "robust") {
-            1.0
-        } else {
-            base.plane_gate
-        },
         ..base
+    };
+    if cfg!(feature = "robust") {
+        Config {
+            degeneracy: Degeneracy::Robust,
+            plane_gate: 1.0,
+            lateral_prior: 1.0,
+            prediction_prior: 0.01,
+            ..base
+        }
+    } else {
+        base
     }
 }
 
