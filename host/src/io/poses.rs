@@ -160,6 +160,18 @@ pub fn parse_tum(text: &str, name: &str) -> Result<Vec<TimedPose>> {
                 )
             })?;
         let q = Quaternion::new(qw, qx, qy, qz);
+        let largest = q.coords.amax();
+        if largest == 0.0 {
+            bail!("{name}:{number}: quaternion has zero norm");
+        }
+        // A squared norm that overflows (or underflows) would normalise the quaternion to
+        // zeros, a pose that is no rotation (cargo-fuzz found it): scale to the largest
+        // component first, only then, so every other line keeps its bits.
+        let q = if q.norm_squared().is_normal() {
+            q
+        } else {
+            q / largest
+        };
         let Some(rotation) = UnitQuaternion::try_new(q, 1e-6) else {
             bail!("{name}:{number}: quaternion has zero norm");
         };
@@ -265,6 +277,26 @@ mod tests {
             // Normalising an already unit quaternion may move the last bit.
             assert!(a.pose.rotation.angle_to(&b.pose.rotation) < 1e-15);
         }
+    }
+
+    #[test]
+    fn a_quaternion_too_large_or_small_to_square_is_still_a_rotation() {
+        // cargo-fuzz's input: qw = 3.8e211, whose square overflows.
+        let big = parse_tum("1 1 1. 83e-10 38e-10 1. 83e-10 38e210", "mem").unwrap();
+        let q = big[0].pose.rotation;
+        println!(
+            "huge qw: rotation {:?}, angle {:e} rad",
+            q.coords,
+            q.angle()
+        );
+        assert!((q.coords.norm() - 1.0).abs() < 1e-15 && q.angle() < 1e-200);
+        // Components whose squares underflow: the rotation they point to, about y by 90 deg.
+        let tiny = parse_tum("0 0 0 0 0 1e-170 0 1e-170", "mem").unwrap();
+        let want =
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), core::f64::consts::FRAC_PI_2);
+        let off = tiny[0].pose.rotation.angle_to(&want);
+        println!("tiny components: {off:e} rad from 90 deg about y (tol 1e-15)");
+        assert!(off < 1e-15);
     }
 
     #[test]
