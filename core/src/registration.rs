@@ -486,8 +486,7 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
             }
             let mut sum = summed(chunks);
             if let Some(prior) = &params.prior {
-                let (t, count) = ((t_icp * initial_guess).translation.vector, sum[27]);
-                prior.add(&mut sum, &t, count);
+                prior.add(&mut sum, &(t_icp * initial_guess).translation.vector);
             }
             out.iterations += 1;
             out.correspondences = sum[27].wide() as u32;

@@ -65,17 +65,18 @@ impl<T: Real> MotionPrior<T> {
         }
     }
 
-    /// Adds the prior's terms at the iterate's position `t` to the summed system `sum` of
-    /// `count` correspondences.
-    pub(super) fn add(&self, sum: &mut [T; SYSTEM_LEN], t: &Vector3<T>, count: T) {
+    /// Adds the prior's terms at the iterate's position `t` to the summed system `sum`, each
+    /// weighted by the system's correspondence count.
+    pub(super) fn add(&self, sum: &mut [T; SYSTEM_LEN], t: &Vector3<T>) {
         // The accumulations count a correspondence and its squared residual: these are not.
         let (correspondences, squares) = (sum[27], sum[28]);
         if self.hold > T::zero() {
-            accumulate(sum, t, &(t - self.predicted), self.hold * count);
+            accumulate(sum, t, &(t - self.predicted), self.hold * correspondences);
         }
         if self.sideways > T::zero() {
             let across = self.lateral.dot(&(t - self.last));
-            accumulate_plane(sum, t, &self.lateral, across, self.sideways * count);
+            let weight = self.sideways * correspondences;
+            accumulate_plane(sum, t, &self.lateral, across, weight);
         }
         sum[27] = correspondences;
         sum[28] = squares;

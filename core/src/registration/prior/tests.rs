@@ -49,16 +49,16 @@ fn a_solve_of_the_prior_alone_lands_on_the_prediction_or_on_the_heading() {
     let (last, pred) = (pose(10.0, 5.0, 0.3), pose(11.0, 5.5, 0.3));
     let t = Vector3::new(12.0, 4.0, 1.0);
     let mut sum = [0.0; SYSTEM_LEN];
-    sum[27] = 7.0;
+    sum[27] = 4.0;
     sum[28] = 3.0;
-    MotionPrior::new(&last, &pred, 2.0, 0.0).add(&mut sum, &t, 4.0);
+    MotionPrior::new(&last, &pred, 2.0, 0.0).add(&mut sum, &t);
     assert_eq!(
         (sum[27], sum[28]),
-        (7.0, 3.0),
+        (4.0, 3.0),
         "the prior is no correspondence"
     );
     let (h, g) = unpack(&sum);
-    // Weight 2 a correspondence over 4 correspondences.
+    // Weight 2 a correspondence over the system's 4 correspondences.
     assert_eq!(h[(0, 0)], 8.0);
     let rho = h
         .fixed_view::<3, 3>(0, 0)
@@ -74,8 +74,9 @@ fn a_solve_of_the_prior_alone_lands_on_the_prediction_or_on_the_heading() {
 
     // Lateral only: the residual is the motion along y rotated halfway, weighted likewise.
     let mut sum = [0.0; SYSTEM_LEN];
+    sum[27] = 4.0;
     let p = MotionPrior::new(&last, &pred, 0.0, 3.0);
-    p.add(&mut sum, &t, 4.0);
+    p.add(&mut sum, &t);
     let (h, g) = unpack(&sum);
     let l = p.lateral;
     let across = l.dot(&(t - last.translation.vector));
@@ -91,6 +92,6 @@ fn a_solve_of_the_prior_alone_lands_on_the_prediction_or_on_the_heading() {
 fn zero_weights_add_nothing() {
     let mut sum = [1.5; SYSTEM_LEN];
     let p = MotionPrior::new(&pose(0.0, 0.0, 0.0), &pose(1.0, 0.0, 0.0), 0.0, 0.0);
-    p.add(&mut sum, &Vector3::new(3.0, 1.0, 0.0), 100.0);
+    p.add(&mut sum, &Vector3::new(3.0, 1.0, 0.0));
     assert_eq!(sum, [1.5; SYSTEM_LEN]);
 }
