@@ -45,14 +45,17 @@ fn both_modes(
 ) -> (common::Run, common::Run) {
     let data = dir.join(profile);
     simulate(&data, profile, frames);
-    let mode = |m, more: &[&str]| {
-        let argv: Vec<&str> = ["--threads", "1", "--degeneracy", m]
-            .into_iter()
-            .chain(more.iter().copied())
-            .collect();
-        run(&data, &dir.join(m), &argv)
-    };
-    (mode("reference", &[]), mode(other, args))
+    let reference = run_mode(&data, &dir.join("reference"), "reference", &[]);
+    (reference, run_mode(&data, &dir.join(other), other, args))
+}
+
+/// Runs degeneracy `mode` (with `args`, one thread) on `data`, writing to `out`.
+fn run_mode(data: &Path, out: &Path, mode: &str, args: &[&str]) -> common::Run {
+    let argv: Vec<&str> = ["--threads", "1", "--degeneracy", mode]
+        .into_iter()
+        .chain(args.iter().copied())
+        .collect();
+    run(data, out, &argv)
 }
 
 /// Frames of a run flagged `planes` (registered again with plane terms).
@@ -150,20 +153,8 @@ fn with_the_vehicle_prior_robust_mode_learns_a_bare_corridors_speed_from_its_tur
     let dir = tempfile::tempdir().unwrap();
     let with: Vec<&str> = tunnel.iter().chain(&vehicle).copied().collect();
     let (reference, robust) = both_modes(dir.path(), "corridor", frames, "robust", &with);
-    let without = run(
-        &dir.path().join("corridor"),
-        &dir.path().join("without"),
-        &[
-            "--threads",
-            "1",
-            "--degeneracy",
-            "robust",
-            tunnel[0],
-            tunnel[1],
-            tunnel[2],
-            tunnel[3],
-        ],
-    );
+    let (data, out) = (dir.path().join("corridor"), dir.path().join("without"));
+    let without = run_mode(&data, &out, "robust", &tunnel);
     for r in [&reference, &robust, &without] {
         r.succeeded_with_frames(frames);
     }
