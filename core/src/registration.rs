@@ -57,7 +57,7 @@ pub struct IcpParams<T: Real> {
     pub convergence_criterion: T,
     /// Iteration cap.
     pub max_iterations: u32,
-    /// Work units (see [`crate::local_map::Nearest::work`]) the whole registration may spend;
+    /// Work units (see `local_map::Nearest::work`) the whole registration may spend;
     /// `None`: no limit. ICP stops with its last complete iterate before exceeding it.
     pub budget: Option<u64>,
     /// Directions every step is projected off (hold mode, see `robust`); `None`: none.

@@ -311,7 +311,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapView<'a, T, P> {
     pub fn voxel_capacity(&self) -> usize {
         self.st.max_voxels
     }
-    /// The most work one search can do, in [`Nearest::work`] units: the query, 27 lookups and
+    /// The most work one search can do, in `Nearest::work` units: the query, 27 lookups and
     /// `N_max` points in each voxel.
     pub fn search_work_bound(&self) -> u32 {
         1 + 27 * (1 + self.st.max_points)

@@ -76,7 +76,7 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
 
     /// The search behind [`Self::closest_neighbor`], reporting bounds on the other points too
     /// (points beyond `max_distance` may be left out, which `within` and `others` account for).
-    /// If it would take more than `cap` work units ([`Nearest::work`]) it gives up before the
+    /// If it would take more than `cap` work units (`Nearest::work`) it gives up before the
     /// unit that would pass `cap`: `Err` with the units spent.
     #[inline]
     pub fn nearest(&self, query: &Point<T>, max_distance: T, cap: u32) -> Result<Nearest<T>, u32> {

@@ -139,7 +139,7 @@ pub(super) fn load<'w, T: Real, C: WorkChunk<T>>(
 
 /// The points ICP moved, in source order (world frame, as the last iteration left them), from
 /// work laid out for `planes` as [`super::align_points_to_map`] left it. It takes the words
-/// mutably only to read them through [`WorkChunk::parts`], the one statement of each layout.
+/// mutably only to read them through `WorkChunk::parts`, the one statement of each layout.
 pub fn moved_points<T: Real>(
     work: &mut [u64],
     n: usize,

@@ -107,7 +107,7 @@ pub fn write(path: &Path, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Result
     write_with(path, points, stamps, DataKind::Binary)
 }
 
-/// Like [`write`], `DATA ascii` (shortest round-trip decimals).
+/// Like [`write()`], `DATA ascii` (shortest round-trip decimals).
 pub fn write_ascii(path: &Path, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Result<()> {
     write_with(path, points, stamps, DataKind::Ascii)
 }

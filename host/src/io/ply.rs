@@ -194,7 +194,7 @@ pub fn write(path: &Path, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Result
     write_with(path, points, stamps, Encoding::BinaryLittleEndian)
 }
 
-/// Like [`write`], ascii (shortest round-trip decimals).
+/// Like [`write()`], ascii (shortest round-trip decimals).
 pub fn write_ascii(path: &Path, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Result<()> {
     write_with(path, points, stamps, Encoding::Ascii)
 }

@@ -53,7 +53,7 @@ pub fn rows_from_matrix(m: &Matrix4<f64>) -> Rows {
 
 /// The rigid transform closest to `m`: the rotation block is projected onto SO(3) with
 /// [`Rotation3::from_matrix`] (nearest rotation in the Frobenius sense), the translation is kept
-/// as is. Fails when the block is not within [`MAX_ROTATION_DEFECT`] of a rotation (a
+/// as is. Fails when the block is not within `MAX_ROTATION_DEFECT` of a rotation (a
 /// reflection, a scale, a non-finite entry).
 pub fn isometry_from_matrix(m: &Matrix4<f64>) -> Result<Isometry3<f64>> {
     if m.iter().any(|v| !v.is_finite()) {

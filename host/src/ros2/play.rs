@@ -1,7 +1,7 @@
 //! `kiss-odom ros2 --play`: publishes a recording's clouds on a ROS 2 topic at their recorded
 //! pace, so the node (or any ROS 2 tool) can be fed without a robot.
 //!
-//! Frames come from the same readers as `kiss-odom run` ([`crate::io::open`]), KITTI
+//! Frames come from the same readers as `kiss-odom run` ([`crate::io::open()`]), KITTI
 //! correction included, and go out as `sensor_msgs/PointCloud2` with x, y, z and (when the
 //! recording has per-point times) `t`, all FLOAT64: every value reaches the node exactly as
 //! `run` reads it. The header stamp is the frame's time; frame `k` is sent `(t_k - t_0) / rate`
