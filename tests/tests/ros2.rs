@@ -10,7 +10,7 @@
 mod ros2_common;
 
 use kiss_odom::drive::Driver;
-use kiss_odom::io::mcap::parse_cdr;
+use kiss_odom::io::cloud_msg::parse_cdr;
 use kiss_odom::io::pointcloud2::decode;
 use kiss_odom::io::poses::{format_kitti, read_kitti};
 use kiss_odom::io::{open, Format, Item, OpenOptions};

@@ -8,10 +8,11 @@
 //! `ros2 bag play` plays them) whatever order they were written in, and a file written out of
 //! order says so in a dataset warning. Without a summary (a file cut short) or chunks, a linear
 //! reader streams the data section in file order and warns at the first message out of order.
-//! The message body is CDR; it is parsed here into a [`PointCloud2`] view and decoded by
-//! [`pointcloud2`].
+//! The message body is CDR; [`cloud_msg`](super::cloud_msg) parses it into a
+//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and [`pointcloud2`] decodes it.
 
-use super::pointcloud2::{self, MessageAt, PointCloud2, PointField, Stamp};
+use super::cloud_msg::parse_cdr;
+use super::pointcloud2::{self, MessageAt};
 use super::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
 use anyhow::{anyhow, bail, Context, Result};
 use mcap::records::{op, Record};
@@ -520,128 +521,11 @@ impl McapSource {
     }
 }
 
-/// Cursor over a CDR (XCDR1) body; alignment is relative to the end of the 4-byte
-/// encapsulation header.
-struct Cdr<'a> {
-    buf: &'a [u8],
-    pos: usize,
-    big_endian: bool,
-}
-
-impl<'a> Cdr<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        let bytes = self
-            .pos
-            .checked_add(n)
-            .and_then(|end| self.buf.get(self.pos..end))
-            .ok_or_else(|| {
-                format!(
-                    "message ends inside {what} (needs {n} bytes at byte {} of {})",
-                    self.pos + 4,
-                    self.buf.len() + 4
-                )
-            })?;
-        self.pos += n;
-        Ok(bytes)
-    }
-
-    fn u8(&mut self, what: &str) -> Result<u8, String> {
-        Ok(self.take(1, what)?[0])
-    }
-
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
-        self.pos = self.pos.next_multiple_of(4);
-        let b = self.take(4, what)?;
-        let b = [b[0], b[1], b[2], b[3]];
-        Ok(if self.big_endian {
-            u32::from_be_bytes(b)
-        } else {
-            u32::from_le_bytes(b)
-        })
-    }
-
-    /// A CDR string: u32 length including the terminating NUL, then the bytes.
-    fn string(&mut self, what: &str) -> Result<String, String> {
-        let n = self.u32(what)? as usize;
-        let bytes = self.take(n, what)?;
-        let bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
-        Ok(String::from_utf8_lossy(bytes).into_owned())
-    }
-}
-
-/// Parses a CDR serialized `sensor_msgs/msg/PointCloud2` (with its encapsulation header).
-pub fn parse_cdr(body: &[u8]) -> Result<PointCloud2<'_>, String> {
-    let (header, buf) = body
-        .split_first_chunk::<4>()
-        .ok_or("message shorter than the CDR encapsulation header")?;
-    let big_endian = match header[..2] {
-        [0, 0] => true,
-        [0, 1] => false,
-        _ => {
-            return Err(format!(
-                "encapsulation {:02x}{:02x} is not plain CDR",
-                header[0], header[1]
-            ))
-        }
-    };
-    let mut r = Cdr {
-        buf,
-        pos: 0,
-        big_endian,
-    };
-    let sec = r.u32("header.stamp.sec")? as i32;
-    let nsec = r.u32("header.stamp.nanosec")?;
-    let frame_id = r.string("header.frame_id")?;
-    let height = r.u32("height")?;
-    let width = r.u32("width")?;
-    let n_fields = r.u32("fields")? as usize;
-    // Each field takes at least 13 bytes; a larger count is garbage, not an allocation size.
-    if n_fields > (buf.len() - r.pos) / 13 {
-        return Err(format!("{n_fields} fields cannot fit in the message"));
-    }
-    let mut fields = Vec::with_capacity(n_fields);
-    for _ in 0..n_fields {
-        fields.push(PointField {
-            name: r.string("fields.name")?,
-            offset: r.u32("fields.offset")?,
-            datatype: r.u8("fields.datatype")?,
-            count: r.u32("fields.count")?,
-        });
-    }
-    let is_bigendian = r.u8("is_bigendian")? != 0;
-    let point_step = r.u32("point_step")?;
-    let row_step = r.u32("row_step")?;
-    let data_len = r.u32("data")? as usize;
-    let data = r.take(data_len, "data")?;
-    let is_dense = r.u8("is_dense")? != 0;
-    // Serializers may pad the message to a multiple of 4 bytes; more is not this type.
-    if buf.len() - r.pos > 3 {
-        return Err(format!(
-            "{} bytes after the end of the message",
-            buf.len() - r.pos
-        ));
-    }
-    Ok(PointCloud2 {
-        stamp: Stamp {
-            sec: i64::from(sec),
-            nsec,
-        },
-        frame_id,
-        height,
-        width,
-        fields,
-        is_bigendian,
-        point_step,
-        row_step,
-        data,
-        is_dense,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::io::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
+    use crate::io::pointcloud2::Stamp;
     use mcap::records::MessageHeader;
     use std::collections::BTreeMap;
 

@@ -222,6 +222,7 @@ impl FrameSource for TimeOrder {
 pub mod bagfile;
 pub mod bin;
 pub mod cloud;
+pub mod cloud_msg;
 pub mod generic;
 pub mod kitti;
 pub mod listing;

@@ -1,8 +1,8 @@
 //! `sensor_msgs/PointCloud2` payloads, shared by the ROS 1 bag and ROS 2 MCAP readers.
 //!
 //! The two containers serialize the message differently (ROS 1 wire format, CDR) but carry the
-//! same layout; each reader parses its serialization into a [`PointCloud2`] view and this module
-//! turns the view into points and per-point times the way the reference does
+//! same layout; [`cloud_msg`](super::cloud_msg) parses either into a [`PointCloud2`] view and
+//! this module turns the view into points and per-point times the way the reference does
 //! (`kiss_icp/tools/point_cloud2.py::read_point_cloud`, kiss-icp 1.3.0): x, y, z and the first
 //! field named `t`, `timestamp` or `time`, every value converted to f64. Unlike the reference,
 //! NaN points are kept (the core counts them) so that points and times stay aligned.

@@ -2,14 +2,16 @@
 //!
 //! The container (records, chunks, compression, index) is read by [`bagfile`], in place, also
 //! when the bag is cut short or was never closed; the message body, in the ROS 1 wire format,
-//! is parsed here into a [`PointCloud2`] view and decoded by [`pointcloud2`]. Frames are the
-//! messages of one topic in receive-time order (as `rosbag play` plays them), whatever order
-//! they were written in; a bag written out of order says so in a dataset warning. A chunk is
-//! decompressed when the stream reaches it, so a bag never has to fit in memory, and
-//! [`FrameSource::seek`] is cheap.
+//! is parsed by [`cloud_msg`](super::cloud_msg) into a
+//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and decoded by [`pointcloud2`].
+//! Frames are the messages of one topic in receive-time order (as `rosbag play` plays them),
+//! whatever order they were written in; a bag written out of order says so in a dataset
+//! warning. A chunk is decompressed when the stream reaches it, so a bag never has to fit in
+//! memory, and [`FrameSource::seek`] is cheap.
 
 use super::bagfile::{Bag, MessageRef};
-use super::pointcloud2::{self, MessageAt, PointCloud2, PointField, Stamp};
+use super::cloud_msg::parse_ros1;
+use super::pointcloud2::{self, MessageAt};
 use super::{bagfile, Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
 use anyhow::{anyhow, bail, Result};
 use std::collections::HashMap;
@@ -179,96 +181,6 @@ impl FrameSource for BagSource {
         self.done = false;
         true
     }
-}
-
-/// Cursor over a ROS 1 serialized message: little-endian, u32-length-prefixed strings/arrays.
-struct Ros1<'a> {
-    buf: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> Ros1<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        let bytes = self
-            .pos
-            .checked_add(n)
-            .and_then(|end| self.buf.get(self.pos..end))
-            .ok_or_else(|| {
-                format!(
-                    "message ends inside {what} (needs {n} bytes at byte {} of {})",
-                    self.pos,
-                    self.buf.len()
-                )
-            })?;
-        self.pos += n;
-        Ok(bytes)
-    }
-
-    fn u8(&mut self, what: &str) -> Result<u8, String> {
-        Ok(self.take(1, what)?[0])
-    }
-
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
-        let b = self.take(4, what)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    fn string(&mut self, what: &str) -> Result<String, String> {
-        let n = self.u32(what)? as usize;
-        Ok(String::from_utf8_lossy(self.take(n, what)?).into_owned())
-    }
-}
-
-/// Parses a ROS 1 serialized `sensor_msgs/PointCloud2`.
-pub fn parse_ros1(body: &[u8]) -> Result<PointCloud2<'_>, String> {
-    let mut r = Ros1 { buf: body, pos: 0 };
-    let _seq = r.u32("header.seq")?;
-    let sec = r.u32("header.stamp")?;
-    let nsec = r.u32("header.stamp")?;
-    let frame_id = r.string("header.frame_id")?;
-    let height = r.u32("height")?;
-    let width = r.u32("width")?;
-    let n_fields = r.u32("fields")? as usize;
-    // Each field takes at least 13 bytes; a larger count is garbage, not an allocation size.
-    if n_fields > (body.len() - r.pos) / 13 {
-        return Err(format!("{n_fields} fields cannot fit in the message"));
-    }
-    let mut fields = Vec::with_capacity(n_fields);
-    for _ in 0..n_fields {
-        fields.push(PointField {
-            name: r.string("fields.name")?,
-            offset: r.u32("fields.offset")?,
-            datatype: r.u8("fields.datatype")?,
-            count: r.u32("fields.count")?,
-        });
-    }
-    let is_bigendian = r.u8("is_bigendian")? != 0;
-    let point_step = r.u32("point_step")?;
-    let row_step = r.u32("row_step")?;
-    let data_len = r.u32("data")? as usize;
-    let data = r.take(data_len, "data")?;
-    let is_dense = r.u8("is_dense")? != 0;
-    if r.pos != body.len() {
-        return Err(format!(
-            "{} bytes after the end of the message",
-            body.len() - r.pos
-        ));
-    }
-    Ok(PointCloud2 {
-        stamp: Stamp {
-            sec: i64::from(sec),
-            nsec,
-        },
-        frame_id,
-        height,
-        width,
-        fields,
-        is_bigendian,
-        point_step,
-        row_step,
-        data,
-        is_dense,
-    })
 }
 
 #[cfg(test)]

@@ -3,10 +3,10 @@
 //!
 //! Outgoing messages (`nav_msgs/msg/Odometry`, `tf2_msgs/msg/TFMessage`,
 //! `sensor_msgs/msg/PointCloud2`) are serde structs in IDL field order. Incoming clouds are kept
-//! as raw CDR bytes ([`RawCloud`]) and parsed by the MCAP reader's parser
-//! ([`crate::io::mcap::parse_cdr`]) and decoded by [`crate::io::pointcloud2::decode`], the code
-//! every other input format uses, so a malformed cloud is an error the node counts, not one the
-//! DDS layer swallows.
+//! as raw CDR bytes ([`RawCloud`]), parsed by the MCAP reader's parser
+//! ([`crate::io::cloud_msg::parse_cdr`]) and decoded by [`crate::io::pointcloud2::decode`], the
+//! code every other input format uses, so a malformed cloud is an error the node counts, not one
+//! the DDS layer swallows.
 
 use crate::io::pointcloud2::FLOAT64;
 use nalgebra::Isometry3;
@@ -396,7 +396,7 @@ mod tests {
         let raw = RawDecoder
             .decode_bytes(&body, RepresentationIdentifier::CDR_LE)
             .unwrap();
-        let cloud = crate::io::mcap::parse_cdr(&raw.0).unwrap();
+        let cloud = crate::io::cloud_msg::parse_cdr(&raw.0).unwrap();
         assert_eq!(cloud.frame_id, "lidar");
         assert_eq!(cloud.stamp.seconds(), 12.5);
         let d = decode(&cloud).unwrap();

@@ -29,7 +29,7 @@ use super::msg::{
 };
 use super::params::NodeParams;
 use crate::drive::Driver;
-use crate::io::{mcap::parse_cdr, pointcloud2::decode, poses::format_kitti};
+use crate::io::{cloud_msg::parse_cdr, pointcloud2::decode, poses::format_kitti};
 use crate::settings::Settings;
 use crate::stats::percentile;
 use anyhow::{anyhow, Context, Result};
