@@ -75,7 +75,7 @@ def main():
             failures += 1
             continue
         args = ["tree", "--locked", "-p", package, "-e", edges, "--prefix", "none"]
-        args += ["--format", "{p}", "--no-dedupe"]
+        args += ["--format", "{p}"]
         if features:
             args += ["--features", features]
         built = set()
