@@ -168,3 +168,70 @@ fn after_stamp<'a>(r: &mut Reader<'a>, stamp: Stamp) -> Result<PointCloud2<'a>, 
         is_dense,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where a ROS 1 message of [`ros1_head`] holds its field count.
+    const FIELD_COUNT_AT: usize = 25;
+
+    /// A ROS 1 message up to its field count `n`: seq, stamp, frame id `f`, a 1 x 1 cloud.
+    fn ros1_head(n: u32) -> Vec<u8> {
+        let mut b = Vec::new();
+        for v in [7u32, 1, 2, 1] {
+            b.extend(v.to_le_bytes());
+        }
+        b.push(b'f');
+        for v in [1u32, 1, n] {
+            b.extend(v.to_le_bytes());
+        }
+        assert_eq!(b.len(), FIELD_COUNT_AT + 4);
+        b
+    }
+
+    /// A field of the fewest bytes, 13: an empty name, `offset`, FLOAT32, count 1.
+    fn field(b: &mut Vec<u8>, offset: u32) {
+        b.extend(0u32.to_le_bytes());
+        b.extend(offset.to_le_bytes());
+        b.push(7);
+        b.extend(1u32.to_le_bytes());
+    }
+
+    #[test]
+    fn a_field_count_the_message_cannot_hold_is_refused_before_allocating() {
+        let err = parse_ros1(&ros1_head(u32::MAX)).unwrap_err();
+        println!("{} fields: {err}", u32::MAX);
+        assert!(err.contains("cannot fit"), "{err}");
+        // As many fields as the rest holds at 13 bytes each: read, then the message ends.
+        let mut b = ros1_head(3);
+        for k in 0..3 {
+            field(&mut b, 4 * k);
+        }
+        let err = parse_ros1(&b).unwrap_err();
+        println!("3 fields in 39 bytes: {err}");
+        assert!(err.contains("inside is_bigendian"), "{err}");
+        // One more than that cannot fit.
+        b[FIELD_COUNT_AT..FIELD_COUNT_AT + 4].copy_from_slice(&4u32.to_le_bytes());
+        let err = parse_ros1(&b).unwrap_err();
+        assert!(err.contains("4 fields cannot fit"), "{err}");
+    }
+
+    #[test]
+    fn the_flags_after_the_fields_are_read_as_written() {
+        for (big, dense) in [(0u8, 0u8), (1, 0), (0, 1), (1, 1)] {
+            let mut b = ros1_head(1);
+            field(&mut b, 0);
+            b.push(big);
+            for v in [4u32, 4, 4] {
+                b.extend(v.to_le_bytes());
+            }
+            b.extend(1.5f32.to_le_bytes());
+            b.push(dense);
+            let cloud = parse_ros1(&b).unwrap();
+            assert_eq!((cloud.is_bigendian, cloud.is_dense), (big == 1, dense == 1));
+            assert_eq!((cloud.point_step, cloud.row_step), (4, 4));
+            assert_eq!(cloud.data, &1.5f32.to_le_bytes()[..]);
+        }
+    }
+}
