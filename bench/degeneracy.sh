@@ -27,9 +27,11 @@ KITTI=${KISS_ODOM_KITTI_MINI:-../shared/data/kitti-mini}
 GENZ=${GENZ_VENV:-target/genzvenv}
 BIN=${BIN:-target/release/kiss-odom}
 [ -x "$BIN" ] || cargo build --release -q -p kiss-odom
-if [ ! -x "$GENZ/bin/python" ]; then
-  python3 -m venv "$GENZ"
-  "$GENZ/bin/pip" install -q genz-icp==0.3.2
+# genz-icp reads its presets' YAML files with PyYAML, which only its heavy `[all]` extra
+# (open3d, polyscope, ouster-sdk...) brings: install it beside the package instead.
+if ! "$GENZ/bin/python" -c "import genz_icp, yaml" 2>/dev/null; then
+  [ -x "$GENZ/bin/python" ] || python3 -m venv "$GENZ"
+  "$GENZ/bin/pip" install -q genz-icp==0.3.2 PyYAML==6.0.4
 fi
 mkdir -p "$OUT"
 : > "$OUT/results.jsonl"
