@@ -158,6 +158,14 @@ impl Scene {
 
     /// Nearest hit of the ray `o + t d` (unit `d`) with `t < t_max`.
     pub fn cast(&self, o: &Point3<f64>, d: &Vector3<f64>, t_max: f64) -> Option<Hit> {
+        let mut best = self.cast_planes(o, d, t_max);
+        let limit = best.as_ref().map_or(t_max, |h| h.t);
+        self.cast_solids(o, d, limit, &mut best);
+        best
+    }
+
+    /// Nearest hit of the ray with a plane, `t < t_max` (closed form, no grid).
+    fn cast_planes(&self, o: &Point3<f64>, d: &Vector3<f64>, t_max: f64) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut limit = t_max;
         for (i, (plane, refl)) in self.planes.iter().enumerate() {
@@ -171,7 +179,6 @@ impl Scene {
                 });
             }
         }
-        self.cast_solids(o, d, limit, &mut best);
         best
     }
 
@@ -259,19 +266,8 @@ impl Scene {
 
     /// Brute-force nearest hit over every surface, for checking [`Self::cast`].
     pub fn cast_brute_force(&self, o: &Point3<f64>, d: &Vector3<f64>, t_max: f64) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let mut limit = t_max;
-        for (i, (plane, refl)) in self.planes.iter().enumerate() {
-            if let Some(h) = plane.hit(o, d, limit) {
-                limit = h.t;
-                best = Some(Hit {
-                    t: h.t,
-                    normal: h.normal,
-                    surface: Surface::Plane(i as u32),
-                    reflectivity: *refl,
-                });
-            }
-        }
+        let mut best = self.cast_planes(o, d, t_max);
+        let mut limit = best.as_ref().map_or(t_max, |h| h.t);
         for (i, s) in self.solids.iter().enumerate() {
             if let Some(h) = s.shape.hit(o, d, limit) {
                 limit = h.t;
