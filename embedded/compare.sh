@@ -17,16 +17,8 @@ here="$(cd "$(dirname "$0")" && pwd)"
 out="$here/target/compare"
 mkdir -p "$out"
 
-if [ -f "$here/target/qemu-skipped" ]; then
-  echo "SKIP: $(cat "$here/target/qemu-skipped") (marker from install-qemu.sh)"
-  exit 0
-fi
-for q in qemu-system-arm qemu-system-aarch64 qemu-system-riscv32; do
-  if ! command -v "$q" >/dev/null; then
-    echo "SKIP: $q not installed (run embedded/install-qemu.sh)"
-    exit 0
-  fi
-done
+# shellcheck source=qemu-or-skip.sh
+source "$here/qemu-or-skip.sh"
 
 cases=("$@")
 [ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-packets aarch64 riscv32 riscv32-f64)

@@ -9,16 +9,8 @@
 # The probes build in the same target dirs as run.sh (only this crate is rebuilt per probe).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-if [ -f "$here/target/qemu-skipped" ]; then
-  echo "SKIP: $(cat "$here/target/qemu-skipped") (marker from install-qemu.sh)"
-  exit 0
-fi
-for q in qemu-system-arm qemu-system-aarch64 qemu-system-riscv32; do
-  if ! command -v "$q" >/dev/null; then
-    echo "SKIP: $q not installed (run embedded/install-qemu.sh)"
-    exit 0
-  fi
-done
+# shellcheck source=qemu-or-skip.sh
+source "$here/qemu-or-skip.sh"
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(thumbv7em aarch64 riscv32)
 failed=0
