@@ -12,20 +12,25 @@
 //! counted; existing map content is never evicted to make room.
 //!
 //! The map is its bookkeeping ([`MapState`], a few words) plus five buffers in named regions
-//! ([`MapLayout`]). [`MapView`] reads them (correspondence search, every point); the update
-//! works on a mutable view. [`LocalMap`] owns (or borrows) storage for a map on its own; inside
+//! ([`MapLayout`], in `layout`). [`MapView`] (`view`, `search`) reads them: correspondence
+//! search, every point; the update (`update`) works on a mutable view. [`LocalMap`] owns (or borrows) storage for a map on its own; inside
 //! [`crate::Odometry`] the regions are part of the pipeline's one storage.
 
 mod codec;
+mod layout;
 mod search;
+mod update;
+mod view;
 
 pub use codec::{Exact, PointCodec, Quantized};
+pub use layout::MapLayout;
 pub use search::Nearest;
+pub(crate) use update::MapMut;
+pub use view::MapView;
 
 use crate::error::ConfigError;
-use crate::scalar::{sqrt_lt, Real};
-use crate::storage::{split_off, view, view_ref, words_for, Carver, Region, Storage};
-use crate::voxel::{home_slot, next_slot, point_to_voxel, slots_for, table_hash, VoxelKey};
+use crate::scalar::Real;
+use crate::storage::Storage;
 use crate::{Point, Pose};
 use core::marker::PhantomData;
 
@@ -34,113 +39,6 @@ use core::marker::PhantomData;
 pub const BLOCK: usize = 4;
 
 const NONE: u32 = u32::MAX;
-
-/// Where the map's buffers sit, in `u64` words: the voxel table (slots for `voxels` at load
-/// <= 3/4) and the block pool (`points / BLOCK` blocks, rounded up).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct MapLayout {
-    /// Slots of the voxel table.
-    pub slots: usize,
-    /// Blocks in the point pool.
-    pub blocks: usize,
-    /// Voxel keys, 12 bytes a slot.
-    pub keys: Region,
-    /// First block of each slot's chain, 4 bytes a slot.
-    pub heads: Region,
-    /// Points in each slot's voxel (0: empty slot), 1 byte a slot.
-    pub counts: Region,
-    /// The block pool, `BLOCK` stored points a block.
-    pub points: Region,
-    /// Next block of each block's chain (or of the free list), 4 bytes a block.
-    pub links: Region,
-}
-
-impl MapLayout {
-    /// The layout for `voxels` voxels and `points` points of `stored_size` bytes each, placed at
-    /// the carver's position.
-    pub(crate) const fn carve(
-        voxels: usize,
-        points: usize,
-        stored_size: usize,
-        c: &mut Carver,
-    ) -> Self {
-        let slots = slots_for(voxels);
-        let blocks = points.div_ceil(BLOCK);
-        Self {
-            slots,
-            blocks,
-            keys: c.take(words_for(slots * 12)),
-            heads: c.take(words_for(slots * 4)),
-            counts: c.take(words_for(slots)),
-            points: c.take(words_for(blocks * BLOCK * stored_size)),
-            links: c.take(words_for(blocks * 4)),
-        }
-    }
-
-    /// The layout of a map on its own storage (regions from word 0).
-    pub const fn new(voxels: usize, points: usize, stored_size: usize) -> Self {
-        Self::carve(voxels, points, stored_size, &mut Carver::new())
-    }
-
-    /// Words from the first region's start to the last one's end.
-    pub const fn words(&self) -> usize {
-        self.links.end() - self.keys.start
-    }
-
-    /// The map's buffers in `words`, which start at the first region.
-    fn split<'w, P: bytemuck::Pod>(
-        &self,
-        words: &'w mut [u64],
-    ) -> Result<MapBuffers<'w, P>, ConfigError> {
-        let (k, rest) = split_off(words, self.keys)?;
-        let (h, rest) = split_off(rest, self.heads)?;
-        let (c, rest) = split_off(rest, self.counts)?;
-        let (p, rest) = split_off(rest, self.points)?;
-        let (l, _) = split_off(rest, self.links)?;
-        Ok(MapBuffers {
-            keys: view(k, self.slots)?,
-            heads: view(h, self.slots)?,
-            counts: view(c, self.slots)?,
-            points: view(p, self.blocks * BLOCK)?,
-            links: view(l, self.blocks)?,
-        })
-    }
-
-    /// Read-only [`Self::split`].
-    fn split_ref<'w, P: bytemuck::Pod>(
-        &self,
-        words: &'w [u64],
-    ) -> Result<MapSlices<'w, P>, ConfigError> {
-        let at = |r: Region| words.get(r.start - self.keys.start..r.end() - self.keys.start);
-        let short = ConfigError::ArenaTooSmall;
-        Ok(MapSlices {
-            keys: view_ref(at(self.keys).ok_or(short)?, self.slots)?,
-            heads: view_ref(at(self.heads).ok_or(short)?, self.slots)?,
-            counts: view_ref(at(self.counts).ok_or(short)?, self.slots)?,
-            points: view_ref(at(self.points).ok_or(short)?, self.blocks * BLOCK)?,
-            links: view_ref(at(self.links).ok_or(short)?, self.blocks)?,
-        })
-    }
-}
-
-/// The map's buffers, mutable.
-pub(crate) struct MapBuffers<'a, S> {
-    keys: &'a mut [VoxelKey],
-    heads: &'a mut [u32],
-    counts: &'a mut [u8],
-    points: &'a mut [S],
-    links: &'a mut [u32],
-}
-
-/// The map's buffers, read-only.
-struct MapSlices<'a, S> {
-    keys: &'a [VoxelKey],
-    heads: &'a [u32],
-    counts: &'a [u8],
-    points: &'a [S],
-    links: &'a [u32],
-}
 
 /// What one map update did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -159,19 +57,19 @@ pub struct UpdateStats {
 /// The map's parameters and bookkeeping: everything but the buffers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct MapState<T> {
-    voxel_size: T,
-    max_distance: T,
-    max_points: u32,
-    resolution: T,
-    slots: usize,
-    blocks: usize,
-    max_voxels: usize,
-    free: u32,
-    voxels: usize,
-    blocks_used: usize,
-    n_points: usize,
-    high_voxels: usize,
-    high_blocks: usize,
+    pub(super) voxel_size: T,
+    pub(super) max_distance: T,
+    pub(super) max_points: u32,
+    pub(super) resolution: T,
+    pub(super) slots: usize,
+    pub(super) blocks: usize,
+    pub(super) max_voxels: usize,
+    pub(super) free: u32,
+    pub(super) voxels: usize,
+    pub(super) blocks_used: usize,
+    pub(super) n_points: usize,
+    pub(super) high_voxels: usize,
+    pub(super) high_blocks: usize,
 }
 
 impl<T: Real> MapState<T> {
@@ -228,375 +126,6 @@ impl<T: Real> MapState<T> {
     pub(crate) fn reset_high_water(&mut self) {
         self.high_voxels = 0;
         self.high_blocks = 0;
-    }
-}
-
-/// Read access to a local map: correspondence search and its points.
-pub struct MapView<'a, T: Real, P: PointCodec<T>> {
-    st: MapState<T>,
-    keys: &'a [VoxelKey],
-    heads: &'a [u32],
-    counts: &'a [u8],
-    points: &'a [P::Stored],
-    links: &'a [u32],
-}
-
-/// Write access to a local map (the pipeline's update).
-pub(crate) struct MapMut<'a, T: Real, P: PointCodec<T>> {
-    st: &'a mut MapState<T>,
-    buf: MapBuffers<'a, P::Stored>,
-}
-
-impl<'a, T: Real, P: PointCodec<T>> MapView<'a, T, P> {
-    /// A view of the map whose buffers start at `words[0]`.
-    pub(crate) fn of(
-        st: &MapState<T>,
-        layout: &MapLayout,
-        words: &'a [u64],
-    ) -> Result<Self, ConfigError> {
-        let s = layout.split_ref::<P::Stored>(words)?;
-        Ok(Self {
-            st: *st,
-            keys: s.keys,
-            heads: s.heads,
-            counts: s.counts,
-            points: s.points,
-            links: s.links,
-        })
-    }
-
-    /// A view of no voxel at all, with `st`'s parameters: what a storage that no longer holds
-    /// the layout reads as (instead of a panic).
-    pub(crate) fn empty(st: &MapState<T>) -> Self {
-        Self {
-            st: MapState {
-                slots: 1,
-                voxels: 0,
-                n_points: 0,
-                ..*st
-            },
-            keys: &[[0; 3]],
-            heads: &[0],
-            counts: &[0],
-            points: &[],
-            links: &[],
-        }
-    }
-
-    /// Voxel size `v`.
-    pub fn voxel_size(&self) -> T {
-        self.st.voxel_size
-    }
-    /// Occupied voxels.
-    pub fn voxels(&self) -> usize {
-        self.st.voxels
-    }
-    /// Stored points.
-    pub fn points(&self) -> usize {
-        self.st.n_points
-    }
-    /// Whether the map holds no voxel.
-    pub fn is_empty(&self) -> bool {
-        self.st.voxels == 0
-    }
-    /// Most voxels ever held.
-    pub fn high_water_voxels(&self) -> usize {
-        self.st.high_water_voxels()
-    }
-    /// Most point slots (blocks * BLOCK) ever in use.
-    pub fn high_water_point_slots(&self) -> usize {
-        self.st.high_water_point_slots()
-    }
-    /// Voxel capacity.
-    pub fn voxel_capacity(&self) -> usize {
-        self.st.max_voxels
-    }
-    /// The most work one search can do, in `Nearest::work` units: the query, 27 lookups and
-    /// `N_max` points in each voxel.
-    pub fn search_work_bound(&self) -> u32 {
-        1 + 27 * (1 + self.st.max_points)
-    }
-    /// Point slot capacity.
-    pub fn point_capacity(&self) -> usize {
-        self.st.blocks * BLOCK
-    }
-
-    /// The slot holding `key`, or `None`. Probing stops at an empty slot; the load cap of 3/4
-    /// guarantees one, and the probe count is bounded anyway, so a broken invariant gives a
-    /// wrong answer that tests catch rather than an endless loop.
-    #[inline]
-    pub(crate) fn find(&self, key: &VoxelKey) -> Option<usize> {
-        let slots = self.st.slots;
-        let mut i = home_slot(table_hash(key), slots);
-        for _ in 0..slots {
-            if self.counts[i] == 0 {
-                return None;
-            }
-            if self.keys[i] == *key {
-                return Some(i);
-            }
-            i = next_slot(i, slots);
-        }
-        None
-    }
-
-    /// Calls `f` on each point of the voxel in `slot`, in insertion order, until it returns
-    /// `false`.
-    #[inline]
-    fn for_each_in(&self, slot: usize, f: impl FnMut(Point<T>) -> bool) {
-        for_each_in::<T, P>(
-            self.st.voxel_size,
-            &self.keys[slot],
-            self.counts[slot],
-            self.heads[slot],
-            self.points,
-            self.links,
-            f,
-        );
-    }
-
-    /// Every stored point, voxel by voxel in table order.
-    pub fn for_each_point(&self, mut f: impl FnMut(&VoxelKey, Point<T>)) {
-        for slot in 0..self.st.slots {
-            if self.counts[slot] != 0 {
-                let key = self.keys[slot];
-                self.for_each_in(slot, |p| {
-                    f(&key, p);
-                    true
-                });
-            }
-        }
-    }
-}
-
-/// Calls `f` on each of `count` points chained from block `head`, until it returns `false`.
-#[inline]
-fn for_each_in<T: Real, P: PointCodec<T>>(
-    v: T,
-    key: &VoxelKey,
-    count: u8,
-    head: u32,
-    points: &[P::Stored],
-    links: &[u32],
-    mut f: impl FnMut(Point<T>) -> bool,
-) {
-    let mut left = count as usize;
-    let mut b = head as usize;
-    while left > 0 {
-        let base = b * BLOCK;
-        let n = left.min(BLOCK);
-        let Some(block) = points.get(base..base + n) else {
-            return;
-        };
-        for s in block {
-            if !f(P::decode(s, key, v)) {
-                return;
-            }
-        }
-        left -= n;
-        b = links.get(b).copied().unwrap_or(NONE) as usize;
-    }
-}
-
-impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
-    /// Write access to the map whose buffers start at `words[0]`.
-    pub(crate) fn of(
-        st: &'a mut MapState<T>,
-        layout: &MapLayout,
-        words: &'a mut [u64],
-    ) -> Result<Self, ConfigError> {
-        Ok(Self {
-            st,
-            buf: layout.split(words)?,
-        })
-    }
-
-    /// Read access to the same map.
-    pub(crate) fn view(&self) -> MapView<'_, T, P> {
-        MapView {
-            st: *self.st,
-            keys: self.buf.keys,
-            heads: self.buf.heads,
-            counts: self.buf.counts,
-            points: self.buf.points,
-            links: self.buf.links,
-        }
-    }
-
-    /// Removes every voxel.
-    pub(crate) fn clear(&mut self) {
-        self.buf.counts.fill(0);
-        let n = self.buf.links.len();
-        for (i, l) in self.buf.links.iter_mut().enumerate() {
-            *l = if i + 1 < n { (i + 1) as u32 } else { NONE };
-        }
-        self.st.free = if n > 0 { 0 } else { NONE };
-        self.st.voxels = 0;
-        self.st.blocks_used = 0;
-        self.st.n_points = 0;
-    }
-
-    fn alloc_block(&mut self) -> Option<u32> {
-        let b = self.st.free;
-        if b == NONE {
-            return None;
-        }
-        self.st.free = self.buf.links[b as usize];
-        self.buf.links[b as usize] = NONE;
-        self.st.blocks_used += 1;
-        self.st.high_blocks = self.st.high_blocks.max(self.st.blocks_used);
-        Some(b)
-    }
-
-    /// Adds world-frame points in order with the reference's admission rule.
-    pub(crate) fn add_points(&mut self, points: impl Iterator<Item = Point<T>>) -> UpdateStats {
-        let mut st = UpdateStats::default();
-        for p in points {
-            self.add_point(&p, &mut st);
-        }
-        st
-    }
-
-    fn add_point(&mut self, p: &Point<T>, st: &mut UpdateStats) {
-        let key = point_to_voxel(p, self.st.voxel_size);
-        let slots = self.st.slots;
-        let mut i = home_slot(table_hash(&key), slots);
-        let mut probes = 0;
-        while self.buf.counts[i] != 0 {
-            if self.buf.keys[i] == key {
-                return self.append(i, &key, p, st);
-            }
-            i = next_slot(i, slots);
-            probes += 1;
-            if probes >= slots {
-                // No empty slot (cannot happen below the 3/4 load cap): drop, never spin.
-                st.dropped_voxels += 1;
-                return;
-            }
-        }
-        if self.st.voxels >= self.st.max_voxels {
-            st.dropped_voxels += 1;
-            return;
-        }
-        let Some(b) = self.alloc_block() else {
-            st.dropped_points += 1;
-            return;
-        };
-        self.buf.keys[i] = key;
-        self.buf.heads[i] = b;
-        self.buf.counts[i] = 1;
-        self.buf.points[b as usize * BLOCK] = P::encode(p, &key, self.st.voxel_size);
-        self.st.voxels += 1;
-        self.st.high_voxels = self.st.high_voxels.max(self.st.voxels);
-        self.st.n_points += 1;
-        st.added += 1;
-    }
-
-    fn append(&mut self, slot: usize, key: &VoxelKey, p: &Point<T>, st: &mut UpdateStats) {
-        let count = self.buf.counts[slot] as usize;
-        if count as u32 >= self.st.max_points {
-            return;
-        }
-        let mut too_close = false;
-        let res = self.st.resolution;
-        self.view().for_each_in(slot, |q| {
-            too_close = sqrt_lt((q - p).norm_squared(), res);
-            !too_close
-        });
-        if too_close {
-            return;
-        }
-        // Find the last block of the chain.
-        let mut b = self.buf.heads[slot];
-        for _ in 0..(count - 1) / BLOCK {
-            b = self.buf.links[b as usize];
-        }
-        if count % BLOCK == 0 {
-            let Some(nb) = self.alloc_block() else {
-                st.dropped_points += 1;
-                return;
-            };
-            self.buf.links[b as usize] = nb;
-            b = nb;
-        }
-        self.buf.points[b as usize * BLOCK + count % BLOCK] = P::encode(p, key, self.st.voxel_size);
-        self.buf.counts[slot] += 1;
-        self.st.n_points += 1;
-        st.added += 1;
-    }
-
-    /// Removes voxels whose first point is at least `r_max` from `origin` (squared distances
-    /// compared, as the reference does).
-    pub(crate) fn remove_far_from(&mut self, origin: &Point<T>) -> usize {
-        let max2 = self.st.max_distance * self.st.max_distance;
-        let mut removed = 0;
-        let mut i = 0;
-        while i < self.st.slots {
-            // A removal shifts a later voxel into slot i: look at slot i again.
-            while self.buf.counts[i] != 0 {
-                let key = self.buf.keys[i];
-                let first = P::decode(
-                    &self.buf.points[self.buf.heads[i] as usize * BLOCK],
-                    &key,
-                    self.st.voxel_size,
-                );
-                if (first - origin).norm_squared() >= max2 {
-                    self.remove_slot(i);
-                    removed += 1;
-                } else {
-                    break;
-                }
-            }
-            i += 1;
-        }
-        removed
-    }
-
-    fn remove_slot(&mut self, mut hole: usize) {
-        // Return the chain to the free list.
-        let mut left = self.buf.counts[hole] as usize;
-        let mut b = self.buf.heads[hole];
-        while left > 0 {
-            let next = self.buf.links[b as usize];
-            self.buf.links[b as usize] = self.st.free;
-            self.st.free = b;
-            self.st.blocks_used -= 1;
-            left = left.saturating_sub(BLOCK);
-            b = next;
-        }
-        self.st.n_points -= self.buf.counts[hole] as usize;
-        self.st.voxels -= 1;
-        self.buf.counts[hole] = 0;
-        // Backward-shift deletion: pull later members of the probe run into the hole.
-        let slots = self.st.slots;
-        let mut j = hole;
-        loop {
-            j = next_slot(j, slots);
-            if self.buf.counts[j] == 0 {
-                return;
-            }
-            let home = home_slot(table_hash(&self.buf.keys[j]), slots);
-            let stays = if hole <= j {
-                hole < home && home <= j
-            } else {
-                hole < home || home <= j
-            };
-            if !stays {
-                self.buf.keys[hole] = self.buf.keys[j];
-                self.buf.heads[hole] = self.buf.heads[j];
-                self.buf.counts[hole] = self.buf.counts[j];
-                self.buf.counts[j] = 0;
-                hole = j;
-            }
-        }
-    }
-
-    /// The reference's `Update`: transforms the merge cloud `local` by `pose`, adds it, then
-    /// prunes voxels beyond `r_max` from the pose's position.
-    pub(crate) fn update(&mut self, local: &[[T; 3]], pose: &Pose<T>) -> UpdateStats {
-        let mut st = self.add_points(local.iter().map(|p| pose * Point::from(*p)));
-        st.pruned_voxels = self.remove_far_from(&Point::from(pose.translation.vector));
-        st
     }
 }
 

@@ -1,5 +1,6 @@
 use super::*;
 use crate::testutil::Rng;
+use crate::voxel::point_to_voxel;
 
 const BLOCKS: usize = 40;
 const WORDS: usize = LocalMap::<f64, Exact, &mut [u64]>::words(48, BLOCKS * BLOCK);
