@@ -75,7 +75,7 @@ mod testutil;
 pub use config::{Capacities, Config, MAX_RANGE_LIMIT};
 pub use deskew::StampProblem;
 pub use error::{ConfigError, FrameError};
-pub use local_map::{Exact, MapView, PointCodec, Quantized};
+pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized};
 pub use odometry::{FrameInput, Layout, Odometry};
 pub use registration::{Executor, Sequential};
 pub use report::{Dropped, Flag, FrameReport, HighWater, Status};
@@ -107,7 +107,9 @@ pub mod stages {
         hat, left_jacobian, left_jacobian_inverse, renormalize, rotation_angle, se3_exp, se3_log,
         so3_exp, so3_log,
     };
-    pub use crate::local_map::{LocalMap, MapLayout, UpdateStats, BLOCK};
+    pub use crate::local_map::{
+        LocalMap, MapLayout, UpdateStats, BLOCK, EVICT_TO, GROW_BELOW, RADIUS_BINS,
+    };
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
         align_points_to_map, chunk_len, chunks_for, moved_points, work_words, Alignment, Chunk,

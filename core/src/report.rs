@@ -2,6 +2,7 @@
 //! they dropped.
 
 use crate::deskew::StampProblem;
+use crate::local_map::MapCapacity;
 use crate::robust::Held;
 use crate::scalar::Real;
 use crate::Pose;
@@ -39,11 +40,15 @@ pub enum Flag {
     /// Robust mode registered the scan with point-to-plane terms where the map is planar: the
     /// reference registration found it degenerate (see `Config::plane_gate`).
     Planes = 1 << 10,
+    /// The map was full: its farthest voxels were evicted to make room, which may have shrunk
+    /// its radius below `r_max` (see [`FrameReport::map_radius`] and
+    /// [`FrameReport::map_filled`]).
+    Evicted = 1 << 11,
 }
 
 impl Flag {
     /// Every flag, in bit order.
-    pub const ALL: [Flag; 11] = [
+    pub const ALL: [Flag; 12] = [
         Flag::TimestampsIgnored,
         Flag::IterationCap,
         Flag::NoCorrespondences,
@@ -55,6 +60,7 @@ impl Flag {
         Flag::Budget,
         Flag::Held,
         Flag::Planes,
+        Flag::Evicted,
     ];
 
     /// The flag's name in reports and `frames.csv` (`snake_case`).
@@ -71,6 +77,7 @@ impl Flag {
             Flag::Budget => "budget",
             Flag::Held => "held",
             Flag::Planes => "planes",
+            Flag::Evicted => "evicted",
         }
     }
 
@@ -196,9 +203,10 @@ pub struct Dropped {
     pub merge_full: u32,
     /// New `beta v` voxels once the registration cloud was full (first-seen voxels kept).
     pub source_full: u32,
-    /// New map voxels refused because the voxel table was full (existing voxels kept).
+    /// New map voxels refused because the voxel table was still full after eviction (the
+    /// scan's nearest points kept, see [`FrameReport::map_radius`]).
     pub map_voxels_full: u32,
-    /// Map points refused because the block pool was empty (existing points kept).
+    /// Map points refused because the block pool was still empty after eviction.
     pub map_points_full: u32,
 }
 
@@ -269,8 +277,16 @@ pub struct FrameReport<T: Real> {
     pub map_voxels: u32,
     /// Points in the map after the update.
     pub map_points: u32,
-    /// Voxels pruned for being beyond `r_max`.
+    /// Voxels pruned for being beyond the map's radius.
     pub pruned_voxels: u32,
+    /// The map's radius after the update: `r_max`, or less once the map has filled and given
+    /// up its farthest voxels (it grows back, a voxel a frame, while the map has room).
+    pub map_radius: T,
+    /// The map capacity an insertion found full in this frame, if any (the frame is then
+    /// flagged [`Flag::Evicted`]).
+    pub map_filled: Option<MapCapacity>,
+    /// Voxels evicted, farthest first, to make room in this frame.
+    pub evicted_voxels: u32,
     /// What the capacity rules and input checks dropped.
     pub dropped: Dropped,
     /// Whether the scan was deskewed.
@@ -307,6 +323,6 @@ mod tests {
         }
         assert_eq!(Flag::from_name("fine"), None);
         let all: Status = Flag::ALL.into_iter().collect();
-        assert_eq!(all.bits(), 0x7ff);
+        assert_eq!(all.bits(), 0xfff);
     }
 }

@@ -256,17 +256,48 @@ proptest! {
         } else {
             check_map_caps::<Exact>(voxel, range, n_max, max_voxels, blocks, &updates)?;
             // With exact storage the pruning rule is checkable: after an update, no voxel's
-            // first point is `r_max` or more from the pose (squared distances, as pruned).
+            // first point is at or beyond the map's radius from the pose (`r_max`, or less
+            // once the map has filled), and the radius never exceeds `r_max`.
             let mut map = new_map::<Exact>(voxel, range, n_max, max_voxels, blocks * BLOCK);
+            let mut scratch = vec![0u64; 2 * 120];
             for (pts, pose) in &updates {
-                map.update(pts, pose);
+                map.update_with(pts, pose, &mut scratch);
                 let origin = Point::from(pose.translation.vector);
+                let r = map.radius();
+                prop_assert!(r <= range, "radius {} above r_max {}", r, range);
                 for (k, (_, first)) in census(&map) {
-                    let d2 = (first - origin).norm_squared();
-                    prop_assert!(d2 < range * range || d2.is_nan(), "voxel {:?} kept at {} m", k, d2.sqrt());
+                    let d = (first - origin).norm();
+                    prop_assert!(d < range && d <= r || d.is_nan(), "voxel {:?} kept at {} m, radius {} m", k, d, r);
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_full_map_evicts_the_same_way_every_run(
+        voxel in 0.2..3.0f64,
+        range in 5.0..60.0f64,
+        n_max in 1u32..=30,
+        max_voxels in 1usize..=64,
+        blocks in 1usize..=48,
+        updates in prop::collection::vec((points(40.0, 120), any_pose(10.0)), 1..8),
+        tallied in any::<bool>(),
+    ) {
+        // Two maps, the same updates: the same voxels, points, radius and counts, bit for bit.
+        let run = || {
+            let mut map = new_map::<Exact>(voxel, range, n_max, max_voxels, blocks * BLOCK);
+            let mut scratch = vec![0u64; if tallied { 2 * 120 } else { 0 }];
+            let mut trace = Vec::new();
+            for (pts, pose) in &updates {
+                let st = map.update_with(pts, pose, &mut scratch);
+                let mut points = Vec::new();
+                map.view().for_each_point(|k, p| points.push((*k, p.coords.map(f64::to_bits))));
+                trace.push((st, map.radius().to_bits(), points));
+            }
+            trace
+        };
+        let (a, b) = (run(), run());
+        prop_assert!(a == b, "two runs differ");
     }
 }
 

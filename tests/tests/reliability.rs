@@ -14,8 +14,8 @@
 
 use kiss_odom::simulate::{Frame, Profile, SimParams, Simulation, Surface};
 use kiss_odom_core::{
-    Capacities, Config, Exact, Flag, FrameError, FrameReport, Odometry, Pose, Quantized,
-    StampProblem, Status,
+    Capacities, Config, Exact, Flag, FrameError, FrameReport, MapCapacity, Odometry, Pose,
+    Quantized, StampProblem, Status,
 };
 use nalgebra::{Isometry3, UnitQuaternion};
 use std::sync::OnceLock;
@@ -514,7 +514,7 @@ fn fast() -> &'static Sequence {
     debug_assertions,
     ignore = "heavy: cargo test --release --test reliability"
 )]
-fn a_map_full_for_many_frames_drops_by_rule_counts_it_and_keeps_tracking() {
+fn a_map_full_for_many_frames_gives_up_its_farthest_voxels_says_so_and_keeps_tracking() {
     let seq = urban();
     let need = clean_run(seq).1.iter().map(|r| r.map_voxels).max().unwrap() as usize;
     let caps = Capacities {
@@ -531,12 +531,22 @@ fn a_map_full_for_many_frames_drops_by_rule_counts_it_and_keeps_tracking() {
     };
     let reports = run();
     assert_eq!(reports, run(), "the full rule is deterministic");
-    let mut full = 0;
+    let (mut full, mut evicted, mut smallest) = (0, 0, RANGE);
     for (k, r) in reports.iter().enumerate() {
         assert!(r.map_voxels as usize <= caps.map_voxels, "frame {k}");
+        // Nothing of the scans near the sensor is refused: the map makes room instead.
         let dropped = r.dropped.map_voxels_full > 0;
+        assert!(!dropped, "frame {k} dropped {}", r.dropped.map_voxels_full);
         assert_eq!(r.status.contains(Flag::Capacity), dropped, "frame {k}");
-        full += dropped as usize;
+        // Eviction is flagged, and names the capacity that filled.
+        let ev = r.status.contains(Flag::Evicted);
+        assert_eq!(ev, r.evicted_voxels > 0, "frame {k}");
+        if ev {
+            assert_eq!(r.map_filled, Some(MapCapacity::Voxels), "frame {k}");
+        }
+        evicted += ev as usize;
+        full += (r.map_radius < RANGE) as usize;
+        smallest = smallest.min(r.map_radius);
     }
     let poses: Vec<_> = reports.iter().map(|r| r.pose).collect();
     let from = 5;
@@ -551,13 +561,14 @@ fn a_map_full_for_many_frames_drops_by_rule_counts_it_and_keeps_tracking() {
     )
     .0;
     println!(
-        "map capped at {} of {need} voxels: full on {full}/{} frames (required >= 20); worst \
-         per-frame error {worst:.3} m vs {clean:.3} m uncapped (bound 2x + 0.02); final error \
-         {last:.3} m vs {clean_last:.3} m (bound 2x + 0.1)",
+        "map capped at {} of {need} voxels: radius below {RANGE} m on {full}/{} frames \
+         (required >= 20; smallest {smallest:.1} m), {evicted} evictions; worst per-frame error \
+         {worst:.3} m vs {clean:.3} m uncapped (bound 2x + 0.02); final error {last:.3} m vs \
+         {clean_last:.3} m (bound 2x + 0.1)",
         caps.map_voxels,
         reports.len()
     );
-    assert!(full >= 20);
+    assert!(full >= 20 && evicted >= 1);
     assert!(worst < 2.0 * clean + 0.02);
     assert!(last < 2.0 * clean_last + 0.1);
 }

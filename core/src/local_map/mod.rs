@@ -8,8 +8,10 @@
 //! Storage is fixed: an open-addressing table of voxel keys (linear probing, load at most 3/4,
 //! backward-shift deletion, so no tombstones accumulate over hours) and a pool of
 //! [`BLOCK`]-point blocks chained per voxel, so a voxel holding 3 points costs one block, not
-//! `N_max` slots. When the table or the pool is full, the new voxel or point is dropped and
-//! counted; existing map content is never evicted to make room.
+//! `N_max` slots. A full map degrades the way a smaller `r_max` would: the update evicts the
+//! voxels farthest from the sensor and shrinks the map's radius, never refusing the structure
+//! next to the sensor that the next scan registers against (`update`); the radius grows back
+//! while there is room.
 //!
 //! The map is its bookkeeping ([`MapState`], a few words) plus five buffers in named regions
 //! ([`MapLayout`], in `layout`). [`MapView`] (`view`, `search`) reads them: correspondence
@@ -17,12 +19,14 @@
 //! [`crate::Odometry`] the regions are part of the pipeline's one storage.
 
 mod codec;
+mod evict;
 mod layout;
 mod search;
 mod update;
 mod view;
 
 pub use codec::{Exact, PointCodec, Quantized};
+pub use evict::{EVICT_TO, GROW_BELOW, RADIUS_BINS};
 pub use layout::MapLayout;
 pub use search::Nearest;
 pub(crate) use update::MapMut;
@@ -40,18 +44,56 @@ pub const BLOCK: usize = 4;
 
 const NONE: u32 = u32::MAX;
 
+/// One of the map's two capacities: what filled when an insertion found no room.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MapCapacity {
+    /// The voxel table (`Capacities::map_voxels`).
+    Voxels,
+    /// The point pool (`Capacities::map_points`).
+    Points,
+}
+
+impl MapCapacity {
+    /// The capacity's name, as `Capacities` calls it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            MapCapacity::Voxels => "map_voxels",
+            MapCapacity::Points => "map_points",
+        }
+    }
+}
+
 /// What one map update did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct UpdateStats {
     /// Points added.
     pub added: usize,
-    /// New voxels refused because the voxel table was at capacity.
+    /// New voxels refused because the voxel table was at capacity (even after eviction).
     pub dropped_voxels: usize,
-    /// Points refused because the point pool had no free block.
+    /// Points refused because the point pool had no free block (even after eviction).
     pub dropped_points: usize,
-    /// Voxels removed for being beyond `r_max`.
+    /// Voxels removed for being beyond the map's radius after the update.
     pub pruned_voxels: usize,
+    /// The capacity an insertion first found full, if any did.
+    pub filled: Option<MapCapacity>,
+    /// Whether the update evicted (at most once per update).
+    pub evicted: bool,
+    /// Voxels evicted to make room, farthest first.
+    pub evicted_voxels: usize,
+    /// Points not added because they lay beyond a radius shrunk below `r_max`.
+    pub beyond_radius: usize,
+}
+
+impl UpdateStats {
+    /// Counts a point refused by `full`.
+    fn count_drop(&mut self, full: MapCapacity) {
+        match full {
+            MapCapacity::Voxels => self.dropped_voxels += 1,
+            MapCapacity::Points => self.dropped_points += 1,
+        }
+    }
 }
 
 /// The map's parameters and bookkeeping: everything but the buffers.
@@ -70,6 +112,8 @@ pub(crate) struct MapState<T> {
     pub(super) n_points: usize,
     pub(super) high_voxels: usize,
     pub(super) high_blocks: usize,
+    /// The squared radius in force: `max_distance^2` until the map fills (see `update`).
+    pub(super) limit2: T,
 }
 
 impl<T: Real> MapState<T> {
@@ -99,6 +143,7 @@ impl<T: Real> MapState<T> {
             n_points: 0,
             high_voxels: 0,
             high_blocks: 0,
+            limit2: max_distance * max_distance,
         })
     }
 
@@ -110,6 +155,15 @@ impl<T: Real> MapState<T> {
     /// Stored points.
     pub(crate) fn points(&self) -> usize {
         self.n_points
+    }
+
+    /// The radius in force: `r_max`, or less after the map filled (see [`MapMut::update`]).
+    pub(crate) fn radius(&self) -> T {
+        if self.limit2 < self.max_distance * self.max_distance {
+            self.limit2.sqrt_l()
+        } else {
+            self.max_distance
+        }
     }
 
     /// Most voxels ever held.
@@ -193,7 +247,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> LocalMap<T, P, S> {
         self.with_mut(|m| m.clear())
     }
 
-    /// Adds world-frame points in order with the reference's admission rule.
+    /// Adds world-frame points in order with the reference's admission rule; with no pose to
+    /// evict around, what does not fit is dropped and counted.
     pub fn add_points(&mut self, points: impl Iterator<Item = Point<T>>) -> UpdateStats {
         self.with_mut(|m| m.add_points(points))
     }
@@ -203,9 +258,22 @@ impl<T: Real, P: PointCodec<T>, S: Storage> LocalMap<T, P, S> {
         self.with_mut(|m| m.remove_far_from(origin))
     }
 
-    /// The reference's `Update`: adds `local` moved by `pose`, then prunes around the pose.
+    /// The reference's `Update`: adds `local` moved by `pose`, then prunes around the pose; a
+    /// full map evicts its farthest voxels first (see the module doc), counting every point of
+    /// the scan as a voxel of its own ([`Self::update_with`] tallies them exactly).
     pub fn update(&mut self, local: &[[T; 3]], pose: &Pose<T>) -> UpdateStats {
-        self.with_mut(|m| m.update(local, pose))
+        self.update_with(local, pose, &mut [])
+    }
+
+    /// [`Self::update`] with `scratch` to tally the scan's voxels when the map is full (16
+    /// bytes per point of `local` are enough; the pipeline lends its downsampling scratch).
+    pub fn update_with(
+        &mut self,
+        local: &[[T; 3]],
+        pose: &Pose<T>,
+        scratch: &mut [u64],
+    ) -> UpdateStats {
+        self.with_mut(|m| m.update(local, pose, scratch))
     }
 
     /// The closest map point to `query` within `max_distance`, with its squared distance.
@@ -221,6 +289,11 @@ impl<T: Real, P: PointCodec<T>, S: Storage> LocalMap<T, P, S> {
     /// Stored points.
     pub fn points(&self) -> usize {
         self.state.n_points
+    }
+
+    /// The radius in force: `max_distance`, or less after the map filled.
+    pub fn radius(&self) -> T {
+        self.state.radius()
     }
 }
 

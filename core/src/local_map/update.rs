@@ -1,8 +1,9 @@
 //! The map update (Sec. III-C): points join with the reference's admission rule, voxels
 //! beyond the radius are pruned.
 
+use super::evict::GROW_BELOW;
 use super::layout::MapBuffers;
-use super::{MapLayout, MapState, MapView, PointCodec, UpdateStats, BLOCK, NONE};
+use super::{MapCapacity, MapLayout, MapState, MapView, PointCodec, UpdateStats, BLOCK, NONE};
 use crate::error::ConfigError;
 use crate::scalar::{sqrt_lt, Real};
 use crate::voxel::{home_slot, next_slot, point_to_voxel, table_hash, VoxelKey};
@@ -50,6 +51,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         self.st.voxels = 0;
         self.st.blocks_used = 0;
         self.st.n_points = 0;
+        self.st.limit2 = self.st.max_distance * self.st.max_distance;
     }
 
     fn alloc_block(&mut self) -> Option<u32> {
@@ -64,16 +66,20 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         Some(b)
     }
 
-    /// Adds world-frame points in order with the reference's admission rule.
+    /// Adds world-frame points in order with the reference's admission rule; what does not fit
+    /// is dropped and counted (this map has no pose to evict around: see [`Self::update`]).
     pub(crate) fn add_points(&mut self, points: impl Iterator<Item = Point<T>>) -> UpdateStats {
         let mut st = UpdateStats::default();
         for p in points {
-            self.add_point(&p, &mut st);
+            if let Err(full) = self.add_point(&p, &mut st) {
+                st.count_drop(full);
+            }
         }
         st
     }
 
-    fn add_point(&mut self, p: &Point<T>, st: &mut UpdateStats) {
+    /// Adds `p` with the admission rule, or says which capacity refused it.
+    fn add_point(&mut self, p: &Point<T>, st: &mut UpdateStats) -> Result<(), MapCapacity> {
         let key = point_to_voxel(p, self.st.voxel_size);
         let slots = self.st.slots;
         let mut i = home_slot(table_hash(&key), slots);
@@ -85,19 +91,14 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
             i = next_slot(i, slots);
             probes += 1;
             if probes >= slots {
-                // No empty slot (cannot happen below the 3/4 load cap): drop, never spin.
-                st.dropped_voxels += 1;
-                return;
+                // No empty slot (cannot happen below the 3/4 load cap): refuse, never spin.
+                return Err(MapCapacity::Voxels);
             }
         }
         if self.st.voxels >= self.st.max_voxels {
-            st.dropped_voxels += 1;
-            return;
+            return Err(MapCapacity::Voxels);
         }
-        let Some(b) = self.alloc_block() else {
-            st.dropped_points += 1;
-            return;
-        };
+        let b = self.alloc_block().ok_or(MapCapacity::Points)?;
         self.buf.keys[i] = key;
         self.buf.heads[i] = b;
         self.buf.counts[i] = 1;
@@ -106,12 +107,19 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         self.st.high_voxels = self.st.high_voxels.max(self.st.voxels);
         self.st.n_points += 1;
         st.added += 1;
+        Ok(())
     }
 
-    fn append(&mut self, slot: usize, key: &VoxelKey, p: &Point<T>, st: &mut UpdateStats) {
+    fn append(
+        &mut self,
+        slot: usize,
+        key: &VoxelKey,
+        p: &Point<T>,
+        st: &mut UpdateStats,
+    ) -> Result<(), MapCapacity> {
         let count = self.buf.counts[slot] as usize;
         if count as u32 >= self.st.max_points {
-            return;
+            return Ok(());
         }
         let mut too_close = false;
         let res = self.st.resolution;
@@ -120,7 +128,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
             !too_close
         });
         if too_close {
-            return;
+            return Ok(());
         }
         // Find the last block of the chain.
         let mut b = self.buf.heads[slot];
@@ -128,10 +136,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
             b = self.buf.links[b as usize];
         }
         if count % BLOCK == 0 {
-            let Some(nb) = self.alloc_block() else {
-                st.dropped_points += 1;
-                return;
-            };
+            let nb = self.alloc_block().ok_or(MapCapacity::Points)?;
             self.buf.links[b as usize] = nb;
             b = nb;
         }
@@ -139,24 +144,34 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         self.buf.counts[slot] += 1;
         self.st.n_points += 1;
         st.added += 1;
+        Ok(())
     }
 
     /// Removes voxels whose first point is at least `r_max` from `origin` (squared distances
     /// compared, as the reference does).
     pub(crate) fn remove_far_from(&mut self, origin: &Point<T>) -> usize {
-        let max2 = self.st.max_distance * self.st.max_distance;
+        self.remove_beyond(origin, self.st.max_distance * self.st.max_distance)
+    }
+
+    /// The squared distance from `origin` of the first point of the voxel in `slot`, by which
+    /// the map decides what is far.
+    pub(super) fn first_distance2(&self, slot: usize, origin: &Point<T>) -> T {
+        let first = P::decode(
+            &self.buf.points[self.buf.heads[slot] as usize * BLOCK],
+            &self.buf.keys[slot],
+            self.st.voxel_size,
+        );
+        (first - origin).norm_squared()
+    }
+
+    /// Removes voxels whose first point's squared distance from `origin` is `limit2` or more.
+    pub(super) fn remove_beyond(&mut self, origin: &Point<T>, limit2: T) -> usize {
         let mut removed = 0;
         let mut i = 0;
         while i < self.st.slots {
             // A removal shifts a later voxel into slot i: look at slot i again.
             while self.buf.counts[i] != 0 {
-                let key = self.buf.keys[i];
-                let first = P::decode(
-                    &self.buf.points[self.buf.heads[i] as usize * BLOCK],
-                    &key,
-                    self.st.voxel_size,
-                );
-                if (first - origin).norm_squared() >= max2 {
+                if self.first_distance2(i, origin) >= limit2 {
                     self.remove_slot(i);
                     removed += 1;
                 } else {
@@ -208,10 +223,58 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
     }
 
     /// The reference's `Update`: transforms the merge cloud `local` by `pose`, adds it, then
-    /// prunes voxels beyond `r_max` from the pose's position.
-    pub(crate) fn update(&mut self, local: &[[T; 3]], pose: &Pose<T>) -> UpdateStats {
-        let mut st = self.add_points(local.iter().map(|p| pose * Point::from(*p)));
-        st.pruned_voxels = self.remove_far_from(&Point::from(pose.translation.vector));
+    /// prunes voxels beyond the map's radius from the pose's position.
+    ///
+    /// The radius is `r_max` until the map fills. An insertion that finds the voxel table or
+    /// the point pool full first evicts the farthest voxels around the pose, making room for
+    /// the rest of the scan inside a smaller radius (`evict`, at most once per update, with
+    /// `scratch` to tally the scan); the points of this and later scans beyond the radius are
+    /// not added, as a smaller `r_max` would have cropped them. Only when the sensor's near
+    /// field alone overfills the map does an insertion still fail: its point is dropped and
+    /// counted. While the map stays below [`GROW_BELOW`] of both capacities, the radius grows
+    /// back by one voxel a scan.
+    pub(crate) fn update(
+        &mut self,
+        local: &[[T; 3]],
+        pose: &Pose<T>,
+        scratch: &mut [u64],
+    ) -> UpdateStats {
+        let origin = Point::from(pose.translation.vector);
+        let max2 = self.st.max_distance * self.st.max_distance;
+        let mut st = UpdateStats::default();
+        for (i, p) in local.iter().enumerate() {
+            let p = pose * Point::from(*p);
+            if self.st.limit2 < max2 && (p - origin).norm_squared() >= self.st.limit2 {
+                st.beyond_radius += 1;
+                continue;
+            }
+            let Err(full) = self.add_point(&p, &mut st) else {
+                continue;
+            };
+            st.filled = st.filled.or(Some(full));
+            if st.evicted {
+                st.count_drop(full);
+                continue;
+            }
+            st.evicted = true;
+            st.evicted_voxels = self.evict(&local[i..], pose, scratch);
+            if (p - origin).norm_squared() >= self.st.limit2 {
+                st.beyond_radius += 1;
+            } else if let Err(full) = self.add_point(&p, &mut st) {
+                st.count_drop(full);
+            }
+        }
+        st.pruned_voxels = self.remove_beyond(&origin, self.st.limit2);
+        if !st.evicted && self.st.limit2 < max2 && self.below(GROW_BELOW) {
+            let r = self.st.limit2.sqrt_l() + self.st.voxel_size;
+            self.st.limit2 = (r * r).min(max2);
+        }
         st
+    }
+
+    /// Whether both the voxels and the point blocks in use are below `share` of capacity.
+    fn below(&self, (num, den): (usize, usize)) -> bool {
+        self.st.voxels * den < self.st.max_voxels * num
+            && self.st.blocks_used * den < self.st.blocks * num
     }
 }

@@ -155,8 +155,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         let model_error = self.threshold.model_error(&deviation);
         self.threshold.update(&deviation);
 
-        // Sec. III-C: P*_merge joins the local map at T_t; voxels beyond r_max are pruned.
-        let update = map.update(merge, &pose);
+        // Sec. III-C: P*_merge joins the local map at T_t; voxels beyond r_max are pruned (a full
+        // map gives up its farthest voxels first).
+        let update = map.update(merge, &pose, parts.scratch);
 
         self.advance(pose);
         self.merge_len = clouds.merge;
@@ -220,6 +221,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             map_voxels: self.map.voxels() as u32,
             map_points: self.map.points() as u32,
             pruned_voxels: f.update.pruned_voxels as u32,
+            map_radius: self.map.radius(),
+            map_filled: f.update.filled,
+            evicted_voxels: f.update.evicted_voxels as u32,
             dropped,
             deskewed: scan.deskews && scan.stamp_problem.is_none(),
             stamp_problem: scan.stamp_problem,
@@ -346,5 +350,6 @@ fn status<T: Real>(cfg: &Config<T>, scan: &Received, dropped: &Dropped, f: &Fact
     status.set(Flag::InvalidPoints, dropped.non_finite > 0);
     status.set(Flag::ScanTruncated, dropped.truncated > 0);
     status.set(Flag::Capacity, dropped.capacity());
+    status.set(Flag::Evicted, f.update.evicted);
     status
 }
