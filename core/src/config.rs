@@ -173,6 +173,10 @@ impl<T: Real> Config<T> {
 /// Fixed capacities of every buffer. Nothing grows at run time; each full buffer has a rule
 /// (see [`crate::report::Dropped`]) and the frame report counts what it dropped.
 ///
+/// [`Capacities::sized_for`] sizes them from the configuration (what hosts use by default);
+/// the named sets below are fixed budgets. When the map fills, it evicts its farthest voxels
+/// and its radius shrinks below `r_max` (see [`crate::FrameReport::map_radius`]).
+///
 /// Sizing rules (measured high-water marks are in BENCHMARKS.md):
 /// - `scan_points`: points the sensor delivers per sweep (HDL-64E about 125k, OS1-128 262k).
 ///   Points past this index are ignored (truncation keeps the first `scan_points`).
@@ -259,6 +263,47 @@ impl Capacities {
         map_points: 27_456,
         plane_terms: false,
     };
+
+    /// Capacities sized from the configuration for a sensor of `scan_points` points a sweep,
+    /// so that no buffer fills on a ground vehicle's data: what a host uses when none are named.
+    ///
+    /// The rule, from the geometry a sensor can see inside `r_max`: the ground it has swept is at
+    /// most the disc of radius `r_max`, `D(c) = pi (r_max / c)^2` cells of size `c`, and what
+    /// stands on it (facades, vegetation, which fills voxels in depth) is counted as twice that
+    /// disc again. So `map_voxels = 3 D(v)`, 94,248 at 100 m and 1 m voxels (the margins over
+    /// measured maps are in BENCHMARKS.md). `map_points` gives every voxel half of `N_max`
+    /// (voxels average 5-8 of 20 on KITTI). A downsampled cloud never holds more points
+    /// than its input, so `merge_points = scan_points` cannot drop; `source_points` is the
+    /// smaller of that and `3 D(beta v)`. Each is capped ([`Self::SIZED_MAP_VOXELS`],
+    /// [`Self::SIZED_MAP_POINTS`]) so that a tiny voxel cannot ask for gigabytes: a map sized
+    /// at a cap can fill, and then evicts its farthest voxels as any full map does.
+    pub fn sized_for<T: Real>(config: &Config<T>, scan_points: usize) -> Self {
+        let disc = |cell: f64| {
+            let r = config.max_range.wide() / cell;
+            core::f64::consts::PI * r * r
+        };
+        // `as` saturates (NaN gives 0, which `validate` refuses).
+        let count = |x: f64, cap: usize| (libm::ceil(x) as usize).clamp(1, cap);
+        let v = config.voxel_size.wide();
+        let map_voxels = count(3.0 * disc(v), Self::SIZED_MAP_VOXELS);
+        let per_voxel = (config.max_points_per_voxel as usize).div_ceil(2).max(1);
+        let source = count(3.0 * disc(config.beta.wide() * v), scan_points.max(1));
+        Self {
+            scan_points,
+            merge_points: scan_points,
+            source_points: source,
+            map_voxels,
+            map_points: map_voxels
+                .saturating_mul(per_voxel)
+                .min(Self::SIZED_MAP_POINTS),
+            plane_terms: config.degeneracy == Degeneracy::Robust,
+        }
+    }
+
+    /// The most map voxels [`Self::sized_for`] gives (4.2 M: a table of about 95 MB).
+    pub const SIZED_MAP_VOXELS: usize = 1 << 22;
+    /// The most map points [`Self::sized_for`] gives (8.4 M: 200 MB of f64 points).
+    pub const SIZED_MAP_POINTS: usize = 1 << 23;
 
     /// Checks that every capacity is usable.
     pub fn validate(&self) -> Result<(), ConfigError> {

@@ -119,21 +119,32 @@ pub struct Registration {
     pub work_budget: Option<u64>,
 }
 
-/// Capacities of the core's buffers (see `kiss_odom_core::Capacities`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Capacities of the core's buffers (see `kiss_odom_core::Capacities`). Each one left out is
+/// sized from the configuration (`Capacities::sized_for`: the range, voxel size and `N_max`,
+/// for a sensor of up to [`SCAN_POINTS`] points a sweep), so that the map does not fill.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Caps {
     /// Input points considered per scan.
-    pub scan_points: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan_points: Option<usize>,
     /// Merge cloud points.
-    pub merge_points: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub merge_points: Option<usize>,
     /// Registration cloud points.
-    pub source_points: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source_points: Option<usize>,
     /// Map voxels.
-    pub map_voxels: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_voxels: Option<usize>,
     /// Map points.
-    pub map_points: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_points: Option<usize>,
 }
+
+/// Points per sweep the capacities sized from the configuration hold (an OS1-128 at 2048
+/// columns); a larger sweep is truncated with a warning.
+pub const SCAN_POINTS: usize = 262_144;
 
 /// How the core runs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -213,20 +224,14 @@ impl Default for Registration {
     }
 }
 
-impl Default for Caps {
-    fn default() -> Self {
-        Self::from(Capacities::FULL_SCALE)
-    }
-}
-
 impl From<Capacities> for Caps {
     fn from(c: Capacities) -> Self {
         Self {
-            scan_points: c.scan_points,
-            merge_points: c.merge_points,
-            source_points: c.source_points,
-            map_voxels: c.map_voxels,
-            map_points: c.map_points,
+            scan_points: Some(c.scan_points),
+            merge_points: Some(c.merge_points),
+            source_points: Some(c.source_points),
+            map_voxels: Some(c.map_voxels),
+            map_points: Some(c.map_points),
         }
     }
 }
@@ -272,20 +277,21 @@ impl Settings {
             .unwrap_or_else(|| Config::new(self.data.max_range).kernel_scale)
     }
 
-    /// The capacities given, where the defaults (`FULL_SCALE`) become `Capacities::ROBUST` in
-    /// robust mode (room for the finer voxels a tunnel needs); room for plane terms in robust
-    /// mode only.
+    /// The capacities given, the rest sized from the configuration; room for plane terms in
+    /// robust mode only.
     fn caps(&self) -> Capacities {
         let c = &self.capacities;
-        if self.registration.degeneracy == DegeneracyMode::Robust && *c == Caps::default() {
-            return Capacities::ROBUST;
-        }
+        let mut cfg = Config::<f64>::new(self.data.max_range);
+        cfg.voxel_size = self.voxel_size();
+        cfg.beta = self.mapping.beta;
+        cfg.max_points_per_voxel = self.mapping.max_points_per_voxel;
+        let sized = Capacities::sized_for(&cfg, c.scan_points.unwrap_or(SCAN_POINTS));
         Capacities {
-            scan_points: c.scan_points,
-            merge_points: c.merge_points,
-            source_points: c.source_points,
-            map_voxels: c.map_voxels,
-            map_points: c.map_points,
+            scan_points: sized.scan_points,
+            merge_points: c.merge_points.unwrap_or(sized.merge_points),
+            source_points: c.source_points.unwrap_or(sized.source_points),
+            map_voxels: c.map_voxels.unwrap_or(sized.map_voxels),
+            map_points: c.map_points.unwrap_or(sized.map_points),
             plane_terms: self.registration.degeneracy == DegeneracyMode::Robust,
         }
     }
@@ -456,13 +462,17 @@ mod tests {
         let mut s = Settings::default();
         s.data.max_range = 60.0;
         s.runtime.scalar = Scalar::F32;
-        s.capacities.map_points = 12345;
+        s.capacities.map_points = Some(12345);
         let text = s.to_toml().unwrap();
         let back: Settings = toml::from_str(&text).unwrap();
         assert_eq!(back.voxel_size(), 0.6);
         assert_eq!(back.data, s.data);
         assert_eq!(back.runtime, s.runtime);
-        assert_eq!(back.capacities, s.capacities);
+        // Written out, the capacities are explicit: the ones given and those sized from the
+        // configuration, so the file says what the run used.
+        assert_eq!(back.capacities.map_points, Some(12345));
+        assert_eq!(back.capacities().unwrap(), s.capacities().unwrap());
+        assert_eq!(back.capacities, s.capacities().unwrap().into());
         // An omitted kernel stays omitted, so the text loads back to the
         // same settings as the ones written: the Python bindings compare them.
         assert_eq!(back.registration, s.registration);
@@ -498,7 +508,8 @@ mod tests {
             (c.voxel_size, c.kernel_scale, c.plane_gate),
             (1.0, 1.0, 0.015)
         );
-        assert_eq!(caps, Capacities::ROBUST);
+        assert_eq!(caps, Capacities::sized_for(&c, SCAN_POINTS));
+        assert!(caps.plane_terms);
         let (c, caps) = robust(
             "kernel_scale = 0.5\nplane_gate = 1.0\n[mapping]\nvoxel_size = 0.7\n[capacities]\nmap_voxels = 5000\n",
         );
@@ -511,11 +522,17 @@ mod tests {
             caps.plane_terms,
             "robust mode needs room for its plane terms"
         );
-        assert_eq!(caps.map_points, Capacities::FULL_SCALE.map_points);
-        // Reference mode keeps kiss-icp's.
+        // What is not given is sized from the configuration (0.7 m voxels).
+        assert_eq!(
+            caps.map_points,
+            Capacities::sized_for(&c, SCAN_POINTS).map_points
+        );
+        // Reference mode keeps kiss-icp's parameters, with capacities sized from them.
         let d = Settings::default();
         assert_eq!(d.core_config::<f64>().unwrap(), Config::new(100.0));
-        assert_eq!(d.capacities().unwrap(), Capacities::FULL_SCALE);
+        let sized = Capacities::sized_for(&Config::<f64>::new(100.0), SCAN_POINTS);
+        assert_eq!(d.capacities().unwrap(), sized);
+        assert!(!sized.plane_terms);
         // Written out, the robust defaults are explicit and load back to the same.
         let s: Settings = toml::from_str("[registration]\ndegeneracy = \"robust\"\n").unwrap();
         let back: Settings = toml::from_str(&s.to_toml().unwrap()).unwrap();
@@ -523,7 +540,7 @@ mod tests {
             back.core_config::<f64>().unwrap(),
             s.core_config::<f64>().unwrap()
         );
-        assert_eq!(back.capacities().unwrap(), Capacities::ROBUST);
+        assert_eq!(back.capacities().unwrap(), s.capacities().unwrap());
     }
 
     #[test]
@@ -556,7 +573,7 @@ mod tests {
         assert!(m.starts_with("registration.kernel_scale = 0.0: "), "{m}");
         let m = msg(|s| s.data.min_range = 200.0);
         assert!(m.starts_with("data.min_range = 200.0: "), "{m}");
-        let m = msg(|s| s.capacities.map_voxels = 0);
+        let m = msg(|s| s.capacities.map_voxels = Some(0));
         assert!(m.starts_with("capacities.map_voxels = 0: "), "{m}");
         let m = msg(|s| s.mapping.voxel_size = Some(-1.0));
         assert!(m.starts_with("mapping.voxel_size = -1.0: "), "{m}");

@@ -18,9 +18,11 @@
 //! After a frame, [`Driver::source_cloud`], [`Driver::merge_cloud`], [`Driver::map_points`] and
 //! [`Driver::deskewed_scan`] give its clouds for a viewer or a published message.
 
+mod capacity;
 mod engine;
 mod select;
 
+pub use capacity::CapacityWarnings;
 pub use engine::Feed;
 pub use select::{index_of, Selection};
 

@@ -62,6 +62,11 @@ pub struct FrameRow {
     pub map_voxels: Option<u32>,
     /// Map points after the update.
     pub map_points: Option<u32>,
+    /// The map's radius after the update (m): `max_range`, or less once a full map gave up
+    /// its farthest voxels.
+    pub map_radius: Option<f64>,
+    /// Map voxels evicted, farthest first, to make room in this frame.
+    pub evicted_voxels: Option<u32>,
     /// Points given.
     pub input_points: Option<usize>,
     /// Merge cloud points.
@@ -134,6 +139,8 @@ impl FrameRow {
             sigma: o.sigma,
             map_voxels: r.map(|r| r.map_voxels),
             map_points: r.map(|r| r.map_points),
+            map_radius: r.map(|r| r.map_radius),
+            evicted_voxels: r.map(|r| r.evicted_voxels),
             input_points: (kind != RowKind::Skipped).then_some(o.input_points),
             merge_points: r.map(|r| r.merge_points),
             source_points: r.map(|r| r.source_points),
@@ -264,6 +271,9 @@ pub struct Summary {
     pub degraded_frames: BTreeMap<&'static str, usize>,
     /// Largest buffer occupancy against capacity.
     pub high_water: serde_json::Value,
+    /// The smallest radius the local map had after a frame, and the first frame that had it:
+    /// `max_range` and no frame while the map never filled.
+    pub map_radius: MapRadius,
     /// Warnings printed.
     pub warnings: usize,
     /// Sensor packets over the run's sweeps (a pcap recording or `live`).
@@ -278,6 +288,34 @@ pub struct Summary {
     pub input: serde_json::Value,
     /// Metrics against ground truth, when it exists.
     pub metrics: Option<serde_json::Value>,
+}
+
+/// The smallest radius of the local map over a run (`summary.json`'s `map_radius`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MapRadius {
+    /// The smallest radius after a frame (m).
+    pub smallest_m: f64,
+    /// The first frame (its index) whose map had it; `None` when the radius never shrank.
+    pub frame: Option<usize>,
+}
+
+impl MapRadius {
+    /// The smallest `map_radius` of `rows`, for a run at `max_range`.
+    fn of(rows: &[FrameRow], max_range: f64) -> Self {
+        let mut least = Self {
+            smallest_m: max_range,
+            frame: None,
+        };
+        for r in rows {
+            if let Some(m) = r.map_radius.filter(|&m| m < least.smallest_m) {
+                least = Self {
+                    smallest_m: m,
+                    frame: Some(r.index),
+                };
+            }
+        }
+        least
+    }
 }
 
 /// Everything the outputs are made of.
@@ -491,6 +529,7 @@ impl Run<'_> {
                 "map_voxels": [hw.map_voxels, c.map_voxels],
                 "map_point_slots": [hw.map_point_slots, c.map_points],
             }),
+            map_radius: MapRadius::of(&o.rows, s.data.max_range),
             warnings: o.warnings,
             packets: PacketTotals::of(&o.rows),
             pose_latency_ms: Latency::of(o.rows.iter().filter_map(|r| r.pose_latency_ms).collect()),
@@ -572,14 +611,14 @@ mod tests {
         assert_eq!(&header[..3], ["index", "source", "outcome"]);
         let first = lines.next().unwrap();
         assert!(
-            first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,"),
+            first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,,,,,"),
             "{first}"
         );
         assert!(
-            first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0,0"),
+            first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0,0,0"),
             "{first}"
         );
         let second = lines.next().unwrap();
-        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0,0,0"), "{second}");
+        assert!(second.ends_with(",0,0,0,0,1,0,0,1,0,0,0,0"), "{second}");
     }
 }

@@ -16,7 +16,7 @@ mod files;
 pub use files::{FrameRow, Latency, PacketTotals, RowKind, Summary, OUTPUTS};
 
 use crate::args::CommonArgs;
-use crate::drive::{Driver, Outcome, Selection, Step};
+use crate::drive::{CapacityWarnings, Driver, Outcome, Selection, Step};
 use crate::io::{self, sensor_pcap::SweepInfo, Item};
 use crate::viz::{Observer, Seen, ViewArgs};
 use anyhow::{anyhow, Context, Result};
@@ -213,9 +213,11 @@ pub(crate) fn execute_on(
         }
     }
     if matches!(end, End::Finished) {
+        let mut capacity = CapacityWarnings::new(driver.capacities(), settings.data.max_range);
         end = frame_loop(
             args,
             &mut driver,
+            &mut capacity,
             &mut dataset,
             &mut record,
             &mut observers,
@@ -305,9 +307,11 @@ fn nothing_registered(r: &Record) -> String {
 
 /// Feeds the frames in range to the driver, recording each outcome and showing it to the
 /// observers, until the end, an error, a `--strict` stop or a signal.
+#[allow(clippy::too_many_arguments)]
 fn frame_loop(
     args: &RunArgs,
     driver: &mut Driver,
+    capacity: &mut CapacityWarnings,
     dataset: &mut io::Dataset,
     record: &mut Record,
     observers: &mut [Box<dyn Observer>],
@@ -361,6 +365,14 @@ fn frame_loop(
                 ));
             }
             core_s += outcome.latency.as_secs_f64();
+        }
+        // A capacity rule that can change a pose warns on its first frame.
+        let full = capacity.check(&outcome);
+        for w in &full {
+            warn(record, &bar, w);
+        }
+        if let (true, Some(first)) = (args.run.strict, full.first()) {
+            break End::Failed(anyhow!("{first} (--strict)"));
         }
         if outcome.step == Step::Empty {
             warn(
