@@ -4,7 +4,8 @@
 //! never runs into one (even where the route crosses itself). `corridor` is an infinite tunnel
 //! along the x axis (floor, walls, ceiling: nothing varies along the axis) and `plane` a lone
 //! ground plane; both are degenerate on purpose. `tunnel` and `field` add sparse structure to
-//! them (see `sparse`): weakly observable, as real tunnels and fields are.
+//! them (see `sparse`): weakly observable, as real tunnels and fields are. `suburban` lines long
+//! streets with rows of houses, yards and trees out to 100 m (see `suburb`).
 
 use super::rng::{Purpose, Stream};
 use super::scene::{Scene, Solid};
@@ -14,6 +15,7 @@ use super::Profile;
 use nalgebra::{Point3, Vector3};
 
 mod sparse;
+mod suburb;
 
 /// Corridor half width (m): walls at `y = +-CORRIDOR_HALF_WIDTH`.
 pub const CORRIDOR_HALF_WIDTH: f64 = 4.5;
@@ -44,6 +46,7 @@ pub fn build(profile: Profile, seed: u64, route: &Route) -> Scene {
         Profile::Urban | Profile::Fast => {
             Scene::new(vec![ground], City::new(route, seed).generate())
         }
+        Profile::Suburban => Scene::new(vec![ground], City::new(route, seed).suburb()),
     }
 }
 

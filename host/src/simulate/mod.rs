@@ -49,6 +49,10 @@ pub enum Profile {
     /// The lone ground plane with sparse objects (poles, trees, boulders 20-60 m apart along
     /// the route): observable in x, y and yaw, but weakly, as an open field is.
     Field,
+    /// Long suburban streets at 55-65 km/h with gentle turns, houses in rows out to 100 m on
+    /// both sides, yards, hedges, trees and lamp posts: a 16-beam sensor's map fills its whole
+    /// `r_max` disc (use with `--sensor vlp16`).
+    Suburban,
 }
 
 /// What `simulate` writes.

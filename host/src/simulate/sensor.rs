@@ -338,6 +338,7 @@ mod tests {
             Profile::Plane,
             Profile::Tunnel,
             Profile::Field,
+            Profile::Suburban,
         ] {
             let sim = small(profile, 0.0);
             let f = sim.frame(4);

@@ -193,6 +193,25 @@ impl Route {
                     b.straight(rng.range(40.0, 180.0));
                 }
             }
+            Profile::Suburban => {
+                // Long streets joined by turns laid out, as in town, for the speed there.
+                b.straight(ROUTE_BEFORE_START + rng.range(100.0, 300.0));
+                while b.s < end {
+                    let angle = if rng.chance(0.6) {
+                        core::f64::consts::FRAC_PI_2
+                    } else {
+                        rng.range(0.2, 0.8)
+                    } * rng.sign();
+                    let t = speed.time_at(b.s);
+                    let v = speed.max_speed(t, t + 8.0);
+                    let radius = rng.range(30.0, 80.0).max(v * v / URBAN_LATERAL_ACCEL);
+                    let ramp = rng
+                        .range(10.0, 20.0)
+                        .max(1.875 * v * v / (radius * URBAN_YAW_ACCEL));
+                    b.turn(angle, radius, ramp);
+                    b.straight(rng.range(150.0, 400.0));
+                }
+            }
             Profile::Fast => {
                 b.straight(ROUTE_BEFORE_START + rng.range(40.0, 80.0));
                 while b.s < end {
@@ -537,6 +556,11 @@ impl MotionParams {
                 speed: (3.0, 8.0),
                 ..car
             },
+            Profile::Suburban => Self {
+                speed: (15.5, 18.5),
+                launch_tau: 2.0,
+                ..car
+            },
         }
     }
 }
@@ -636,7 +660,7 @@ impl Trajectory {
 mod tests {
     use super::*;
 
-    fn profiles() -> [Profile; 6] {
+    fn profiles() -> [Profile; 7] {
         [
             Profile::Urban,
             Profile::Corridor,
@@ -644,6 +668,7 @@ mod tests {
             Profile::Plane,
             Profile::Tunnel,
             Profile::Field,
+            Profile::Suburban,
         ]
     }
 
