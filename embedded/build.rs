@@ -257,8 +257,15 @@ fn tiny(out: &std::path::Path) {
 /// generated VLP-16 recording in `KISS_EMBED_PCAP` (a `kiss-odom simulate --sensor vlp16
 /// --format pcap` folder: `packets.pcap`, and `sim.toml` for the packets per sweep), 1206 bytes
 /// each, in `packets.bin`. The pcap is the simulator's: Ethernet, IPv4 without options, UDP.
+/// With `far`, the odometry runs at r_max 100 m with 1.5 m voxels.
 fn packets(out: &std::path::Path) {
     let (dir, first, n) = generated("KISS_EMBED_PCAP");
+    // `far`: the range and voxels at which TINY's map fills (Config::tiny's otherwise).
+    let (max_range, voxel) = if env::var_os("CARGO_FEATURE_FAR").is_some() {
+        (100.0f64, 1.5f64)
+    } else {
+        (50.0, 2.0)
+    };
     let toml = std::fs::read_to_string(dir.join("sim.toml")).expect("sim.toml");
     let per_sweep: usize = toml
         .lines()
@@ -310,9 +317,9 @@ fn packets(out: &std::path::Path) {
          /// Index of the first sweep.\n\
          pub const FIRST: usize = {first};\n\
          /// The odometry's `max_range`.\n\
-         pub const MAX_RANGE: f64 = 50.0;\n\
+         pub const MAX_RANGE: f64 = {max_range:?};\n\
          /// Map voxel size.\n\
-         pub const VOXEL_SIZE: f64 = 2.0;\n\
+         pub const VOXEL_SIZE: f64 = {voxel:?};\n\
          /// Every point is kept.\n\
          pub const KEEP_EVERY: usize = 1;\n\
          /// The simulator's sweeps, in packets (the program finds them itself, by azimuth).\n\

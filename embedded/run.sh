@@ -96,11 +96,17 @@ if [[ ",$features," == *",tiny,"* ]]; then
   export KISS_EMBED_VLP16="$vlp"
 fi
 # The packets profile embeds the UDP payloads of a generated VLP-16 recording (the same drive).
+# `far`: a suburban drive, 36 sweeps from the fifth, over which TINY's map fills at 100 m.
 if [[ ",$features," == *",packets,"* ]]; then
-  pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"
+  if [[ ",$features," == *",far,"* ]]; then
+    pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-suburban-pcap}"; sim=(--frames 40 --profile suburban)
+    export KISS_EMBED_FIRST="${KISS_EMBED_FIRST:-4}" KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-36}"
+  else
+    pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"; sim=(--frames 36)
+  fi
   if [ ! -f "$pcapdir/sim.toml" ]; then
     (cd "$here/.." && env -u RUSTFLAGS -u CARGO_ENCODED_RUSTFLAGS -u CARGO_BUILD_TARGET \
-      cargo run --release -q -p kiss-odom -- simulate --out "$pcapdir" --frames 36 \
+      cargo run --release -q -p kiss-odom -- simulate --out "$pcapdir" "${sim[@]}" \
       --seed 11 --sensor vlp16 --format pcap --max-range 100 --overwrite) >&2 \
       || { echo "error: cannot generate the VLP-16 pcap" >&2; exit 96; }
   fi

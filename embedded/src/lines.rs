@@ -16,7 +16,7 @@ impl<T: Real + LowerExp> Display for FrameLine<'_, T> {
         let FrameLine(i, points, r) = *self;
         write!(
             f,
-            "frame {} status={} iterations={} work={} correspondences={} points={} merge={} source={} map_voxels={} map_points={} sigma={:e} rms={:e}",
+            "frame {} status={} iterations={} work={} correspondences={} points={} merge={} source={} map_voxels={} map_points={} map_radius={:e} sigma={:e} rms={:e}",
             i,
             r.status,
             r.iterations,
@@ -27,6 +27,7 @@ impl<T: Real + LowerExp> Display for FrameLine<'_, T> {
             r.source_points,
             r.map_voxels,
             r.map_points,
+            r.map_radius,
             r.sigma,
             r.rms
         )

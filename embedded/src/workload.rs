@@ -116,7 +116,12 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 /// work a frame of robust mode's plane registration takes) on those voxels.
 pub fn config() -> Config<Scalar> {
     let base = if cfg!(any(feature = "tiny", feature = "packets")) {
-        Config::tiny()
+        // Config::tiny() itself at its 50 m and 2 m; `far` widens both.
+        Config {
+            max_range: frames::MAX_RANGE as Scalar,
+            voxel_size: frames::VOXEL_SIZE as Scalar,
+            ..Config::tiny()
+        }
     } else {
         Config {
             voxel_size: frames::VOXEL_SIZE as Scalar,
