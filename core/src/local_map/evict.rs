@@ -23,9 +23,6 @@ pub const RADIUS_BINS: usize = 64;
 /// scans find room.
 pub const EVICT_TO: (usize, usize) = (9, 10);
 
-/// Below this share of both capacities a shrunk radius grows back, a voxel a scan.
-pub const GROW_BELOW: (usize, usize) = (8, 10);
-
 /// Which shell a squared distance falls in: `RADIUS_BINS` for the radius and beyond.
 #[derive(Clone, Copy)]
 struct Shelling<T> {

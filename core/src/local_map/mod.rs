@@ -26,10 +26,11 @@ mod update;
 mod view;
 
 pub use codec::{Exact, PointCodec, Quantized};
-pub use evict::{EVICT_TO, GROW_BELOW, RADIUS_BINS};
+pub use evict::{EVICT_TO, RADIUS_BINS};
 pub use layout::MapLayout;
 pub use search::Nearest;
 pub(crate) use update::MapMut;
+pub use update::GROW_BELOW;
 pub use view::MapView;
 
 use crate::error::ConfigError;

@@ -1,13 +1,15 @@
 //! The map update (Sec. III-C): points join with the reference's admission rule, voxels
 //! beyond the radius are pruned.
 
-use super::evict::GROW_BELOW;
 use super::layout::MapBuffers;
 use super::{MapCapacity, MapLayout, MapState, MapView, PointCodec, UpdateStats, BLOCK, NONE};
 use crate::error::ConfigError;
 use crate::scalar::{sqrt_lt, Real};
 use crate::voxel::{home_slot, next_slot, point_to_voxel, table_hash, VoxelKey};
 use crate::{Point, Pose};
+
+/// Below this share of both capacities a shrunk radius grows back, a voxel a scan.
+pub const GROW_BELOW: (usize, usize) = (8, 10);
 
 /// Write access to a local map (the pipeline's update).
 pub(crate) struct MapMut<'a, T: Real, P: PointCodec<T>> {
