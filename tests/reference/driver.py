@@ -14,7 +14,7 @@ pipeline     KissICP.register_frame over a sequence; writes LiDAR-frame poses (K
              full precision) and a JSON side file with per-frame sigma and timing.
                --dataset DIR --format kitti|generic [--frames A:B] [--threads N]
                [--deskew|--no-deskew] [--max-range R] [--min-range R] [--voxel-size V]
-               [--bin-layout f32x4|f32x3|f64x3|f64x4] --out poses.txt [--side side.json]
+               [--max-points-per-voxel N] [--bin-layout f32x4|f32x3|f64x3|f64x4] --out poses.txt [--side side.json]
              kitti:   DIR is a sequence folder (DIR/velodyne/NNNNNN.bin, f32 x y z i); every
                       scan gets the reference's `_correct_kitti_scan`, as its KITTI loader does;
                       no per-point timestamps.
@@ -527,7 +527,7 @@ def parse_frames(spec: str | None) -> slice:
 
 
 def run_pipeline(frames, max_range=100.0, min_range=0.0, deskew_on=True, voxel_size=None,
-                 threads=1):  # fmt: skip
+                 threads=1, max_points_per_voxel=20):  # fmt: skip
     """Runs KissICP over preloaded frames; returns poses (n x 4 x 4), sigmas, seconds, config."""
     from kiss_icp.config import load_config
     from kiss_icp.kiss_icp import KissICP
@@ -537,6 +537,7 @@ def run_pipeline(frames, max_range=100.0, min_range=0.0, deskew_on=True, voxel_s
     config.data.min_range = float(min_range)
     config.data.deskew = bool(deskew_on)
     config.mapping.voxel_size = float(voxel_size) if voxel_size else float(max_range) / 100.0
+    config.mapping.max_points_per_voxel = int(max_points_per_voxel)
     config.registration.max_num_threads = int(threads)
     odom = KissICP(config)
     poses, sigmas, seconds = [], [], []
@@ -742,6 +743,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-range", type=float, default=100.0)
     p.add_argument("--min-range", type=float, default=0.0)
     p.add_argument("--voxel-size", type=float, default=None, help="default max_range / 100")
+    p.add_argument("--max-points-per-voxel", type=int, default=20)
     p.add_argument("--bin-layout", choices=sorted(BIN_LAYOUTS), default="f32x4")
     _add_deskew(p)
     _add_threads(p)
@@ -851,7 +853,8 @@ def main(argv=None) -> int:
     if a.command == "pipeline":
         frames = load_frames(a.dataset, a.format, parse_frames(a.frames), a.bin_layout)
         poses, sigmas, seconds, config = run_pipeline(
-            frames, a.max_range, a.min_range, a.deskew, a.voxel_size, a.threads
+            frames, a.max_range, a.min_range, a.deskew, a.voxel_size, a.threads,
+            a.max_points_per_voxel,
         )
         write_kitti_poses(a.out, poses)
         side = a.side or a.out.with_suffix(".json")
