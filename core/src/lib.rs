@@ -108,7 +108,7 @@ pub mod stages {
         so3_exp, so3_log,
     };
     pub use crate::local_map::{
-        LocalMap, MapLayout, UpdateStats, BLOCK, EVICT_TO, GROW_BELOW, RADIUS_BINS,
+        LocalMap, MapLayout, UpdateStats, BLOCK, EVICT_TO, GROW_BELOW, GROW_STEP, RADIUS_BINS,
     };
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{

@@ -280,7 +280,7 @@ pub struct FrameReport<T: Real> {
     /// Voxels pruned for being beyond the map's radius.
     pub pruned_voxels: u32,
     /// The map's radius after the update: `r_max`, or less once the map has filled and given
-    /// up its farthest voxels (it grows back, a voxel a frame, while the map has room).
+    /// up its farthest voxels (it grows back, `r_max / 20` a frame, while the map has room).
     pub map_radius: T,
     /// The map capacity an insertion found full in this frame, if any (the frame is then
     /// flagged [`Flag::Evicted`]).

@@ -30,7 +30,7 @@ pub use evict::{EVICT_TO, RADIUS_BINS};
 pub use layout::MapLayout;
 pub use search::Nearest;
 pub(crate) use update::MapMut;
-pub use update::GROW_BELOW;
+pub use update::{GROW_BELOW, GROW_STEP};
 pub use view::MapView;
 
 use crate::error::ConfigError;

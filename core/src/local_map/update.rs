@@ -8,8 +8,12 @@ use crate::scalar::{sqrt_lt, Real};
 use crate::voxel::{home_slot, next_slot, point_to_voxel, table_hash, VoxelKey};
 use crate::{Point, Pose};
 
-/// Below this share of both capacities a shrunk radius grows back, a voxel a scan.
+/// Below this share of both capacities a shrunk radius grows back by [`GROW_STEP`] a scan.
 pub const GROW_BELOW: (usize, usize) = (8, 10);
+
+/// What a shrunk radius grows by a scan, as a share of `r_max`: 1/20 (BENCHMARKS.md compares
+/// it with one voxel a scan, with no growth and with starting each scan at `r_max`).
+pub const GROW_STEP: (usize, usize) = (1, 20);
 
 /// Write access to a local map (the pipeline's update).
 pub(crate) struct MapMut<'a, T: Real, P: PointCodec<T>> {
@@ -234,7 +238,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
     /// not added, as a smaller `r_max` would have cropped them. Only when the sensor's near
     /// field alone overfills the map does an insertion still fail: its point is dropped and
     /// counted. While the map stays below [`GROW_BELOW`] of both capacities, the radius grows
-    /// back by one voxel a scan.
+    /// back by [`GROW_STEP`] of `r_max` a scan.
     pub(crate) fn update(
         &mut self,
         local: &[[T; 3]],
@@ -268,7 +272,9 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         }
         st.pruned_voxels = self.remove_beyond(&origin, self.st.limit2);
         if !st.evicted && self.st.limit2 < max2 && self.below(GROW_BELOW) {
-            let r = self.st.limit2.sqrt_l() + self.st.voxel_size;
+            let (num, den) = GROW_STEP;
+            let step = self.st.max_distance * T::of(num as f64) / T::of(den as f64);
+            let r = self.st.limit2.sqrt_l() + step;
             self.st.limit2 = (r * r).min(max2);
         }
         st
