@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""Bounded memory against the odometry (BENCHMARKS.md, "When the map fills").
+
+Two tables, each a Markdown table on stdout:
+
+  defaults  `kiss-odom run` with the capacities sized from the configuration on every given
+            dataset: the smallest map radius (must stay max_range), the state's bytes, and the
+            worst per-frame pose difference from kiss-icp 1.3.0 (`crosscheck --only
+            end-to-end`, must stay within 1e-9 m).
+  filled    named capacities that fill (SMALL; TINY at r_max 100 m on 16-beam drives, names
+            with `vlp16`) in f64 and f32: this build (the map gives
+            up its farthest voxels), an older build with the old rule (`--old BIN`: new voxels
+            refused) and kiss-icp 1.3.0 run with max_range set to the smallest radius the map
+            reached, on the same frames in the same run: KITTI relative error and the worst
+            per-frame position error against ground truth of each.
+
+    python3 bench/map_bound.py defaults BIN DATASET...
+    python3 bench/map_bound.py filled BIN OLD_BIN PYTHON DRIVER DATASET...
+
+DATASET: a generic or KITTI folder `run` reads; `@ARGS` after it (one word, comma-separated)
+adds `run` flags, e.g. `dir@--meta,x.json`. Outputs go to $OUT (default target/map_bound).
+"""
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+OUT = Path(os.environ.get("OUT", "target/map_bound"))
+
+
+def sh(*cmd, **kw):
+    return subprocess.run([str(c) for c in cmd], check=True, capture_output=True, text=True, **kw)
+
+
+def spec(arg):
+    path, _, extra = arg.partition("@")
+    return Path(path), [a for a in extra.split(",") if a]
+
+
+def poses(path):
+    rows = [list(map(float, l.split())) for l in Path(path).read_text().split("\n") if l.strip()]
+    return [[r[3], r[7], r[11]] for r in rows]
+
+
+def worst_position_error(est, gt):
+    """Largest |position| difference over frames, both trajectories rebased on their first."""
+    e0, g0 = est[0], gt[0]
+    return max(
+        math.dist([a - b for a, b in zip(e, e0)], [a - b for a, b in zip(g, g0)])
+        for e, g in zip(est, gt)
+    )
+
+
+def ground_truth(dataset):
+    for p in (dataset / "poses.txt", dataset.parent.parent / "poses" / f"{dataset.name}.txt"):
+        if p.exists():
+            return p
+    return None
+
+
+def defaults(binary, datasets):
+    print("| dataset | frames | smallest map radius m (max_range) | state MiB | frames with "
+          "capacity drops | worst per-frame difference from kiss-icp 1.3.0 m (<= 1e-9) |")
+    print("|---|---|---|---|---|---|")
+    ok = True
+    for arg in datasets:
+        d, extra = spec(arg)
+        out = OUT / "defaults" / d.name
+        sh(binary, "run", d, "--out", out, "-q", "--threads", "1", *extra)
+        s = json.loads((out / "summary.json").read_text())
+        cc = out / "crosscheck.json"
+        sh(binary, "crosscheck", d, "--only", "end-to-end", "--quiet", "--json", cc, *extra)
+        worst = crosscheck_worst(json.loads(cc.read_text()))
+        capacity = s["degraded_frames"].get("capacity", 0)
+        r = s["map_radius"]
+        good = r["frame"] is None and capacity == 0 and worst <= 1e-9
+        ok &= good
+        print(f"| {d.name} | {s['frames']} | {r['smallest_m']:g} "
+              f"({'never shrank' if r['frame'] is None else 'frame ' + str(r['frame'])}) | "
+              f"{s['state_bytes'] / 2**20:.1f} | {capacity} | {worst:.2e} "
+              f"{'' if good else '**FAIL**'} |")
+    return ok
+
+
+def crosscheck_worst(j):
+    """The largest per-frame translation difference of the end-to-end section."""
+    best = 0.0
+    for e in j.get("end_to_end", []):
+        best = max([best, *e["agreement"]["translation_m"]])
+    return best
+
+
+def filled(binary, old, python, driver, datasets):
+    print("| dataset | capacities | scalar | smallest radius m (frame) | KITTI %: new rule / old "
+          "rule / kiss-icp at that radius | new / reference (<= 1.25) | worst position error "
+          "m: new / old / reference | new / reference worst (<= 2) | KITTI %: kiss-icp at max_range "
+          "(unbounded) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    ok = True
+    for arg in datasets:
+        d, extra = spec(arg)
+        gt_path = ground_truth(d)
+        gt = poses(gt_path)
+        # TINY is sized for a 16-beam sensor: on those drives, at r_max 100 m, where it fills.
+        sets = [("small", [])] + ([("tiny", ["--max-range", "100"])] if "vlp16" in d.name else [])
+        for caps, more in sets:
+            for scalar, storage in (("f64", "exact"), ("f32", "quantized")):
+                tag = f"{d.name}-{caps}-{scalar}"
+                flags = ["--capacities", caps, *more, "--scalar", scalar, "--storage", storage,
+                         "--threads", "1", "-q", *extra]
+                new, was = OUT / "filled" / tag, OUT / "filled" / f"{tag}-old"
+                run = sh(binary, "run", d, "--out", new, *flags)
+                sh(old, "run", d, "--out", was, *flags)
+                s = json.loads((new / "summary.json").read_text())
+                cfg = (new / "config.toml").read_text()
+                voxel = float(next(l.split("=")[1] for l in cfg.splitlines()
+                                   if l.startswith("voxel_size")))
+                n_max = int(next(l.split("=")[1] for l in cfg.splitlines()
+                                 if l.startswith("max_points_per_voxel")))
+                radius, frame = s["map_radius"]["smallest_m"], s["map_radius"]["frame"]
+                ref = OUT / "filled" / f"{tag}-ref.txt"
+                fmt = "kitti" if (d / "calib.txt").exists() else "generic"
+                sh(python, driver, "pipeline", "--dataset", d, "--format", fmt,
+                   "--max-range", radius, "--voxel-size", voxel,
+                   "--max-points-per-voxel", n_max, "--out", ref)
+                # For context: the reference at the configuration's own range (no bound at all).
+                full = OUT / "filled" / f"{tag}-ref-full.txt"
+                r_max = float(next(l.split("=")[1] for l in cfg.splitlines()
+                                   if l.startswith("max_range")))
+                sh(python, driver, "pipeline", "--dataset", d, "--format", fmt,
+                   "--max-range", r_max, "--voxel-size", voxel,
+                   "--max-points-per-voxel", n_max, "--out", full)
+                metrics = {}
+                for name, p in (("new", new / "poses_kitti.txt"), ("old", was / "poses_kitti.txt"),
+                                ("ref", ref), ("full", full)):
+                    e = json.loads(sh(binary, "eval", p, gt_path, "--json").stdout)
+                    metrics[name] = (e["kitti_t_err_pct"], worst_position_error(poses(p), gt))
+                warned = "local map filled" in run.stderr
+                (kn, wn), (ko, wo), (kr, wr) = metrics["new"], metrics["old"], metrics["ref"]
+                kf = metrics["full"][0]
+                good = kn <= 1.25 * kr and wn <= 2.0 * wr and (frame is None or warned)
+                ok &= good
+                label = caps.upper() + (" at 100 m" if more else "")
+                print(f"| {d.name} | {label} | {scalar} | {radius:.1f} ({frame}) | "
+                      f"{kn:.3f} / {ko:.3f} / {kr:.3f} | {kn / kr:.2f} | {wn:.2f} / {wo:.2f} / "
+                      f"{wr:.2f} | {wn / wr:.2f} {'' if good else '**FAIL**'} | {kf:.3f} |")
+    return ok
+
+
+def main():
+    cmd, args = sys.argv[1], sys.argv[2:]
+    ok = defaults(args[0], args[1:]) if cmd == "defaults" else filled(*args[:4], args[4:])
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
