@@ -9,13 +9,30 @@
 //! - deskewing moves every point to the end of the sweep, so poses are end-of-sweep poses.
 
 use crate::error::ConfigError;
-use crate::robust::Degeneracy;
 use crate::scalar::Real;
 
 /// Largest accepted `max_range` (m). The adaptive threshold squares distances of order
 /// `r_max` (Eq. (6)-(7)); beyond about 1e154 m that overflows f64 and sigma would stay
 /// infinite for good. No range sensor reaches a thousand kilometres, so this is the limit.
 pub const MAX_RANGE_LIMIT: f64 = 1.0e6;
+
+/// How registration treats directions the scene does not constrain.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Degeneracy {
+    /// As kiss-icp 1.3.0: ICP moves the pose along every direction (bit-identical to it).
+    #[default]
+    Reference,
+    /// The reference, except on frames whose registration the reference leaves degenerate
+    /// (observability below `Config::plane_gate`): those are registered again with
+    /// point-to-plane terms wherever the map around a registration point is planar (GenZ-ICP's,
+    /// see `registration::planes`), so sparse structure moves the pose along walls and ground;
+    /// for tunnels, corridors, long walls, open ground. Nothing is held.
+    Robust,
+    /// Kept for comparison with robust mode: directions the scene does not constrain are held
+    /// at the constant-velocity prediction (see `hold`).
+    Hold,
+}
 
 /// Pipeline parameters. [`Config::new`] gives the reference defaults for a maximum range.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,9 +6,9 @@
 //! `s = (t - t_min) / (t_max - t_min)`, each point becomes `Exp((s - 1) Log(dT)) p`. Poses
 //! are therefore end-of-sweep poses. We follow the reference.
 
+use crate::geometry::{Point, Pose};
 use crate::lie::{se3_exp, se3_log};
 use crate::scalar::Real;
-use crate::{Point, Pose};
 use nalgebra::Vector6;
 
 /// Why a scan's timestamps were not used.

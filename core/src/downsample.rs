@@ -10,12 +10,12 @@
 //! grows with the kept points only, so both passes keep the same points as the reference and
 //! feed the map in the same order. That is what lets whole trajectories agree to rounding.
 
+use crate::geometry::Point;
 use crate::scalar::Real;
 use crate::storage::{view, words_for};
 use crate::voxel::{
     home_slot, next_slot, point_to_voxel, reference_hash, slots_for, table_hash, VoxelKey,
 };
-use crate::Point;
 
 const EMPTY: u32 = u32::MAX;
 

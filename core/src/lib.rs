@@ -53,17 +53,19 @@ extern crate alloc;
 extern crate std;
 
 mod config;
-mod degeneracy;
 mod deskew;
 mod downsample;
+mod eigen;
 mod error;
+mod geometry;
+mod hold;
 mod lie;
 mod local_map;
+mod observability;
 mod odometry;
 mod preprocess;
 mod registration;
 mod report;
-mod robust;
 mod scalar;
 pub mod storage;
 mod threshold;
@@ -72,21 +74,17 @@ mod voxel;
 #[cfg(test)]
 mod testutil;
 
-pub use config::{Capacities, Config, MAX_RANGE_LIMIT};
+pub use config::{Capacities, Config, Degeneracy, MAX_RANGE_LIMIT};
 pub use deskew::StampProblem;
 pub use error::{ConfigError, FrameError};
+pub use geometry::{Point, Pose};
+pub use hold::{Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
 pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized};
 pub use odometry::{FrameInput, Layout, Odometry};
 pub use registration::{Executor, Sequential};
 pub use report::{Dropped, Flag, FrameReport, HighWater, Status};
-pub use robust::{Degeneracy, Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
 pub use scalar::Real;
 pub use storage::{Storage, Words};
-
-/// Rigid transform used for every pose: a unit quaternion and a translation.
-pub type Pose<T> = nalgebra::Isometry3<T>;
-/// A 3D point.
-pub type Point<T> = nalgebra::Point3<T>;
 
 /// The pipeline's stages one by one: the **unstable** surface.
 ///
@@ -95,14 +93,12 @@ pub type Point<T> = nalgebra::Point3<T>;
 /// `Registration`, `AdaptiveThreshold`) call. Names and signatures here may change between
 /// versions without notice; applications use [`Odometry`].
 pub mod stages {
-    pub use crate::degeneracy::{
-        information, observability, Information, Volumes, RING_SINE, SAMPLES,
-    };
     pub use crate::deskew::{Deskewer, TimeSpan};
     pub use crate::downsample::{
         cloud_words, grid_slots_for, reference_order, reference_order_bytes, robin_bucket_count,
         scratch_words_for, voxel_downsample, Dedup, Downsampled,
     };
+    pub use crate::hold::{min_points, weakness, Hold, Weakness};
     pub use crate::lie::{
         hat, left_jacobian, left_jacobian_inverse, renormalize, rotation_angle, se3_exp, se3_log,
         so3_exp, so3_log,
@@ -110,13 +106,15 @@ pub mod stages {
     pub use crate::local_map::{
         LocalMap, MapLayout, UpdateStats, BLOCK, EVICT_TO, GROW_BELOW, GROW_STEP, RADIUS_BINS,
     };
+    pub use crate::observability::{
+        information, observability, Information, Volumes, RING_SINE, SAMPLES,
+    };
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
         align_points_to_map, chunk_len, chunks_for, moved_points, work_words, Alignment, Chunk,
         IcpParams, MotionPrior, PlaneChunk, CHUNK, CHUNK_LEN, MIN_POINTS, PLANARITY,
         PLANE_CHUNK_LEN, PLANE_KERNEL_SCALE, SYSTEM_LEN,
     };
-    pub use crate::robust::{min_points, weakness, Hold, Weakness};
     pub use crate::scalar::{norm_lt, sqrt_lt};
     pub use crate::threshold::AdaptiveThreshold;
     pub use crate::voxel::{

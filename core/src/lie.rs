@@ -7,8 +7,8 @@
 //! different map, so the two maps are written out here with Sophus's formulas and its
 //! small-angle branches. The types stay nalgebra's (`UnitQuaternion`, `Isometry3`).
 
+use crate::geometry::Pose;
 use crate::scalar::Real;
-use crate::Pose;
 use nalgebra::{Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3, Vector6};
 
 /// Skew-symmetric matrix `[v]x` with `[v]x w = v x w`.

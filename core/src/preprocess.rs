@@ -4,8 +4,8 @@
 //! `min_range < |p| < max_range`. Non-finite points never reach the crop; they are counted.
 
 use crate::deskew::{Deskewer, StampProblem, TimeSpan};
+use crate::geometry::{Point, Pose};
 use crate::scalar::Real;
-use crate::{Point, Pose};
 
 /// Counts from preprocessing one scan.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

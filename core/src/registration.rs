@@ -20,11 +20,11 @@ use planes::{accumulate_plane, Cached, CACHED};
 pub use planes::{MIN_POINTS, PLANARITY, PLANE_KERNEL_SCALE};
 pub use prior::MotionPrior;
 
+use crate::geometry::{Point, Pose};
+use crate::hold::Hold;
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};
-use crate::robust::Hold;
 use crate::scalar::{sqrt_lt, Real};
-use crate::{Point, Pose};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// Source points per chunk: the unit of parallel work and of the fixed reduction order (chunk

@@ -2,10 +2,10 @@
 //! they dropped.
 
 use crate::deskew::StampProblem;
+use crate::geometry::Pose;
+use crate::hold::Held;
 use crate::local_map::MapCapacity;
-use crate::robust::Held;
 use crate::scalar::Real;
-use crate::Pose;
 
 /// One way a frame was degraded; a [`Status`] holds any set of them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]

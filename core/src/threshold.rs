@@ -10,9 +10,9 @@
 //! As in the reference, the running sum starts with `tau_0^2` counted as one sample, so the
 //! first frames use `sigma = tau_0` and the seed's weight fades as real samples arrive.
 
+use crate::geometry::Pose;
 use crate::lie::rotation_angle;
 use crate::scalar::Real;
-use crate::Pose;
 
 /// Running estimate of Eq. (7).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,7 +1,7 @@
 //! Voxel indices and hashes shared by the downsampling grid and the local map.
 
+use crate::geometry::Point;
 use crate::scalar::Real;
-use crate::Point;
 
 /// Integer voxel coordinates `floor(p / v)`, as the reference computes them (a division, not a
 /// multiplication by `1/v`, so boundary points fall in the same voxel).

@@ -1,8 +1,8 @@
 //! How map points are stored: exactly, or as quantised offsets inside their voxel.
 
+use crate::geometry::Point;
 use crate::scalar::Real;
 use crate::voxel::VoxelKey;
-use crate::Point;
 
 /// Encoding of map points in the block pool.
 pub trait PointCodec<T: Real>: Send + Sync + 'static {

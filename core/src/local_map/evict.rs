@@ -10,10 +10,10 @@
 
 use super::update::MapMut;
 use super::{PointCodec, BLOCK};
+use crate::geometry::{Point, Pose};
 use crate::scalar::Real;
 use crate::storage::{view, words_for};
 use crate::voxel::{home_slot, next_slot, point_to_voxel, table_hash, VoxelKey};
-use crate::{Point, Pose};
 
 /// Shells of equal squared width inside the radius (so they are thinnest at the rim, where the
 /// cut falls): at `r_max` 100 m the outermost is 0.8 m thick.

@@ -34,9 +34,9 @@ pub use update::{GROW_BELOW, GROW_STEP};
 pub use view::MapView;
 
 use crate::error::ConfigError;
+use crate::geometry::{Point, Pose};
 use crate::scalar::Real;
 use crate::storage::Storage;
-use crate::{Point, Pose};
 use core::marker::PhantomData;
 
 /// Points per map block; a voxel owns a chain of blocks, so memory follows the points a voxel

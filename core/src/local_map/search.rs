@@ -30,7 +30,7 @@ const REFERENCE_RANK: [u8; 27] = {
     }
     rank
 };
-use crate::Point;
+use crate::geometry::Point;
 
 /// Whether `x` is NaN (the only value not ordered against itself).
 #[inline]

@@ -4,9 +4,9 @@
 use super::layout::MapBuffers;
 use super::{MapCapacity, MapLayout, MapState, MapView, PointCodec, UpdateStats, BLOCK, NONE};
 use crate::error::ConfigError;
+use crate::geometry::{Point, Pose};
 use crate::scalar::{sqrt_lt, Real};
 use crate::voxel::{home_slot, next_slot, point_to_voxel, table_hash, VoxelKey};
-use crate::{Point, Pose};
 
 /// Below this share of both capacities a shrunk radius grows back by [`GROW_STEP`] a scan.
 pub const GROW_BELOW: (usize, usize) = (8, 10);

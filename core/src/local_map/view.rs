@@ -2,9 +2,9 @@
 
 use super::{MapLayout, MapState, PointCodec, BLOCK, NONE};
 use crate::error::ConfigError;
+use crate::geometry::Point;
 use crate::scalar::Real;
 use crate::voxel::{home_slot, next_slot, table_hash, VoxelKey};
-use crate::Point;
 
 /// Read access to a local map: correspondence search and its points.
 pub struct MapView<'a, T: Real, P: PointCodec<T>> {

@@ -15,24 +15,25 @@
 //! ([`FrameInput`]), `layout` where each buffer lives in the storage.
 
 mod frame;
+mod icp;
 mod input;
 mod layout;
 
 pub use input::FrameInput;
 pub use layout::Layout;
 
+use crate::config::Degeneracy;
 use crate::config::{Capacities, Config};
 use crate::error::{ConfigError, FrameError};
+use crate::geometry::Pose;
 use crate::lie::renormalize;
 use crate::local_map::{Exact, MapMut, MapState, MapView, PointCodec};
 use crate::preprocess::{preprocess, Preprocessed};
 use crate::registration::{Executor, Sequential};
 use crate::report::{FrameReport, HighWater};
-use crate::robust::Degeneracy;
 use crate::scalar::Real;
 use crate::storage::Storage;
 use crate::threshold::AdaptiveThreshold;
-use crate::Pose;
 use core::marker::PhantomData;
 
 /// KISS-ICP odometry over storage it owns or borrows (see [`crate::storage`]).

@@ -3,9 +3,9 @@
 
 use super::planes::{Cached, CACHED};
 use super::CHUNK;
+use crate::geometry::Point;
 use crate::scalar::Real;
 use crate::storage::{view, words_for};
-use crate::Point;
 use bytemuck::Pod;
 
 /// Scalars in one partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`) +

@@ -23,11 +23,11 @@
 //! fit a point and voxel instead of a point and iteration.
 
 use super::SYSTEM_LEN;
+use crate::eigen::jacobi_eigen;
+use crate::geometry::Point;
 use crate::local_map::{MapView, PointCodec};
-use crate::robust::jacobi_eigen;
 use crate::scalar::Real;
 use crate::voxel::{point_to_voxel, VoxelKey};
-use crate::Point;
 use nalgebra::Vector3;
 
 /// A neighbourhood is planar when its smallest covariance eigenvalue is below this share of

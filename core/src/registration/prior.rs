@@ -23,8 +23,8 @@
 
 use super::planes::accumulate_plane;
 use super::{accumulate, SYSTEM_LEN};
+use crate::geometry::Pose;
 use crate::scalar::Real;
-use crate::Pose;
 use nalgebra::Vector3;
 
 /// The motion prior of one frame's registration with plane terms.

@@ -1,7 +1,7 @@
 use super::*;
+use crate::geometry::Pose;
 use crate::local_map::{Exact, LocalMap};
 use crate::registration::{align_points_to_map, work_words, IcpParams, Sequential};
-use crate::Pose;
 use std::vec::Vec;
 
 const VOXELS: usize = 2000;

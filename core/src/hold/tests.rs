@@ -1,7 +1,7 @@
 use super::*;
 use crate::local_map::{Exact, LocalMap};
 use crate::testutil::yard;
-use nalgebra::{Translation3, UnitQuaternion};
+use nalgebra::{Translation3, UnitQuaternion, Vector3};
 
 /// Information of a corridor along the world x axis: walls and floor, nothing across x.
 fn corridor_information<T: Real>() -> Information<T> {
@@ -92,22 +92,6 @@ fn a_lone_plane_holds_the_translations_in_it_and_yaw() {
     let w = decide(&info, &Pose::identity());
     assert_eq!(w.held().axes(), 0b10_0011);
     assert_eq!(w.held().directions(), 3);
-}
-
-#[test]
-fn jacobi_eigen_decomposes_symmetric_matrices() {
-    let mut rng = crate::testutil::Rng(7);
-    let mut worst = 0.0f64;
-    for _ in 0..200 {
-        let b = Matrix3::from_fn(|_, _| rng.next() - 0.5);
-        let a = b * b.transpose();
-        let (values, vectors) = jacobi_eigen(a);
-        let back = vectors * Matrix3::from_diagonal(&values) * vectors.transpose();
-        worst = worst.max((back - a).amax());
-        worst = worst.max((vectors.transpose() * vectors - Matrix3::identity()).amax());
-    }
-    std::println!("jacobi: worst reconstruction error {worst:e} (tol 1e-12)");
-    assert!(worst < 1e-12);
 }
 
 const VOXELS: usize = 3000;

@@ -19,10 +19,10 @@
 //! information; steeper lines (poles, trunks, vertical edges) keep theirs. The spin axis is
 //! taken as the map's z (the first scan's up), which is right for ground vehicles.
 
+use crate::geometry::Point;
 use crate::lie::hat;
 use crate::local_map::{MapView, PointCodec};
 use crate::scalar::Real;
-use crate::Point;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 /// Most points sampled per frame; the sample is every k-th point, so it is deterministic.

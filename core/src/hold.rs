@@ -1,50 +1,33 @@
-//! Registration modes for degenerate scenes ([`Degeneracy`]) and the hold of weak directions
-//! ([`Degeneracy::Hold`], issue 17's candidate (a), kept for comparison; robust mode itself,
-//! [`Degeneracy::Robust`], is point-to-plane terms, see `registration::planes`).
+//! Hold mode ([`crate::Degeneracy::Hold`], kept for comparison with robust mode): directions the
+//! scene does not constrain are held at the constant-velocity prediction. Robust mode itself,
+//! [`crate::Degeneracy::Robust`], is point-to-plane terms (see `registration::planes`).
 //!
 //! Step 4 (Sec. III-E) moves the pose along every direction its point-to-point normal
 //! equations allow, and those equations cannot tell a corridor from a street (see
-//! `degeneracy`): in a tunnel or over a lone ground plane ICP slides along the directions the
+//! `observability`): in a tunnel or over a lone ground plane ICP slides along the directions the
 //! scene does not constrain. In hold mode, before ICP, the point-to-plane information of the
 //! registration points at the constant-velocity prediction is measured from the shapes of
-//! well-filled map voxels (`degeneracy::information`) and taken in the predicted sensor frame.
+//! well-filled map voxels (`observability::information`) and taken in the predicted sensor frame.
 //! Translation directions weaker than [`TRANSLATION_RATIO`] of the strongest translation, and
 //! rotation directions weaker than [`ROTATION_RATIO`] of the strongest rotation, are *held*:
 //! every Gauss-Newton step is projected off them (Zhang, Kaess & Singh, ICRA 2016, "solution
 //! remapping"), and the final correction's twist, in the predicted sensor frame, loses its
 //! component along them. Along a held direction the pose is the prediction; along the others
 //! ICP runs as in the reference, and a frame with no weak direction is registered exactly as
-//! in [`Degeneracy::Reference`].
+//! in [`crate::Degeneracy::Reference`].
 //!
 //! Memory: nothing is kept between frames and nothing is added to the arena; a [`Hold`] is two
 //! 6x6 matrices (288 B in f32, 576 B in f64) on the stack and in the ICP parameters.
 //! Determinism: the eigen-decompositions are cyclic Jacobi sweeps in fixed order using only
 //! `+ - * /` and the correctly rounded square root, so every target gives the same bits.
 
-use crate::degeneracy::{information, Information, Volumes};
+use crate::eigen::jacobi_eigen;
+use crate::geometry::{Point, Pose};
 use crate::lie::{hat, se3_exp, se3_log};
 use crate::local_map::{MapView, PointCodec};
+use crate::observability::{information, Information, Volumes};
 use crate::scalar::Real;
-use crate::{Point, Pose};
-use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
-
-/// How registration treats directions the scene does not constrain.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Degeneracy {
-    /// As kiss-icp 1.3.0: ICP moves the pose along every direction (bit-identical to it).
-    #[default]
-    Reference,
-    /// The reference, except on frames whose registration the reference leaves degenerate
-    /// (observability below `Config::plane_gate`): those are registered again with
-    /// point-to-plane terms wherever the map around a registration point is planar (GenZ-ICP's,
-    /// see `registration::planes`), so sparse structure moves the pose along walls and ground;
-    /// for tunnels, corridors, long walls, open ground. Nothing is held.
-    Robust,
-    /// Issue 17's candidate (a), kept for comparison: directions the scene does not constrain
-    /// are held at the constant-velocity prediction (see the module doc).
-    Hold,
-}
+use nalgebra::{Matrix3, Matrix6, Vector6};
 
 /// Names of the predicted sensor frame's axes in twist order, as [`Held`] and `frames.csv`
 /// give them: translations along x, y, z, then rotations about x (roll), y (pitch), z (yaw).
@@ -288,65 +271,6 @@ fn hold_of<T: Real>(body: Matrix6<T>, held: Held, prediction: &Pose<T>) -> Hold<
         world: ad * body * ad_inv,
         body,
         held,
-    }
-}
-
-/// Eigenvalues and eigenvectors (columns) of the symmetric `a` by cyclic Jacobi rotations.
-pub(crate) fn jacobi_eigen<T: Real>(mut a: Matrix3<T>) -> (Vector3<T>, Matrix3<T>) {
-    let mut v = Matrix3::identity();
-    let scale = a.iter().fold(T::zero(), |m, x| m.max(x.abs()));
-    let tiny = T::EPS * T::EPS * scale * scale;
-    for _ in 0..32 {
-        let mut off = T::zero();
-        for p in 0..3 {
-            for q in p + 1..3 {
-                off += a[(p, q)] * a[(p, q)];
-            }
-        }
-        if off <= tiny {
-            break;
-        }
-        for p in 0..3 {
-            for q in p + 1..3 {
-                rotate(&mut a, &mut v, p, q);
-            }
-        }
-    }
-    (a.diagonal(), v)
-}
-
-/// One Jacobi rotation zeroing `a[(p, q)]`, accumulated into `v`.
-fn rotate<T: Real>(a: &mut Matrix3<T>, v: &mut Matrix3<T>, p: usize, q: usize) {
-    let apq = a[(p, q)];
-    if apq == T::zero() {
-        return;
-    }
-    let theta = (a[(q, q)] - a[(p, p)]) / (T::of(2.0) * apq);
-    let root = (theta * theta + T::one()).sqrt_l();
-    let t = if theta >= T::zero() {
-        T::one() / (theta + root)
-    } else {
-        -T::one() / (-theta + root)
-    };
-    if !t.is_finite() {
-        return;
-    }
-    let c = T::one() / (t * t + T::one()).sqrt_l();
-    let s = t * c;
-    for k in 0..3 {
-        let (akp, akq) = (a[(k, p)], a[(k, q)]);
-        a[(k, p)] = c * akp - s * akq;
-        a[(k, q)] = s * akp + c * akq;
-    }
-    for k in 0..3 {
-        let (apk, aqk) = (a[(p, k)], a[(q, k)]);
-        a[(p, k)] = c * apk - s * aqk;
-        a[(q, k)] = s * apk + c * aqk;
-    }
-    for k in 0..3 {
-        let (vkp, vkq) = (v[(k, p)], v[(k, q)]);
-        v[(k, p)] = c * vkp - s * vkq;
-        v[(k, q)] = s * vkp + c * vkq;
     }
 }
 
