@@ -271,3 +271,83 @@ fn a_simulate_killed_midway_leaves_no_data_set_and_its_staging_folder_goes_next_
     assert!(left.is_empty(), "{left:?}");
     assert_eq!(std::fs::read_dir(out.join("velodyne")).unwrap().count(), 3);
 }
+
+#[test]
+fn kiss_icps_yaml_config_is_read_with_its_meaning() {
+    let dir = tempfile::tempdir().unwrap();
+    let yaml = dir.path().join("kiss.yaml");
+    std::fs::write(
+        &yaml,
+        "out_dir: results\ndata:\n  max_range: 60.0\n  deskew: true\nmapping:\n  voxel_size: null\n  \
+         max_points_per_voxel: 10\nregistration:\n  max_num_threads: 1\n",
+    )
+    .unwrap();
+    let from_yaml = dir.path().join("yaml");
+    let r = run(
+        &sample(),
+        &from_yaml,
+        &["--frames", "0..4", "--config", yaml.to_str().unwrap()],
+    );
+    r.succeeded_with_frames(4);
+    let toml = dir.path().join("same.toml");
+    std::fs::write(
+        &toml,
+        "[data]\nmax_range = 60.0\n[mapping]\nvoxel_size = 0.6\nmax_points_per_voxel = 10\n\
+         [runtime]\nthreads = 1\n",
+    )
+    .unwrap();
+    let from_toml = dir.path().join("toml");
+    let r = run(
+        &sample(),
+        &from_toml,
+        &["--frames", "0..4", "--config", toml.to_str().unwrap()],
+    );
+    r.succeeded_with_frames(4);
+    for name in ["poses_kitti.txt", "config.toml"] {
+        assert_eq!(
+            std::fs::read_to_string(from_yaml.join(name)).unwrap(),
+            std::fs::read_to_string(from_toml.join(name)).unwrap(),
+            "{name}"
+        );
+    }
+    // A YAML file under another name says how it was read.
+    let misnamed = dir.path().join("kiss.conf");
+    std::fs::copy(&yaml, &misnamed).unwrap();
+    let r = run(
+        &sample(),
+        &dir.path().join("out"),
+        &["--config", misnamed.to_str().unwrap()],
+    );
+    let line = r.failed_naming(&misnamed);
+    assert!(
+        line.contains("read as TOML") && line.contains(".yaml"),
+        "{line}"
+    );
+}
+
+#[test]
+fn nan_and_inf_settings_are_refused_naming_the_setting() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("nan.toml");
+    std::fs::write(&config, "[data]\nmax_range = nan\n").unwrap();
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["--config", config.to_str().unwrap()],
+            "data.max_range = nan",
+        ),
+        (&["--plane-gate", "inf"], "registration.plane_gate = inf"),
+        (&["--voxel-size", "NaN"], "mapping.voxel_size = nan"),
+    ];
+    for (flags, named) in cases {
+        let r = run(&sample(), &dir.path().join("out"), flags);
+        assert_eq!(r.code, 1, "{flags:?}");
+        let errors = r.errors();
+        println!("{}", errors[0]);
+        assert!(
+            errors[0].contains(named) && errors[0].contains("not a finite number"),
+            "{flags:?}: {}",
+            errors[0]
+        );
+        assert!(!errors[0].contains("null"), "{}", errors[0]);
+    }
+}

@@ -22,7 +22,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// `kiss-odom ros2` arguments. Without `--play`, runs the node until Ctrl-C. Parameters:
-/// defaults, then `--config` (TOML, as `run`), then `--params` (ROS 2 YAML), then flags.
+/// defaults, then `--config` (as `run`'s), then `--params` (ROS 2 YAML), then flags.
 #[derive(Debug, clap::Args)]
 pub struct Ros2Args {
     /// Cloud topic (node: subscribe; --play: publish).
@@ -37,7 +37,7 @@ pub struct Ros2Args {
     /// Node name looked up in the parameter file.
     #[arg(long, default_value = params::NODE_NAME)]
     pub node_name: String,
-    /// Odometry settings file (TOML, as `kiss-odom run --config`).
+    /// Odometry settings file (TOML or kiss-icp's YAML, as `kiss-odom run --config`).
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// DDS domain (default: $ROS_DOMAIN_ID, else 0).
