@@ -174,16 +174,23 @@ fn a_failed_run_leaves_no_output_of_an_earlier_run() {
     assert_eq!(s["input"]["path"], broken.display().to_string(), "{s:#}");
     assert_eq!(r.rows().len(), 1, "this run's frames.csv");
 
-    // A run refused before it starts removes them too.
+    // A run whose input cannot be opened removes them too; what it writes is its own.
     run(&sample(), &out, &["--frames", "0..2"]).succeeded_with_frames(2);
-    let r = run(&dir.path().join("missing"), &out, &[]);
+    let missing = dir.path().join("missing");
+    let r = run(&missing, &out, &[]);
     assert_eq!(r.code, 1);
     for name in kiss_odom::run::OUTPUTS {
+        if matches!(name, "summary.json" | "config.toml") {
+            continue;
+        }
         assert!(
             !out.join(name).exists(),
             "{name} of the earlier run is left"
         );
     }
+    let s = r.summary();
+    assert_eq!(s["input"]["path"], missing.display().to_string(), "{s:#}");
+    assert_eq!(s["frames"], 0, "{s:#}");
 }
 
 #[test]
@@ -270,6 +277,188 @@ fn a_simulate_killed_midway_leaves_no_data_set_and_its_staging_folder_goes_next_
         .collect();
     assert!(left.is_empty(), "{left:?}");
     assert_eq!(std::fs::read_dir(out.join("velodyne")).unwrap().count(), 3);
+}
+
+/// `kiss-odom-cli ARGS...` as its own process, with writes past `kib` KiB refused as on a full
+/// disk (`ulimit -f`, SIGXFSZ ignored so the write fails with EFBIG instead of killing it).
+fn with_file_limit(kib: u32, args: &[&std::ffi::OsStr]) -> std::process::Output {
+    // `ulimit -f` counts 512-byte blocks in dash, 1024-byte blocks in bash: ask for KiB in
+    // blocks of 512, so either shell allows at most `2 * kib` KiB.
+    let blocks = (2 * kib).to_string();
+    std::process::Command::new("sh")
+        .args(["-c", "trap '' XFSZ; ulimit -f \"$0\"; exec \"$@\"", &blocks])
+        .arg(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_refused_argument_leaves_every_file_it_names_and_the_earlier_outputs_in_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    run(&sample(), &out, &["--frames", "0..2"]).succeeded_with_frames(2);
+    let earlier = std::fs::read(out.join("summary.json")).unwrap();
+    let notes = dir.path().join("notes.txt");
+    let rrd = dir.path().join("old.rrd");
+    let recording = dir.path().join("old.txt");
+    for f in [&notes, &rrd, &recording] {
+        std::fs::write(f, "keep me").unwrap();
+    }
+    let (notes_s, rrd_s, rec_s) = (
+        notes.to_str().unwrap(),
+        rrd.to_str().unwrap(),
+        recording.to_str().unwrap(),
+    );
+    let mut cases: Vec<Vec<&str>> = vec![
+        vec!["--save-map", notes_s],
+        vec!["--save-cloud", notes_s],
+        vec!["--save-cloud", "cloud.ply", "--save-cloud-voxel", "0"],
+        vec!["--rerun", rec_s],
+        vec!["--max-range", "0", "--save-map", notes_s],
+    ];
+    if !cfg!(feature = "rerun") {
+        // This build cannot record: refused before the earlier recording goes.
+        cases.push(vec!["--rerun", rrd_s]);
+    }
+    // An output over a frame of the run's own dataset (a folder of PLY frames).
+    let frames = dir.path().join("ply");
+    std::fs::create_dir(&frames).unwrap();
+    for k in 0..3 {
+        kiss_odom::io::ply::write(&frames.join(format!("{k:06}.ply")), &kitti_points(k), None)
+            .unwrap();
+    }
+    let frame = frames.join("000002.ply");
+    let frame_s = frame.to_str().unwrap().to_string();
+    let map_over_input = ["--save-map", &frame_s];
+    for flags in &cases {
+        let r = run(&sample(), &out, flags);
+        assert_eq!(r.code, 1, "{flags:?}: stderr:\n{}", r.stderr);
+        println!("{flags:?}: {}", r.errors()[0]);
+        for f in [&notes, &rrd, &recording] {
+            assert_eq!(
+                std::fs::read(f).unwrap(),
+                b"keep me",
+                "{flags:?}: {}",
+                f.display()
+            );
+        }
+        assert_eq!(
+            std::fs::read(out.join("summary.json")).unwrap(),
+            earlier,
+            "{flags:?}: a refused run changes no output"
+        );
+    }
+    let before = std::fs::read(&frame).unwrap();
+    let r = run(&frames, &out, &map_over_input);
+    let line = r.failed_naming(&frame);
+    assert!(line.contains("input"), "{line}");
+    assert_eq!(std::fs::read(&frame).unwrap(), before);
+}
+
+#[test]
+fn a_config_in_the_output_folder_is_read_before_the_folder_is_cleared() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let first = run(&sample(), &out, &["--frames", "0..4", "--max-range", "60"]);
+    first.succeeded_with_frames(4);
+    let (poses, config) = (
+        std::fs::read(out.join("poses_kitti.txt")).unwrap(),
+        std::fs::read(out.join("config.toml")).unwrap(),
+    );
+    let again = out.join("config.toml");
+    let r = run(
+        &sample(),
+        &out,
+        &["--frames", "0..4", "--config", again.to_str().unwrap()],
+    );
+    r.succeeded_with_frames(4);
+    assert_eq!(std::fs::read(out.join("poses_kitti.txt")).unwrap(), poses);
+    assert_eq!(std::fs::read(out.join("config.toml")).unwrap(), config);
+}
+
+#[test]
+fn summary_json_is_written_when_the_input_cannot_be_opened_or_the_disk_fills() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing");
+    let r = run(&missing, &dir.path().join("out-missing"), &[]);
+    r.failed_naming(&missing);
+    let s = r.summary();
+    assert_eq!(
+        (s["frames"].as_u64(), s["interrupted"].as_bool()),
+        (Some(0), Some(false))
+    );
+    assert!(
+        s["stop_reason"]
+            .as_str()
+            .unwrap()
+            .contains(&missing.display().to_string()),
+        "{s:#}"
+    );
+
+    // The plots (150-300 KB) do not fit under the limit; the small files do.
+    let out = dir.path().join("out-full");
+    let o = with_file_limit(
+        32,
+        &[
+            "run".as_ref(),
+            sample().as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+            "--quiet".as_ref(),
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("trajectory.png"),
+        "the error names the file: {stderr}"
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let reason = s["stop_reason"].as_str().unwrap_or_default();
+    assert!(
+        reason.contains("outputs incomplete") && reason.contains("trajectory.png"),
+        "{s:#}"
+    );
+    assert_eq!(s["frames"], 10);
+    assert!(!out.join("trajectory.png").exists());
+    assert_no_temporaries(&out);
+}
+
+#[test]
+fn convert_on_a_full_disk_leaves_whole_frames_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("converted");
+    // A frame is 318 KiB: the first one cannot be written whole.
+    let o = with_file_limit(
+        32,
+        &[
+            "convert".as_ref(),
+            sample().as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+            "--quiet".as_ref(),
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("000000.bin"),
+        "the error names the frame: {stderr}"
+    );
+    for entry in std::fs::read_dir(out.join("velodyne")).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let whole = std::fs::metadata(sample().join("velodyne").join(&name)).map(|m| m.len());
+        assert_eq!(
+            std::fs::metadata(&path).unwrap().len(),
+            whole.unwrap_or(u64::MAX),
+            "{name}: a frame cut short (or a temporary) is left"
+        );
+    }
 }
 
 #[test]
