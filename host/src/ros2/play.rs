@@ -68,7 +68,7 @@ pub fn run(
         &dds::sensor_qos(),
     )?;
     let stopped = || stop.load(Ordering::SeqCst);
-    if !dds::wait_for_reader(&w, Duration::from_secs_f64(opts.wait.max(0.0)), &stopped) {
+    if !dds::wait_for_reader(&w, crate::interrupt::seconds(opts.wait), &stopped) {
         writeln!(
             err,
             "warning: no subscriber on {} after {} s; publishing anyway",
@@ -102,13 +102,16 @@ pub fn run(
             .unwrap_or(next_time);
         next_time = time + opts.period;
         let (t0, start) = *first.get_or_insert((time, Instant::now()));
-        let due = start + Duration::from_secs_f64(((time - t0) / opts.rate).max(0.0));
+        // A tiny rate or a long gap is a long wait (past `Instant`'s range: until stopped).
+        let due = start.checked_add(crate::interrupt::seconds((time - t0) / opts.rate));
         while !stopped() {
-            let now = Instant::now();
-            if now >= due {
+            let left = due.map_or(Duration::MAX, |d| {
+                d.saturating_duration_since(Instant::now())
+            });
+            if left.is_zero() {
                 break;
             }
-            std::thread::sleep((due - now).min(Duration::from_millis(50)));
+            std::thread::sleep(left.min(Duration::from_millis(50)));
         }
         let header = Header {
             stamp: Time::from_seconds(time),
