@@ -436,16 +436,7 @@ impl Settings {
     /// value: the one that, put back to its default, makes the settings valid (several when
     /// more than one would).
     pub fn validate(&self) -> Result<()> {
-        // NaN and inf pass some of the core's range checks (`inf >= 1`) and fail others with
-        // no name: refused here, each by its setting.
-        let non_finite: Vec<String> = fields()
-            .iter()
-            .filter(|f| matches!((f.value)(self), Some(toml::Value::Float(v)) if !v.is_finite()))
-            .map(|f| format!("{} = {}", f.name, f.show(self)))
-            .collect();
-        if !non_finite.is_empty() {
-            bail!("{}: not a finite number", non_finite.join(", "));
-        }
+        self.refuse_non_finite()?;
         let Some(e) = self.fault() else {
             return Ok(());
         };
@@ -463,6 +454,20 @@ impl Settings {
             return Err(e);
         }
         Err(e.context(culprits.join(" or ")))
+    }
+
+    /// Refuses NaN and inf, naming each setting: they pass some of the core's range checks
+    /// (`inf >= 1`), fail others with no name, and JSON has no way to write them.
+    pub fn refuse_non_finite(&self) -> Result<()> {
+        let non_finite: Vec<String> = fields()
+            .iter()
+            .filter(|f| matches!((f.value)(self), Some(toml::Value::Float(v)) if !v.is_finite()))
+            .map(|f| format!("{} = {}", f.name, f.show(self)))
+            .collect();
+        if !non_finite.is_empty() {
+            bail!("{}: not a finite number", non_finite.join(", "));
+        }
+        Ok(())
     }
 
     /// The pipeline settings away from their defaults that the reference's driver does not
