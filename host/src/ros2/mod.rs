@@ -83,9 +83,14 @@ pub struct Ros2Args {
     /// --play: seconds between frames that carry no time.
     #[arg(long, default_value_t = 0.1)]
     pub period: f64,
-    /// --play: seconds to wait for a subscriber before the first cloud.
+    /// --play: seconds to wait for a subscriber before the first cloud (and, with
+    /// --lockstep, for each cloud's odometry).
     #[arg(long, default_value_t = 10.0)]
     pub wait: f64,
+    /// --play: publish each cloud only once the node's odometry for the one before came (on
+    /// --odom), so that no cloud is dropped whatever the node's speed; the pace is the node's.
+    #[arg(long)]
+    pub lockstep: bool,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -118,6 +123,9 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
             rate: args.rate,
             period: args.period,
             wait: args.wait,
+            lockstep: args
+                .lockstep
+                .then(|| args.odom.clone().unwrap_or_else(|| "/kiss/odometry".into())),
             domain,
         };
         play::run(&opts, &STOP, &mut out, err)?;
