@@ -234,9 +234,10 @@ fn printed_lines(child: &mut Child) -> Arc<Mutex<Vec<String>>> {
     lines
 }
 
-/// Signals the child with `name`, then waits for it to end: its status and the time from the
-/// signal to its exit. A child that has not ended a minute later is killed and the test fails.
-fn signal_and_time_exit(child: &mut Child, name: &str) -> (ExitStatus, Duration) {
+/// Signals the child with `name`, then waits for it to end: its status, the time from the
+/// signal to its exit and its stderr. A child that has not ended a minute later is killed and
+/// the test fails.
+fn signal_and_time_exit(child: &mut Child, name: &str) -> (ExitStatus, Duration, String) {
     let sent = Instant::now();
     let kill = Command::new("kill")
         .args([format!("-{name}"), child.id().to_string()])
@@ -245,7 +246,12 @@ fn signal_and_time_exit(child: &mut Child, name: &str) -> (ExitStatus, Duration)
     assert!(kill.success());
     loop {
         if let Some(status) = child.try_wait().unwrap() {
-            return (status, sent.elapsed());
+            let took = sent.elapsed();
+            let mut stderr = String::new();
+            if let Some(mut e) = child.stderr.take() {
+                e.read_to_string(&mut stderr).unwrap();
+            }
+            return (status, took, stderr);
         }
         if sent.elapsed() > Duration::from_secs(60) {
             let _ = child.kill();
@@ -281,14 +287,7 @@ fn sigint_ends_live_with_its_outputs_written() {
         );
         std::thread::sleep(Duration::from_millis(20));
     }
-    let (status, _) = signal_and_time_exit(&mut child, "INT");
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
+    let (status, _, stderr) = signal_and_time_exit(&mut child, "INT");
     assert_eq!(status.code(), Some(130), "{stderr}");
     let s = summary(&out);
     assert_eq!(s["interrupted"], true);
@@ -345,16 +344,9 @@ fn live_ends_within_a_second_of_sigint_while_packets_keep_coming_without_complet
         })
     };
     std::thread::sleep(Duration::from_secs(1));
-    let (status, took) = signal_and_time_exit(&mut child, "INT");
+    let (status, took, stderr) = signal_and_time_exit(&mut child, "INT");
     stop.store(true, Ordering::Relaxed);
     let sent = sender.join().unwrap();
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
     println!(
         "SIGINT to exit: {:.3} s with packets still coming ({sent} sent)",
         took.as_secs_f64()
@@ -371,14 +363,7 @@ fn sigint_on_live_before_any_packet_is_an_interruption_whatever_the_idle_timeout
     for extra in [&[][..], &["--idle-timeout", "1e20"]] {
         let out = dir.path().join(format!("live-{}", extra.len()));
         let mut child = live(&free_address(), None, &out, extra);
-        let (status, took) = signal_and_time_exit(&mut child, "INT");
-        let mut stderr = String::new();
-        child
-            .stderr
-            .take()
-            .unwrap()
-            .read_to_string(&mut stderr)
-            .unwrap();
+        let (status, took, stderr) = signal_and_time_exit(&mut child, "INT");
         println!(
             "{extra:?}: SIGINT to exit {:.3} s: {stderr}",
             took.as_secs_f64()
@@ -421,14 +406,7 @@ fn replay_ends_within_a_second_of_sigterm_in_a_long_gap_or_at_a_tiny_rate() {
         // The first datagram came: replay now waits for the second.
         let mut buf = [0u8; 200];
         assert_eq!(receiver.recv(&mut buf).expect("the first datagram"), 100);
-        let (status, took) = signal_and_time_exit(&mut child, "TERM");
-        let mut stderr = String::new();
-        child
-            .stderr
-            .take()
-            .unwrap()
-            .read_to_string(&mut stderr)
-            .unwrap();
+        let (status, took, stderr) = signal_and_time_exit(&mut child, "TERM");
         println!(
             "gap {gap_ns} ns at rate {rate}: SIGTERM to exit {:.3} s",
             took.as_secs_f64()

@@ -279,16 +279,21 @@ fn a_simulate_killed_midway_leaves_no_data_set_and_its_staging_folder_goes_next_
     assert_eq!(std::fs::read_dir(out.join("velodyne")).unwrap().count(), 3);
 }
 
-/// `kiss-odom-cli ARGS...` as its own process, with writes past `kib` KiB refused as on a full
-/// disk (`ulimit -f`, SIGXFSZ ignored so the write fails with EFBIG instead of killing it).
-fn with_file_limit(kib: u32, args: &[&std::ffi::OsStr]) -> std::process::Output {
+/// `kiss-odom-cli COMMAND INPUT --out OUT --quiet` as its own process, with writes past `kib`
+/// KiB refused as on a full disk (`ulimit -f`, SIGXFSZ ignored so the write fails with EFBIG
+/// instead of killing it).
+fn with_file_limit(kib: u32, command: &str, input: &Path, out: &Path) -> std::process::Output {
     // `ulimit -f` counts 512-byte blocks in dash, 1024-byte blocks in bash: ask for KiB in
     // blocks of 512, so either shell allows at most `2 * kib` KiB.
     let blocks = (2 * kib).to_string();
     std::process::Command::new("sh")
         .args(["-c", "trap '' XFSZ; ulimit -f \"$0\"; exec \"$@\"", &blocks])
         .arg(env!("CARGO_BIN_EXE_kiss-odom-cli"))
-        .args(args)
+        .arg(command)
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
         .output()
         .unwrap()
 }
@@ -398,16 +403,7 @@ fn summary_json_is_written_when_the_input_cannot_be_opened_or_the_disk_fills() {
 
     // The plots (150-300 KB) do not fit under the limit; the small files do.
     let out = dir.path().join("out-full");
-    let o = with_file_limit(
-        32,
-        &[
-            "run".as_ref(),
-            sample().as_os_str(),
-            "--out".as_ref(),
-            out.as_os_str(),
-            "--quiet".as_ref(),
-        ],
-    );
+    let o = with_file_limit(32, "run", &sample(), &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     println!("{stderr}");
     assert_eq!(o.status.code(), Some(1), "{stderr}");
@@ -432,16 +428,7 @@ fn convert_on_a_full_disk_leaves_whole_frames_only() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("converted");
     // A frame is 318 KiB: the first one cannot be written whole.
-    let o = with_file_limit(
-        32,
-        &[
-            "convert".as_ref(),
-            sample().as_os_str(),
-            "--out".as_ref(),
-            out.as_os_str(),
-            "--quiet".as_ref(),
-        ],
-    );
+    let o = with_file_limit(32, "convert", &sample(), &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     println!("{stderr}");
     assert_eq!(o.status.code(), Some(1), "{stderr}");
