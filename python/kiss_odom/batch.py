@@ -18,9 +18,9 @@ of its parent folders before it (joined by ``-``) as it takes to tell it apart f
 of that name (``a/00``, ``b/00`` -> ``a-00``, ``b-00``). A path given twice, or names that
 still collide, are a ``ValueError`` before any task starts.
 
-Ctrl-C (SIGINT) cancels the tasks still running, writes the tables of the sequences that
-finished (the others listed as ``interrupted``) and, on the command line, exits with 130; a
-second Ctrl-C ends it at once.
+Ctrl-C (SIGINT) cancels the tasks still running, writes the tables of the sequences whose run
+completed (also one whose task was cut short after its ``summary.json``; the others are listed
+as ``interrupted``) and, on the command line, exits with 130; a second Ctrl-C ends it at once.
 
 Command line: ``kiss-odom-batch SEQUENCE... --out DIR [--address A] [--num-cpus N]
 [-- RUN FLAGS]``.
@@ -34,6 +34,7 @@ import json
 import math
 import os
 import sys
+import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
@@ -90,12 +91,19 @@ def run_sequence(path: str, out: str, run_args: Sequence[str] = ()) -> Result:
     ``RuntimeError`` with the command's reason when it fails."""
     from kiss_odom import _native
 
-    name = Path(out).name
     code, err = _native.run_cli(["run", str(path), "--out", str(out), "--quiet", *run_args])
     if code != 0:
         lines = err.strip().splitlines()
         reason = lines[-1].removeprefix("error: ") if lines else f"{path}: exit status {code}"
         raise RuntimeError(reason)
+    return _row(path, out)
+
+
+def _row(path: str, out: str) -> Result:
+    """The row of a sequence whose ``kiss-odom run`` completed into ``out``."""
+    from kiss_odom import _native
+
+    name = Path(out).name
     summary = json.loads((Path(out) / "summary.json").read_text())
     metrics = summary.get("metrics") or {}
     row = Result(
@@ -204,6 +212,7 @@ def run_batch(
     out_dir.mkdir(parents=True, exist_ok=True)
     by_name: Dict[str, Result] = {}
     interrupted = False
+    began = time.time()
     started = not ray.is_initialized()
     try:
         if started:
@@ -238,6 +247,16 @@ def run_batch(
             _second_interrupt_ends_the_process()
             for ref in pending:
                 ray.cancel(ref, force=True)
+            # A run that completed before the signal finished, whether or not its task got
+            # to return.
+            for ref, name in pending.items():
+                i = names.index(name)
+                if _completed_since(out_dir / name, began):
+                    try:
+                        by_name[name] = _row(str(paths[i].resolve()),
+                                             str((out_dir / name).resolve()))
+                    except Exception:  # noqa: BLE001 - its outputs are not whole: unfinished
+                        pass
         bar.close()
     except KeyboardInterrupt:  # before the tasks started (Ray starting)
         interrupted = True
@@ -251,6 +270,18 @@ def run_batch(
     batch = Batch(results=results, totals=totals(results), interrupted=interrupted)
     write_tables(out_dir, batch)
     return batch
+
+
+def _completed_since(out: Path, began: float) -> bool:
+    """Whether ``out`` holds a complete run written after ``began``."""
+    path = out / "summary.json"
+    try:
+        if path.stat().st_mtime < began:
+            return False  # an earlier batch's
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    return not summary.get("interrupted") and summary.get("stop_reason") is None
 
 
 def _second_interrupt_ends_the_process() -> None:
