@@ -174,23 +174,16 @@ fn a_failed_run_leaves_no_output_of_an_earlier_run() {
     assert_eq!(s["input"]["path"], broken.display().to_string(), "{s:#}");
     assert_eq!(r.rows().len(), 1, "this run's frames.csv");
 
-    // A run whose input cannot be opened removes them too; what it writes is its own.
+    // A run refused before it starts removes them too.
     run(&sample(), &out, &["--frames", "0..2"]).succeeded_with_frames(2);
-    let missing = dir.path().join("missing");
-    let r = run(&missing, &out, &[]);
+    let r = run(&dir.path().join("missing"), &out, &[]);
     assert_eq!(r.code, 1);
     for name in kiss_odom::run::OUTPUTS {
-        if matches!(name, "summary.json" | "config.toml") {
-            continue;
-        }
         assert!(
             !out.join(name).exists(),
             "{name} of the earlier run is left"
         );
     }
-    let s = r.summary();
-    assert_eq!(s["input"]["path"], missing.display().to_string(), "{s:#}");
-    assert_eq!(s["frames"], 0, "{s:#}");
 }
 
 #[test]
@@ -383,24 +376,8 @@ fn a_config_in_the_output_folder_is_read_before_the_folder_is_cleared() {
 }
 
 #[test]
-fn summary_json_is_written_when_the_input_cannot_be_opened_or_the_disk_fills() {
+fn summary_json_is_written_when_the_disk_fills_and_names_the_output_that_failed() {
     let dir = tempfile::tempdir().unwrap();
-    let missing = dir.path().join("missing");
-    let r = run(&missing, &dir.path().join("out-missing"), &[]);
-    r.failed_naming(&missing);
-    let s = r.summary();
-    assert_eq!(
-        (s["frames"].as_u64(), s["interrupted"].as_bool()),
-        (Some(0), Some(false))
-    );
-    assert!(
-        s["stop_reason"]
-            .as_str()
-            .unwrap()
-            .contains(&missing.display().to_string()),
-        "{s:#}"
-    );
-
     // The plots (150-300 KB) do not fit under the limit; the small files do.
     let out = dir.path().join("out-full");
     let o = with_file_limit(32, "run", &sample(), &out);

@@ -169,8 +169,9 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
 ///
 /// Every argument is checked and every input read before any file is removed: a run refused
 /// for its arguments changes nothing, and a `--config` inside the output folder is read
-/// before the folder's old outputs go. From then on `summary.json` is written however the run
-/// ends, an input that cannot be opened included.
+/// before the folder's old outputs go. An input that cannot be opened refuses the run after
+/// those are removed, writing nothing; once it is open, `summary.json` is written however the
+/// run ends.
 pub(crate) fn execute_on(
     args: &RunArgs,
     open: impl FnOnce(&io::OpenOptions) -> Result<io::Dataset>,
@@ -197,17 +198,11 @@ pub(crate) fn execute_on(
     for path in crate::viz::files(&args.view) {
         crate::output::remove_stale_file(path)?;
     }
+    // An input that cannot be opened refuses the run before it starts: nothing is written.
+    let mut dataset = opened?;
     std::fs::create_dir_all(&args.run.out)
         .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
     let mut record = Record::default();
-    let mut dataset = match opened {
-        Ok(d) => d,
-        Err(e) => {
-            let info = io::DatasetInfo::default();
-            let end = stopped_by(e);
-            return finish(args, &settings, &info, &driver, &record, end, err);
-        }
-    };
     // After the folder: a recording or cloud may be asked for inside it.
     let mut observers = match crate::viz::observers(&args.view) {
         Ok(o) => o,
@@ -281,7 +276,7 @@ fn inputs(args: &RunArgs) -> [&Path; 4] {
     .map(|p| p.map_or(none, PathBuf::as_path))
 }
 
-/// An error from the input: an interruption if a signal ended the input (a `live` socket
+/// An error from the frames: an interruption if a signal ended the input (a `live` socket
 /// closed by Ctrl-C before any packet came), else a failure.
 fn stopped_by(e: anyhow::Error) -> End {
     match crate::interrupt::requested() {
