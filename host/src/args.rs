@@ -106,7 +106,8 @@ impl InputArgs {
 /// The pipeline's parameters.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PipelineArgs {
-    /// Settings file (TOML, as `run` writes to `config.toml`); flags override it.
+    /// Settings file: TOML, as `run` writes to `config.toml`, or kiss-icp's YAML (a .yaml or
+    /// .yml name); flags override it.
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Maximum range r_max (m) [default: 100].
@@ -174,9 +175,10 @@ pub struct CoreArgs {
 }
 
 /// `--config` of the commands that compare with the reference.
-pub const CONFIG_HELP_WITH_REFERENCE: &str = "Settings file (TOML, as `run` writes to \
-    `config.toml`); flags override it. The reference gets only the range, voxel size and \
-    deskewing, so every other pipeline setting must keep its default";
+pub const CONFIG_HELP_WITH_REFERENCE: &str = "Settings file: TOML, as `run` writes to \
+    `config.toml`, or kiss-icp's YAML (a .yaml or .yml name); flags override it. The reference \
+    gets only the range, voxel size and deskewing, so every other pipeline setting must keep \
+    its default";
 
 /// `--threads` of the commands that compare with the reference.
 pub const THREADS_HELP_WITH_REFERENCE: &str = "Threads for both implementations (the \

@@ -8,7 +8,8 @@
 //! them: seconds since the sweep began for a sensor recording); `times.txt` has the frame
 //! times when every frame from 0 on has one. A frame that cannot be read is left out with a warning
 //! (the generic reader sees the gap); a damaged container ends the conversion with its error
-//! after the frames before it.
+//! after the frames before it. Every file is written under a temporary name and renamed when
+//! complete ([`crate::output`]), so a full disk or a signal leaves whole frames only.
 
 use crate::args::InputArgs;
 use crate::io::{self, bin, generic, Item};
@@ -82,8 +83,8 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
         }
         let name = format!("{:06}.bin", frame.index);
         let bytes = bin::encode_with_intensity(&frame.points, frame.intensity.as_deref());
-        let path = frames_dir.join(&name);
-        std::fs::write(&path, bytes).with_context(|| format!("{}", path.display()))?;
+        // Whole or not at all: a frame cut short by a full disk would read as a shorter frame.
+        crate::output::write(&frames_dir.join(&name), &bytes)?;
         if let Some(stamps) = &frame.stamps {
             create(&stamps_dir)?;
             generic::write_timestamps(&stamps_dir.join(&name), stamps)?;
@@ -99,8 +100,7 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
         written += 1;
     };
     if let Some(text) = times.filter(|_| written > 0) {
-        let path = args.out.join("times.txt");
-        std::fs::write(&path, text).with_context(|| format!("{}", path.display()))?;
+        crate::output::write(&args.out.join("times.txt"), text.as_bytes())?;
     }
     if !args.quiet {
         println!("{written} frames written to {}", args.out.display());

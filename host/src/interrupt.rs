@@ -10,9 +10,16 @@
 //!
 //! In-process callers (the tests, bindings) do not install the handlers, and the flag then
 //! rises only through [`raise`].
+//!
+//! Waits that a user sizes (`replay`'s pace, `live --idle-timeout`) go through [`seconds`],
+//! which never panics, and [`sleep`], which a signal cuts short.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
+/// How often a [`sleep`] looks at the flag: a signal ends it within this.
+pub const POLL: Duration = Duration::from_millis(50);
 
 struct Flags {
     raised: Arc<AtomicBool>,
@@ -68,4 +75,50 @@ pub fn requested() -> Option<i32> {
 /// The exit status of a command stopped by `signal`.
 pub fn exit_status(signal: i32) -> i32 {
     128 + signal
+}
+
+/// `secs` seconds as a [`Duration`], saturating: negative or NaN is none, anything beyond
+/// `Duration`'s range (`1e20`, infinity) is [`Duration::MAX`], in effect forever.
+pub fn seconds(secs: f64) -> Duration {
+    if secs.is_nan() || secs <= 0.0 {
+        return Duration::ZERO;
+    }
+    Duration::try_from_secs_f64(secs).unwrap_or(Duration::MAX)
+}
+
+/// Sleeps for `wait` unless a signal asks the process to stop first; returns that signal.
+pub fn sleep(wait: Duration) -> Option<i32> {
+    // `None`: past `Instant`'s range, which no process lives to see.
+    let deadline = Instant::now().checked_add(wait);
+    loop {
+        if let Some(sig) = requested() {
+            return Some(sig);
+        }
+        let left = match deadline {
+            Some(d) => d.saturating_duration_since(Instant::now()),
+            None => POLL,
+        };
+        if left.is_zero() {
+            return None;
+        }
+        std::thread::sleep(left.min(POLL));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn any_number_of_seconds_is_a_duration_without_panicking() {
+        assert_eq!(seconds(1.5), Duration::from_millis(1500));
+        for none in [0.0, -1.0, -0.0, f64::NAN, f64::NEG_INFINITY] {
+            assert_eq!(seconds(none), Duration::ZERO, "{none}");
+        }
+        for forever in [1e20, 1e30 / 1e-30, f64::INFINITY, f64::MAX] {
+            assert_eq!(seconds(forever), Duration::MAX, "{forever}");
+        }
+        // A wait that long is not added to an instant (which would panic).
+        assert_eq!(sleep(Duration::ZERO), None);
+    }
 }

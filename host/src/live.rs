@@ -31,8 +31,6 @@ const QUEUE: usize = 4096;
 /// Socket receive buffer asked for (the kernel caps it at `net.core.rmem_max`): a sweep of
 /// packets, so none is lost while the machine is busy elsewhere.
 const RECEIVE_BUFFER: usize = 8 << 20;
-/// How often a wait for packets checks for a signal.
-const POLL: Duration = Duration::from_millis(100);
 
 /// `kiss-odom live` arguments.
 #[derive(Debug, clap::Args)]
@@ -78,7 +76,7 @@ impl Socket {
     fn open(addr: SocketAddr, idle: Option<Duration>) -> Result<Self> {
         let name = format!("udp://{addr}");
         let socket = listen(addr).with_context(|| format!("{name}: cannot listen"))?;
-        socket.set_read_timeout(Some(POLL))?;
+        socket.set_read_timeout(Some(crate::interrupt::POLL))?;
         let port = socket.local_addr()?.port();
         let (tx, queue) = mpsc::sync_channel(QUEUE);
         let dropped = Arc::new(AtomicU64::new(0));
@@ -172,7 +170,12 @@ fn receive(
 impl DatagramSource for Socket {
     fn next_datagram(&mut self) -> Result<Option<Datagram>> {
         loop {
-            match self.queue.recv_timeout(POLL) {
+            // Before every datagram, not only when the queue runs dry: packets that keep
+            // coming must not hold off a signal.
+            if crate::interrupt::requested().is_some() {
+                return Ok(None);
+            }
+            match self.queue.recv_timeout(crate::interrupt::POLL) {
                 Ok(d) => {
                     self.last = Instant::now();
                     self.received = true;
@@ -180,9 +183,6 @@ impl DatagramSource for Socket {
                 }
                 Err(RecvTimeoutError::Disconnected) => return Err(self.thread_error()),
                 Err(RecvTimeoutError::Timeout) => {}
-            }
-            if crate::interrupt::requested().is_some() {
-                return Ok(None);
             }
             match self.idle {
                 Some(idle) if self.last.elapsed() >= idle => {
@@ -207,7 +207,7 @@ pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
         bail!("live listens on the port of --udp; --port is for recordings");
     }
     let idle = match args.idle_timeout {
-        Some(s) if s.is_finite() && s > 0.0 => Some(Duration::from_secs_f64(s)),
+        Some(s) if s > 0.0 => Some(crate::interrupt::seconds(s)),
         Some(s) => bail!("--idle-timeout must be a positive number of seconds, not {s}"),
         None => None,
     };

@@ -68,7 +68,7 @@ pub fn write_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) 
 /// encoders that open the file themselves).
 pub fn write_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let tmp = temp_beside(path)?.into_temp_path();
-    fill(&tmp)?;
+    fill(&tmp).with_context(|| format!("{}", path.display()))?;
     tmp.persist(path)
         .map_err(|e| e.error)
         .with_context(|| format!("{}", path.display()))?;
@@ -100,6 +100,31 @@ pub fn remove_stale(dir: &Path, names: &[&str]) -> Result<()> {
 /// [`remove_stale`] does for a folder of outputs.
 pub fn remove_stale_file(path: &Path) -> Result<()> {
     remove_stale(parent_of(path), &[&file_name(path)?])
+}
+
+/// Refuses an output at `path` that would remove an input: the file there is removed before
+/// a command starts, so it must not be one of `inputs` (by any name) nor a file inside an
+/// input folder (a frame of a dataset). Nothing at `path` yet is nothing to refuse.
+pub fn refuse_input(path: &Path, inputs: &[&Path]) -> Result<()> {
+    let entry = |p: &Path| Some(parent_of(p).canonicalize().ok()?.join(p.file_name()?));
+    if std::fs::symlink_metadata(path).is_err() {
+        return Ok(());
+    }
+    let Some(out) = entry(path) else {
+        return Ok(());
+    };
+    for input in inputs {
+        let folder = input.is_dir().then(|| input.canonicalize().ok()).flatten();
+        let within = folder.is_some_and(|f| out.starts_with(f));
+        if within || entry(input).as_ref() == Some(&out) {
+            anyhow::bail!(
+                "{}: would replace a file of this run's input {}; write the output elsewhere",
+                path.display(),
+                input.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Removes `path` if it is a file (or a link); anything else there is left alone.
@@ -150,6 +175,26 @@ mod tests {
         assert!(e.is_err());
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
         assert!(temporaries_in(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn an_output_over_an_input_or_a_file_of_an_input_folder_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("sub")).unwrap();
+        std::fs::write(d.join("rec.pcap"), "x").unwrap();
+        let input = d.join("rec.pcap");
+        let e = refuse_input(&d.join("sub/../rec.pcap"), &[&input]).unwrap_err();
+        assert!(e.to_string().contains("of this run's input"), "{e}");
+        // A file inside an input folder (a frame) too, but not the folder's new files.
+        std::fs::write(d.join("sub/000000.ply"), "x").unwrap();
+        let folder = d.join("sub");
+        assert!(refuse_input(&d.join("sub/000000.ply"), &[&folder]).is_err());
+        refuse_input(&d.join("sub/map.ply"), &[&folder]).unwrap();
+        // Another file, or none yet, is no conflict.
+        std::fs::write(d.join("map.ply"), "x").unwrap();
+        refuse_input(&d.join("map.ply"), &[&input]).unwrap();
+        refuse_input(&d.join("new.ply"), &[&input]).unwrap();
     }
 
     #[test]

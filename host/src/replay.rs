@@ -4,15 +4,15 @@
 //! Each datagram to the sensor's data port leaves when its capture time, measured from the
 //! first one and divided by `--rate`, has elapsed; a sender that falls behind sends at once
 //! and catches up (the pace is kept on average, never by skipping). SIGINT/SIGTERM stop
-//! between datagrams with `128 + signal`; a capture damaged in the middle is sent up to the
-//! damage and then reported as the error.
+//! between datagrams or during a wait, however long, with `128 + signal`; a capture damaged
+//! in the middle is sent up to the damage and then reported as the error.
 
 use crate::io::pcap;
 use anyhow::{bail, Context, Result};
 use std::collections::BTreeMap;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// `kiss-odom replay` arguments.
 #[derive(Debug, clap::Args)]
@@ -64,27 +64,29 @@ pub fn execute(args: &ReplayArgs) -> Result<i32> {
     let mut capture = pcap::open(&args.path)?;
     let (mut sent, mut bytes) = (0u64, 0u64);
     let mut first: Option<(u64, Instant)> = None;
-    loop {
-        if let Some(sig) = crate::interrupt::requested() {
-            eprintln!("interrupted by signal {sig} after {sent} datagrams");
-            return Ok(crate::interrupt::exit_status(sig));
-        }
+    let interrupted = loop {
         let Some(d) = capture.next_datagram()? else {
-            break;
+            break None;
         };
         if d.port != port {
             continue;
         }
         let (t0, start) = *first.get_or_insert((d.time_ns, Instant::now()));
-        let due = Duration::from_secs_f64(d.time_ns.saturating_sub(t0) as f64 * 1e-9 / args.rate);
-        if let Some(wait) = due.checked_sub(start.elapsed()) {
-            std::thread::sleep(wait);
+        // A tiny rate or a long gap in the recording is a long wait, which a signal ends.
+        let due = crate::interrupt::seconds(d.time_ns.saturating_sub(t0) as f64 * 1e-9 / args.rate);
+        let wait = due.checked_sub(start.elapsed()).unwrap_or_default();
+        if let Some(sig) = crate::interrupt::sleep(wait) {
+            break Some(sig);
         }
         socket
             .send_to(&d.payload, args.to)
             .with_context(|| format!("{}: cannot send to {}", args.path.display(), args.to))?;
         sent += 1;
         bytes += d.payload.len() as u64;
+    };
+    if let Some(sig) = interrupted {
+        eprintln!("interrupted by signal {sig} after {sent} datagrams");
+        return Ok(crate::interrupt::exit_status(sig));
     }
     if sent == 0 {
         bail!("{}: no datagrams to port {port}", args.path.display());

@@ -1,6 +1,7 @@
 //! Every parameter of a run, as TOML: defaults, then `--config FILE`, then command-line flags.
 //! The `config.toml` a run writes holds the values actually used and can be passed back with
-//! `--config` to repeat the run.
+//! `--config` to repeat the run. `--config` also reads kiss-icp's YAML (a `.yaml` or `.yml`
+//! file, [`Settings::from_kiss_icp_yaml`]).
 
 use anyhow::{bail, Context, Result};
 use kiss_odom_core::{Capacities, Config, Degeneracy, Real};
@@ -247,10 +248,108 @@ impl Default for Runtime {
 }
 
 impl Settings {
-    /// Reads a TOML file; unknown keys are errors (a typo must not silently fall back).
+    /// Reads a settings file: kiss-icp's YAML when its name ends in `.yaml` or `.yml`, else
+    /// TOML (the layout of `config.toml`). Unknown keys are errors (a typo must not silently
+    /// fall back).
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
-        toml::from_str(&text).with_context(|| format!("{}: invalid configuration", path.display()))
+        let yaml = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+        if yaml {
+            return Self::from_kiss_icp_yaml(&text).with_context(|| {
+                format!("{}: invalid kiss-icp YAML configuration", path.display())
+            });
+        }
+        toml::from_str(&text).with_context(|| {
+            format!(
+                "{}: invalid configuration (read as TOML; a kiss-icp YAML file needs a .yaml \
+                 or .yml name)",
+                path.display()
+            )
+        })
+    }
+
+    /// Settings from kiss-icp's YAML configuration (`kiss_icp.config.load_config`'s file), read
+    /// as the Python package reads it: its sections are ours (`data`, `mapping`,
+    /// `adaptive_threshold`, `registration`, plus our `capacities` and `runtime`), with
+    /// `registration.max_num_threads` as `runtime.threads`, `out_dir` (its pipeline's) ignored,
+    /// `null` as not given, and the voxel size made explicit at `max_range / 100` when not given,
+    /// as kiss-icp does. `adaptive_threshold.fixed_threshold` is refused: the core always adapts.
+    pub fn from_kiss_icp_yaml(text: &str) -> Result<Self> {
+        use serde_yaml_ng::Value;
+        let doc: Value = serde_yaml_ng::from_str(text)?;
+        let mut s = Settings::default();
+        let top = match doc {
+            Value::Null => return Ok(s.with_explicit_voxel()),
+            Value::Mapping(m) => m,
+            _ => bail!("expected sections (data:, mapping:, ...) at the top"),
+        };
+        // `null` is kiss-icp's "not given" (pydantic's None), except where it means "derive".
+        let given = |section: &str, value: &Value| -> Result<Value> {
+            let Value::Mapping(m) = value else {
+                bail!("`{section}` is not a mapping of settings");
+            };
+            let kept = m
+                .iter()
+                .filter(|(k, v)| !v.is_null() || k.as_str() == Some("voxel_size"))
+                .map(|(k, v)| (k.clone(), v.clone()));
+            Ok(Value::Mapping(kept.collect()))
+        };
+        fn section<T: serde::de::DeserializeOwned>(name: &str, v: Value) -> Result<T> {
+            serde_yaml_ng::from_value(v).with_context(|| format!("`{name}`"))
+        }
+        let mut threads = None;
+        for (key, value) in &top {
+            let name = key.as_str().unwrap_or_default();
+            if value.is_null() {
+                continue;
+            }
+            match name {
+                "out_dir" => {}
+                "data" => s.data = section(name, given(name, value)?)?,
+                "mapping" => s.mapping = section(name, given(name, value)?)?,
+                "adaptive_threshold" => {
+                    let mut v = given(name, value)?;
+                    if let Some(t) = v.as_mapping_mut().and_then(|m| m.remove("fixed_threshold")) {
+                        bail!(
+                            "adaptive_threshold.fixed_threshold = {}: not supported, kiss-odom's \
+                             core always adapts the threshold (set initial_threshold instead)",
+                            serde_yaml_ng::to_string(&t).unwrap_or_default().trim()
+                        );
+                    }
+                    s.adaptive_threshold = section(name, v)?;
+                }
+                "registration" => {
+                    let mut v = given(name, value)?;
+                    threads = v.as_mapping_mut().and_then(|m| m.remove("max_num_threads"));
+                    s.registration = section(name, v)?;
+                }
+                "capacities" => s.capacities = section(name, given(name, value)?)?,
+                "runtime" => s.runtime = section(name, given(name, value)?)?,
+                _ => bail!(
+                    "unknown section `{}` (kiss-icp's: data, mapping, adaptive_threshold, \
+                     registration, out_dir; kiss-odom's: capacities, runtime)",
+                    serde_yaml_ng::to_string(key).unwrap_or_default().trim()
+                ),
+            }
+        }
+        let runtime_threads = top
+            .get("runtime")
+            .and_then(|r| r.get("threads"))
+            .is_some_and(|t| !t.is_null());
+        if let (Some(t), false) = (threads, runtime_threads) {
+            s.runtime.threads = section("registration.max_num_threads", t)
+                .map(|t: Option<usize>| t.unwrap_or(0))?;
+        }
+        Ok(s.with_explicit_voxel())
+    }
+
+    /// These settings with the voxel size given (`max_range / 100` when it was not).
+    fn with_explicit_voxel(mut self) -> Self {
+        self.mapping.voxel_size = Some(self.voxel_size());
+        self
     }
 
     /// The TOML text of these settings, with the voxel size and capacities made explicit (an
@@ -343,6 +442,7 @@ impl Settings {
     /// value: the one that, put back to its default, makes the settings valid (several when
     /// more than one would).
     pub fn validate(&self) -> Result<()> {
+        self.refuse_non_finite()?;
         let Some(e) = self.fault() else {
             return Ok(());
         };
@@ -352,14 +452,28 @@ impl Settings {
             .filter(|f| {
                 let mut fixed = self.clone();
                 (f.reset)(&mut fixed, &defaults);
-                (f.show)(&fixed) != (f.show)(self) && fixed.fault().is_none()
+                f.show(&fixed) != f.show(self) && fixed.fault().is_none()
             })
-            .map(|f| format!("{} = {}", f.name, (f.show)(self)))
+            .map(|f| format!("{} = {}", f.name, f.show(self)))
             .collect();
         if culprits.is_empty() {
             return Err(e);
         }
         Err(e.context(culprits.join(" or ")))
+    }
+
+    /// Refuses NaN and inf, naming each setting: they pass some of the core's range checks
+    /// (`inf >= 1`), fail others with no name, and JSON has no way to write them.
+    pub fn refuse_non_finite(&self) -> Result<()> {
+        let non_finite: Vec<String> = fields()
+            .iter()
+            .filter(|f| matches!((f.value)(self), Some(toml::Value::Float(v)) if !v.is_finite()))
+            .map(|f| format!("{} = {}", f.name, f.show(self)))
+            .collect();
+        if !non_finite.is_empty() {
+            bail!("{}: not a finite number", non_finite.join(", "));
+        }
+        Ok(())
     }
 
     /// The pipeline settings away from their defaults that the reference's driver does not
@@ -376,7 +490,7 @@ impl Settings {
         let (this, defaults) = (resolved(self), resolved(&Settings::default()));
         fields()
             .iter()
-            .filter(|f| !f.reference_takes && (f.show)(&this) != (f.show)(&defaults))
+            .filter(|f| !f.reference_takes && f.show(&this) != f.show(&defaults))
             .map(|f| f.name)
             .collect()
     }
@@ -408,16 +522,24 @@ fn cores() -> usize {
 /// whether the reference's driver takes it (or it does not change poses).
 struct Field {
     name: &'static str,
-    show: fn(&Settings) -> String,
+    /// The value as TOML writes it (`nan` and `inf` included); `None` when not given.
+    value: fn(&Settings) -> Option<toml::Value>,
     reset: fn(&mut Settings, &Settings),
     reference_takes: bool,
+}
+
+impl Field {
+    /// The value as an error message names it.
+    fn show(&self, s: &Settings) -> String {
+        (self.value)(s).map_or_else(|| "none".into(), |v| v.to_string())
+    }
 }
 
 macro_rules! field {
     ($section:ident . $name:ident, $takes:expr) => {
         Field {
             name: concat!(stringify!($section), ".", stringify!($name)),
-            show: |s| serde_json::to_string(&s.$section.$name).unwrap_or_default(),
+            value: |s| toml::Value::try_from(&s.$section.$name).ok(),
             reset: |s, d| s.$section.$name = d.$section.$name.clone(),
             reference_takes: $takes,
         }
@@ -578,6 +700,78 @@ mod tests {
         let m = msg(|s| s.mapping.voxel_size = Some(-1.0));
         assert!(m.starts_with("mapping.voxel_size = -1.0: "), "{m}");
         Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn non_finite_values_are_refused_by_name_and_printed_as_toml_writes_them() {
+        let msg = |edit: fn(&mut Settings)| {
+            let mut s = Settings::default();
+            edit(&mut s);
+            format!("{:#}", s.validate().unwrap_err())
+        };
+        let m = msg(|s| s.data.max_range = f64::NAN);
+        assert_eq!(m, "data.max_range = nan: not a finite number");
+        // inf would pass a `>= 1` check (plane_gate: every frame) and is still refused.
+        let m = msg(|s| s.registration.plane_gate = f64::INFINITY);
+        assert_eq!(m, "registration.plane_gate = inf: not a finite number");
+        let m = msg(|s| s.mapping.voxel_size = Some(f64::NEG_INFINITY));
+        assert!(m.starts_with("mapping.voxel_size = -inf"), "{m}");
+        let text = "[adaptive_threshold]\nmin_motion_th = nan\n";
+        let s: Settings = toml::from_str(text).unwrap();
+        let m = format!("{:#}", s.validate().unwrap_err());
+        assert_eq!(
+            m,
+            "adaptive_threshold.min_motion_th = nan: not a finite number"
+        );
+    }
+
+    #[test]
+    fn kiss_icps_yaml_reads_as_its_python_package_reads_it() {
+        // kiss-icp 1.3.0's own config/advanced.yaml layout.
+        let yaml = "out_dir: results\n\
+            data:\n  deskew: false\n  max_range: 60.0\n  min_range: 5.0\n\
+            mapping:\n  voxel_size: null\n  max_points_per_voxel: 10\n\
+            adaptive_threshold:\n  fixed_threshold: null\n  initial_threshold: 1.5\n  min_motion_th: 0.2\n\
+            registration:\n  max_num_iterations: 300\n  convergence_criterion: 0.001\n  max_num_threads: 2\n";
+        let s = Settings::from_kiss_icp_yaml(yaml).unwrap();
+        let mut want = Settings {
+            data: Data {
+                max_range: 60.0,
+                min_range: 5.0,
+                deskew: false,
+            },
+            adaptive_threshold: Threshold {
+                initial_threshold: 1.5,
+                min_motion_th: 0.2,
+            },
+            ..Settings::default()
+        };
+        want.mapping.voxel_size = Some(0.6); // kiss-icp's max_range / 100, made explicit
+        want.mapping.max_points_per_voxel = 10;
+        want.registration.max_num_iterations = 300;
+        want.registration.convergence_criterion = 0.001;
+        want.runtime.threads = 2;
+        assert_eq!(s, want);
+        // Empty is the defaults; ours sections are read too; runtime.threads wins.
+        let d = Settings::from_kiss_icp_yaml("").unwrap();
+        assert_eq!(d.voxel_size(), 1.0);
+        assert_eq!(d.core_config::<f64>().unwrap(), Config::new(100.0));
+        let both = "registration:\n  max_num_threads: 2\nruntime:\n  threads: 1\n  scalar: f32\n";
+        let s = Settings::from_kiss_icp_yaml(both).unwrap();
+        assert_eq!((s.runtime.threads, s.runtime.scalar), (1, Scalar::F32));
+        // What the Python package refuses, this refuses, naming it.
+        for (bad, named) in [
+            (
+                "adaptive_threshold:\n  fixed_threshold: 0.3\n",
+                "fixed_threshold = 0.3",
+            ),
+            ("data:\n  max_rnage: 3.0\n", "max_rnage"),
+            ("dataa:\n  max_range: 3.0\n", "unknown section `dataa`"),
+            ("data:\n  max_range: [1]\n", "`data`"),
+        ] {
+            let e = format!("{:#}", Settings::from_kiss_icp_yaml(bad).unwrap_err());
+            assert!(e.contains(named), "{bad}: {e}");
+        }
     }
 
     #[test]

@@ -13,6 +13,15 @@ Ray starts locally (``ray.init()``) unless ``address`` is given (``"auto"`` or
 ``ray://host:10001`` for a cluster). Each task runs in a fresh worker process
 (``max_calls=1``), so its ``peak_rss_bytes`` is that sequence's worker alone.
 
+Output folders are named after the sequences: a sequence's folder or file name, with as many
+of its parent folders before it (joined by ``-``) as it takes to tell it apart from the others
+of that name (``a/00``, ``b/00`` -> ``a-00``, ``b-00``). A path given twice, or names that
+still collide, are a ``ValueError`` before any task starts.
+
+Ctrl-C (SIGINT) cancels the tasks still running, writes the tables of the sequences whose run
+completed (also one whose task was cut short after its ``summary.json``; the others are listed
+as ``interrupted``) and, on the command line, exits with 130; a second Ctrl-C ends it at once.
+
 Command line: ``kiss-odom-batch SEQUENCE... --out DIR [--address A] [--num-cpus N]
 [-- RUN FLAGS]``.
 """
@@ -23,7 +32,9 @@ import argparse
 import csv
 import json
 import math
+import os
 import sys
+import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
@@ -41,7 +52,7 @@ class Result:
     """One sequence's row of the aggregate table."""
 
     sequence: str
-    status: str  # "ok" or "failed"
+    status: str  # "ok", "failed" or "interrupted"
     frames: int = 0
     kitti_t_err_pct: float = math.nan
     kitti_r_err_deg_per_m: float = math.nan
@@ -60,6 +71,8 @@ class Batch:
 
     results: List[Result]
     totals: Dict[str, float] = field(default_factory=dict)
+    #: Whether Ctrl-C stopped the batch (the unfinished sequences are ``interrupted``).
+    interrupted: bool = False
 
     @property
     def failed(self) -> List[Result]:
@@ -78,12 +91,19 @@ def run_sequence(path: str, out: str, run_args: Sequence[str] = ()) -> Result:
     ``RuntimeError`` with the command's reason when it fails."""
     from kiss_odom import _native
 
-    name = Path(out).name
     code, err = _native.run_cli(["run", str(path), "--out", str(out), "--quiet", *run_args])
     if code != 0:
         lines = err.strip().splitlines()
         reason = lines[-1].removeprefix("error: ") if lines else f"{path}: exit status {code}"
         raise RuntimeError(reason)
+    return _row(path, out)
+
+
+def _row(path: str, out: str) -> Result:
+    """The row of a sequence whose ``kiss-odom run`` completed into ``out``."""
+    from kiss_odom import _native
+
+    name = Path(out).name
     summary = json.loads((Path(out) / "summary.json").read_text())
     metrics = summary.get("metrics") or {}
     row = Result(
@@ -106,12 +126,29 @@ def run_sequence(path: str, out: str, run_args: Sequence[str] = ()) -> Result:
 
 
 def _names(paths: Sequence[Path]) -> List[str]:
-    """Output folder names: the sequence folder's name, made unique."""
-    names, seen = [], {}
-    for p in paths:
-        base = p.name or "sequence"
-        seen[base] = seen.get(base, 0) + 1
-        names.append(base if seen[base] == 1 else f"{base}-{seen[base]}")
+    """Output folder names (see the module doc): unique, each from its own path."""
+    seen: Dict[Path, Path] = {}
+    for given in paths:
+        real = given.resolve()
+        if real in seen:
+            raise ValueError(f"{given}: given twice (as {seen[real]})")
+        seen[real] = given
+    # Named as given (made absolute), links not followed.
+    absolute = [Path(os.path.abspath(p)) for p in paths]
+    names = []
+    for p in absolute:
+        parts = p.parts[1:] or ("sequence",)
+        same = [q.parts[1:] for q in absolute if q.name == p.name]
+        depth = 1
+        while len({q[-depth:] for q in same}) < len(same):
+            depth += 1
+        names.append("-".join(parts[-depth:]))
+    first: Dict[str, int] = {}
+    for i, name in enumerate(names):
+        j = first.setdefault(name.casefold(), i)
+        if j != i:
+            raise ValueError(
+                f"{paths[j]} and {paths[i]} would both write to {name}/: rename one of them")
     return names
 
 
@@ -170,43 +207,87 @@ def run_batch(
     import ray
 
     paths = [Path(s) for s in sequences]
+    names = _names(paths)  # a collision is an error before anything starts
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
+    by_name: Dict[str, Result] = {}
+    interrupted = False
+    began = time.time()
     started = not ray.is_initialized()
-    if started:
-        if address:
-            ray.init(address=address, log_to_driver=False)
-        else:
-            ray.init(num_cpus=num_cpus, include_dashboard=False, log_to_driver=False)
     try:
+        if started:
+            if address:
+                ray.init(address=address, log_to_driver=False)
+            else:
+                ray.init(num_cpus=num_cpus, include_dashboard=False, log_to_driver=False)
         task = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(run_sequence)
-        names = _names(paths)
         pending = {
             task.remote(str(p.resolve()), str((out_dir / n).resolve()), list(run_args)): n
             for p, n in zip(paths, names)
         }
-        by_name: Dict[str, Result] = {}
         bar = _bar(len(pending), progress)
-        while pending:
-            done, _ = ray.wait(list(pending), num_returns=1)
-            ref = done[0]
-            name = pending.pop(ref)
-            try:
-                by_name[name] = ray.get(ref)
-            except Exception as e:  # a failed task: keep its reason, the others go on
-                cause = getattr(e, "cause", None) or e
-                by_name[name] = Result(sequence=name, status="failed", reason=str(cause).strip()
-                                       .splitlines()[-1])
-            bar.set_postfix_str(f"{name}: {by_name[name].status}")
-            bar.update(1)
+        try:
+            while pending:
+                # A timeout, so that Ctrl-C is seen while every task is still running.
+                done, _ = ray.wait(list(pending), num_returns=1, timeout=0.2)
+                if not done:
+                    continue
+                ref = done[0]
+                name = pending.pop(ref)
+                try:
+                    by_name[name] = ray.get(ref)
+                except Exception as e:  # a failed task: keep its reason, the others go on
+                    cause = getattr(e, "cause", None) or e
+                    by_name[name] = Result(sequence=name, status="failed",
+                                           reason=str(cause).strip().splitlines()[-1])
+                bar.set_postfix_str(f"{name}: {by_name[name].status}")
+                bar.update(1)
+        except KeyboardInterrupt:
+            interrupted = True
+            _second_interrupt_ends_the_process()
+            for ref in pending:
+                ray.cancel(ref, force=True)
+            # A run that completed before the signal finished, whether or not its task got
+            # to return.
+            for ref, name in pending.items():
+                i = names.index(name)
+                if _completed_since(out_dir / name, began):
+                    try:
+                        by_name[name] = _row(str(paths[i].resolve()),
+                                             str((out_dir / name).resolve()))
+                    except Exception:  # noqa: BLE001 - its outputs are not whole: unfinished
+                        pass
         bar.close()
+    except KeyboardInterrupt:  # before the tasks started (Ray starting)
+        interrupted = True
+        _second_interrupt_ends_the_process()
     finally:
-        if started:
+        if started and ray.is_initialized():
             ray.shutdown()
-    results = [by_name[n] for n in names]
-    batch = Batch(results=results, totals=totals(results))
+    results = [by_name.get(n) or Result(sequence=n, status="interrupted",
+                                        reason="interrupted before it finished")
+               for n in names]
+    batch = Batch(results=results, totals=totals(results), interrupted=interrupted)
     write_tables(out_dir, batch)
     return batch
+
+
+def _completed_since(out: Path, began: float) -> bool:
+    """Whether ``out`` holds a complete run written after ``began``."""
+    path = out / "summary.json"
+    try:
+        if path.stat().st_mtime < began:
+            return False  # an earlier batch's
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    return not summary.get("interrupted") and summary.get("stop_reason") is None
+
+
+def _second_interrupt_ends_the_process() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, lambda *_: os._exit(130))
 
 
 def _bar(total: int, enabled: bool):
@@ -232,10 +313,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     p.add_argument("--num-cpus", type=int, help="CPUs for a local Ray (default: all)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     a = p.parse_args(argv)
-    batch = run_batch(a.sequences, a.out, run_args, a.address, a.num_cpus, not a.quiet)
+    try:
+        batch = run_batch(a.sequences, a.out, run_args, a.address, a.num_cpus, not a.quiet)
+    except ValueError as e:
+        p.error(str(e))
+    except KeyboardInterrupt:  # before Ray was imported: nothing ran, nothing to write
+        print("interrupted before any sequence started", file=sys.stderr)
+        return 130
     print((Path(a.out) / "aggregate.md").read_text())
     for r in batch.failed:
-        print(f"failed: {r.sequence}: {r.reason}", file=sys.stderr)
+        if r.status == "failed":
+            print(f"failed: {r.sequence}: {r.reason}", file=sys.stderr)
+    if batch.interrupted:
+        done = sum(r.status != "interrupted" for r in batch.results)
+        print(f"interrupted: the tables hold the {done} of {len(batch.results)} sequences "
+              "that finished", file=sys.stderr)
+        return 130
     return 1 if batch.failed else 0
 
 

@@ -5,19 +5,24 @@ Accepted by :func:`settings_from` (and so by :class:`kiss_odom.KissICP`):
 
 - ``None``: the defaults, which are kiss-icp 1.3.0's (max range 100 m, voxel max_range/100);
 - a kiss-icp ``KISSConfig`` (``kiss_icp.config.load_config(...)``), or the path of one of its
-  YAML files;
+  YAML files (``.yaml``/``.yml``, read by the compiled module as ``kiss-odom run --config``
+  reads it: neither PyYAML nor kiss-icp is needed; the voxel size is made explicit at
+  ``max_range / 100`` as kiss-icp's ``load_config`` does, but a ``min_range`` above
+  ``max_range`` is a ``ValueError`` where kiss-icp resets it to 0 with a printed warning);
 - a ``config.toml`` path as ``kiss-odom run`` writes it;
 - a dict with any of the sections ``data``, ``mapping``, ``adaptive_threshold``,
   ``registration`` (kiss-icp's keys and ours), ``capacities`` and ``runtime``.
 
 kiss-icp keys map as: ``registration.max_num_threads`` -> ``runtime.threads``; ``out_dir`` is
 kiss-icp's pipeline's and is ignored; ``adaptive_threshold.fixed_threshold`` is refused (the
-core always adapts). Keys neither side knows are a ``ValueError``.
+core always adapts). Keys neither side knows are a ``ValueError``, and so are NaN and inf
+values, named by their setting.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any, Mapping, Optional, Union
@@ -32,21 +37,6 @@ def defaults() -> dict:
     return json.loads(_native.default_settings_json())
 
 
-def _yaml_dict(path: Path) -> dict:
-    try:
-        from kiss_icp.config import load_config
-    except ImportError:
-        load_config = None
-    if load_config is not None:
-        return load_config(path).model_dump()
-    try:
-        import yaml
-    except ImportError as e:
-        raise ValueError(f"{path}: reading a YAML config needs kiss-icp or PyYAML") from e
-    with open(path) as f:
-        return yaml.safe_load(f) or {}
-
-
 def _as_dict(config: ConfigLike) -> dict:
     if config is None:
         return {}
@@ -54,10 +44,8 @@ def _as_dict(config: ConfigLike) -> dict:
         path = Path(config)
         if not path.is_file():
             raise ValueError(f"{path}: no such configuration file")
-        if path.suffix == ".toml":
+        if path.suffix.lower() in (".toml", ".yaml", ".yml"):
             return json.loads(_native.load_settings_json(str(path)))
-        if path.suffix in (".yaml", ".yml"):
-            return _yaml_dict(path)
         raise ValueError(f"{path}: a configuration is a .toml (kiss-odom) or .yaml (kiss-icp) file")
     if hasattr(config, "model_dump"):  # kiss-icp's pydantic KISSConfig
         return config.model_dump()
@@ -111,4 +99,14 @@ def settings_from(
         given["capacities"] = {**given.get("capacities", {}), **capacities}
     settings = defaults()
     _merge(settings, given)
+    _refuse_non_finite(settings)
     return settings
+
+
+def _refuse_non_finite(settings: dict, where: str = "") -> None:
+    # JSON has no NaN or inf: refused here by name rather than as a parse error later.
+    for key, value in settings.items():
+        if isinstance(value, dict):
+            _refuse_non_finite(value, f"{where}{key}.")
+        elif isinstance(value, float) and not math.isfinite(value):
+            raise ValueError(f"{where}{key} = {value}: not a finite number")

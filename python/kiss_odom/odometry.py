@@ -18,11 +18,17 @@ Input handling, each covered by a test in ``python/tests/test_bad_input.py``:
 - ``timestamps`` may be empty or ``None`` (no deskewing). Timestamps of the wrong length,
   non-finite or all equal are ignored: the frame is registered without deskewing, with the
   flag ``timestamps_ignored`` and the reason in ``last_report.stamp_problem``.
+
+Threads: one ``KissICP`` may be shared by several Python threads. Its calls are serialised
+by a lock (a second thread's ``register_frame`` waits for the first to finish, with the GIL
+released meanwhile); frames still go one after the other, in the order the calls take the
+lock. Separate objects run in parallel.
 """
 
 from __future__ import annotations
 
 import json
+import threading
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Tuple
 
@@ -74,19 +80,23 @@ class FrameReport:
 class LocalMap:
     """kiss-icp's ``local_map``: the map of a :class:`KissICP` (world frame)."""
 
-    def __init__(self, odometry: "_native.Odometry"):
+    def __init__(self, odometry: "_native.Odometry", lock: threading.Lock):
         self._odom = odometry
+        self._lock = lock
 
     def point_cloud(self) -> np.ndarray:
         """Every map point, Nx3 float64 (voxel by voxel; kiss-icp's order differs)."""
-        return self._odom.map_points()
+        with self._lock:
+            return self._odom.map_points()
 
     def clear(self) -> None:
         """Empties the map; poses and threshold stay (as in kiss-icp)."""
-        self._odom.clear_map()
+        with self._lock:
+            self._odom.clear_map()
 
     def empty(self) -> bool:
-        return self._odom.map_empty()
+        with self._lock:
+            return self._odom.map_empty()
 
 
 def _is_kiss_icp_config(config: Any) -> bool:
@@ -116,55 +126,67 @@ class KissICP:
             config, scalar=scalar, map_storage=map_storage, capacities=capacities, threads=threads
         )
         self._odom = _native.Odometry.from_json(json.dumps(self.settings))
+        # Every call into `_odom` holds it (see the module doc, "Threads").
+        self._lock = threading.Lock()
         # kiss-icp's pipeline reads its own config back (config.data.max_range, ...).
         self.config = config if _is_kiss_icp_config(config) else self.settings
-        self.local_map = LocalMap(self._odom)
+        self.local_map = LocalMap(self._odom, self._lock)
         self.last_report: Optional[FrameReport] = None
 
     def register_frame(self, frame, timestamps=None) -> Tuple[np.ndarray, np.ndarray]:
         """Registers one scan; returns ``(deskewed_frame, source)`` like kiss-icp: the
         deskewed, cropped frame and the registration points (both sensor frame, Nx3)."""
-        deskewed, source, report = self._odom.register_frame(frame, timestamps)
-        self.last_report = FrameReport.from_dict(report)
+        with self._lock:
+            deskewed, source, report = self._odom.register_frame(frame, timestamps)
+            self.last_report = FrameReport.from_dict(report)
         return deskewed, source
 
     @property
     def last_pose(self) -> np.ndarray:
         """The latest pose, 4x4 (a copy; assign a 4x4 rigid transform to replace it)."""
-        return self._odom.last_pose()
+        with self._lock:
+            return self._odom.last_pose()
 
     @last_pose.setter
     def last_pose(self, pose) -> None:
-        self._odom.set_last_pose(pose)
+        with self._lock:
+            self._odom.set_last_pose(pose)
 
     @property
     def last_delta(self) -> np.ndarray:
         """The constant-velocity model, 4x4 (assignable like ``last_pose``)."""
-        return self._odom.last_delta()
+        with self._lock:
+            return self._odom.last_delta()
 
     @last_delta.setter
     def last_delta(self, delta) -> None:
-        self._odom.set_last_delta(delta)
+        with self._lock:
+            self._odom.set_last_delta(delta)
 
     @property
     def sigma(self) -> float:
         """The adaptive threshold's current sigma (m)."""
-        return self._odom.sigma()
+        with self._lock:
+            return self._odom.sigma()
 
     @property
     def state_bytes(self) -> int:
         """Bytes of the core's state, fixed at construction."""
-        return self._odom.state_bytes()
+        with self._lock:
+            return self._odom.state_bytes()
 
     def high_water(self) -> dict:
         """Largest occupancy of each buffer since start, ``(peak, capacity)``."""
-        return self._odom.high_water()
+        with self._lock:
+            return self._odom.high_water()
 
     def settings_toml(self) -> str:
         """The settings as the ``config.toml`` ``kiss-odom run`` would write."""
-        return self._odom.settings_toml()
+        with self._lock:
+            return self._odom.settings_toml()
 
     def reset(self) -> None:
         """Back to a new odometry's state (empty map, identity pose)."""
-        self._odom.reset()
-        self.last_report = None
+        with self._lock:
+            self._odom.reset()
+            self.last_report = None

@@ -54,7 +54,8 @@ pub struct Odometry {
     pool: Pool,
     settings: Settings,
     /// The frame's points and its deskewed copy: kept from frame to frame so their memory is
-    /// already mapped (fresh 3 MB buffers cost page faults on every frame).
+    /// already mapped (fresh 3 MB buffers cost page faults on every frame), up to
+    /// `scan_points` points each ([`trim`]).
     input: Vec<[f64; 3]>,
     deskewed: Vec<[f64; 3]>,
 }
@@ -121,6 +122,15 @@ fn one_frame<T: Numpy, P: PointCodec<T>>(
             deskewed.clear();
             Err(e)
         }
+    }
+}
+
+/// Gives back the memory of a frame buffer beyond `keep` points (the core reads no more of a
+/// scan), so one huge frame does not hold hundreds of MB until the object goes.
+fn trim(buffer: &mut Vec<[f64; 3]>, keep: usize) {
+    if buffer.capacity() > keep {
+        buffer.clear();
+        buffer.shrink_to(keep);
     }
 }
 
@@ -197,6 +207,7 @@ impl Odometry {
         let de = &mut serde_json::Deserializer::from_str(json);
         let s: Settings = serde_path_to_error::deserialize(de)
             .map_err(|e| PyValueError::new_err(format!("invalid configuration: {e}")))?;
+        s.validate().map_err(value_error)?;
         Self::from_settings(s)
     }
 
@@ -224,6 +235,9 @@ impl Odometry {
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         let report = report_dict(py, out.report.as_ref(), index, self.input.len())?;
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
+        let keep = self.settings.capacities.scan_points;
+        trim(&mut self.input, keep);
+        trim(&mut self.deskewed, keep);
         let source = convert::points_array(py, out.source)?;
         (deskewed, source, report).into_pyobject(py)
     }
@@ -313,10 +327,14 @@ fn default_settings_json() -> PyResult<String> {
     serde_json::to_string(&Settings::default()).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
-/// A `config.toml` (as `kiss-odom run` writes it) as settings JSON; unknown keys are errors.
+/// A settings file as settings JSON: a `config.toml` (as `kiss-odom run` writes it) or
+/// kiss-icp's YAML (`.yaml`/`.yml`, read as `run --config` reads it); unknown keys are errors,
+/// and so are NaN and inf (JSON would write them as `null`, "not given").
 #[pyfunction]
 fn load_settings_json(path: std::path::PathBuf) -> PyResult<String> {
     let s = Settings::load(&path).map_err(value_error)?;
+    s.refuse_non_finite()
+        .map_err(|e| value_error(e.context(path.display().to_string())))?;
     serde_json::to_string(&s).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 

@@ -101,3 +101,92 @@ def test_the_console_script_reports_the_failure_and_exits_1(tmp_path):
     kiss_odom("run", seq, "--out", tmp_path / "ref", "--quiet")
     assert (tmp_path / "out" / "05" / "poses_kitti.txt").read_bytes() == \
         (tmp_path / "ref" / "poses_kitti.txt").read_bytes()
+
+
+def test_output_names_come_from_the_paths_and_a_collision_is_refused_before_any_task(tmp_path):
+    from kiss_odom.batch import _names
+
+    for d in ("a/00", "b/00", "c/00-2", "x/b-00", "y/b/00"):
+        (tmp_path / d).mkdir(parents=True)
+    t = tmp_path
+    assert _names([t / "a/00", t / "b/00", t / "c/00-2"]) == ["a-00", "b-00", "00-2"]
+    # From each path alone: the order does not change a name.
+    assert _names([t / "c/00-2", t / "b/00", t / "a/00"]) == ["00-2", "b-00", "a-00"]
+    with pytest.raises(ValueError, match="given twice"):
+        _names([t / "a/00", t / "b/../a/00"])
+    with pytest.raises(ValueError, match="would both write to b-00"):
+        _names([t / "x/b-00", t / "b/00", t / "a/00"])
+    # The console script says so and starts nothing.
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(sys.executable).parent / "kiss-odom-batch"
+    out = subprocess.run([str(script), str(t / "a/00"), str(t / "a/00"), "--out", str(t / "out")],
+                         capture_output=True, text=True)
+    assert out.returncode == 2 and "given twice" in out.stderr, out.stderr
+    assert "Traceback" not in out.stderr and not (t / "out").exists()
+
+
+def test_the_same_name_in_two_folders_gives_two_outputs_and_two_rows(tmp_path):
+    import shutil
+
+    from conftest import REPO
+
+    a, b = tmp_path / "a" / "05", tmp_path / "b" / "05"
+    for d in (a, b):
+        shutil.copytree(REPO / "fixtures" / "kitti-05-reduced", d)
+    result = run_batch([str(a), str(b)], str(tmp_path / "out"), ["--frames", "0..3"],
+                       num_cpus=2, progress=False)
+    assert [r.sequence for r in result.results] == ["a-05", "b-05"]
+    assert all(r.status == "ok" for r in result.results)
+    rows = list(csv.DictReader(open(tmp_path / "out" / "aggregate.csv")))
+    assert [r["sequence"] for r in rows if not r["sequence"].startswith("total:")] == \
+        ["a-05", "b-05"]
+    for n in ("a-05", "b-05"):
+        assert (tmp_path / "out" / n / "poses_kitti.txt").is_file()
+
+
+def test_sigint_writes_the_tables_of_what_finished_and_exits_130_without_a_traceback(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    # A long sequence (minutes of frames: links to the sample's scans, forth and back) beside
+    # a short one.
+    sample = kitti_root() / "sequences" / "05" / "velodyne"
+    scans = sorted(sample.glob("*.bin"))
+    long = tmp_path / "long" / "velodyne"
+    long.mkdir(parents=True)
+    for k in range(6000):
+        lap, i = divmod(k, len(scans))
+        os.symlink(scans[i if lap % 2 == 0 else len(scans) - 1 - i], long / f"{k:06}.bin")
+    short = kitti_root() / "sequences" / "05"
+    out = tmp_path / "out"
+    script = Path(sys.executable).parent / "kiss-odom-batch"
+    child = subprocess.Popen([str(script), str(short), str(long.parent), "--out", str(out),
+                              "--num-cpus", "2", "--quiet", "--", "--threads", "1"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # The short sequence's summary is its acknowledgement: it finished.
+    start = time.monotonic()
+    while not (out / "05" / "summary.json").is_file():
+        assert child.poll() is None, child.communicate()
+        assert time.monotonic() - start < 600, "the short sequence never finished"
+        time.sleep(0.1)
+    assert not (out / "long" / "summary.json").exists(), "the long one finished first"
+    child.send_signal(signal.SIGINT)
+    try:
+        stdout, stderr = child.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        raise
+    print(stderr[-2000:])
+    assert child.returncode == 130, stderr[-2000:]
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr
+    rows = {r["sequence"]: r for r in csv.DictReader(open(out / "aggregate.csv"))}
+    assert rows["05"]["status"] == "ok" and float(rows["05"]["frames"]) == 10
+    assert rows["long"]["status"] == "interrupted"
+    assert "| 05 | ok |" in (out / "aggregate.md").read_text()

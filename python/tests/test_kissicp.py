@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -173,3 +174,31 @@ def test_the_thread_count_does_not_change_a_bit():
     one, two = our_poses(frames, threads=1), our_poses(frames, threads=2)
     print(f"{np.count_nonzero(one != two)} pose entries differ between 1 and 2 threads (allowed 0)")
     assert np.array_equal(one, two)
+
+
+def test_a_yaml_config_needs_neither_pyyaml_nor_kiss_icp(tmp_path, monkeypatch):
+    yaml_file = tmp_path / "kiss.yaml"
+    yaml_file.write_text("out_dir: results\ndata:\n  max_range: 60.0\nmapping:\n  voxel_size: null\n"
+                         "  max_points_per_voxel: 10\nregistration:\n  max_num_threads: 1\n")
+    want = kiss_odom.KissICP({"data": {"max_range": 60.0}, "runtime": {"threads": 1},
+                              "mapping": {"max_points_per_voxel": 10, "voxel_size": 0.6}}).settings
+    # Without PyYAML (kiss-icp's own loader would end the interpreter), then without kiss-icp.
+    for missing in (["yaml"], ["yaml", "kiss_icp", "kiss_icp.config"]):
+        for name in missing:
+            monkeypatch.setitem(sys.modules, name, None)
+        got = kiss_odom.KissICP(yaml_file).settings
+        print(f"without {missing}: {got['data']}, {got['mapping']}")
+        assert got == want
+
+
+def test_nan_and_inf_settings_are_value_errors_naming_the_setting(tmp_path):
+    with pytest.raises(ValueError, match=r"data\.max_range = nan: not a finite number"):
+        kiss_odom.KissICP({"data": {"max_range": float("nan")}})
+    with pytest.raises(ValueError, match=r"registration\.plane_gate = inf"):
+        kiss_odom.KissICP({"registration": {"plane_gate": float("inf")}})
+    for name, text in (("nan.yaml", "data:\n  min_range: .nan\n"),
+                       ("inf.toml", "[data]\nmin_range = inf\n")):
+        path = tmp_path / name
+        path.write_text(text)
+        with pytest.raises(ValueError, match=r"data\.min_range = (nan|inf): not a finite number"):
+            kiss_odom.KissICP(path)

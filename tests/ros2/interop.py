@@ -2,7 +2,8 @@
 
 Driven by tests/tests/ros2.rs. Publishes the KITTI .bin scans of a folder as ROS 2
 sensor_msgs/PointCloud2 (x, y, z, intensity float32, as KITTI drivers publish them) on `rt/points`,
-stamped from times.txt, at a fixed rate; subscribes to nav_msgs/Odometry and tf2_msgs/TFMessage
+stamped from times.txt, at a fixed rate or (`--ack`) each once the odometry of the one before
+came back, so that a slow node drops none; subscribes to nav_msgs/Odometry and tf2_msgs/TFMessage
 and writes every message received as JSON (floats printed by repr(), which reads back to the same
 bits). Types are declared the way rosidl lays them out, with ROS 2's DDS names
 (`pkg::msg::dds_::Name_`).
@@ -11,7 +12,7 @@ Discovery is unicast over loopback: CYCLONEDDS_URI (set below unless already set
 Cyclone to 127.0.0.1, disables multicast and names 127.0.0.1 as the peer, so the participants
 find each other through the well-known unicast ports.
 
-usage: interop.py --folder DIR --domain N --rate HZ --out FILE.json [--frames N]
+usage: interop.py --folder DIR --domain N (--rate HZ | --ack) --out FILE.json [--frames N]
 """
 
 import argparse
@@ -183,6 +184,8 @@ def main():
     ap.add_argument("--folder", type=Path, required=True)
     ap.add_argument("--domain", type=int, required=True)
     ap.add_argument("--rate", type=float, default=10.0)
+    ap.add_argument("--ack", action="store_true",
+                    help="send each cloud once the odometry of the one before came (no --rate)")
     ap.add_argument("--frames", type=int, default=None)
     ap.add_argument("--timeout", type=float, default=60.0)
     ap.add_argument("--out", type=Path, required=True)
@@ -250,10 +253,14 @@ def main():
 
     start = time.monotonic()
     for k, path in enumerate(scans):
-        due = start + k / a.rate
-        while time.monotonic() < due:
-            drain()
-            time.sleep(0.002)
+        if a.ack:
+            wait_for(f"the odometry of cloud {k - 1}", lambda: drain() or len(odoms) >= k,
+                     a.timeout)
+        else:
+            due = start + k / a.rate
+            while time.monotonic() < due:
+                drain()
+                time.sleep(0.002)
         cloud_w.write(kitti_cloud(path, times[k]))
         print(f"sent {path.name} stamp {times[k]}", flush=True)
 

@@ -271,3 +271,236 @@ fn a_simulate_killed_midway_leaves_no_data_set_and_its_staging_folder_goes_next_
     assert!(left.is_empty(), "{left:?}");
     assert_eq!(std::fs::read_dir(out.join("velodyne")).unwrap().count(), 3);
 }
+
+/// `kiss-odom-cli COMMAND INPUT --out OUT --quiet` as its own process, with writes past `kib`
+/// KiB refused as on a full disk (`ulimit -f`, SIGXFSZ ignored so the write fails with EFBIG
+/// instead of killing it).
+fn with_file_limit(kib: u32, command: &str, input: &Path, out: &Path) -> std::process::Output {
+    // `ulimit -f` counts 512-byte blocks in dash, 1024-byte blocks in bash: ask for KiB in
+    // blocks of 512, so either shell allows at most `2 * kib` KiB.
+    let blocks = (2 * kib).to_string();
+    std::process::Command::new("sh")
+        .args(["-c", "trap '' XFSZ; ulimit -f \"$0\"; exec \"$@\"", &blocks])
+        .arg(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+        .arg(command)
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_refused_argument_leaves_every_file_it_names_and_the_earlier_outputs_in_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    run(&sample(), &out, &["--frames", "0..2"]).succeeded_with_frames(2);
+    let earlier = std::fs::read(out.join("summary.json")).unwrap();
+    let notes = dir.path().join("notes.txt");
+    let rrd = dir.path().join("old.rrd");
+    let recording = dir.path().join("old.txt");
+    for f in [&notes, &rrd, &recording] {
+        std::fs::write(f, "keep me").unwrap();
+    }
+    let (notes_s, rrd_s, rec_s) = (
+        notes.to_str().unwrap(),
+        rrd.to_str().unwrap(),
+        recording.to_str().unwrap(),
+    );
+    let mut cases: Vec<Vec<&str>> = vec![
+        vec!["--save-map", notes_s],
+        vec!["--save-cloud", notes_s],
+        vec!["--save-cloud", "cloud.ply", "--save-cloud-voxel", "0"],
+        vec!["--rerun", rec_s],
+        vec!["--max-range", "0", "--save-map", notes_s],
+    ];
+    if !cfg!(feature = "rerun") {
+        // This build cannot record: refused before the earlier recording goes.
+        cases.push(vec!["--rerun", rrd_s]);
+    }
+    // An output over a frame of the run's own dataset (a folder of PLY frames).
+    let frames = dir.path().join("ply");
+    std::fs::create_dir(&frames).unwrap();
+    for k in 0..3 {
+        kiss_odom::io::ply::write(&frames.join(format!("{k:06}.ply")), &kitti_points(k), None)
+            .unwrap();
+    }
+    let frame = frames.join("000002.ply");
+    let frame_s = frame.to_str().unwrap().to_string();
+    let map_over_input = ["--save-map", &frame_s];
+    for flags in &cases {
+        let r = run(&sample(), &out, flags);
+        assert_eq!(r.code, 1, "{flags:?}: stderr:\n{}", r.stderr);
+        println!("{flags:?}: {}", r.errors()[0]);
+        for f in [&notes, &rrd, &recording] {
+            assert_eq!(
+                std::fs::read(f).unwrap(),
+                b"keep me",
+                "{flags:?}: {}",
+                f.display()
+            );
+        }
+        assert_eq!(
+            std::fs::read(out.join("summary.json")).unwrap(),
+            earlier,
+            "{flags:?}: a refused run changes no output"
+        );
+    }
+    let before = std::fs::read(&frame).unwrap();
+    let r = run(&frames, &out, &map_over_input);
+    let line = r.failed_naming(&frame);
+    assert!(line.contains("input"), "{line}");
+    assert_eq!(std::fs::read(&frame).unwrap(), before);
+}
+
+#[test]
+fn a_config_in_the_output_folder_is_read_before_the_folder_is_cleared() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let first = run(&sample(), &out, &["--frames", "0..4", "--max-range", "60"]);
+    first.succeeded_with_frames(4);
+    let (poses, config) = (
+        std::fs::read(out.join("poses_kitti.txt")).unwrap(),
+        std::fs::read(out.join("config.toml")).unwrap(),
+    );
+    let again = out.join("config.toml");
+    let r = run(
+        &sample(),
+        &out,
+        &["--frames", "0..4", "--config", again.to_str().unwrap()],
+    );
+    r.succeeded_with_frames(4);
+    assert_eq!(std::fs::read(out.join("poses_kitti.txt")).unwrap(), poses);
+    assert_eq!(std::fs::read(out.join("config.toml")).unwrap(), config);
+}
+
+#[test]
+fn summary_json_is_written_when_the_disk_fills_and_names_the_output_that_failed() {
+    let dir = tempfile::tempdir().unwrap();
+    // The plots (150-300 KB) do not fit under the limit; the small files do.
+    let out = dir.path().join("out-full");
+    let o = with_file_limit(32, "run", &sample(), &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("trajectory.png"),
+        "the error names the file: {stderr}"
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let reason = s["stop_reason"].as_str().unwrap_or_default();
+    assert!(
+        reason.contains("outputs incomplete") && reason.contains("trajectory.png"),
+        "{s:#}"
+    );
+    assert_eq!(s["frames"], 10);
+    assert!(!out.join("trajectory.png").exists());
+    assert_no_temporaries(&out);
+}
+
+#[test]
+fn convert_on_a_full_disk_leaves_whole_frames_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("converted");
+    // A frame is 318 KiB: the first one cannot be written whole.
+    let o = with_file_limit(32, "convert", &sample(), &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    println!("{stderr}");
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("000000.bin"),
+        "the error names the frame: {stderr}"
+    );
+    for entry in std::fs::read_dir(out.join("velodyne")).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let whole = std::fs::metadata(sample().join("velodyne").join(&name)).map(|m| m.len());
+        assert_eq!(
+            std::fs::metadata(&path).unwrap().len(),
+            whole.unwrap_or(u64::MAX),
+            "{name}: a frame cut short (or a temporary) is left"
+        );
+    }
+}
+
+#[test]
+fn kiss_icps_yaml_config_is_read_with_its_meaning() {
+    let dir = tempfile::tempdir().unwrap();
+    let yaml = dir.path().join("kiss.yaml");
+    std::fs::write(
+        &yaml,
+        "out_dir: results\ndata:\n  max_range: 60.0\n  deskew: true\nmapping:\n  voxel_size: null\n  \
+         max_points_per_voxel: 10\nregistration:\n  max_num_threads: 1\n",
+    )
+    .unwrap();
+    let from_yaml = dir.path().join("yaml");
+    let r = run(
+        &sample(),
+        &from_yaml,
+        &["--frames", "0..4", "--config", yaml.to_str().unwrap()],
+    );
+    r.succeeded_with_frames(4);
+    let toml = dir.path().join("same.toml");
+    std::fs::write(
+        &toml,
+        "[data]\nmax_range = 60.0\n[mapping]\nvoxel_size = 0.6\nmax_points_per_voxel = 10\n\
+         [runtime]\nthreads = 1\n",
+    )
+    .unwrap();
+    let from_toml = dir.path().join("toml");
+    let r = run(
+        &sample(),
+        &from_toml,
+        &["--frames", "0..4", "--config", toml.to_str().unwrap()],
+    );
+    r.succeeded_with_frames(4);
+    for name in ["poses_kitti.txt", "config.toml"] {
+        assert_eq!(
+            std::fs::read_to_string(from_yaml.join(name)).unwrap(),
+            std::fs::read_to_string(from_toml.join(name)).unwrap(),
+            "{name}"
+        );
+    }
+    // A YAML file under another name says how it was read.
+    let misnamed = dir.path().join("kiss.conf");
+    std::fs::copy(&yaml, &misnamed).unwrap();
+    let r = run(
+        &sample(),
+        &dir.path().join("out"),
+        &["--config", misnamed.to_str().unwrap()],
+    );
+    let line = r.failed_naming(&misnamed);
+    assert!(
+        line.contains("read as TOML") && line.contains(".yaml"),
+        "{line}"
+    );
+}
+
+#[test]
+fn nan_and_inf_settings_are_refused_naming_the_setting() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("nan.toml");
+    std::fs::write(&config, "[data]\nmax_range = nan\n").unwrap();
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["--config", config.to_str().unwrap()],
+            "data.max_range = nan",
+        ),
+        (&["--plane-gate", "inf"], "registration.plane_gate = inf"),
+        (&["--voxel-size", "NaN"], "mapping.voxel_size = nan"),
+    ];
+    for (flags, named) in cases {
+        let r = run(&sample(), &dir.path().join("out"), flags);
+        assert_eq!(r.code, 1, "{flags:?}");
+        let errors = r.errors();
+        println!("{}", errors[0]);
+        assert!(
+            errors[0].contains(named) && errors[0].contains("not a finite number"),
+            "{flags:?}: {}",
+            errors[0]
+        );
+        assert!(!errors[0].contains("null"), "{}", errors[0]);
+    }
+}

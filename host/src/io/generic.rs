@@ -131,7 +131,7 @@ pub fn parse_timestamps(bytes: &[u8]) -> Result<Vec<f64>> {
 /// Writes per-point times as a `timestamps/<stem>.bin` file.
 pub fn write_timestamps(path: &Path, stamps: &[f64]) -> Result<()> {
     let bytes: Vec<u8> = stamps.iter().flat_map(|t| t.to_le_bytes()).collect();
-    std::fs::write(path, bytes).with_context(|| format!("{}", path.display()))
+    crate::output::write(path, &bytes)
 }
 
 /// `path: reason` on one line, for [`Item::Skipped`] and warnings.

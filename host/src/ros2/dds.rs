@@ -11,11 +11,11 @@ use super::msg::{dds_topic, RawAdapter, RawCloud};
 use anyhow::{anyhow, Result};
 use rustdds::no_key::{DataReader, DataWriter};
 use rustdds::policy::{Durability, History, Reliability};
-use rustdds::serialization::CDRSerializerAdapter;
+use rustdds::serialization::{CDRDeserializerAdapter, CDRSerializerAdapter};
 pub use rustdds::DomainParticipant;
 use rustdds::{
-    DataWriterStatus, DomainParticipantBuilder, QosPolicies, QosPolicyBuilder, StatusEvented,
-    TopicKind,
+    DataReaderStatus, DataWriterStatus, DomainParticipantBuilder, QosPolicies, QosPolicyBuilder,
+    StatusEvented, TopicKind,
 };
 use serde::Serialize;
 use std::net::{IpAddr, Ipv4Addr};
@@ -23,6 +23,9 @@ use std::time::{Duration, Instant};
 
 /// A writer of `D` in CDR little endian, as `rmw` writes.
 pub type Writer<D> = DataWriter<D, CDRSerializerAdapter<D>>;
+
+/// A reader of `D` in CDR.
+pub type Reader<D> = DataReader<D, CDRDeserializerAdapter<D>>;
 
 /// A reader of serialized clouds.
 pub type CloudReader = DataReader<RawCloud, RawAdapter>;
@@ -84,6 +87,45 @@ pub fn writer<D: Serialize>(
     publisher
         .create_datawriter_no_key_cdr::<D>(&topic, Some(qos.clone()))
         .map_err(|e| anyhow!("writer on {name}: {e:?}"))
+}
+
+/// A reader of `D` (CDR) on ROS 2 topic `name` with DDS type `type_name`.
+pub fn reader<D: serde::de::DeserializeOwned + 'static>(
+    dp: &DomainParticipant,
+    name: &str,
+    type_name: &str,
+    qos: &QosPolicies,
+) -> Result<Reader<D>> {
+    let topic = dp
+        .create_topic(dds_topic(name), type_name.into(), qos, TopicKind::NoKey)
+        .map_err(|e| anyhow!("topic {name}: {e:?}"))?;
+    let subscriber = dp
+        .create_subscriber(qos)
+        .map_err(|e| anyhow!("subscriber for {name}: {e:?}"))?;
+    subscriber
+        .create_datareader_no_key_cdr::<D>(&topic, Some(qos.clone()))
+        .map_err(|e| anyhow!("reader on {name}: {e:?}"))
+}
+
+/// Waits until `r` has a matched writer, `stop` says stop, or `timeout` passes; returns whether
+/// a writer matched.
+pub fn wait_for_writer<D: serde::de::DeserializeOwned + 'static>(
+    r: &Reader<D>,
+    timeout: Duration,
+    stop: &dyn Fn() -> bool,
+) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < timeout && !stop() {
+        while let Some(status) = r.try_recv_status() {
+            if let DataReaderStatus::SubscriptionMatched { current, .. } = status {
+                if current.count() > 0 {
+                    return true;
+                }
+            }
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    false
 }
 
 /// A reader of `sensor_msgs/msg/PointCloud2` on ROS 2 topic `name`, sensor-data QoS.

@@ -22,7 +22,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// `kiss-odom ros2` arguments. Without `--play`, runs the node until Ctrl-C. Parameters:
-/// defaults, then `--config` (TOML, as `run`), then `--params` (ROS 2 YAML), then flags.
+/// defaults, then `--config` (as `run`'s), then `--params` (ROS 2 YAML), then flags.
 #[derive(Debug, clap::Args)]
 pub struct Ros2Args {
     /// Cloud topic (node: subscribe; --play: publish).
@@ -37,7 +37,7 @@ pub struct Ros2Args {
     /// Node name looked up in the parameter file.
     #[arg(long, default_value = params::NODE_NAME)]
     pub node_name: String,
-    /// Odometry settings file (TOML, as `kiss-odom run --config`).
+    /// Odometry settings file (TOML or kiss-icp's YAML, as `kiss-odom run --config`).
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// DDS domain (default: $ROS_DOMAIN_ID, else 0).
@@ -83,9 +83,14 @@ pub struct Ros2Args {
     /// --play: seconds between frames that carry no time.
     #[arg(long, default_value_t = 0.1)]
     pub period: f64,
-    /// --play: seconds to wait for a subscriber before the first cloud.
+    /// --play: seconds to wait for a subscriber before the first cloud (and, with
+    /// --lockstep, for each cloud's odometry).
     #[arg(long, default_value_t = 10.0)]
     pub wait: f64,
+    /// --play: publish each cloud only once the node's odometry for the one before came (on
+    /// --odom), so that no cloud is dropped whatever the node's speed; the pace is the node's.
+    #[arg(long)]
+    pub lockstep: bool,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -118,6 +123,9 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
             rate: args.rate,
             period: args.period,
             wait: args.wait,
+            lockstep: args
+                .lockstep
+                .then(|| args.odom.clone().unwrap_or_else(|| "/kiss/odometry".into())),
             domain,
         };
         play::run(&opts, &STOP, &mut out, err)?;

@@ -332,28 +332,43 @@ pub(super) struct Run<'a> {
 impl Run<'_> {
     /// Writes the outputs: `config.toml` and `summary.json` always, `frames.csv` when a frame
     /// was read (its header comes with the first row), the pose files and the plot when a
-    /// frame was registered.
+    /// frame was registered. An output that cannot be written (a full disk) does not keep the
+    /// others from being tried: `summary.json`, last, then says which failed in `stop_reason`
+    /// (if nothing else stopped the run), and the first such error is returned.
     pub fn write(&self) -> Result<Summary> {
         let dir = &self.args.run.out;
         let o = self.record;
-        crate::output::write(
-            &dir.join("config.toml"),
-            self.settings.to_toml()?.as_bytes(),
-        )?;
+        let mut failed: Option<anyhow::Error> = None;
+        let mut attempt = |r: Result<()>| {
+            if let Err(e) = r {
+                failed.get_or_insert(e);
+            }
+        };
+        attempt(
+            self.settings
+                .to_toml()
+                .and_then(|t| crate::output::write(&dir.join("config.toml"), t.as_bytes())),
+        );
         if !o.rows.is_empty() {
-            crate::output::write_with(&dir.join("frames.csv"), |w| {
+            attempt(crate::output::write_with(&dir.join("frames.csv"), |w| {
                 let mut csv = csv::Writer::from_writer(w);
                 for row in &o.rows {
                     csv.serialize((row, FlagColumns(row.status)))?;
                 }
                 csv.flush()?;
                 Ok(())
-            })?;
+            }));
         }
         let rows = self.info.ground_truth_for(&o.indices);
-        let metrics = self.metrics(&rows)?;
+        let metrics = match self.metrics(&rows) {
+            Ok(m) => m,
+            Err(e) => {
+                attempt(Err(e));
+                None
+            }
+        };
         if o.registered() > 0 {
-            self.write_poses()?;
+            attempt(self.write_poses());
             let title = self
                 .args
                 .path
@@ -362,18 +377,26 @@ impl Run<'_> {
             let gt = self.in_estimate_frame(&rows);
             let paired: Vec<Isometry3<f64>> = gt.iter().flatten().copied().collect();
             let paired = (!paired.is_empty()).then_some(paired.as_slice());
-            crate::output::write_via_path(&dir.join("trajectory.png"), |p| {
-                crate::plot::trajectory_png(p, &o.poses, paired, &title)
-            })?;
+            attempt(crate::output::write_via_path(
+                &dir.join("trajectory.png"),
+                |p| crate::plot::trajectory_png(p, &o.poses, paired, &title),
+            ));
             let diagnostics = self.diagnostics(&gt);
-            crate::output::write_via_path(&dir.join("diagnostics.png"), |p| {
-                crate::plot::diagnostics_png(p, &diagnostics, &title)
-            })?;
+            attempt(crate::output::write_via_path(
+                &dir.join("diagnostics.png"),
+                |p| crate::plot::diagnostics_png(p, &diagnostics, &title),
+            ));
         }
-        let summary = self.summary(metrics.filter(|_| o.registered() > 0));
+        let mut summary = self.summary(metrics.filter(|_| o.registered() > 0));
+        if let (None, Some(e)) = (&summary.stop_reason, &failed) {
+            summary.stop_reason = Some(format!("outputs incomplete: {}", crate::cli::one_line(e)));
+        }
         let json = serde_json::to_string_pretty(&summary)? + "\n";
-        crate::output::write(&dir.join("summary.json"), json.as_bytes())?;
-        Ok(summary)
+        let written = crate::output::write(&dir.join("summary.json"), json.as_bytes());
+        match failed {
+            Some(e) => Err(e),
+            None => written.map(|()| summary),
+        }
     }
 
     fn write_poses(&self) -> Result<()> {

@@ -26,7 +26,7 @@ use kiss_odom_core::Flag;
 use kiss_odom_sensors::SweepEnd;
 use nalgebra::Isometry3;
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `kiss-odom run` arguments. Flags override `--config`, which overrides the defaults (the
 /// reference's: max range 100 m, voxel max_range/100, deskew on).
@@ -133,6 +133,7 @@ enum End {
 }
 
 /// What the run produced, frame by frame.
+#[derive(Default)]
 pub(crate) struct Record {
     /// One row per frame.
     pub rows: Vec<FrameRow>,
@@ -165,36 +166,50 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
 
 /// Runs `run` on the dataset `open` gives (the options ask for the settings' scan
 /// capacity): `kiss-odom run`, and `live` with a socket for a dataset.
+///
+/// Every argument is checked and every input read before any file is removed: a run refused
+/// for its arguments changes nothing, and a `--config` inside the output folder is read
+/// before the folder's old outputs go. An input that cannot be opened refuses the run after
+/// those are removed, writing nothing; once it is open, `summary.json` is written however the
+/// run ends.
 pub(crate) fn execute_on(
     args: &RunArgs,
     open: impl FnOnce(&io::OpenOptions) -> Result<io::Dataset>,
     mode: Mode,
     err: &mut dyn Write,
 ) -> Result<i32> {
+    let settings = args.common.settings(None)?;
+    let inputs = inputs(args);
+    crate::viz::check(&args.view, &inputs)?;
+    // The sensor files are read while the input opens; `--config` is read by now, and
+    // `config.toml` is the settings it gave, written back.
+    for name in OUTPUTS {
+        crate::output::refuse_input(&args.run.out.join(name), &inputs[1..3])?;
+    }
+    let mut driver = Driver::new(&settings)?;
+    let opened = open(
+        &args
+            .common
+            .input
+            .open_options(settings.capacities()?.scan_points),
+    );
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     crate::output::remove_stale(&args.run.out, &OUTPUTS)?;
     for path in crate::viz::files(&args.view) {
         crate::output::remove_stale_file(path)?;
     }
-    let settings = args.common.settings(None)?;
-    let mut dataset = open(
-        &args
-            .common
-            .input
-            .open_options(settings.capacities()?.scan_points),
-    )?;
+    // An input that cannot be opened refuses the run before it starts: nothing is written.
+    let mut dataset = opened?;
     std::fs::create_dir_all(&args.run.out)
         .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
+    let mut record = Record::default();
     // After the folder: a recording or cloud may be asked for inside it.
-    let mut observers = crate::viz::observers(&args.view)?;
-    let mut driver = Driver::new(&settings)?;
-    let mut record = Record {
-        rows: Vec::new(),
-        poses: Vec::new(),
-        times: Vec::new(),
-        indices: Vec::new(),
-        warnings: 0,
-        sweeps: false,
+    let mut observers = match crate::viz::observers(&args.view) {
+        Ok(o) => o,
+        Err(e) => {
+            let end = End::Failed(e);
+            return finish(args, &settings, &dataset.info, &driver, &record, end, err);
+        }
     };
     let mut warn = |record: &mut Record, bar: &ProgressBar, text: &str| {
         bar.suspend(|| writeln!(err, "warning: {text}")).ok();
@@ -244,6 +259,45 @@ pub(crate) fn execute_on(
         )),
         other => other,
     };
+    let code = finish(args, &settings, &dataset.info, &driver, &record, end, err);
+    drop(dataset); // readers' temporary files go now, before the process exits
+    code
+}
+
+/// The files this run reads, which no output of it may replace: the dataset, `--meta`,
+/// `--calibration`, `--config` (the ones not given are empty paths, which name nothing).
+fn inputs(args: &RunArgs) -> [&Path; 4] {
+    let sensor = &args.common.input.sensor;
+    let none = Path::new("");
+    [
+        Some(&args.path),
+        sensor.meta.as_ref(),
+        sensor.calibration.as_ref(),
+        args.common.pipeline.config.as_ref(),
+    ]
+    .map(|p| p.map_or(none, PathBuf::as_path))
+}
+
+/// An error from the frames: an interruption if a signal ended the input (a `live` socket
+/// closed by Ctrl-C before any packet came), else a failure.
+fn stopped_by(e: anyhow::Error) -> End {
+    match crate::interrupt::requested() {
+        Some(sig) => End::Interrupted(sig),
+        None => End::Failed(e),
+    }
+}
+
+/// Writes the outputs of a run that ended with `end` and gives its exit status: the stop
+/// reason is the error, a failed write after it only a warning.
+fn finish(
+    args: &RunArgs,
+    settings: &crate::settings::Settings,
+    info: &io::DatasetInfo,
+    driver: &Driver,
+    record: &Record,
+    end: End,
+    err: &mut dyn Write,
+) -> Result<i32> {
     let (interrupted, stop) = match &end {
         End::Finished => (None, None),
         End::Failed(e) => (None, Some(crate::cli::one_line(e))),
@@ -251,19 +305,17 @@ pub(crate) fn execute_on(
     };
     let run = files::Run {
         args,
-        settings: &settings,
-        info: &dataset.info,
-        driver: &driver,
-        record: &record,
+        settings,
+        info,
+        driver,
+        record,
         interrupted,
         stop,
     };
     let written = run.write();
-    drop(dataset); // readers' temporary files go now, before the process exits
     let summary = match (written, end) {
         (Ok(summary), End::Finished) => summary,
         (Err(e), End::Finished) => return Err(e),
-        // The stop reason is the error; a failed write after it is only a warning.
         (written, End::Failed(e)) => {
             if let Err(w) = written {
                 writeln!(
@@ -335,7 +387,7 @@ fn frame_loop(
                 Some(sig) => break End::Interrupted(sig),
                 None => break End::Finished,
             },
-            Some(Err(e)) => break End::Failed(e),
+            Some(Err(e)) => break stopped_by(e),
             Some(Ok(item)) => item,
         };
         let problems: Vec<String> = match &item {

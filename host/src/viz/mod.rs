@@ -10,9 +10,9 @@ pub mod export;
 pub mod recording;
 
 use crate::drive::{Driver, Outcome};
-use anyhow::Result;
+use anyhow::{bail, Result};
 use nalgebra::Isometry3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The run command's options for what a run shows (`kiss-odom run --help`, "View and export").
 #[derive(Debug, Clone, clap::Args)]
@@ -72,8 +72,35 @@ pub trait Observer {
     fn finish(&mut self, driver: &Driver) -> Result<Vec<String>>;
 }
 
+/// Checks `args` without creating anything: the file types, the cloud's voxel, what this
+/// build can record, and that no file named is one of the run's `inputs` (the file at an
+/// output's name is removed before the run starts, so this comes first).
+pub fn check(args: &ViewArgs, inputs: &[&Path]) -> Result<()> {
+    if let Some(path) = &args.save_map {
+        export::MapExport::new(path)?;
+    }
+    if let Some(path) = &args.save_cloud {
+        export::CloudExport::new(path, args.save_cloud_voxel, args.save_cloud_max_points)?;
+    }
+    if args.rerun.is_some() || args.rerun_connect.is_some() {
+        rerun_available()?;
+    }
+    if let Some(path) = &args.rerun {
+        let rrd = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("rrd"));
+        if !rrd {
+            bail!("{}: give a .rrd file name", path.display());
+        }
+    }
+    for path in files(args) {
+        crate::output::refuse_input(path, inputs)?;
+    }
+    Ok(())
+}
+
 /// The observers `args` ask for, in the order they run; an error for a file type or an option
-/// this build cannot serve.
+/// this build cannot serve ([`check`] says so before anything is created).
 pub fn observers(args: &ViewArgs) -> Result<Vec<Box<dyn Observer>>> {
     let mut out: Vec<Box<dyn Observer>> = Vec::new();
     if let Some(path) = &args.save_map {
@@ -99,10 +126,19 @@ fn rerun_observer(args: &ViewArgs) -> Result<Box<dyn Observer>> {
 
 #[cfg(not(feature = "rerun"))]
 fn rerun_observer(_: &ViewArgs) -> Result<Box<dyn Observer>> {
-    anyhow::bail!(
-        "--rerun and --rerun-connect need the `rerun` cargo feature: \
-         cargo build --release -p kiss-odom --features rerun"
-    )
+    bail!("{RERUN_MISSING}")
+}
+
+/// Why a build without the `rerun` feature refuses `--rerun` and `--rerun-connect`.
+const RERUN_MISSING: &str = "--rerun and --rerun-connect need the `rerun` cargo feature: \
+     cargo build --release -p kiss-odom --features rerun";
+
+/// Whether this build can record for Rerun.
+fn rerun_available() -> Result<()> {
+    if !cfg!(feature = "rerun") {
+        bail!("{RERUN_MISSING}");
+    }
+    Ok(())
 }
 
 /// The files `args` name that a run writes, for removing stale ones before it starts.

@@ -45,13 +45,38 @@ pub fn cli() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_kiss-odom-cli"))
 }
 
-/// The node thread: its result, standard output and warnings.
-type NodeThread = std::thread::JoinHandle<(Result<Summary, String>, Vec<u8>, Vec<u8>)>;
+/// The node thread and its result.
+type NodeThread = std::thread::JoinHandle<Result<Summary, String>>;
+
+/// What a node prints, readable while it runs (its frame lines are its acknowledgements).
+#[derive(Clone, Default)]
+struct Printed(Arc<Mutex<Vec<u8>>>);
+
+impl std::io::Write for Printed {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Printed {
+    fn text(&self) -> String {
+        String::from_utf8_lossy(&self.0.lock().unwrap_or_else(|e| e.into_inner())).into_owned()
+    }
+}
 
 /// A node running in a thread of the test process.
 pub struct Node {
     stop: Arc<AtomicBool>,
     handle: NodeThread,
+    out: Printed,
+    err: Printed,
     /// Where it writes its poses.
     pub poses: PathBuf,
 }
@@ -87,14 +112,16 @@ pub fn start_node_with(domain: u16, dir: &Path, min_period: Duration, params: No
     };
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
+    let (out, err) = (Printed::default(), Printed::default());
+    let (mut o, mut e) = (out.clone(), err.clone());
     let handle = std::thread::spawn(move || {
-        let (mut out, mut err) = (Vec::new(), Vec::new());
-        let r = node::run(&opts, &flag, &mut out, &mut err).map_err(|e| format!("{e:#}"));
-        (r, out, err)
+        node::run(&opts, &flag, &mut o, &mut e).map_err(|e| format!("{e:#}"))
     });
     Node {
         stop,
         handle,
+        out,
+        err,
         poses,
     }
 }
@@ -107,6 +134,22 @@ impl Node {
             .unwrap_or(0)
     }
 
+    /// Whether the node has registered the cloud stamped `stamp` (s): a frame line says so.
+    pub fn has_registered(&self, stamp: f64) -> bool {
+        registered_stamps(&self.out.text())
+            .iter()
+            .any(|s| s.parse::<f64>().is_ok_and(|t| (t - stamp).abs() < 1e-6))
+    }
+
+    /// Warnings printed so far (one per skipped cloud, and per problem in a registered one).
+    pub fn warnings(&self) -> usize {
+        self.err
+            .text()
+            .lines()
+            .filter(|l| l.starts_with("warning:"))
+            .count()
+    }
+
     /// Waits until `n` poses are written (or `timeout`), then stops the node.
     pub fn stop_after(self, n: usize, timeout: Duration) -> Stopped {
         wait_until(timeout, || self.registered() >= n);
@@ -116,9 +159,8 @@ impl Node {
     /// Stops the node and collects what it printed.
     pub fn stop(self) -> Stopped {
         self.stop.store(true, Ordering::SeqCst);
-        let (r, out, err) = self.handle.join().expect("node thread");
-        let out = String::from_utf8_lossy(&out).into_owned();
-        let err = String::from_utf8_lossy(&err).into_owned();
+        let r = self.handle.join().expect("node thread");
+        let (out, err) = (self.out.text(), self.err.text());
         let summary = r.unwrap_or_else(|e| panic!("node failed: {e}\n{out}\n{err}"));
         let poses = std::fs::read_to_string(&self.poses).unwrap_or_default();
         Stopped {
@@ -170,6 +212,15 @@ pub fn play(path: &Path, domain: u16, args: &[&str]) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     text
+}
+
+/// The stamps of the clouds `--play` published, from its lines (`published K NAME stamp T`).
+pub fn published_stamps(played: &str) -> Vec<f64> {
+    played
+        .lines()
+        .filter(|l| l.starts_with("published "))
+        .filter_map(|l| l.split_whitespace().nth(4)?.parse().ok())
+        .collect()
 }
 
 /// The stamps (`sec.nanosec`) of the clouds a node registered, from its frame lines.
