@@ -98,6 +98,9 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
         };
         written += 1;
     };
+    for w in dataset.frames.trailer().warnings {
+        writeln!(err, "warning: {w}")?;
+    }
     if let Some(text) = times.filter(|_| written > 0) {
         let path = args.out.join("times.txt");
         std::fs::write(&path, text).with_context(|| format!("{}", path.display()))?;
