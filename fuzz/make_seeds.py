@@ -244,9 +244,60 @@ def sensor_seeds():
     put("sensor_pcap", "vlp16-5-records", pcap_records(data / "velodyne_vlp16.pcap", 5))
 
 
+def ethernet_frames(path, count):
+    """The first `count` link frames of a classic pcap file."""
+    b = path.read_bytes()
+    at, out = 24, []
+    while at + 16 <= len(b) and len(out) < count:
+        incl = int.from_bytes(b[at + 8:at + 12], "little")
+        out.append(b[at + 16:at + 16 + incl])
+        at += 16 + incl
+    return out
+
+
+def ipv4_fragments(payload, ident, step):
+    """IPv4 packets (no checksum) carrying UDP `payload` to port 2368 in fragments."""
+    body = struct.pack(">HHHH", 2368, 2368, 8 + len(payload), 0) + payload
+    out = []
+    for k in range(0, len(body), step):
+        piece = body[k:k + step]
+        flags = (0x2000 if k + step < len(body) else 0) | (k // 8)
+        out.append(struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(piece), ident, flags, 64, 17,
+                               0, bytes([192, 168, 1, 201]), bytes([192, 168, 1, 2])) + piece)
+    return out
+
+
+def capture_seeds():
+    """The `capture` target: reassembly ops, a pcapng of three interfaces, a pcap of SLL2."""
+    ops = b""
+    for key, offset, more, length, t in [(1, 0, 1, 8, 0), (2, 0, 1, 8, 1), (1, 8, 0, 3, 2),
+                                         (1, 1, 1, 8, 3), (1, 1, 1, 8, 3), (2, 1, 1, 9, 4),
+                                         (2, 0, 1, 8, 5000), (0x81, 0, 0, 4, 6)]:
+        ops += bytes([key]) + struct.pack("<H", offset) + bytes([more << 7 | length]) \
+            + struct.pack("<H", t)
+    put("capture", "reassembly", b"\0" + ops)
+    data = ROOT.parent / "shared" / "data" / "sensors" / "velodyne"
+    frames = ethernet_frames(data / "velodyne_vlp16.pcap", 4)
+    ips = [f[14:] for f in frames if f[12:14] == b"\x08\x00"]
+    sll2 = lambda ip: b"\x08\x00" + bytes(6) + b"\x00\x01\x00\x06" + bytes(8) + ip
+    # Interfaces: Ethernet in microseconds; SLL2 in nanoseconds 100 s on; raw IP in 2^-20 s.
+    head = bytes([2]) + bytes([0, 255, 6, 0]) + bytes([2, 255, 9, 101]) + bytes([3, 255, 0x94, 0])
+    epbs = b""
+    for i, f in enumerate(frames):
+        for iface, pkt in ((0, f), (1, sll2(f[14:])), (2, f[14:])):
+            epbs += bytes([iface]) + struct.pack("<Q", 10**6 * i + 5) + struct.pack("<H", len(pkt)) \
+                + b"\0\0\0" + pkt
+    for frag in ipv4_fragments(bytes(range(256)) * 12, 7, 1480):
+        epbs += bytes([2]) + struct.pack("<Q", 9) + struct.pack("<H", len(frag)) + b"\0\0\0" + frag
+    put("capture", "pcapng-3-interfaces", bytes([1]) + head + epbs)
+    records = b"".join(struct.pack("<H", len(sll2(ip))) + sll2(ip) for ip in ips)
+    put("capture", "pcap-sll2", bytes([2 + 3 * 2]) + records)
+
+
 def main():
     for make in (bin_seeds, ply_seeds, pcd_seeds, timestamps_seeds, poses_seeds,
-                 pointcloud2_seeds, container_seeds, core_frame_seeds, sensor_seeds):
+                 pointcloud2_seeds, container_seeds, core_frame_seeds, sensor_seeds,
+                 capture_seeds):
         make()
     for d in sorted(CORPUS.iterdir()):
         print(f"{d.name}: {len(list(d.iterdir()))} seeds")

@@ -25,7 +25,7 @@ fuzz_target!(|data: &[u8]| {
     let beams = [1usize, 2, 8, 16][usize::from(data[0] >> 2 & 3)];
     let angle = |b: u8| f64::from(b as i8) * 0.5;
     let mut m = [0.0; 16];
-    (m[0], m[5], m[10], m[15], m[3]) = (1.0, 1.0, 1.0, 1.0, f64::from(data[3]));
+    (m[0], m[5], m[10], m[15], m[3]) = (1.0, 1.0, 1.0, 1.0, f64::from(data[3] / 2));
     let info = SensorInfo {
         profile,
         columns_per_frame: 64,
@@ -35,13 +35,15 @@ fuzz_target!(|data: &[u8]| {
             .map(|i| angle(data[1].wrapping_add(i as u8)))
             .collect(),
         beam_azimuth_deg: (0..beams)
-            .map(|i| angle(data[2].wrapping_mul(i as u8)))
+            .map(|i| angle(data[2].wrapping_mul(i as u8)) / 2.0)
             .collect(),
         pixel_shift_by_row: Vec::new(),
         beam_to_lidar: m,
         lidar_to_sensor: m,
         initialization_id: (data[0] & 0x40 != 0).then_some(5),
         serial: None,
+        // A rate of 1000 Hz or none: the column-spacing check both ways.
+        frequency_hz: (data[0] & 0x80 != 0).then_some(1000),
     };
     let mut dec = Decoder::new(&info).expect("valid metadata");
     let len = info.layout().packet_len();

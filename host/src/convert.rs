@@ -99,6 +99,9 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
         };
         written += 1;
     };
+    for w in dataset.frames.trailer().warnings {
+        writeln!(err, "warning: {w}")?;
+    }
     if let Some(text) = times.filter(|_| written > 0) {
         crate::output::write(&args.out.join("times.txt"), text.as_bytes())?;
     }

@@ -34,6 +34,14 @@ pub enum PacketError {
     /// The Ouster packet's initialisation id or serial number differs from the metadata's:
     /// the metadata JSON belongs to another sensor. Give the JSON saved with this recording.
     MetadataMismatch,
+    /// An Ouster column the packet marks valid lies outside the metadata's `column_window`:
+    /// the sensor sends columns the metadata says it does not. Give the metadata saved with
+    /// this recording.
+    ColumnWindow,
+    /// The Ouster packet's column timestamps are spaced for another `lidar_mode` than the
+    /// metadata's (`columns_per_frame` columns a turn at its rate): its encoder angles would
+    /// be wrong. Give the metadata saved with this recording.
+    ColumnRate,
     /// The packet is older than the sweep being assembled (a late or repeated packet): it is
     /// dropped and counted in `out_of_order`. Nothing to do.
     Late,
@@ -54,6 +62,14 @@ impl core::fmt::Display for PacketError {
             Self::OtherSensor => "packet of another sensor than the sweep's",
             Self::PacketType => "not a lidar data packet",
             Self::MetadataMismatch => "initialisation id or serial differs from the metadata",
+            Self::ColumnWindow => {
+                "a valid column outside the metadata's column_window (metadata of another \
+                 configuration)"
+            }
+            Self::ColumnRate => {
+                "column timestamps spaced for another lidar_mode than the metadata's \
+                 columns_per_frame"
+            }
             Self::Late => "packet older than the sweep being assembled",
         })
     }
@@ -75,6 +91,16 @@ pub enum ConfigError {
     Columns,
     /// A transform or angle is not finite.
     NonFinite,
+    /// Ouster `lidar_to_sensor_transform` is not rigid (an orthonormal rotation without
+    /// reflection, last row 0 0 0 1) or moves the lidar more than [`crate::ouster::MAX_OFFSET_MM`].
+    LidarToSensor,
+    /// Ouster `beam_to_lidar_transform` (or `lidar_origin_to_beam_origin_mm`) is not rigid, or
+    /// puts the beam origin more than [`crate::ouster::MAX_BEAM_ORIGIN_MM`] from the lidar's.
+    BeamToLidar,
+    /// An Ouster beam altitude beyond +-90 degrees.
+    BeamAltitude,
+    /// An Ouster beam azimuth offset beyond +-[`crate::ouster::MAX_BEAM_AZIMUTH_DEG`] degrees.
+    BeamAzimuth,
     /// The cut angle is not below 360 degrees.
     CutAngle,
 }
@@ -86,6 +112,16 @@ impl core::fmt::Display for ConfigError {
             Self::Beams => "beam count zero, too large or not matching the angle tables",
             Self::Columns => "columns per frame or per packet zero or too large, or bad window",
             Self::NonFinite => "a transform or angle is not finite",
+            Self::LidarToSensor => {
+                "lidar_to_sensor_transform is not a rigid transform (orthonormal rotation, last \
+                 row 0 0 0 1) within 500 mm"
+            }
+            Self::BeamToLidar => {
+                "beam_to_lidar_transform / lidar_origin_to_beam_origin_mm is not a rigid \
+                 transform within 200 mm"
+            }
+            Self::BeamAltitude => "beam_altitude_angles beyond +-90 degrees",
+            Self::BeamAzimuth => "beam_azimuth_angles beyond +-45 degrees",
             Self::CutAngle => "cut angle not below 360 degrees",
         })
     }

@@ -27,4 +27,5 @@ pub use error::{ConfigError, PacketError};
 pub use heapless;
 pub use sweep::{
     Chunk, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStart, SweepStats, CHUNK,
+    RESYNC_PACKETS,
 };

@@ -82,7 +82,19 @@ pub enum SweepEnd {
     Gap,
     /// The caller called `finish` (end of the recording).
     Finished,
+    /// The packets' clock (Velodyne) or frame ids (Ouster) jumped and stayed there (a sensor
+    /// restart, a clock step, a packet far ahead): the decoder gave up this sweep's timeline
+    /// and took theirs ([`RESYNC_PACKETS`]).
+    Resync,
 }
+
+/// Consecutive packets refused as older than the sweep, agreeing among themselves on a
+/// timeline (times or frame ids moving on from one to the next), after which the decoder
+/// takes their timeline: a sensor restarted or its clock stepped, or one packet far ahead
+/// opened a sweep the others can never join. Those packets are dropped and counted in
+/// `out_of_order`; the sweep that takes their timeline counts the resync in
+/// [`SweepStats::resyncs`].
+pub const RESYNC_PACKETS: u32 = 16;
 
 /// Per-sweep packet statistics: what arrived, what was lost, what was refused.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -113,6 +125,8 @@ pub struct SweepStats {
     pub other_sensor: u32,
     /// The last refusal's reason.
     pub last_error: Option<PacketError>,
+    /// Times the decoder took a new timeline before this sweep ([`SweepEnd::Resync`]).
+    pub resyncs: u32,
     /// Why the sweep ended.
     pub end: SweepEnd,
 }
@@ -122,9 +136,10 @@ impl SweepStats {
     pub(crate) fn refuse(&mut self, e: PacketError) {
         match e {
             PacketError::Late => self.out_of_order = self.out_of_order.saturating_add(1),
-            PacketError::OtherSensor | PacketError::MetadataMismatch => {
-                self.other_sensor = self.other_sensor.saturating_add(1)
-            }
+            PacketError::OtherSensor
+            | PacketError::MetadataMismatch
+            | PacketError::ColumnWindow
+            | PacketError::ColumnRate => self.other_sensor = self.other_sensor.saturating_add(1),
             _ => self.bad_packets = self.bad_packets.saturating_add(1),
         }
         self.last_error = Some(e);
@@ -153,6 +168,9 @@ pub trait Decode {
     fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError>;
     /// Ends the open sweep ([`SweepEnd::Finished`]): call at the end of a recording.
     fn finish<S: SweepSink>(&mut self, sink: &mut S);
+    /// Refusals and losses counted since the last sweep ended that no sweep has taken yet
+    /// (they go to the next one): after [`Self::finish`], what came after the last sweep.
+    fn between_sweeps(&self) -> &SweepStats;
 }
 
 /// Receives sweeps from a decoder.
@@ -204,6 +222,7 @@ impl Assembly {
                 bad_packets: 0,
                 other_sensor: 0,
                 last_error: None,
+                resyncs: 0,
                 end: SweepEnd::Complete,
             },
             begun: 0,
@@ -273,6 +292,11 @@ impl Assembly {
             });
         }
         self.len = 0;
+    }
+
+    /// Counts a resync in the next sweep's statistics.
+    pub fn resynced(&mut self) {
+        self.pending.resyncs = self.pending.resyncs.saturating_add(1);
     }
 
     /// Closes the open sweep, if any.

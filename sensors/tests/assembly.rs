@@ -54,6 +54,18 @@ fn ofeed(dec: &mut ouster::Decoder, bytes: &[u8], log: &mut Log) -> Pushed {
     feed(&mut |b| dec.push(b, log), bytes)
 }
 
+/// Pushes `bytes`, again when the decoder asks; refusals are returned.
+fn push_again(
+    dec: &mut ouster::Decoder,
+    bytes: &[u8],
+    log: &mut Log,
+) -> Result<Pushed, PacketError> {
+    match dec.push(bytes, log)? {
+        Pushed::Again => dec.push(bytes, log),
+        done => Ok(done),
+    }
+}
+
 /// VLP-16 at 10 Hz: 1327.104 us a packet, 0.398 degrees (40 units) a block.
 const VLP16_PACKET_US: u32 = 1327;
 const BLOCK_UNITS: u32 = 40;
@@ -267,6 +279,7 @@ fn small_ouster() -> SensorInfo {
         lidar_to_sensor: identity,
         initialization_id: Some(77),
         serial: Some(1234),
+        frequency_hz: None,
     }
 }
 
@@ -387,4 +400,206 @@ fn ouster_metadata_that_cannot_decode_is_refused() {
     let mut info = small_ouster();
     info.lidar_to_sensor[3] = f64::INFINITY;
     assert!(ouster::Decoder::new(&info).is_err());
+}
+
+#[test]
+fn velodyne_a_clock_that_jumps_and_stays_is_taken_after_a_run_of_late_packets() {
+    use kiss_odom_sensors::RESYNC_PACKETS;
+    let mut dec = velodyne_decoder(None);
+    let mut log = Log::default();
+    for i in 0..10 {
+        vfeed(&mut dec, &nth(i), &mut log);
+    }
+    // 40 minutes on: half an hour back on the hour-long clock, so older than the sweep.
+    let jumped = |i: u32| {
+        let mut p = nth(i);
+        let t = u32::from_le_bytes(p[1200..1204].try_into().unwrap()) + 2_400_000_000;
+        p[1200..1204].copy_from_slice(&(t % 3_600_000_000).to_le_bytes());
+        p
+    };
+    for i in 10..10 + RESYNC_PACKETS - 1 {
+        assert_eq!(dec.push(&jumped(i), &mut log), Err(PacketError::Late));
+    }
+    // The next one in the run ends the sweep, and its clock is the decoder's now.
+    let i = 10 + RESYNC_PACKETS - 1;
+    assert_eq!(vfeed(&mut dec, &jumped(i), &mut log), Pushed::Decoded);
+    for i in i + 1..i + 20 {
+        assert_eq!(vfeed(&mut dec, &jumped(i), &mut log), Pushed::Decoded);
+    }
+    dec.finish(&mut log);
+    let [old, new] = [log.ends[0], log.ends[1]];
+    assert_eq!(
+        (old.end, old.packets, old.out_of_order),
+        (SweepEnd::Resync, 10, 15)
+    );
+    assert_eq!((new.resyncs, new.packets, new.lost_packets), (1, 20, 0));
+    // Late packets that do not agree among themselves (repeats of old ones) never do.
+    let mut dec = velodyne_decoder(None);
+    for i in 0..30 {
+        vfeed(&mut dec, &nth(i), &mut log);
+    }
+    for _ in 0..3 * RESYNC_PACKETS {
+        assert_eq!(dec.push(&nth(5), &mut log), Err(PacketError::Late));
+    }
+}
+
+#[test]
+fn velodyne_a_configured_model_overrides_the_product_byte_and_losses_follow_the_packets() {
+    // VLP-16 packets whose product byte says HDL-32E (0x21), as some units write.
+    let hdl = |i: u32| {
+        let mut p = nth(i);
+        p[1205] = 0x21;
+        p
+    };
+    let mut log = Log::default();
+    let mut by_byte = velodyne_decoder(None);
+    for i in (0..40).filter(|i| *i != 20) {
+        vfeed(&mut by_byte, &hdl(i), &mut log);
+    }
+    by_byte.finish(&mut log);
+    assert_eq!(by_byte.model(), Some(Model::Hdl32e));
+    // An HDL-32E sends a packet every 553 us; these come 1327 us apart: losses are counted
+    // by the packets' spacing, so only the one missing packet is.
+    assert_eq!(by_byte.shortest_step_us(), Some(VLP16_PACKET_US));
+    assert!((by_byte.packet_us().unwrap() - 552.96).abs() < 1e-9);
+    assert_eq!(log.ends.iter().map(|s| s.lost_packets).sum::<u32>(), 1);
+    let mut given = velodyne::Decoder::new(velodyne::Config {
+        model: Some(Model::Vlp16),
+        ..Default::default()
+    })
+    .unwrap();
+    let mut log = Log::default();
+    for i in 0..3 {
+        vfeed(&mut given, &hdl(i), &mut log);
+    }
+    assert_eq!(given.model(), Some(Model::Vlp16));
+    // A packet with another product byte than the first is another sensor's.
+    assert_eq!(given.push(&nth(3), &mut log), Err(PacketError::OtherSensor));
+}
+
+/// `small_ouster` with its real column spacing for the rate: 100 us a column of 64 is
+/// 156.25 turns a second, so the check needs the rate said.
+fn timed_ouster(hz: u16) -> SensorInfo {
+    SensorInfo {
+        frequency_hz: Some(hz),
+        ..small_ouster()
+    }
+}
+
+#[test]
+fn ouster_packets_that_contradict_the_metadata_are_refused() {
+    let mut log = Log::default();
+    // Columns 100 us apart: 156 turns a second at 64 columns; 10 Hz is another mode.
+    let mut dec = ouster::Decoder::new(&timed_ouster(10)).unwrap();
+    assert_eq!(
+        dec.push(&ouster_packet(7, 0, 1234), &mut log),
+        Err(PacketError::ColumnRate)
+    );
+    let mut dec = ouster::Decoder::new(&timed_ouster(156)).unwrap();
+    let mut log = Log::default();
+    assert_eq!(
+        ofeed(&mut dec, &ouster_packet(7, 0, 1234), &mut log),
+        Pushed::Decoded
+    );
+    // A window of columns 0..=20: the packet of columns 16..31 carries valid ones beyond.
+    let mut info = small_ouster();
+    info.column_window = (0, 20);
+    let mut dec = ouster::Decoder::new(&info).unwrap();
+    let mut log = Log::default();
+    ofeed(&mut dec, &ouster_packet(7, 0, 1234), &mut log);
+    assert_eq!(
+        dec.push(&ouster_packet(7, 1, 1234), &mut log),
+        Err(PacketError::ColumnWindow)
+    );
+}
+
+#[test]
+fn ouster_a_restart_or_a_frame_id_far_ahead_is_resynchronised() {
+    use kiss_odom_sensors::RESYNC_PACKETS;
+    let info = small_ouster();
+    // Frame 9's second packet says frame 1009: it opens a frame the rest never join.
+    let mut dec = ouster::Decoder::new(&info).unwrap();
+    let mut log = Log::default();
+    for k in 0..4 {
+        ofeed(&mut dec, &ouster_packet(8, k, 1234), &mut log);
+    }
+    ofeed(&mut dec, &ouster_packet(9, 0, 1234), &mut log);
+    ofeed(&mut dec, &ouster_packet(1009, 1, 1234), &mut log);
+    let mut refused = 0;
+    for fid in 9..20u16 {
+        for k in 0..4 {
+            match push_again(&mut dec, &ouster_packet(fid, k, 1234), &mut log) {
+                Err(PacketError::Late) => refused += 1,
+                r => assert!(r.is_ok(), "{r:?}"),
+            }
+        }
+    }
+    dec.finish(&mut log);
+    assert_eq!(refused, RESYNC_PACKETS - 1);
+    let resync = log
+        .ends
+        .iter()
+        .position(|s| s.end == SweepEnd::Resync)
+        .unwrap();
+    let far = log.ends[resync];
+    // The frame far ahead: its one packet; the 1000 frame ids it skipped were never lost.
+    assert_eq!(
+        (far.frame_id, far.packets, far.lost_packets),
+        (Some(1009), 1, 0)
+    );
+    assert_eq!(log.ends[resync + 1].resyncs, 1);
+    assert!(log
+        .ends
+        .iter()
+        .skip(resync + 2)
+        .all(|s| s.lost_packets == 0));
+
+    // A restart: frame ids from 0 again after frame 9.
+    let mut dec = ouster::Decoder::new(&info).unwrap();
+    let mut log = Log::default();
+    for fid in 8..10u16 {
+        for k in 0..4 {
+            ofeed(&mut dec, &ouster_packet(fid, k, 1234), &mut log);
+        }
+    }
+    let mut decoded = 0;
+    for fid in 0..8u16 {
+        for k in 0..4 {
+            match push_again(&mut dec, &ouster_packet(fid, k, 1234), &mut log) {
+                Ok(_) => decoded += 1,
+                Err(e) => assert_eq!(e, PacketError::Late),
+            }
+        }
+    }
+    assert_eq!(decoded, 32 - (RESYNC_PACKETS - 1));
+}
+
+#[test]
+fn ouster_transforms_and_angles_out_of_physics_are_refused() {
+    use kiss_odom_sensors::ConfigError;
+    let mut info = small_ouster();
+    info.lidar_to_sensor[0] = 1.5;
+    assert_eq!(info.validate(), Err(ConfigError::LidarToSensor));
+    let mut info = small_ouster();
+    info.lidar_to_sensor[14] = 1.0;
+    assert_eq!(info.validate(), Err(ConfigError::LidarToSensor));
+    let mut info = small_ouster();
+    // A reflection is orthonormal but not a rotation.
+    info.lidar_to_sensor[10] = -1.0;
+    assert_eq!(info.validate(), Err(ConfigError::LidarToSensor));
+    let mut info = small_ouster();
+    info.beam_to_lidar[3] = 5000.0;
+    assert_eq!(info.validate(), Err(ConfigError::BeamToLidar));
+    let mut info = small_ouster();
+    info.beam_altitude_deg[0] = 91.0;
+    assert_eq!(info.validate(), Err(ConfigError::BeamAltitude));
+    let mut info = small_ouster();
+    info.beam_azimuth_deg[1] = -46.0;
+    assert_eq!(info.validate(), Err(ConfigError::BeamAzimuth));
+    // The OS sensors' own: a half turn about z, 36.18 mm up.
+    let mut info = small_ouster();
+    info.lidar_to_sensor = [
+        -1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 36.18, 0.0, 0.0, 0.0, 1.0,
+    ];
+    assert_eq!(info.validate(), Ok(()));
 }

@@ -77,6 +77,16 @@ impl Item {
     }
 }
 
+/// What a source found that none of its items carries (a sensor recording's refusals after
+/// its last sweep, a second sender), asked for once after the last item.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Trailer {
+    /// Warnings naming the source: to print, count and, under `--strict`, refuse.
+    pub warnings: Vec<String>,
+    /// Sensor packets refused or lost after the last sweep, for the packet totals.
+    pub packets: Option<kiss_odom_sensors::SweepStats>,
+}
+
 /// A stream of scans.
 pub trait FrameSource {
     /// Number of frames if known in advance.
@@ -88,6 +98,11 @@ pub trait FrameSource {
     /// returns false otherwise (the caller then reads and drops frames).
     fn seek(&mut self, _index: usize) -> bool {
         false
+    }
+    /// What the stream found that none of its items carried; ask once it has ended (or
+    /// stopped being read). Empty for most formats.
+    fn trailer(&mut self) -> Trailer {
+        Trailer::default()
     }
 }
 
@@ -216,6 +231,10 @@ impl FrameSource for TimeOrder {
     fn seek(&mut self, index: usize) -> bool {
         self.last = None;
         self.inner.seek(index)
+    }
+
+    fn trailer(&mut self) -> Trailer {
+        self.inner.trailer()
     }
 }
 

@@ -4,7 +4,12 @@
 //! Two layouts exist: the flat one of firmware up to 2.3 (`beam_altitude_angles` at the top,
 //! `data_format`, `prod_sn`) and the nested one of later firmware (`beam_intrinsics`,
 //! `lidar_intrinsics`, `lidar_data_format`, `sensor_info`, `config_params`). Both are read;
-//! where a field is in neither, the error names it.
+//! where a field is in neither, the error names it. Metadata that contradicts itself or
+//! physics is refused naming the field: `columns_per_frame` against `lidar_mode`, transforms
+//! that are not rigid, beam angles and origins out of bounds
+//! ([`SensorInfo::validate`]); a column window under an eighth of a turn is a warning. What
+//! only the packets can contradict (the column window, the columns' spacing, the sensor's
+//! identity) the decoder checks.
 
 use anyhow::{anyhow, bail, Context, Result};
 use kiss_odom_sensors::ouster::{Profile, SensorInfo, MAX_BEAMS};
@@ -26,6 +31,8 @@ pub struct OusterMeta {
     pub udp_port_lidar: Option<u16>,
     /// `lidar_mode`, e.g. `1024x10`.
     pub lidar_mode: String,
+    /// What is odd but decodes correctly, one line each.
+    pub warnings: Vec<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -145,6 +152,14 @@ pub fn parse(text: &str) -> Result<OusterMeta> {
             );
         }
     }
+    let lidar_mode = config.lidar_mode.unwrap_or_default();
+    // `1024x10`: columns per frame and turns per second.
+    let mode: Option<(u16, u16)> = lidar_mode
+        .split_once('x')
+        .and_then(|(w, hz)| Some((w.parse().ok()?, hz.parse().ok()?)));
+    if let Some((w, _)) = mode.filter(|&(w, _)| w != columns_per_frame) {
+        bail!("columns_per_frame {columns_per_frame} but lidar_mode {lidar_mode} ({w} columns)");
+    }
     let serial = match ident.prod_sn {
         Some(serde_json::Value::String(s)) => s,
         Some(serde_json::Value::Number(n)) => n.to_string(),
@@ -167,15 +182,27 @@ pub fn parse(text: &str) -> Result<OusterMeta> {
         lidar_to_sensor,
         initialization_id: ident.initialization_id,
         serial: serial.parse().ok(),
+        frequency_hz: mode.map(|(_, hz)| hz),
     };
     info.validate().map_err(|e| anyhow!("{e}"))?;
+    let mut warnings = Vec::new();
+    let (a, b) = info.column_window;
+    let window = usize::from(b.wrapping_sub(a)) % usize::from(columns_per_frame) + 1;
+    if window * 8 < usize::from(columns_per_frame) {
+        warnings.push(format!(
+            "column_window [{a}, {b}] holds {window} of the {columns_per_frame} columns: each \
+             sweep covers {:.0} degrees of the turn",
+            360.0 * window as f64 / f64::from(columns_per_frame)
+        ));
+    }
     Ok(OusterMeta {
         info,
         prod_line: ident.prod_line.unwrap_or_default(),
         serial,
         firmware: ident.build_rev.unwrap_or_default(),
         udp_port_lidar: config.udp_port_lidar,
-        lidar_mode: config.lidar_mode.unwrap_or_default(),
+        lidar_mode,
+        warnings,
     })
 }
 
@@ -224,6 +251,38 @@ mod tests {
         let e = parse(&NESTED.replace("\"pixels_per_column\": 2", "\"pixels_per_column\": 64"))
             .unwrap_err();
         assert!(format!("{e:#}").contains("pixels_per_column 64"), "{e:#}");
+        let e = parse(&NESTED.replace("\"lidar_mode\": \"512x10\"", "\"lidar_mode\": \"1024x10\""))
+            .unwrap_err();
+        assert!(
+            format!("{e:#}").contains("columns_per_frame 512 but lidar_mode 1024x10"),
+            "{e:#}"
+        );
+        let e =
+            parse(&NESTED.replace("[-1,0,0,0, 0,-1,0,0,", "[-1.5,0,0,0, 0,-1,0,0,")).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("lidar_to_sensor_transform"),
+            "{e:#}"
+        );
+        let e = parse(&NESTED.replace(
+            "1,0,0,15.8, 0,1,0,0, 0,0,1,3.0, 0,0,0,1",
+            "1,0,0,15.8, 0,1,0,0, 0,0,1,3.0, 0,0,1,1",
+        ))
+        .unwrap_err();
+        assert!(
+            format!("{e:#}").contains("beam_to_lidar_transform"),
+            "{e:#}"
+        );
+        let e = parse(&NESTED.replace("[10.0, -10.0]", "[10.0, -100.0]")).unwrap_err();
+        assert!(format!("{e:#}").contains("beam_altitude_angles"), "{e:#}");
+        let m =
+            parse(&NESTED.replace("\"column_window\": [0, 511]", "\"column_window\": [500, 3]"))
+                .unwrap();
+        assert!(
+            m.warnings[0].contains("holds 16 of the 512 columns"),
+            "{:?}",
+            m.warnings
+        );
+        assert!(parse(NESTED).unwrap().warnings.is_empty());
         let e = parse(&NESTED.replace("RNG19_RFL8_SIG16_NIR16", "FUSA_RNG15")).unwrap_err();
         assert!(format!("{e:#}").contains("FUSA_RNG15"), "{e:#}");
         assert!(parse("[1, 2]").is_err());

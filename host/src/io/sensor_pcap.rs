@@ -3,20 +3,25 @@
 //! statistics.
 //!
 //! The sensor is told by the options or found in the capture: Velodyne data packets are 1206
-//! bytes (the model is in each packet), Ouster packets need the sensor's metadata JSON
-//! (`--meta`). Only one sender is decoded: the first whose packets decode on the port; other
-//! senders on that port (a second sensor) are skipped and counted in the [`PcapReport`].
+//! bytes on port 2368 unless `--port` says otherwise (the model is in each packet's product
+//! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
+//! need the sensor's metadata JSON (`--meta`). Only one sender is decoded: the first whose
+//! packets decode on the port; other senders on that port (a second sensor) are skipped,
+//! counted as another sensor's in the sweep they arrive in and named in the [`PcapReport`].
 //! Damage confined to a packet is a counted skip in the sweep's statistics; a capture with no
-//! decodable packet, or cut in the middle, is an error naming the file and the reason.
+//! decodable packet, or cut in the middle, or Ouster packets that contradict the metadata
+//! before the first sweep is complete, is an error naming the file and the reason. A sweep
+//! keeps at most the points it is asked to ([`PcapSweeps::limit_points`]: the core's scan
+//! capacity), however long the sensor takes to end it.
 
-use super::pcap::{self, Capture, Datagram};
+use super::pcap::{self, Capture, Datagram, Record};
 use super::{ouster_meta, velodyne_calib, Frame};
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
     ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart, SweepStats,
 };
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
@@ -84,6 +89,8 @@ pub struct Sweep {
     pub capture_ns: u64,
     /// Capture (host) time of the last packet that gave the sweep points.
     pub last_capture_ns: u64,
+    /// Points the sweep had beyond the most it keeps ([`PcapSweeps::limit_points`]): dropped.
+    pub beyond_capacity: u64,
 }
 
 /// What a frame decoded from sensor packets carries besides its points: the sweep's packet
@@ -150,10 +157,16 @@ pub struct PcapReport {
     pub other_sources: BTreeMap<SocketAddr, u64>,
     /// Datagrams on other ports (skipped), by port.
     pub other_ports: BTreeMap<u16, u64>,
+    /// Of those, datagrams of the sensor's data-packet length, by port: another sensor there?
+    pub data_elsewhere: BTreeMap<u16, u64>,
+    /// What else the capture, the metadata and the packets' timing showed (frames not read,
+    /// fragments lost, a model the timing contradicts), one line each; complete at the end.
+    pub notes: Vec<String>,
 }
 
 impl PcapReport {
-    /// One line per thing a person should know: other senders, refused packets.
+    /// One line per thing a person should know: other senders, refused packets, packets of
+    /// the sensor's length elsewhere, and the notes.
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
         if !self.other_sources.is_empty() {
@@ -172,6 +185,15 @@ impl PcapReport {
         for (reason, n) in &self.refused {
             w.push(format!("{n} packet(s) refused: {reason}"));
         }
+        if self.decoded > 0 {
+            for (port, n) in &self.data_elsewhere {
+                w.push(format!(
+                    "{n} packet(s) of the sensor's data length on port {port} not decoded (a \
+                     second sensor? --port {port} decodes them instead)"
+                ));
+            }
+        }
+        w.extend(self.notes.iter().cloned());
         w
     }
 }
@@ -203,14 +225,51 @@ impl Decoder {
             Self::Ouster(d) => d.finish(sink),
         }
     }
+    fn between_sweeps(&self) -> SweepStats {
+        match self {
+            Self::Velodyne(d) => *d.between_sweeps(),
+            Self::Ouster(d) => *d.between_sweeps(),
+        }
+    }
 }
 
-/// Gathers the decoder's chunks into whole sweeps.
-#[derive(Default)]
+/// Packets refused here, before the decoder (damaged, other senders), that no sweep's
+/// statistics hold yet: they go to the sweep that ends next.
+#[derive(Clone, Copy, Debug, Default)]
+struct Refused {
+    bad: u32,
+    other_sensor: u32,
+}
+
+impl Refused {
+    fn add_to(self, s: &mut SweepStats) {
+        s.bad_packets = s.bad_packets.saturating_add(self.bad);
+        s.other_sensor = s.other_sensor.saturating_add(self.other_sensor);
+    }
+}
+
+/// Gathers the decoder's chunks into whole sweeps of at most `capacity` points.
 struct Collect {
     current: Option<Sweep>,
     done: VecDeque<Sweep>,
     capture_ns: u64,
+    capacity: usize,
+    refused: Refused,
+    /// Sweeps ended so far.
+    ended: u64,
+}
+
+impl Default for Collect {
+    fn default() -> Self {
+        Self {
+            current: None,
+            done: VecDeque::new(),
+            capture_ns: 0,
+            capacity: usize::MAX,
+            refused: Refused::default(),
+            ended: 0,
+        }
+    }
 }
 
 impl SweepSink for Collect {
@@ -223,15 +282,22 @@ impl SweepSink for Collect {
     fn points(&mut self, c: Chunk<'_>) {
         if let Some(s) = &mut self.current {
             s.last_capture_ns = self.capture_ns;
-            s.points.extend_from_slice(c.xyz);
-            s.times.extend_from_slice(c.times);
-            s.meta.extend_from_slice(c.meta);
+            let n = c
+                .xyz
+                .len()
+                .min(self.capacity.saturating_sub(s.points.len()));
+            s.points.extend_from_slice(&c.xyz[..n]);
+            s.times.extend_from_slice(&c.times[..n]);
+            s.meta.extend_from_slice(&c.meta[..n]);
+            s.beyond_capacity += (c.xyz.len() - n) as u64;
         }
     }
     fn end_sweep(&mut self, stats: &SweepStats) {
         if let Some(mut s) = self.current.take() {
             s.stats = *stats;
+            std::mem::take(&mut self.refused).add_to(&mut s.stats);
             self.done.push_back(s);
+            self.ended += 1;
         }
     }
 }
@@ -241,11 +307,26 @@ pub trait DatagramSource {
     /// The next datagram, `Ok(None)` at the end, or an error naming the source when nothing
     /// after it can be read.
     fn next_datagram(&mut self) -> Result<Option<Datagram>>;
+    /// The next datagram, whole or damaged ([`Record`]); a source that never holds damaged
+    /// ones (a socket) need not say.
+    fn next_record(&mut self) -> Result<Option<Record>> {
+        Ok(self.next_datagram()?.map(Record::Datagram))
+    }
+    /// What the source could not hand on (frames not read, fragments lost), one line each.
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 impl DatagramSource for Capture {
     fn next_datagram(&mut self) -> Result<Option<Datagram>> {
         Capture::next_datagram(self)
+    }
+    fn next_record(&mut self) -> Result<Option<Record>> {
+        Capture::next_record(self)
+    }
+    fn warnings(&self) -> Vec<String> {
+        self.counts().warnings()
     }
 }
 
@@ -256,29 +337,61 @@ pub struct PcapSweeps {
     decoder: Decoder,
     sink: Collect,
     meta_path: Option<PathBuf>,
+    /// Whether `--sensor` named the Velodyne model.
+    model_given: bool,
     report: PcapReport,
+    /// Ouster packets contradicting the metadata before the first sweep: the stream's end.
+    fatal: Option<anyhow::Error>,
     finished: bool,
 }
 
-/// Ports and lengths of the first datagrams of a capture (up to any damage, which the
-/// decoding pass reports).
-fn survey(path: &Path) -> Result<BTreeMap<(u16, usize), u64>> {
-    let mut seen = BTreeMap::new();
-    for d in pcap::open(path)?.take(2000).map_while(Result::ok) {
-        *seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
-    }
-    Ok(seen)
+/// The first datagrams of a capture (up to any damage, which the decoding pass reports):
+/// whole ones by port and length, the ports of damaged ones, and what the capture could not
+/// hand on.
+struct Survey {
+    seen: BTreeMap<(u16, usize), u64>,
+    damaged: BTreeSet<u16>,
+    notes: Vec<String>,
 }
 
-fn describe(seen: &BTreeMap<(u16, usize), u64>) -> String {
-    if seen.is_empty() {
-        return "no UDP packets at all".into();
+fn survey(path: &Path) -> Result<Survey> {
+    let mut capture = pcap::open(path)?;
+    let mut s = Survey {
+        seen: BTreeMap::new(),
+        damaged: BTreeSet::new(),
+        notes: Vec::new(),
+    };
+    for _ in 0..2000 {
+        match capture.next_record() {
+            Ok(Some(Record::Datagram(d))) => {
+                *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
+            }
+            Ok(Some(Record::Damaged { port, .. })) => {
+                s.damaged.insert(port);
+            }
+            Ok(None) | Err(_) => break,
+        }
     }
-    let list: Vec<_> = seen
-        .iter()
-        .map(|((p, l), n)| format!("{n} x {l} bytes on port {p}"))
-        .collect();
-    format!("UDP seen: {}", list.join(", "))
+    s.notes = capture.counts().warnings();
+    Ok(s)
+}
+
+fn describe(s: &Survey) -> String {
+    let mut text = if s.seen.is_empty() {
+        "no UDP packets at all".to_string()
+    } else {
+        let list: Vec<_> = s
+            .seen
+            .iter()
+            .map(|((p, l), n)| format!("{n} x {l} bytes on port {p}"))
+            .collect();
+        format!("UDP seen: {}", list.join(", "))
+    };
+    for n in &s.notes {
+        text.push_str("; ");
+        text.push_str(n);
+    }
+    text
 }
 
 /// Opens a recording (see the module doc).
@@ -286,14 +399,25 @@ pub fn open(path: &Path, opts: &SensorOptions) -> Result<PcapSweeps> {
     decode(path, Box::new(pcap::open(path)?), opts)
 }
 
+/// The `--sensor` value of a model.
+fn sensor_flag(m: Model) -> &'static str {
+    match m {
+        Model::Vlp16 => "vlp16",
+        Model::PuckHiRes => "puck-hi-res",
+        Model::Vlp32c => "vlp32c",
+        Model::Hdl32e => "hdl32e",
+    }
+}
+
 /// Decodes the datagrams of `capture`, named `path` in messages; without `opts.port` a
-/// Velodyne's port is found by reading the file at `path`.
+/// Velodyne recording at `path` is looked at first, for an error that says what it holds.
 pub fn decode(
     path: &Path,
     capture: Box<dyn DatagramSource>,
     opts: &SensorOptions,
 ) -> Result<PcapSweeps> {
     let ouster = opts.meta.is_some() || opts.sensor == SensorKind::Ouster;
+    let mut notes = Vec::new();
     let (decoder, port, sensor) = if ouster {
         let Some(meta_path) = &opts.meta else {
             bail!(
@@ -309,6 +433,11 @@ pub fn decode(
             "Ouster {} {} ({})",
             meta.prod_line, meta.serial, meta.firmware
         );
+        notes.extend(
+            meta.warnings
+                .iter()
+                .map(|w| format!("{}: {w}", meta_path.display())),
+        );
         (Decoder::Ouster(Box::new(dec)), port, name)
     } else {
         let model = match opts.sensor {
@@ -318,28 +447,29 @@ pub fn decode(
             SensorKind::Hdl32e => Some(Model::Hdl32e),
             SensorKind::Auto | SensorKind::Ouster => None,
         };
-        let port = match opts.port {
-            Some(p) => p,
-            None => {
-                let seen = survey(path)?;
-                let velodyne = seen
-                    .keys()
-                    .find(|(_, len)| *len == velodyne::wire::field::LEN);
-                match velodyne {
-                    Some(&(p, _)) => p,
-                    None if seen.keys().any(|(p, _)| *p == OUSTER_PORT) => bail!(
+        let port = opts.port.unwrap_or(VELODYNE_PORT);
+        if opts.port.is_none() {
+            let s = survey(path)?;
+            let data = s
+                .seen
+                .keys()
+                .any(|(_, len)| *len == velodyne::wire::field::LEN)
+                || s.damaged.contains(&port);
+            if !data {
+                if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
+                    bail!(
                         "{}: packets on port {OUSTER_PORT} look like an Ouster's: give its \
                          metadata JSON (--meta)",
                         path.display()
-                    ),
-                    None => bail!(
-                        "{}: no Velodyne data packets (1206 bytes); {}",
-                        path.display(),
-                        describe(&seen)
-                    ),
+                    );
                 }
+                bail!(
+                    "{}: no Velodyne data packets (1206 bytes); {}",
+                    path.display(),
+                    describe(&s)
+                );
             }
-        };
+        }
         let calibration = opts
             .calibration
             .as_deref()
@@ -363,11 +493,14 @@ pub fn decode(
         decoder,
         sink: Collect::default(),
         meta_path: opts.meta.clone(),
+        model_given: !matches!(opts.sensor, SensorKind::Auto | SensorKind::Ouster),
         report: PcapReport {
             sensor,
             port,
+            notes,
             ..PcapReport::default()
         },
+        fatal: None,
         finished: false,
     })
 }
@@ -378,35 +511,111 @@ impl PcapSweeps {
         &self.report
     }
 
+    /// Keeps at most `points` points of each sweep from now on; the rest are counted in
+    /// [`Sweep::beyond_capacity`], so memory follows the capacity, not the recording.
+    pub fn limit_points(&mut self, points: usize) {
+        self.sink.capacity = points;
+    }
+
     /// Whether the source has ended and every sweep was taken: the report is complete.
     pub fn exhausted(&self) -> bool {
         self.finished && self.sink.done.is_empty()
     }
 
-    fn feed(&mut self, d: pcap::Datagram) {
+    /// Packets refused or lost since the last sweep ended, which no sweep holds: once
+    /// [`Self::exhausted`], what came after the last sweep.
+    pub fn after_last_sweep(&self) -> SweepStats {
+        let mut s = self.decoder.between_sweeps();
+        self.sink.refused.add_to(&mut s);
+        s
+    }
+
+    /// The length of the sensor's data packets.
+    fn data_len(&self) -> usize {
+        match &self.decoder {
+            Decoder::Velodyne(_) => velodyne::wire::field::LEN,
+            Decoder::Ouster(d) => d.layout().packet_len(),
+        }
+    }
+
+    fn feed(&mut self, record: Record) {
+        let (time_ns, source, port) = match &record {
+            Record::Datagram(d) => (d.time_ns, d.source, d.port),
+            Record::Damaged {
+                time_ns,
+                source,
+                port,
+                ..
+            } => (*time_ns, *source, *port),
+        };
+        let data_len = self.data_len();
         let r = &mut self.report;
-        if d.port != r.port {
-            *r.other_ports.entry(d.port).or_insert(0) += 1;
+        if port != r.port {
+            *r.other_ports.entry(port).or_insert(0) += 1;
+            if matches!(&record, Record::Datagram(d) if d.payload.len() == data_len) {
+                *r.data_elsewhere.entry(port).or_insert(0) += 1;
+            }
             return;
         }
-        if r.source.is_some_and(|s| s != d.source) {
-            *r.other_sources.entry(d.source).or_insert(0) += 1;
+        if r.source.is_some_and(|s| s != source) {
+            *r.other_sources.entry(source).or_insert(0) += 1;
+            self.sink.refused.other_sensor = self.sink.refused.other_sensor.saturating_add(1);
             return;
         }
         r.on_port += 1;
-        self.sink.capture_ns = d.time_ns;
+        self.sink.capture_ns = time_ns;
+        let d = match record {
+            Record::Datagram(d) => d,
+            Record::Damaged { damage, .. } => {
+                *r.refused.entry(damage.to_string()).or_insert(0) += 1;
+                self.sink.refused.bad = self.sink.refused.bad.saturating_add(1);
+                return;
+            }
+        };
         match self.decoder.push(&d.payload, &mut self.sink) {
             Ok(()) => {
                 r.decoded += 1;
                 if r.source.is_none() {
                     r.source = Some(d.source);
                     if let Decoder::Velodyne(v) = &self.decoder {
-                        r.sensor = format!("Velodyne {:?}", v.model().unwrap_or(Model::Vlp16));
+                        let model = v.model().unwrap_or(Model::Vlp16);
+                        r.sensor = format!("Velodyne {}", model.name());
                     }
                 }
             }
-            Err(e) => *r.refused.entry(e.to_string()).or_insert(0) += 1,
+            Err(e) => {
+                *r.refused.entry(e.to_string()).or_insert(0) += 1;
+                let contradiction =
+                    matches!(e, PacketError::ColumnWindow | PacketError::ColumnRate);
+                if contradiction && self.sink.ended == 0 && self.fatal.is_none() {
+                    self.fatal = Some(self.contradicted(e));
+                }
+            }
         }
+    }
+
+    /// The error for Ouster packets that contradict the metadata.
+    fn contradicted(&self, e: PacketError) -> anyhow::Error {
+        let meta = self
+            .meta_path
+            .as_deref()
+            .map_or_else(String::new, |m| format!(" {}", m.display()));
+        anyhow!(
+            "{}: packet {} on port {} contradicts the metadata{meta}: {e}; give the metadata \
+             saved with this recording",
+            self.path.display(),
+            self.report.on_port,
+            self.report.port
+        )
+    }
+
+    /// What the capture and the packets' timing showed, for the report's notes.
+    fn end_notes(&self) -> Vec<String> {
+        let mut notes = self.capture.warnings();
+        if let Decoder::Velodyne(v) = &self.decoder {
+            notes.extend(timing_note(v, self.model_given));
+        }
+        notes
     }
 
     /// The reason nothing decoded, naming the file.
@@ -419,14 +628,29 @@ impl PcapSweeps {
                 .iter()
                 .map(|(p, n)| format!("{n} on port {p}"))
                 .collect();
+            let seen = if ports.is_empty() {
+                "no UDP packets at all".to_string()
+            } else {
+                format!("UDP seen: {}", ports.join(", "))
+            };
+            let elsewhere: Vec<_> = r
+                .data_elsewhere
+                .iter()
+                .map(|(p, n)| format!("{n} on port {p} (--port {p})"))
+                .collect();
+            let hint = if elsewhere.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; packets of the sensor's data length ({} bytes): {}",
+                    self.data_len(),
+                    elsewhere.join(", ")
+                )
+            };
+            let notes: String = r.notes.iter().map(|n| format!("; {n}")).collect();
             return anyhow!(
-                "{file}: no packets on port {} ({})",
-                r.port,
-                if ports.is_empty() {
-                    "no UDP packets at all".to_string()
-                } else {
-                    format!("UDP seen: {}", ports.join(", "))
-                }
+                "{file}: no packets on port {} ({seen}){hint}{notes}",
+                r.port
             );
         }
         let (reason, _) = r
@@ -453,21 +677,70 @@ impl PcapSweeps {
     }
 }
 
+/// A warning when the packets' spacing contradicts the Velodyne model decoded (from the
+/// product byte, or `--sensor`): which models send packets that far apart.
+fn timing_note(v: &velodyne::Decoder, model_given: bool) -> Option<String> {
+    let (model, nominal, step) = (v.model()?, v.packet_us()?, v.shortest_step_us()?);
+    let spacing = f64::from(step);
+    if spacing <= 1.5 * nominal && spacing >= nominal / 1.5 {
+        return None;
+    }
+    let dual = (nominal - model.packet_us(true)).abs() < 1e-6;
+    let fitting: Vec<Model> = Model::ALL
+        .into_iter()
+        .filter(|m| (m.packet_us(dual) - spacing).abs() <= 0.02 * spacing)
+        .collect();
+    let names: Vec<&str> = fitting.iter().map(|m| m.name()).collect();
+    let flags: Vec<String> = fitting
+        .iter()
+        .map(|m| format!("--sensor {}", sensor_flag(*m)))
+        .collect();
+    let said = if model_given {
+        "--sensor"
+    } else {
+        "the packets' product byte"
+    };
+    let (why, fix) = if fitting.is_empty() {
+        (
+            "packets are lost in between, or the model is wrong".to_string(),
+            "--sensor with the unit's model".to_string(),
+        )
+    } else {
+        (
+            format!("as from a {}", names.join(" or ")),
+            flags.join(" or "),
+        )
+    };
+    Some(format!(
+        "{said} says {name}, but they come {step} us apart at the closest, {why} ({name}: one \
+         every {nominal:.0} us): decoded as {name}, losses counted from the packets' own \
+         spacing; if the model is wrong, give {fix}",
+        name = model.name()
+    ))
+}
+
 impl Iterator for PcapSweeps {
     type Item = Result<Sweep>;
 
     fn next(&mut self) -> Option<Result<Sweep>> {
         loop {
+            if let Some(e) = self.fatal.take() {
+                self.finished = true;
+                self.sink.done.clear();
+                return Some(Err(e));
+            }
             if let Some(s) = self.sink.done.pop_front() {
                 return Some(Ok(s));
             }
             if self.finished {
                 return None;
             }
-            match self.capture.next_datagram() {
-                Ok(Some(d)) => self.feed(d),
+            match self.capture.next_record() {
+                Ok(Some(r)) => self.feed(r),
                 Ok(None) => {
                     self.finished = true;
+                    let notes = self.end_notes();
+                    self.report.notes.extend(notes);
                     if self.report.decoded == 0 {
                         return Some(Err(self.nothing_decoded()));
                     }

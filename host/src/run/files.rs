@@ -176,6 +176,16 @@ impl FrameRow {
         self.azimuth_jumps = Some(s.azimuth_jumps);
         self
     }
+
+    /// Adds packets refused or lost after the last sweep (a source's trailer) to this row's
+    /// packet columns, so that the totals count them.
+    pub fn add_packets(&mut self, s: &SweepStats) {
+        let add = |c: &mut Option<u32>, n: u32| *c = Some(c.unwrap_or(0).saturating_add(n));
+        add(&mut self.packets_lost, s.lost_packets);
+        add(&mut self.packets_out_of_order, s.out_of_order);
+        add(&mut self.packets_bad, s.bad_packets);
+        add(&mut self.packets_other_sensor, s.other_sensor);
+    }
 }
 
 /// The flag columns of a row: one per [`Flag`], named by [`Flag::name`], 0 or 1.

@@ -240,6 +240,21 @@ pub(crate) fn execute_on(
             &mut warn,
         );
     }
+    // What the source found after its last frame (a sensor recording's packets refused after
+    // the last sweep) is warned about and counted like a frame's findings.
+    let trailer = dataset.frames.trailer();
+    for w in &trailer.warnings {
+        warn(&mut record, &hidden, w);
+    }
+    if let (Some(p), Some(row)) = (
+        trailer.packets,
+        record.rows.iter_mut().rev().find(|r| r.packets.is_some()),
+    ) {
+        row.add_packets(&p);
+    }
+    if let (true, End::Finished, Some(w)) = (args.run.strict, &end, trailer.warnings.first()) {
+        end = End::Failed(anyhow!("{w} (--strict)"));
+    }
     // The observers' files hold the frames processed, however the loop ended.
     for observer in &mut observers {
         match observer.finish(&driver) {

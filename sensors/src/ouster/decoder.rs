@@ -2,9 +2,11 @@
 //! bookkeeping for losses and order, then each return to a point.
 
 use super::wire::{Column, Layout, Packet};
-use super::{SensorInfo, MAX_BEAMS, MAX_COLUMNS};
+use super::{spacing_fits, SensorInfo, MAX_BEAMS, MAX_COLUMNS};
 use crate::error::{ConfigError, PacketError};
-use crate::sweep::{Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink};
+use crate::sweep::{
+    Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats, RESYNC_PACKETS,
+};
 use core::f64::consts::PI;
 
 /// One beam's angles, ready to use.
@@ -21,6 +23,7 @@ pub struct Decoder {
     layout: Layout,
     beams: [Beam; MAX_BEAMS],
     width: u16,
+    frequency_hz: Option<u16>,
     window: (u16, u16),
     rotation: [[f64; 3]; 3],
     translation: [f64; 3],
@@ -33,6 +36,11 @@ pub struct Decoder {
     last_closed: Option<u16>,
     seen: [u32; MAX_COLUMNS / 32],
     last_column: Option<u16>,
+    /// Packets lost by the frame ids the open frame skipped (given back if its timeline is
+    /// abandoned).
+    jump_lost: u32,
+    /// Consecutive late packets and the last one's frame id.
+    late_run: Option<(u32, u16)>,
     asm: Assembly,
 }
 
@@ -72,6 +80,7 @@ impl Decoder {
             layout: info.layout(),
             beams,
             width: info.columns_per_frame,
+            frequency_hz: info.frequency_hz,
             window: info.column_window,
             rotation,
             translation,
@@ -86,8 +95,68 @@ impl Decoder {
             last_closed: None,
             seen: [0; MAX_COLUMNS / 32],
             last_column: None,
+            jump_lost: 0,
+            late_run: None,
             asm: Assembly::new(),
         })
+    }
+
+    /// The packet's valid columns against the metadata: inside the column window, and spaced
+    /// in time as its columns per frame and rate say.
+    fn check_columns(&self, p: &Packet<'_>) -> Result<(), PacketError> {
+        let (mut first, mut last) = (None, None);
+        for c in (0..self.layout.columns).map(|i| p.column(i)) {
+            if !c.valid() {
+                continue;
+            }
+            let m = c.measurement_id();
+            if !self.in_window(m) {
+                return Err(PacketError::ColumnWindow);
+            }
+            let at = (m, c.timestamp_ns());
+            first.get_or_insert(at);
+            last = Some(at);
+        }
+        if let (Some((m0, t0)), Some((m1, t1))) = (first, last) {
+            if m1 > m0 && t1 > t0 {
+                let spacing = (t1 - t0) as f64 / f64::from(m1 - m0);
+                if !spacing_fits(self.width, self.frequency_hz, spacing) {
+                    return Err(PacketError::ColumnRate);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Counts a packet older than the sweep; true when it is the [`RESYNC_PACKETS`]-th in a
+    /// row whose frame ids stay or move on by one: their timeline is the sensor's now.
+    fn late_run_complete(&mut self, fid: u16) -> bool {
+        let n = match self.late_run {
+            Some((n, last)) if fid == last || fid == last.wrapping_add(1) => n + 1,
+            _ => 1,
+        };
+        self.late_run = Some((n, fid));
+        n >= RESYNC_PACKETS
+    }
+
+    /// Abandons the open frame's timeline (its missing columns and skipped frame ids were
+    /// never lost: the ids jumped); true if a sweep was open and has ended.
+    fn resync<S: SweepSink>(&mut self, sink: &mut S) -> bool {
+        self.late_run = None;
+        self.last_closed = None;
+        let open = self.frame.take().is_some();
+        if open {
+            let stats = self.asm.stats();
+            stats.lost_packets = stats.lost_packets.saturating_sub(self.jump_lost);
+            self.asm.end(sink, SweepEnd::Resync);
+        }
+        self.asm.resynced();
+        open
+    }
+
+    /// The packet layout the metadata announced.
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
     fn in_window(&self, m: u16) -> bool {
@@ -132,17 +201,27 @@ impl Decoder {
         if columns.clone().any(|c| c.measurement_id() >= self.width) {
             return Err(PacketError::MetadataMismatch);
         }
+        self.check_columns(&p)?;
         let fid = p.frame_id();
-        match (self.frame, self.last_closed) {
-            (Some(f), _) if f == fid => {}
+        let older = match (self.frame, self.last_closed) {
+            (Some(f), _) if f == fid => false,
             (Some(f), _) if after(fid, f) => {
                 self.close(sink, SweepEnd::NextFrame);
                 return Ok(Pushed::Again);
             }
-            (Some(_), _) => return Err(PacketError::Late),
-            (None, Some(l)) if !after(fid, l) => return Err(PacketError::Late),
-            _ => {}
+            (Some(_), _) => true,
+            (None, Some(l)) => !after(fid, l),
+            (None, None) => false,
+        };
+        if older {
+            if !self.late_run_complete(fid) {
+                return Err(PacketError::Late);
+            }
+            if self.resync(sink) {
+                return Ok(Pushed::Again);
+            }
         }
+        self.late_run = None;
         if self.frame.is_none() {
             let skipped = match self.last_closed {
                 Some(l) => u32::from(fid.wrapping_sub(l)).saturating_sub(1),
@@ -155,10 +234,9 @@ impl Decoder {
                 .timestamp_ns();
             self.asm.begin(sink, start, Some(fid));
             let per_frame = self.window_len().div_ceil(self.layout.columns as u32);
+            self.jump_lost = skipped.saturating_mul(per_frame);
             let stats = self.asm.stats();
-            stats.lost_packets = stats
-                .lost_packets
-                .saturating_add(skipped.saturating_mul(per_frame));
+            stats.lost_packets = stats.lost_packets.saturating_add(self.jump_lost);
             self.frame = Some(fid);
             self.seen = [0; MAX_COLUMNS / 32];
             self.last_column = None;
@@ -258,5 +336,8 @@ impl Decode for Decoder {
     }
     fn finish<S: SweepSink>(&mut self, sink: &mut S) {
         self.close(sink, SweepEnd::Finished);
+    }
+    fn between_sweeps(&self) -> &SweepStats {
+        &self.asm.pending
     }
 }

@@ -4,7 +4,9 @@
 use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
 use super::{Calibration, Config, Model, MAX_LASERS};
 use crate::error::{ConfigError, PacketError};
-use crate::sweep::{Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink};
+use crate::sweep::{
+    Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats, RESYNC_PACKETS,
+};
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
 /// new one: the sensor stopped, or the recording has a hole (velodyne-decoder's 0.3 s).
@@ -38,6 +40,8 @@ struct Sensor {
     model: Model,
     mode: Mode,
     mode_byte: u8,
+    /// The first packet's product byte: later packets with another are another sensor's.
+    product_byte: u8,
     beams: [Beam; MAX_LASERS],
     resolution: f64,
     /// Firing times after the packet timestamp (s), in f32 as velodyne-decoder interpolates
@@ -46,7 +50,8 @@ struct Sensor {
 }
 
 impl Sensor {
-    fn new(model: Model, mode: Mode, mode_byte: u8, calib: &Calibration) -> Self {
+    fn new(model: Model, mode: Mode, bytes: (u8, u8), calib: &Calibration) -> Self {
+        let (mode_byte, product_byte) = bytes;
         let mut beams = [Beam::default(); MAX_LASERS];
         for (b, l) in beams.iter_mut().zip(calib.lasers.iter()) {
             let v = l.vertical_deg.to_radians();
@@ -82,6 +87,7 @@ impl Sensor {
             model,
             mode,
             mode_byte,
+            product_byte,
             beams,
             resolution: calib.distance_resolution_m,
             firing_f32,
@@ -98,11 +104,7 @@ impl Sensor {
 
     /// Microseconds from one packet to the next.
     fn packet_us(&self) -> f64 {
-        let groups = match self.mode {
-            Mode::Single(_) => field::BLOCKS,
-            Mode::Dual => field::BLOCKS / 2,
-        };
-        self.model.group_us() * groups as f64
+        self.model.packet_us(self.mode == Mode::Dual)
     }
 }
 
@@ -135,6 +137,10 @@ pub struct Decoder {
     coverage: u32,
     sweep_first_us: i64,
     next_column: u16,
+    /// Shortest time between consecutive packets seen, microseconds.
+    shortest_step_us: Option<i64>,
+    /// Consecutive late packets and the last one's timestamp (microseconds past the hour).
+    late_run: Option<(u32, u32)>,
     asm: Assembly,
 }
 
@@ -165,8 +171,65 @@ impl Decoder {
             coverage: 0,
             sweep_first_us: 0,
             next_column: 0,
+            shortest_step_us: None,
+            late_run: None,
             asm: Assembly::new(),
         })
+    }
+
+    /// Time from one packet to the next as the model fires, microseconds (once a packet told
+    /// the return mode).
+    pub fn packet_us(&self) -> Option<f64> {
+        self.sensor.as_ref().map(Sensor::packet_us)
+    }
+
+    /// The shortest time between consecutive packets seen, microseconds: the model's
+    /// [`Self::packet_us`] unless the packets come from another model or many are lost.
+    pub fn shortest_step_us(&self) -> Option<u32> {
+        self.shortest_step_us
+            .map(|s| s.clamp(0, i64::from(u32::MAX)) as u32)
+    }
+
+    /// The period losses are counted by: the model's, unless the packets never come that
+    /// close or always come closer (a product byte naming another model), when their own
+    /// shortest spacing is what a step of one packet looks like.
+    fn loss_period_us(&self, model_us: f64) -> f64 {
+        match self.shortest_step_us {
+            Some(s) if (s as f64) > 1.5 * model_us || (s as f64) < model_us / 1.5 => s as f64,
+            _ => model_us,
+        }
+    }
+
+    /// Counts a packet older than the sweep; true when it is the [`RESYNC_PACKETS`]-th in a
+    /// row whose timestamps move on from one to the next as a sensor's do (within
+    /// [`GAP_NS`]): their clock is the sensor's now.
+    fn late_run_complete(&mut self, ts: u32) -> bool {
+        let n = match self.late_run {
+            Some((n, last)) => {
+                let d = wrap_us(i64::from(ts) - i64::from(last));
+                if d > 0 && d <= GAP_US {
+                    n + 1
+                } else {
+                    1
+                }
+            }
+            None => 1,
+        };
+        self.late_run = Some((n, ts));
+        n >= RESYNC_PACKETS
+    }
+
+    /// Abandons the open sweep's clock; true if a sweep was open and has ended.
+    fn resync<S: SweepSink>(&mut self, sink: &mut S) -> bool {
+        self.late_run = None;
+        self.last_us = None;
+        self.shortest_step_us = None;
+        let open = self.asm.open.is_some();
+        self.asm.end(sink, SweepEnd::Resync);
+        self.initial_azimuth = self.cut;
+        self.coverage = 0;
+        self.asm.resynced();
+        open
     }
 
     /// The model, once a packet has been decoded or if configured.
@@ -178,16 +241,15 @@ impl Decoder {
         let product = p.product();
         let byte = p.return_mode();
         if let Some(s) = &self.sensor {
-            let same_model = product == s.model.product() || self.config_model.is_some();
-            return if same_model && byte == s.mode_byte {
+            return if product == s.product_byte && byte == s.mode_byte {
                 Ok(())
             } else {
                 Err(PacketError::OtherSensor)
             };
         }
+        // A configured model overrides the product byte (which some units get wrong).
         let model = match self.config_model {
-            Some(m) if product == m.product() || product == 0 => m,
-            Some(_) => return Err(PacketError::OtherSensor),
+            Some(m) => m,
             None => Model::from_product(product).ok_or(PacketError::UnknownModel)?,
         };
         let mode = match byte {
@@ -203,35 +265,42 @@ impl Decoder {
             Some(c) => c.clone(),
             None => Calibration::nominal(model),
         };
-        self.sensor = Some(Sensor::new(model, mode, byte, &calib));
+        self.sensor = Some(Sensor::new(model, mode, (byte, product), &calib));
         Ok(())
     }
 
     fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
         let p = Packet::new_checked(bytes)?;
         self.identify(&p)?;
-        let Some(sensor) = &self.sensor else {
-            return Err(PacketError::UnknownModel);
-        };
 
         // Sensor time, counted on across the hour; anything not after the last packet is late.
-        let ts = i64::from(p.timestamp_us());
+        let raw = p.timestamp_us();
+        let ts = i64::from(raw);
         let (now, step) = match self.last_us {
             None => (ts, None),
             Some(last) => {
-                let mut d = ts - last.rem_euclid(i64::from(HOUR_US));
-                if d > HALF_HOUR_US {
-                    d -= i64::from(HOUR_US);
-                } else if d <= -HALF_HOUR_US {
-                    d += i64::from(HOUR_US);
-                }
+                let d = wrap_us(ts - last.rem_euclid(i64::from(HOUR_US)));
                 if d <= 0 {
-                    return Err(PacketError::Late);
+                    if !self.late_run_complete(raw) {
+                        return Err(PacketError::Late);
+                    }
+                    if self.resync(sink) {
+                        return Ok(Pushed::Again);
+                    }
+                    (ts, None)
+                } else {
+                    (last + d, Some(d))
                 }
-                (last + d, Some(d))
             }
         };
-        let period = sensor.packet_us();
+        self.late_run = None;
+        let Some(sensor) = &self.sensor else {
+            return Err(PacketError::UnknownModel);
+        };
+        if let Some(d) = step.filter(|&d| d <= GAP_US) {
+            self.shortest_step_us = Some(self.shortest_step_us.map_or(d, |s| s.min(d)));
+        }
+        let period = self.loss_period_us(sensor.packet_us());
         let first_az = p.azimuth(0);
         let last_az = p.azimuth(field::BLOCKS - 1);
 
@@ -373,6 +442,20 @@ impl Decode for Decoder {
     fn finish<S: SweepSink>(&mut self, sink: &mut S) {
         self.asm.end(sink, SweepEnd::Finished);
     }
+    fn between_sweeps(&self) -> &SweepStats {
+        &self.asm.pending
+    }
+}
+
+/// A time step in microseconds taken to the nearest of its values modulo an hour (the
+/// timestamp counts microseconds past the hour).
+fn wrap_us(d: i64) -> i64 {
+    let hour = i64::from(HOUR_US);
+    let mut d = d.rem_euclid(hour);
+    if d > HALF_HOUR_US {
+        d -= hour;
+    }
+    d
 }
 
 /// `a` modulo one turn, in azimuth units.

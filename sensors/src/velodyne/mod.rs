@@ -167,6 +167,23 @@ impl Model {
         // Written as the manuals' tables (and velodyne-decoder) compute it.
         cycle * 1e-6 * k as f64 + single * 1e-6 * p as f64
     }
+    /// Time from one data packet to the next, microseconds (12 firing groups, or 6 block
+    /// pairs in dual-return mode).
+    pub fn packet_us(self, dual: bool) -> f64 {
+        let groups = if dual { 6.0 } else { 12.0 };
+        self.group_us() * groups
+    }
+    /// The name the manuals give the model.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Vlp16 => "VLP-16",
+            Self::PuckHiRes => "Puck Hi-Res",
+            Self::Vlp32c => "VLP-32C",
+            Self::Hdl32e => "HDL-32E",
+        }
+    }
+    /// Every supported model.
+    pub const ALL: [Self; 4] = [Self::Vlp16, Self::PuckHiRes, Self::Vlp32c, Self::Hdl32e];
     /// Time from one firing group to the next, microseconds.
     pub fn group_us(self) -> f64 {
         let (cycle, _) = self.timing_us();

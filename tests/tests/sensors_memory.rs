@@ -1,0 +1,137 @@
+//! Memory of `kiss-odom run` on hostile sensor recordings follows the configuration, not the
+//! file: 100,000 IP fragments that never complete, and a Velodyne sweep whose azimuth never
+//! advances (millions of returns in one sweep), each stay under 64 MB of peak RSS. Each
+//! measures a child process (`wait4`'s resource usage of that child alone). Linux counts a
+//! child's pages from before its `exec` too, so the captures are written as they are made
+//! and this process stays small (its RSS at the start is printed).
+#![cfg(target_os = "linux")]
+
+mod capture_kit;
+
+use capture_kit::{datagrams, ethernet, ethernet_frames, simulate, velodyne, Frame, PcapOut};
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+const LIMIT_BYTES: u64 = 64 << 20;
+
+/// `kiss-odom run INPUT --out OUT --quiet EXTRA...` as a child: exit status, stderr and peak
+/// RSS in bytes.
+fn run_measured(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, u64) {
+    println!(
+        "this process at the start of the child: {:.1} MiB",
+        mib(kiss_odom::memory::rss_bytes().unwrap_or(0))
+    );
+    // Reaped by the wait4 below, which also gives its resource usage.
+    #[allow(clippy::zombie_processes)]
+    let child = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+        .arg("run")
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .args(extra)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id() as libc::pid_t;
+    // Read stderr while the child runs, so a full pipe cannot stall it.
+    let mut err = child.stderr.unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut err, &mut s).unwrap();
+        s
+    });
+    let mut status = 0;
+    // SAFETY: `rusage` is plain old data that wait4 fills; `pid` is our child, not yet waited
+    // for (std's `Child` was consumed without waiting), so this reaps exactly it.
+    let (waited, usage) = unsafe {
+        let mut usage: libc::rusage = std::mem::zeroed();
+        (libc::wait4(pid, &mut status, 0, &mut usage), usage)
+    };
+    assert_eq!(waited, pid, "wait4");
+    let code = if libc::WIFEXITED(status) {
+        libc::WEXITSTATUS(status)
+    } else {
+        -1
+    };
+    // Linux gives ru_maxrss in KiB.
+    (code, reader.join().unwrap(), usage.ru_maxrss as u64 * 1024)
+}
+
+fn mib(b: u64) -> f64 {
+    b as f64 / f64::from(1 << 20)
+}
+
+#[test]
+fn a_hundred_thousand_fragments_that_never_complete_stay_under_64_mb() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = datagrams(&simulate(dir.path(), "vlp16", "vlp16", 3, 0).join("packets.pcap"));
+    let path = dir.path().join("fragments.pcap");
+    let mut w = PcapOut::create(&path, 1);
+    // First fragments of 100,000 datagrams from as many senders, each 600 bytes, never
+    // followed by the rest: 444 between two of the sensor's packets.
+    let mut k = 0u32;
+    for (i, sensor) in ethernet_frames(&d).iter().enumerate() {
+        w.push(sensor);
+        while k < 100_000 && (k as usize) < (i + 1) * 100_000 / d.len() {
+            let src = [10, (k >> 16) as u8, (k >> 8) as u8, k as u8];
+            let mut ip =
+                etherparse::Ipv4Header::new(600, 64, etherparse::IpNumber::UDP, src, [10, 0, 0, 2])
+                    .unwrap();
+            ip.identification = k as u16;
+            ip.more_fragments = true;
+            ip.header_checksum = ip.calc_header_checksum();
+            let mut packet = ip.to_bytes().to_vec();
+            packet.extend_from_slice(&[0x13, 0x88, 0x27, 0x0f, 0x09, 0x00, 0, 0]);
+            packet.resize(20 + 600, 0);
+            w.push(&Frame::whole(sensor.time_ns, ethernet(&packet)));
+            k += 1;
+        }
+    }
+    drop(w);
+    let (code, stderr, peak) = run_measured(&path, &dir.path().join("out"), &[]);
+    println!(
+        "peak RSS {:.1} MiB (limit {:.0} MiB)",
+        mib(peak),
+        mib(LIMIT_BYTES)
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("100000 fragmented IP datagram(s) dropped"),
+        "{stderr}"
+    );
+    assert!(peak < LIMIT_BYTES, "{:.1} MiB", mib(peak));
+}
+
+#[test]
+fn a_sweep_whose_azimuth_never_advances_stays_under_64_mb() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = datagrams(&simulate(dir.path(), "vlp16", "vlp16", 1, 0).join("packets.pcap"));
+    // 10,000 packets, 3.8 M returns, all at one azimuth, each 1 us after the last: no rule
+    // of the sensor's timing or azimuth ends the sweep before the recording does.
+    let t0 = velodyne::timestamp(&d[0].payload);
+    let path = dir.path().join("stuck.pcap");
+    let mut w = PcapOut::create(&path, 1);
+    for k in 0..10_000u32 {
+        let mut p = d[k as usize % d.len()].clone();
+        for b in 0..12 {
+            velodyne::set_azimuth(&mut p.payload, b, 9000);
+        }
+        velodyne::set_timestamp(&mut p.payload, t0 + k);
+        p.time_ns = d[0].time_ns + u64::from(k) * 1000;
+        for f in ethernet_frames(&[p]) {
+            w.push(&f);
+        }
+    }
+    drop(w);
+    let (code, stderr, peak) = run_measured(&path, &dir.path().join("out"), &[]);
+    println!(
+        "peak RSS {:.1} MiB (limit {:.0} MiB)",
+        mib(peak),
+        mib(LIMIT_BYTES)
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stderr.contains("only the first"), "{stderr}");
+    assert!(peak < LIMIT_BYTES, "{:.1} MiB", mib(peak));
+}
