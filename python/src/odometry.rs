@@ -235,7 +235,7 @@ impl Odometry {
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         let report = report_dict(py, out.report.as_ref(), index, self.input.len())?;
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
-        let keep = self.settings.capacities.scan_points;
+        let keep = each!(&self.engine, o => o.capacities().scan_points);
         trim(&mut self.input, keep);
         trim(&mut self.deskewed, keep);
         let source = convert::points_array(py, out.source)?;
