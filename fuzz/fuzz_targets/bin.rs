@@ -1,10 +1,10 @@
-//! KITTI `.bin` scans (`io::bin::parse`): accepted exactly when the length is a positive
+//! KITTI `.bin` scans (`io::folders::bin::parse`): accepted exactly when the length is a positive
 //! multiple of 16, one point per 16 bytes, and `encode` then `parse` gives the points back.
 #![no_main]
 
 mod common;
 
-use kiss_odom::io::bin::{encode, parse, POINT_BYTES};
+use kiss_odom_io::folders::bin::{encode, parse, POINT_BYTES};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -1,4 +1,4 @@
-//! Packet captures and IP reassembly (`io::pcap`). The first byte picks what the rest is:
+//! Packet captures and IP reassembly (`io::capture::pcap`). The first byte picks what the rest is:
 //! fragments fed straight to the reassembly pool; the blocks of a pcapng whose interfaces
 //! (1 to 4) have link types, snap lengths, `if_tsresol` and `if_tsoffset` from the input and
 //! whose packets name any interface, even one never described; or the records of a pcap of a
@@ -9,8 +9,8 @@
 
 mod common;
 
-use kiss_odom::io::pcap::reassembly::{Fragment, Key, Reassembly, MAX_BYTES, MAX_WAITING};
-use kiss_odom::io::pcap::{self, Record};
+use kiss_odom_io::capture::pcap::{self, Record};
+use kiss_odom_io::capture::reassembly::{Fragment, Key, Reassembly, MAX_BYTES, MAX_WAITING};
 use libfuzzer_sys::fuzz_target;
 
 /// Link types tried: read ones (Ethernet, SLL, SLL2, raw IP as 101/12/228/229, BSD

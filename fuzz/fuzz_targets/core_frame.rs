@@ -52,7 +52,10 @@ fn value(u: &mut Unstructured, unit: f64) -> Result<f64> {
 }
 
 fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
-    let max_range = pick(u, &[100.0, 50.0, 1.0, 10.0, 1e3, 1e6, 1e30, 1e200, f64::MAX])?;
+    let max_range = pick(
+        u,
+        &[100.0, 50.0, 1.0, 10.0, 1e3, 1e6, 1e30, 1e200, f64::MAX],
+    )?;
     let mut c = Config::new(T::of(max_range));
     c.voxel_size = T::of(max_range / pick(u, &[100.0, 10.0, 1.0, 1000.0, 1e6])?);
     c.min_range = T::of(max_range * pick(u, &[0.0, 0.0, 0.01, 0.5])?);
@@ -118,7 +121,10 @@ fn run<T: Real, P: PointCodec<T>>(u: &mut Unstructured) -> Result<()> {
     for _ in 0..8 {
         let points: Vec<[f64; 3]> = match u.arbitrary::<u8>()? % 8 {
             0 => {
-                assert!(finite(&odom.skip_frame()), "skip_frame gave a non-finite pose");
+                assert!(
+                    finite(&odom.skip_frame()),
+                    "skip_frame gave a non-finite pose"
+                );
                 continue;
             }
             // The previous scan seen after a small motion (within a voxel and 3 degrees).
@@ -133,7 +139,8 @@ fn run<T: Real, P: PointCodec<T>>(u: &mut Unstructured) -> Result<()> {
                     f64::from(u.arbitrary::<i8>()?),
                     f64::from(u.arbitrary::<i8>()?),
                 ) * (0.052 / 128.0);
-                let m = Pose::from_parts(Translation3::from(t), UnitQuaternion::from_scaled_axis(w));
+                let m =
+                    Pose::from_parts(Translation3::from(t), UnitQuaternion::from_scaled_axis(w));
                 last.iter()
                     .map(|p| {
                         let q = m * Point3::from(*p);

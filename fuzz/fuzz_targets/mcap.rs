@@ -1,10 +1,11 @@
-//! ROS 2 MCAP files (`io::mcap::open`, path only: a tmpfs file), streamed to the end or the
+//! ROS 2 MCAP files (`io::ros::mcap::open`, path only: a tmpfs file), streamed to the end or the
 //! first container error.
 #![no_main]
 
 mod common;
 
-use kiss_odom::io::{mcap, OpenOptions};
+use kiss_odom_io::ros::mcap;
+use kiss_odom_io::OpenOptions;
 use libfuzzer_sys::fuzz_target;
 
 /// Items read at most.

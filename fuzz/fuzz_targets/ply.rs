@@ -1,4 +1,4 @@
-//! PLY scans (`io::ply::read`, path only: the bytes go to a tmpfs file). Any bytes give a cloud
+//! PLY scans (`io::folders::ply::read`, path only: the bytes go to a tmpfs file). Any bytes give a cloud
 //! or an error, never a panic; a cloud's stamps, if any, are one per point.
 #![no_main]
 
@@ -8,7 +8,7 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let path = common::scratch_file("scan.ply", data);
-    if let Ok(cloud) = kiss_odom::io::ply::read(&path) {
+    if let Ok(cloud) = kiss_odom_io::folders::ply::read(&path) {
         if let Some(s) = &cloud.stamps {
             assert_eq!(s.len(), cloud.points.len());
         }

@@ -1,10 +1,10 @@
-//! PointCloud2 payloads: the ROS 1 (`cloud_msg::parse_ros1`) and CDR (`cloud_msg::parse_cdr`)
+//! PointCloud2 payloads: the ROS 1 (`message::parse_ros1`) and CDR (`message::parse_cdr`)
 //! serializations, and `pointcloud2::decode` on what they parse. The first byte picks the
 //! serialization; a decoded cloud has `width * height` points and as many stamps, if any.
 #![no_main]
 
-use kiss_odom::io::cloud_msg::{parse_cdr, parse_ros1};
-use kiss_odom::io::pointcloud2::{decode, PointCloud2};
+use kiss_odom_io::ros::message::{parse_cdr, parse_ros1};
+use kiss_odom_io::ros::pointcloud2::{decode, PointCloud2};
 use libfuzzer_sys::fuzz_target;
 
 fn check(cloud: &PointCloud2<'_>) {

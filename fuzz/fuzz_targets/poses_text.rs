@@ -5,8 +5,8 @@
 
 mod common;
 
-use kiss_odom::io::kitti::read_calib_tr;
-use kiss_odom::io::poses::{
+use kiss_odom_io::folders::kitti::read_calib_tr;
+use kiss_odom_io::poses::{
     format_kitti, format_tum, isometry_from_rows, parse_kitti_rows, parse_tum, rows_from_isometry,
 };
 use libfuzzer_sys::fuzz_target;
@@ -22,8 +22,10 @@ fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
     if let Ok(rows) = parse_kitti_rows(&text, "fuzz") {
         assert!(rows.iter().flatten().all(|v| v.is_finite()));
-        let poses: Vec<Isometry3<f64>> =
-            rows.iter().filter_map(|r| isometry_from_rows(r).ok()).collect();
+        let poses: Vec<Isometry3<f64>> = rows
+            .iter()
+            .filter_map(|r| isometry_from_rows(r).ok())
+            .collect();
         assert!(poses.iter().all(rigid), "KITTI gave a non-rigid pose");
         // Written and read back, every bit survives.
         let back = parse_kitti_rows(&format_kitti(&poses), "back").expect("written KITTI parses");

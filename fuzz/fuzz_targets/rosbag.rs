@@ -1,4 +1,4 @@
-//! ROS 1 bags (`io::rosbag::open`, path only: a tmpfs file), streamed to the end or the first
+//! ROS 1 bags (`io::ros::bag::open`, path only: a tmpfs file), streamed to the end or the first
 //! container error; then, where the source can seek, back to frame 0, which must read the same
 //! as the first time (apart from warnings about the whole bag, which are given once; compared as text, so
 //! NaN coordinates read twice count as equal).
@@ -6,7 +6,8 @@
 
 mod common;
 
-use kiss_odom::io::{rosbag, Item, OpenOptions};
+use kiss_odom_io::ros::bag as rosbag;
+use kiss_odom_io::{Item, OpenOptions};
 use libfuzzer_sys::fuzz_target;
 
 /// Items read at most (a bag of many empty messages would otherwise take long).
@@ -29,7 +30,10 @@ fuzz_target!(|data: &[u8]| {
     }
     if let Some(first) = first {
         if src.seek(0) {
-            let again = src.next_item().expect("frame 0 read before").expect("frame 0 exists");
+            let again = src
+                .next_item()
+                .expect("frame 0 read before")
+                .expect("frame 0 exists");
             // Compared as text: NaN coordinates are legal input and NaN != NaN.
             assert_eq!(
                 format!("{:?}", without_warnings(again)),

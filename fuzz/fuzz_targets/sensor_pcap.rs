@@ -1,11 +1,12 @@
-//! Sensor recordings (`io::sensor_pcap::open`, path only: a tmpfs file): the capture reader,
+//! Sensor recordings (`io::capture::sweeps::open`, path only: a tmpfs file): the capture reader,
 //! the Ethernet/IP/UDP parsing with reassembly, sensor detection and the Velodyne decoder, read
 //! to the end or the first error.
 #![no_main]
 
 mod common;
 
-use kiss_odom::io::sensor_pcap::{open, SensorOptions};
+use kiss_odom_io::capture::sweeps::open;
+use kiss_odom_io::SensorOptions;
 use libfuzzer_sys::fuzz_target;
 
 /// Sweeps read at most.

@@ -4,7 +4,7 @@
 
 mod common;
 
-use kiss_odom::io::generic::{parse_timestamps, read_times};
+use kiss_odom_io::folders::generic::{parse_timestamps, read_times};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -19,6 +19,9 @@ fuzz_target!(|data: &[u8]| {
     }
     let path = common::scratch_file("times.txt", data);
     if let Ok(times) = read_times(&path) {
-        assert!(times.iter().all(|t| t.is_finite()), "non-finite time accepted");
+        assert!(
+            times.iter().all(|t| t.is_finite()),
+            "non-finite time accepted"
+        );
     }
 });

@@ -1,17 +1,17 @@
 """``kiss_odom.batch``: ``kiss-odom run`` over many sequences as Ray tasks, and one table.
 
-One Ray task per sequence runs ``kiss-odom run SEQUENCE --out OUT/NAME`` inside the worker
-through the binding (``kiss_odom._native.run_cli``, the command's own ``main_with``), so each
-sequence's outputs (``poses_kitti.txt``, ``poses_tum.txt``, ``summary.json``, ``frames.csv``,
-...) are byte for byte what the command writes. A task that fails (a corrupt sequence) is
+One Ray task per sequence runs the ``kiss-odom`` command, ``kiss-odom run SEQUENCE --out
+OUT/NAME``, so each sequence's outputs (``poses_kitti.txt``, ``poses_tum.txt``,
+``summary.json``, ``frames.csv``, ...) are the command's own. The command is the one
+``KISS_ODOM_BIN`` names, else ``kiss-odom`` on ``PATH`` (``cargo install --path host/cli``);
+on a cluster every node needs it. A task that fails (a corrupt sequence) is
 reported with the command's reason; the others complete. Then ``OUT/aggregate.csv`` and
 ``OUT/aggregate.md`` list per sequence the KITTI relative errors, ATE, Hz and peak memory,
 and two totals for the KITTI errors: the devkit's (every 100-800 m segment of every sequence
 weighs the same) and the mean of the per-sequence values.
 
 Ray starts locally (``ray.init()``) unless ``address`` is given (``"auto"`` or
-``ray://host:10001`` for a cluster). Each task runs in a fresh worker process
-(``max_calls=1``), so its ``peak_rss_bytes`` is that sequence's worker alone.
+``ray://host:10001`` for a cluster). ``peak_rss_bytes`` is that sequence's command alone.
 
 Output folders are named after the sequences: a sequence's folder or file name, with as many
 of its parent folders before it (joined by ``-``) as it takes to tell it apart from the others
@@ -33,6 +33,8 @@ import csv
 import json
 import math
 import os
+import shutil
+import subprocess
 import sys
 import time
 from dataclasses import asdict, dataclass, field
@@ -86,15 +88,44 @@ def _kitti_lines(path: Path) -> np.ndarray:
     return out
 
 
-def run_sequence(path: str, out: str, run_args: Sequence[str] = ()) -> Result:
-    """``kiss-odom run path --out out`` in this process, then this sequence's row. Raises
-    ``RuntimeError`` with the command's reason when it fails."""
-    from kiss_odom import _native
+def kiss_odom_command() -> str:
+    """The ``kiss-odom`` executable: ``KISS_ODOM_BIN``, else ``kiss-odom`` on ``PATH``. Raises
+    ``FileNotFoundError`` saying how to get it."""
+    given = os.environ.get("KISS_ODOM_BIN")
+    found = given or shutil.which("kiss-odom")
+    if not found or not os.access(found, os.X_OK):
+        where = f"KISS_ODOM_BIN={given} is not an executable" if given else \
+            "no kiss-odom on PATH"
+        raise FileNotFoundError(
+            f"kiss-odom-batch runs the kiss-odom command: {where} (build it with "
+            "`cargo install --path host/cli`, or set KISS_ODOM_BIN)")
+    return found
 
-    code, err = _native.run_cli(["run", str(path), "--out", str(out), "--quiet", *run_args])
-    if code != 0:
-        lines = err.strip().splitlines()
-        reason = lines[-1].removeprefix("error: ") if lines else f"{path}: exit status {code}"
+
+def _die_with_parent() -> None:
+    """In the child: SIGTERM when the task's worker goes (a cancelled task), so no run is left
+    behind it; the command then writes what it has, as on any SIGTERM. Linux only."""
+    import ctypes
+    import signal
+
+    try:
+        ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def run_sequence(path: str, out: str, run_args: Sequence[str] = (),
+                 command: Optional[str] = None) -> Result:
+    """``kiss-odom run path --out out``, then this sequence's row. Raises ``RuntimeError``
+    with the command's reason when it fails."""
+    argv = [command or kiss_odom_command(), "run", str(path), "--out", str(out), "--quiet",
+            *run_args]
+    done = subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                          preexec_fn=_die_with_parent if sys.platform == "linux" else None)
+    if done.returncode != 0:
+        lines = done.stderr.strip().splitlines()
+        reason = (lines[-1].removeprefix("error: ") if lines
+                  else f"{path}: exit status {done.returncode}")
         raise RuntimeError(reason)
     return _row(path, out)
 
@@ -208,6 +239,7 @@ def run_batch(
 
     paths = [Path(s) for s in sequences]
     names = _names(paths)  # a collision is an error before anything starts
+    command = kiss_odom_command()  # so is a missing command
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     by_name: Dict[str, Result] = {}
@@ -220,9 +252,10 @@ def run_batch(
                 ray.init(address=address, log_to_driver=False)
             else:
                 ray.init(num_cpus=num_cpus, include_dashboard=False, log_to_driver=False)
-        task = ray.remote(num_cpus=1, max_calls=1, max_retries=0)(run_sequence)
+        task = ray.remote(num_cpus=1, max_retries=0)(run_sequence)
         pending = {
-            task.remote(str(p.resolve()), str((out_dir / n).resolve()), list(run_args)): n
+            task.remote(str(p.resolve()), str((out_dir / n).resolve()), list(run_args),
+                        command): n
             for p, n in zip(paths, names)
         }
         bar = _bar(len(pending), progress)
@@ -315,7 +348,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     a = p.parse_args(argv)
     try:
         batch = run_batch(a.sequences, a.out, run_args, a.address, a.num_cpus, not a.quiet)
-    except ValueError as e:
+    except (ValueError, FileNotFoundError) as e:
         p.error(str(e))
     except KeyboardInterrupt:  # before Ray was imported: nothing ran, nothing to write
         print("interrupted before any sequence started", file=sys.stderr)

@@ -96,7 +96,7 @@ pub fn pose(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Pose<f64>> {
             "{what} is not a rigid transform (rotation block off by {defect:.1e}, last row {bottom:?})"
         )));
     }
-    let q = kiss_odom::pose::quaternion_of(&r);
+    let q = kiss_odom_io::pose::quaternion_of(&r);
     Ok(Pose::from_parts(
         Translation3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]),
         q,

@@ -1,29 +1,14 @@
-//! The host crate from Python: the `kiss-odom` command as a library call, the trajectory
-//! metrics (under kiss-icp's names too), the KITTI scan correction and ground truth.
+//! The readers and metrics from Python: the trajectory metrics (under kiss-icp's names too),
+//! the KITTI scan correction and ground truth.
 
 use crate::convert;
-use kiss_odom::io::poses::isometry_from_matrix;
-use kiss_odom::io::{Format, OpenOptions};
-use kiss_odom::metrics::{absolute_trajectory_error, kitti_relative_error};
+use kiss_odom_io::metrics::{absolute_trajectory_error, kitti_relative_error};
+use kiss_odom_io::poses::isometry_from_matrix;
+use kiss_odom_io::{Format, OpenOptions};
 use nalgebra::Isometry3;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use std::ffi::OsString;
-
-/// Runs `kiss-odom ARGS...` in this process (`kiss_odom::cli::main_with`, so the outputs are
-/// exactly those of the command) with the GIL released. Returns the exit status and what the
-/// command wrote to stderr (warnings, the error line).
-#[pyfunction]
-fn run_cli(py: Python<'_>, args: Vec<String>) -> (i32, String) {
-    py.detach(|| {
-        let mut argv: Vec<OsString> = vec!["kiss-odom".into()];
-        argv.extend(args.into_iter().map(OsString::from));
-        let mut err = Vec::new();
-        let code = kiss_odom::cli::main_with(argv, &mut err);
-        (code, String::from_utf8_lossy(&err).into_owned())
-    })
-}
 
 fn poses(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Isometry3<f64>>> {
     convert::matrices(obj, what)?
@@ -35,7 +20,7 @@ fn poses(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Isometry3<f64>>> {
         .collect()
 }
 
-fn metrics_error(e: kiss_odom::metrics::MetricsError) -> PyErr {
+fn metrics_error(e: kiss_odom_io::metrics::MetricsError) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
@@ -86,7 +71,7 @@ fn correct_kitti_scan<'py>(
     points: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let mut pts = convert::points(points, "points")?;
-    kiss_odom::io::kitti::correct_scan(&mut pts);
+    kiss_odom_io::folders::kitti::correct_scan(&mut pts);
     convert::points_array(py, pts)
 }
 
@@ -97,8 +82,8 @@ fn ground_truth<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
 ) -> PyResult<Option<Bound<'py, PyArray3<f64>>>> {
-    let ds = kiss_odom::io::open(&path, Format::Auto, &OpenOptions::default())
-        .map_err(|e| PyRuntimeError::new_err(kiss_odom::cli::one_line(&e)))?;
+    let ds = kiss_odom_io::open(&path, Format::Auto, &OpenOptions::default())
+        .map_err(|e| PyRuntimeError::new_err(kiss_odom_drive::one_line(&e)))?;
     let Some(gt) = ds.info.ground_truth else {
         return Ok(None);
     };
@@ -118,7 +103,6 @@ fn ground_truth<'py>(
 
 /// Adds the functions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(run_cli, m)?)?;
     m.add_function(wrap_pyfunction!(kitti_relative_error_segments, m)?)?;
     m.add_function(wrap_pyfunction!(_kitti_seq_error, m)?)?;
     m.add_function(wrap_pyfunction!(_absolute_trajectory_error, m)?)?;

@@ -6,13 +6,13 @@
 //! downsamples with the GIL released.
 
 use crate::convert::{self, narrow, Numpy};
-use kiss_odom::exec::Pool;
-use kiss_odom::pose::{widen, widen_report};
-use kiss_odom::settings::{Scalar, Settings, Storage};
 use kiss_odom_core::{
     Exact, Flag, FrameError, FrameReport, Odometry as Core, PointCodec, Quantized, Real,
     StampProblem,
 };
+use kiss_odom_drive::pool::Pool;
+use kiss_odom_drive::settings::{Scalar, Settings, Storage};
+use kiss_odom_drive::widen::{widen, widen_report};
 use nalgebra::Matrix4;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -67,7 +67,7 @@ fn build<T: Numpy, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
 }
 
 fn value_error(e: anyhow::Error) -> PyErr {
-    PyValueError::new_err(kiss_odom::cli::one_line(&e))
+    PyValueError::new_err(kiss_odom_drive::one_line(&e))
 }
 
 impl Odometry {

@@ -9,12 +9,12 @@
 //! the searches see the same map). Nothing is ever dropped.
 
 use crate::convert::{self, points_array};
-use kiss_odom::exec::Pool;
 use kiss_odom_core::stages::{
     align_points_to_map, preprocess, scratch_words_for, voxel_downsample, work_words,
     AdaptiveThreshold, IcpParams, LocalMap, BLOCK,
 };
 use kiss_odom_core::{Exact, Point, Pose};
+use kiss_odom_drive::pool::Pool;
 use numpy::{PyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -349,11 +349,11 @@ fn _voxel_down_sample(
     .ok_or_else(|| PyRuntimeError::new_err("voxel downsampling: scratch too small"))
 }
 
-/// kiss-icp's `CorrectKITTIScan` (the host's `io::kitti::correct_scan`).
+/// kiss-icp's `CorrectKITTIScan` (the host's `io::folders::kitti::correct_scan`).
 #[pyfunction]
 fn _correct_kitti_scan(frame: PyRef<'_, Vector3dVector>) -> Vector3dVector {
     let mut pts = frame.points.clone();
-    kiss_odom::io::kitti::correct_scan(&mut pts);
+    kiss_odom_io::folders::kitti::correct_scan(&mut pts);
     vector(pts)
 }
 

@@ -1,7 +1,7 @@
 """`kiss-odom eval` against evo (PyPI `evo`) on the same files: ATE equals evo's APE and the
 per-frame RPE equals evo's RPE, to 1e-9, on kitti-mini and a generated run.
 
-Matching definitions (ours in host/src/metrics.rs):
+Matching definitions (ours in host/io/src/metrics.rs):
 - ATE (`ate_m`): rigid Umeyama alignment of the estimated positions onto the ground truth, no
   scale, then the RMSE of the position errors = evo `APE(PoseRelation.translation_part)` on
   `est.align(ref, correct_scale=False)`, statistic `rmse` (the translation of

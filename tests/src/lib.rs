@@ -48,11 +48,11 @@ pub fn have_sensor_file(file: &str) -> bool {
 
 /// Adds a second VLP-16 on the same port to a VLP-16 recording's datagrams: each of its data
 /// packets (port 2368, 1206 bytes) again, 0.3 ms later, from 192.168.1.202; in time order.
-pub fn add_second_vlp16(d: &mut Vec<kiss_odom::io::pcap::Datagram>) {
+pub fn add_second_vlp16(d: &mut Vec<kiss_odom_io::capture::pcap::Datagram>) {
     let second: Vec<_> = d
         .iter()
         .filter(|p| p.port == 2368 && p.payload.len() == 1206)
-        .map(|p| kiss_odom::io::pcap::Datagram {
+        .map(|p| kiss_odom_io::capture::pcap::Datagram {
             time_ns: p.time_ns + 300_000,
             source: "192.168.1.202:2368".parse().unwrap(),
             ..p.clone()

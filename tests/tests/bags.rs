@@ -2,12 +2,12 @@
 //!
 //! `fixtures/bags/*.bag|*.mcap` were written by the Python `rosbags` 0.11.9 library
 //! (`fixtures/bags/make_bags.py`), so a mistake shared by our reader and our own test writers
-//! (in `host/src/io/{rosbag,mcap}.rs`) cannot pass here. Every expected value below is the
+//! (in `host/io/src/ros/{bag,mcap}.rs`) cannot pass here. Every expected value below is the
 //! formula of that script, recomputed; nothing is read back through the decoder under test.
-//! Files are opened through `kiss_odom::io::open` with `--format auto`, the path `kiss-odom run`
+//! Files are opened through `kiss_odom_io::open` with `--format auto`, the path `kiss-odom run`
 //! takes.
 
-use kiss_odom::io::{self, Dataset, Format, Frame, Item, OpenOptions};
+use kiss_odom_io::{self as io, Dataset, Format, Frame, Item, OpenOptions};
 use std::path::{Path, PathBuf};
 
 const STAMP0: u32 = 1_700_000_000;

@@ -17,7 +17,7 @@
 mod common;
 
 use common::*;
-use kiss_odom::io::{pcd, ply};
+use kiss_odom_io::folders::{pcd, ply};
 use std::ffi::OsString;
 
 // ------------------------------------------------------------------------------------------

@@ -4,7 +4,7 @@
 //! in `KISS_ODOM_PYTHON` (a venv made from `tests/reference/requirements.txt`) and kitti-mini
 //! (`KISS_ODOM_KITTI_MINI`, default `../shared/data/kitti-mini` beside the repository); without
 //! them it prints why and passes without checking anything. The table and tolerance logic
-//! itself is unit-tested in `host/src/crosscheck/report.rs`.
+//! itself is unit-tested in `host/cli/src/crosscheck/report.rs`.
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};

@@ -9,7 +9,7 @@
 //! Each test failed on the main branch before the dataset layer learnt frame identities (the
 //! finding it holds is named in its comment).
 
-use kiss_odom::io::{bin, pcd, ply};
+use kiss_odom_io::folders::{bin, pcd, ply};
 use kiss_odom_tests::{kitti_copy, run, Run};
 use std::path::{Path, PathBuf};
 

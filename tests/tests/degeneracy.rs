@@ -68,7 +68,7 @@ fn plane_frames(r: &common::Run) -> usize {
 
 /// Worst position error of a run's poses against the simulator's (m).
 fn worst_error(data: &Path, r: &common::Run) -> f64 {
-    let truth = kiss_odom::io::poses::read_kitti_matrices(&data.join("poses.txt")).unwrap();
+    let truth = kiss_odom_io::poses::read_kitti_matrices(&data.join("poses.txt")).unwrap();
     let est = r.poses();
     assert_eq!(truth.len(), est.len());
     est.iter()
@@ -102,10 +102,10 @@ fn robust_and_reference(
 
 /// Position RMSE after a rigid alignment (m), as `kiss-odom eval` reports it.
 fn ate(data: &Path, r: &common::Run) -> f64 {
-    let read = kiss_odom::io::poses::read_kitti;
+    let read = kiss_odom_io::poses::read_kitti;
     let truth = read(&data.join("poses.txt")).unwrap();
     let est = read(&r.out.join("poses_kitti.txt")).unwrap();
-    kiss_odom::metrics::absolute_trajectory_error(&est, &truth)
+    kiss_odom_io::metrics::absolute_trajectory_error(&est, &truth)
         .unwrap()
         .ate_m
 }
@@ -159,7 +159,7 @@ fn with_the_vehicle_prior_robust_mode_learns_a_bare_corridors_speed_from_its_tur
         r.succeeded_with_frames(frames);
     }
     let truth =
-        kiss_odom::io::poses::read_kitti_matrices(&dir.path().join("corridor/poses.txt")).unwrap();
+        kiss_odom_io::poses::read_kitti_matrices(&dir.path().join("corridor/poses.txt")).unwrap();
     // The first frame whose heading left the axis by 10 mrad.
     let turn = truth
         .iter()

@@ -215,7 +215,7 @@ fn embedded_frames_use_the_host_readers_kitti_correction() {
     }
     let raw = kitti::read_scan(&path).unwrap();
     let mut host = raw.clone();
-    kiss_odom::io::kitti::correct_scan(&mut host);
+    kiss_odom_io::folders::kitti::correct_scan(&mut host);
     let differing = raw
         .iter()
         .zip(&host)

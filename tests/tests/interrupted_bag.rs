@@ -3,7 +3,7 @@
 //! without an index in place). Alone in its file because it raises the
 //! process-wide stop flag (`kiss_odom::interrupt::raise`, what a SIGINT handler does) and
 //! points `TMPDIR` at a folder of its own. The signal itself, sent to a real process, is in
-//! `host/tests/interrupt.rs`.
+//! `host/cli/tests/interrupt.rs`.
 
 mod common;
 
@@ -22,7 +22,7 @@ fn an_interrupted_run_on_a_damaged_bag_leaves_no_temporary_copy() {
     let whole = std::fs::read(bag_fixture("ouster.bag")).unwrap();
     let bag = dir.path().join("cut.bag");
     std::fs::write(&bag, &whole[..ouster_payload_at(&whole, 2) + 40]).unwrap();
-    let opened = kiss_odom::io::open(&bag, kiss_odom::io::Format::Auto, &Default::default());
+    let opened = kiss_odom_io::open(&bag, kiss_odom_io::Format::Auto, &Default::default());
     assert!(opened.is_ok(), "the frames before the cut are readable");
     assert_eq!(files_in_tmp(), 0, "no copy in TMPDIR");
     drop(opened);

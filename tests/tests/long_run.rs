@@ -12,8 +12,8 @@
 //! speed; a slowdown makes it longer):
 //! `cargo test --release -p kiss-odom-tests --test long_run -- --ignored --nocapture`.
 
-use kiss_odom::simulate::{Profile, SimParams, Simulation};
 use kiss_odom_core::{Capacities, Config, Flag, Odometry, Quantized};
+use kiss_odom_sim::{Profile, SimParams, Simulation};
 use std::time::Instant;
 
 const FRAMES: usize = 10_000;

@@ -3,8 +3,9 @@
 //! reach 4.2 GB of RSS before the reader fed the mcap crate in bounded pieces. Its own test
 //! binary, so no other test's memory counts.
 
-use kiss_odom::io::{mcap, OpenOptions};
 use kiss_odom::memory::{peak_rss_bytes, reset_peak_rss, rss_bytes};
+use kiss_odom_io::ros::mcap;
+use kiss_odom_io::OpenOptions;
 use kiss_odom_tests::repo;
 
 #[test]

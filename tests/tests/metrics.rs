@@ -1,13 +1,14 @@
-//! Trajectory metrics (`kiss_odom::metrics`): cases whose answers are worked out by hand, and
+//! Trajectory metrics (`kiss_odom_io::metrics`): cases whose answers are worked out by hand, and
 //! agreement with the reference kiss-icp 1.3.0 on real KITTI data and on a long synthetic drive.
 //!
 //! The reference's figures come from `fixtures/golden/metrics_reference.json`, written once by
 //! `tests/reference/gen_metrics_golden.py` with the reference's own Python metrics. kitti-mini is
 //! read from `KISS_KITTI_MINI` (default `../shared/data/kitti-mini` beside the repository).
 
-use kiss_odom::metrics::{
-    absolute_trajectory_error, evaluate, execute_to, final_position_error, kitti_relative_error,
-    relative_pose_error, umeyama, EvalArgs, MetricsError, KITTI_DEVKIT_PI,
+use kiss_odom::eval::{execute_to, EvalArgs};
+use kiss_odom_io::metrics::{
+    absolute_trajectory_error, evaluate, final_position_error, kitti_relative_error,
+    relative_pose_error, umeyama, MetricsError, KITTI_DEVKIT_PI,
 };
 use nalgebra::{Isometry3, Matrix4, Translation3, UnitQuaternion, Vector3};
 use serde_json::Value;
@@ -505,10 +506,10 @@ fn gt_lidar(seq: &str) -> Vec<Isometry3<f64>> {
     let root = kitti_mini();
     let tr = read_tr(&root.join(format!("sequences/{seq}/calib.txt")));
     let tr_inv = tr.try_inverse().unwrap();
-    kiss_odom::io::poses::read_kitti_matrices(&root.join(format!("poses/{seq}.txt")))
+    kiss_odom_io::poses::read_kitti_matrices(&root.join(format!("poses/{seq}.txt")))
         .unwrap()
         .iter()
-        .map(|t_cam| kiss_odom::io::poses::isometry_from_matrix(&(tr_inv * t_cam * tr)).unwrap())
+        .map(|t_cam| kiss_odom_io::poses::isometry_from_matrix(&(tr_inv * t_cam * tr)).unwrap())
         .collect()
 }
 
@@ -520,7 +521,7 @@ fn ate_and_are_on_kitti_mini_match_the_reference() {
     for seq in ["01", "02", "04", "05"] {
         let g = &golden["kitti_mini"][seq];
         let gt = gt_lidar(seq);
-        let est = kiss_odom::io::poses::read_kitti(
+        let est = kiss_odom_io::poses::read_kitti(
             &kitti_mini().join(format!("reference_kiss_icp_1.3.0/{seq}.txt")),
         )
         .unwrap();

@@ -1,7 +1,7 @@
 //! The file readers of the host against files built here and against real KITTI data.
 //!
 //! Round trips write small generated frames with the crate's writers and read them back through
-//! `kiss_odom::io::open`, the path `kiss-odom run` takes. Readers are also fed files built by
+//! `kiss_odom_io::open`, the path `kiss-odom run` takes. Readers are also fed files built by
 //! hand in these tests (headers as text, payloads as bytes), so that a reader and a writer
 //! sharing one mistake cannot pass. Damaged files must become skipped frames or warnings that
 //! name the file, never a panic or a silently wrong frame.
@@ -10,7 +10,8 @@
 //! kiss-icp 1.3.0 (`tests/reference/gen_kitti_correction.py`): the corrected first scan of
 //! sequence 01 and its ground truth in the LiDAR frame.
 
-use kiss_odom::io::{self, bin, generic, kitti, pcd, ply, poses, Dataset, Format, Item};
+use kiss_odom_io::folders::{bin, generic, kitti, pcd, ply};
+use kiss_odom_io::{self as io, poses, Dataset, Format, Item};
 use nalgebra::{Isometry3, Matrix4, Vector3};
 use std::path::{Path, PathBuf};
 

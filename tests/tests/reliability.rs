@@ -12,11 +12,11 @@
 //! Heavy scenes run in release only (`cargo test --release -p kiss-odom-tests --test
 //! reliability`); in debug they are ignored with that command as the reason.
 
-use kiss_odom::simulate::{Frame, Profile, SimParams, Simulation, Surface};
 use kiss_odom_core::{
     Capacities, Config, Exact, Flag, FrameError, FrameReport, MapCapacity, Odometry, Pose,
     Quantized, StampProblem, Status,
 };
+use kiss_odom_sim::{Frame, Profile, SimParams, Simulation, Surface};
 use nalgebra::{Isometry3, UnitQuaternion};
 use std::sync::OnceLock;
 

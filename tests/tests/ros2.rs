@@ -12,15 +12,15 @@
 
 mod ros2_common;
 
-use kiss_odom::drive::Driver;
-use kiss_odom::io::cloud_msg::parse_cdr;
-use kiss_odom::io::pointcloud2::decode;
-use kiss_odom::io::poses::{format_kitti, read_kitti};
-use kiss_odom::io::{open, Format, Item, OpenOptions};
 use kiss_odom::ros2::dds;
 use kiss_odom::ros2::node::twist_of;
 use kiss_odom::ros2::params::NodeParams;
-use kiss_odom::settings::Settings;
+use kiss_odom_drive::settings::Settings;
+use kiss_odom_drive::Driver;
+use kiss_odom_io::poses::{format_kitti, read_kitti};
+use kiss_odom_io::ros::message::parse_cdr;
+use kiss_odom_io::ros::pointcloud2::decode;
+use kiss_odom_io::{open, Format, Item, OpenOptions};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
 use ros2_common::*;
 use serde_json::Value;

@@ -3,7 +3,7 @@
 //! by an output error, a run that registered nothing fails, a setting out of range is named,
 //! no output of an earlier command survives beside a failed one, and `frames.csv` says where
 //! each row came from and which flags the core set. Signals sent to a real process are in
-//! `host/tests/interrupt.rs`.
+//! `host/cli/tests/interrupt.rs`.
 
 mod common;
 
@@ -29,7 +29,7 @@ fn assert_no_pose_outputs(r: &Run) {
 }
 
 fn assert_no_temporaries(dir: &Path) {
-    let left = kiss_odom::output::temporaries_in(dir);
+    let left = kiss_odom_io::write::temporaries_in(dir);
     assert!(left.is_empty(), "temporary files left: {left:?}");
 }
 
@@ -323,8 +323,12 @@ fn a_refused_argument_leaves_every_file_it_names_and_the_earlier_outputs_in_plac
     let frames = dir.path().join("ply");
     std::fs::create_dir(&frames).unwrap();
     for k in 0..3 {
-        kiss_odom::io::ply::write(&frames.join(format!("{k:06}.ply")), &kitti_points(k), None)
-            .unwrap();
+        kiss_odom_io::folders::ply::write(
+            &frames.join(format!("{k:06}.ply")),
+            &kitti_points(k),
+            None,
+        )
+        .unwrap();
     }
     let frame = frames.join("000002.ply");
     let frame_s = frame.to_str().unwrap().to_string();

@@ -8,8 +8,9 @@
 //! it it prints SKIP. The offline test compares the committed golden files (counts and a
 //! sample of points the same script wrote) and always runs where `../shared/data` is.
 
-use kiss_odom::io::ouster_meta;
-use kiss_odom::io::sensor_pcap::{self, SensorOptions, Sweep};
+use kiss_odom_io::capture::ouster_meta;
+use kiss_odom_io::capture::sweeps::{self, Sweep};
+use kiss_odom_io::SensorOptions;
 use kiss_odom_tests::{have_sensor_file, repo, sensor_data as data};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -160,7 +161,7 @@ fn decode(r: &Recording) -> Ours {
             p
         }
     };
-    let (sweeps, report) = sensor_pcap::read_all(&path, &opts).unwrap();
+    let (sweeps, report) = sweeps::read_all(&path, &opts).unwrap();
     assert!(report.other_sources.is_empty(), "{report:?}");
     let info = r
         .meta
@@ -324,7 +325,7 @@ fn md5_of<T: Copy, const N: usize>(values: &[T], bytes: impl Fn(T) -> [u8; N]) -
 /// and measurement ids whose MD5 sums ouster-sdk's own test suite stored beside the recordings.
 #[test]
 fn ouster_fields_match_the_digests_beside_the_recordings() {
-    use kiss_odom::io::pcap;
+    use kiss_odom_io::capture::pcap;
     use kiss_odom_sensors::ouster::Packet;
     if !have_data() {
         return;
@@ -392,8 +393,8 @@ impl<F: FnMut(&[[f64; 3]], &[f64])> kiss_odom_sensors::SweepSink for CoreFeed<F>
 /// through `register_frame`, once the sweep's time span is known.
 #[test]
 fn packets_streamed_into_the_core_give_the_poses_of_whole_sweeps() {
-    use kiss_odom::io::pcap;
     use kiss_odom_core::{Capacities, Config, Exact, Odometry};
+    use kiss_odom_io::capture::pcap;
     use kiss_odom_sensors::{ouster, Decode, Pushed};
     if !have_data() {
         return;
@@ -404,7 +405,7 @@ fn packets_streamed_into_the_core_give_the_poses_of_whole_sweeps() {
         meta: Some(meta.clone()),
         ..SensorOptions::default()
     };
-    let (sweeps, _) = sensor_pcap::read_all(&path, &opts).unwrap();
+    let (sweeps, _) = sweeps::read_all(&path, &opts).unwrap();
     let caps = Capacities::FULL_SCALE;
     let words = caps.arena_words::<f64, Exact>();
     let (mut arena_a, mut arena_b) = (vec![0u64; words], vec![0u64; words]);

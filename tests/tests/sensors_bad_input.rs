@@ -1,8 +1,9 @@
 //! Damaged sensor recordings: every kind of damage gives an error naming the file and the
 //! reason, or a counted skip reported per sweep and in the capture report, never a panic.
 
-use kiss_odom::io::pcap::{self, Datagram};
-use kiss_odom::io::sensor_pcap::{self, SensorOptions};
+use kiss_odom_io::capture::pcap::{self, Datagram};
+use kiss_odom_io::capture::sweeps;
+use kiss_odom_io::SensorOptions;
 use std::path::{Path, PathBuf};
 
 use kiss_odom_tests::{add_second_vlp16, have_sensor_file, sensor_data as data};
@@ -29,7 +30,7 @@ fn is_data(d: &Datagram) -> bool {
 }
 
 fn err(path: &Path, opts: &SensorOptions) -> String {
-    let e = sensor_pcap::read_all(path, opts).unwrap_err();
+    let e = sweeps::read_all(path, opts).unwrap_err();
     format!("{e:#}")
 }
 
@@ -45,8 +46,8 @@ fn a_truncated_or_corrupted_packet_is_a_counted_skip() {
         // Block 4's azimuth at 655.35 degrees.
         data.nth(10).unwrap().payload[402..404].copy_from_slice(&[0xFF, 0xFF]);
     });
-    let (sweeps, report) = sensor_pcap::read_all(&path, &SensorOptions::default()).unwrap();
-    let (clean, _) = sensor_pcap::read_all(
+    let (sweeps, report) = sweeps::read_all(&path, &SensorOptions::default()).unwrap();
+    let (clean, _) = sweeps::read_all(
         &data().join("velodyne/velodyne_vlp16.pcap"),
         &SensorOptions::default(),
     )
@@ -156,7 +157,7 @@ fn a_capture_cut_in_the_middle_gives_the_sweeps_before_then_an_error() {
     let bytes = std::fs::read(&src).unwrap();
     let path = dir.path().join("cut.pcap");
     std::fs::write(&path, &bytes[..bytes.len() * 2 / 3]).unwrap();
-    let mut it = sensor_pcap::open(&path, &SensorOptions::default()).unwrap();
+    let mut it = sweeps::open(&path, &SensorOptions::default()).unwrap();
     let first = it.next().unwrap();
     let e = match first {
         Ok(_) => format!("{:#}", it.next().unwrap().unwrap_err()),
@@ -203,8 +204,8 @@ fn two_sensors_on_one_port_decode_one_and_report_the_other() {
     }
     let dir = tempfile::tempdir().unwrap();
     let path = edited(dir.path(), "two.pcap", add_second_vlp16);
-    let (two, report) = sensor_pcap::read_all(&path, &SensorOptions::default()).unwrap();
-    let (one, _) = sensor_pcap::read_all(
+    let (two, report) = sweeps::read_all(&path, &SensorOptions::default()).unwrap();
+    let (one, _) = sweeps::read_all(
         &data().join("velodyne/velodyne_vlp16.pcap"),
         &SensorOptions::default(),
     )

@@ -9,8 +9,9 @@ mod common;
 
 use capture_kit::{datagrams, ethernet, ethernet_frames, ipv4, simulate, write_pcap, Frame};
 use common::run;
-use kiss_odom::io::pcap::Datagram;
-use kiss_odom::io::sensor_pcap::{self, SensorOptions, Sweep};
+use kiss_odom_io::capture::pcap::Datagram;
+use kiss_odom_io::capture::sweeps::{self, Sweep};
+use kiss_odom_io::SensorOptions;
 use std::path::{Path, PathBuf};
 
 fn s(p: &Path) -> &str {
@@ -227,7 +228,7 @@ fn os1_64(dir: &Path) -> (Vec<Datagram>, SensorOptions) {
 }
 
 fn sweeps(path: &Path, opts: &SensorOptions) -> Vec<Sweep> {
-    sensor_pcap::read_all(path, opts).unwrap().0
+    sweeps::read_all(path, opts).unwrap().0
 }
 
 #[test]

@@ -11,7 +11,7 @@ mod common;
 
 use capture_kit::{datagrams, ethernet_frames, ouster, simulate, velodyne, write_pcap};
 use common::run;
-use kiss_odom::io::pcap::Datagram;
+use kiss_odom_io::capture::pcap::Datagram;
 use kiss_odom_tests::{have_sensor_file, sensor_data};
 use std::net::UdpSocket;
 use std::path::{Path, PathBuf};

@@ -13,10 +13,11 @@
 mod common;
 
 use common::run;
-use kiss_odom::io::pcap::{self, Datagram};
-use kiss_odom::io::poses::read_kitti;
-use kiss_odom::io::sensor_pcap::{self, SensorKind, SensorOptions};
-use kiss_odom::pose::pose_difference;
+use kiss_odom_io::capture::pcap::{self, Datagram};
+use kiss_odom_io::capture::sweeps;
+use kiss_odom_io::pose::pose_difference;
+use kiss_odom_io::poses::read_kitti;
+use kiss_odom_io::{SensorKind, SensorOptions};
 use kiss_odom_tests::{add_second_vlp16, have_sensor_file, sensor_data as data};
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
@@ -102,7 +103,7 @@ fn run_on_the_os1_128_recording_equals_kiss_icp_fed_the_same_points_and_times() 
         ..SensorOptions::default()
     };
     // The decoder's sweeps, exported at full precision for the reference's generic loader.
-    let (sweeps, _) = sensor_pcap::read_all(&pcap, &opts).unwrap();
+    let (sweeps, _) = sweeps::read_all(&pcap, &opts).unwrap();
     let frames = dir.path().join("frames");
     std::fs::create_dir_all(frames.join("velodyne")).unwrap();
     std::fs::create_dir_all(frames.join("timestamps")).unwrap();
@@ -210,7 +211,7 @@ fn frames_csv_has_the_packet_statistics_of_each_sweep() {
     let pcap = data().join("velodyne/velodyne_vlp16.pcap");
     let r = run(&pcap, &dir.path().join("out"), &[]);
     assert_eq!(r.code, 0, "{}", r.stderr);
-    let (sweeps, _) = sensor_pcap::read_all(&pcap, &SensorOptions::default()).unwrap();
+    let (sweeps, _) = sweeps::read_all(&pcap, &SensorOptions::default()).unwrap();
     let packets: Vec<String> = sweeps.iter().map(|s| s.stats.packets.to_string()).collect();
     assert_eq!(r.column("packets"), packets);
     let lost: Vec<String> = sweeps
@@ -290,7 +291,7 @@ fn convert_writes_the_decoded_sweeps_to_float32_rounding_and_run_reads_them_back
         meta: Some(meta),
         ..SensorOptions::default()
     };
-    let (sweeps, _) = sensor_pcap::read_all(&pcap, &opts).unwrap();
+    let (sweeps, _) = sweeps::read_all(&pcap, &opts).unwrap();
     let mut worst = 0.0f64;
     for (k, s) in sweeps.iter().enumerate() {
         let bytes = std::fs::read(out.join(format!("velodyne/{k:06}.bin"))).unwrap();
@@ -313,7 +314,7 @@ fn convert_writes_the_decoded_sweeps_to_float32_rounding_and_run_reads_them_back
             }
             assert_eq!(row[3], f32::from(m.intensity), "sweep {k}: intensity");
         }
-        let t = kiss_odom::io::generic::parse_timestamps(
+        let t = kiss_odom_io::folders::generic::parse_timestamps(
             &std::fs::read(out.join(format!("timestamps/{k:06}.bin"))).unwrap(),
         )
         .unwrap();

@@ -14,7 +14,8 @@
 //! (KITTI relative error within 10 %), and deskewing shows its effect on the fast drive.
 //! `bench/sensors_pcap.sh` measures the same on 500-sweep drives of both sensors.
 
-use kiss_odom::io::sensor_pcap::{self, SensorOptions, Sweep};
+use kiss_odom_io::capture::sweeps::{self, Sweep};
+use kiss_odom_io::SensorOptions;
 use std::collections::HashMap;
 use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
@@ -176,8 +177,7 @@ impl Worst {
 
 /// Our decoding of the generated pcap, checked against the ground truth point by point.
 fn decode_and_compare(case: &Case, dir: &Path, frames: usize) -> Vec<Sweep> {
-    let (sweeps, report) =
-        sensor_pcap::read_all(&dir.join("packets.pcap"), &case.options(dir)).unwrap();
+    let (sweeps, report) = sweeps::read_all(&dir.join("packets.pcap"), &case.options(dir)).unwrap();
     assert_eq!(sweeps.len(), frames, "{}: sweeps decoded", case.sensor);
     let mut worst = Worst::default();
     for (k, s) in sweeps.iter().enumerate() {
@@ -289,10 +289,10 @@ fn references_decode_generated_packets_to_the_simulated_points() {
 
 /// KITTI relative translation error (%) of the poses a run wrote, against the simulation's.
 fn kitti_error(run: &Path, truth: &Path) -> f64 {
-    use kiss_odom::io::poses::read_kitti;
+    use kiss_odom_io::poses::read_kitti;
     let est = read_kitti(&run.join("poses_kitti.txt")).unwrap();
     let gt = read_kitti(&truth.join("poses.txt")).unwrap();
-    let m = kiss_odom::metrics::evaluate(&est, &gt).unwrap();
+    let m = kiss_odom_io::metrics::evaluate(&est, &gt).unwrap();
     m.kitti_t_err_pct.expect("the drive is shorter than 100 m")
 }
 

@@ -7,8 +7,8 @@
 //! Files are read here with small private readers written from the layout's description, not
 //! with the simulator's writers or the host's readers, so a shared mistake cannot pass.
 
-use kiss_odom::simulate::{Profile, SimParams, Simulation, Surface};
 use kiss_odom_core::{Capacities, Config, Exact, Odometry};
+use kiss_odom_sim::{Profile, SimParams, Simulation, Surface};
 use nalgebra::{Matrix3, Point3, Vector3};
 use std::ffi::OsString;
 use std::path::Path;

@@ -50,8 +50,8 @@ fn saved_map_has_the_last_frames_map_points_in_our_readers_and_others() {
         r.succeeded_with_frames(10);
         let expected: usize = r.column("map_points").last().unwrap().parse().unwrap();
         let ours = match name {
-            "map.ply" => kiss_odom::io::ply::read(&map),
-            _ => kiss_odom::io::pcd::read(&map),
+            "map.ply" => kiss_odom_io::folders::ply::read(&map),
+            _ => kiss_odom_io::folders::pcd::read(&map),
         }
         .unwrap();
         assert_eq!(ours.points.len(), expected, "{name}: our reader");
@@ -76,7 +76,7 @@ fn saved_cloud_is_voxel_thinned_and_its_bound_drops_with_a_warning() {
     );
     r.succeeded_with_frames(10);
     assert!(r.warnings().is_empty(), "{}", r.stderr);
-    let points = kiss_odom::io::ply::read(&cloud).unwrap().points;
+    let points = kiss_odom_io::folders::ply::read(&cloud).unwrap().points;
     // One point per 0.5 m voxel.
     let mut cells: Vec<[i64; 3]> = points
         .iter()
@@ -109,7 +109,10 @@ fn saved_cloud_is_voxel_thinned_and_its_bound_drops_with_a_warning() {
         r.stderr
     );
     assert_eq!(
-        kiss_odom::io::pcd::read(&bounded).unwrap().points.len(),
+        kiss_odom_io::folders::pcd::read(&bounded)
+            .unwrap()
+            .points
+            .len(),
         100
     );
     assert_eq!(r.count("warnings"), 1);

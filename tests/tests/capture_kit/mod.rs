@@ -5,7 +5,7 @@
 
 #![allow(dead_code)] // each test file uses its own share
 
-use kiss_odom::io::pcap::{self, Datagram};
+use kiss_odom_io::capture::pcap::{self, Datagram};
 use pcap_file::pcap::{PcapHeader, PcapPacket, PcapWriter};
 use pcap_file::DataLink;
 use std::path::{Path, PathBuf};

@@ -4,7 +4,8 @@
 
 #![allow(dead_code)] // each test file uses its own share
 
-use kiss_odom::io::{bin, poses};
+use kiss_odom_io::folders::bin;
+use kiss_odom_io::poses;
 #[allow(unused_imports)] // each test file uses its own share
 pub use kiss_odom_tests::{repo, run, Run};
 use nalgebra::Matrix4;

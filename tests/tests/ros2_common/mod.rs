@@ -5,7 +5,7 @@
 
 use kiss_odom::ros2::node::{self, NodeOptions, Summary};
 use kiss_odom::ros2::params::NodeParams;
-use kiss_odom::settings::Settings;
+use kiss_odom_drive::settings::Settings;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};

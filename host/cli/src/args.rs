@@ -1,0 +1,406 @@
+//! Command-line options that `run`, `bench` and `crosscheck` share, as clap argument groups
+//! each command flattens (`#[command(flatten)]`), and how they become [`Settings`].
+//!
+//! Precedence is the same everywhere: defaults, then `--config FILE`, then flags.
+
+use anyhow::{bail, Result};
+use kiss_odom_core::Capacities;
+use kiss_odom_drive::settings::{DegeneracyMode, Scalar, Settings, Storage};
+use kiss_odom_io::{Format, OpenOptions};
+use kiss_odom_io::{FrameRange, SensorKind, SensorOptions};
+use std::path::{Path, PathBuf};
+
+/// What every command that runs the pipeline takes: which frames, the pipeline's parameters and
+/// how the core runs.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CommonArgs {
+    /// Which frames, how read.
+    #[command(flatten, next_help_heading = "Input")]
+    pub input: InputArgs,
+    /// The pipeline's parameters.
+    #[command(flatten, next_help_heading = "Pipeline")]
+    pub pipeline: PipelineArgs,
+    /// How the core runs.
+    #[command(flatten, next_help_heading = "Core")]
+    pub core: CoreArgs,
+}
+
+impl CommonArgs {
+    /// The settings these options ask for; see [`settings`].
+    pub fn settings(&self, threads: Option<usize>) -> Result<Settings> {
+        settings(&self.pipeline, &self.core, threads)
+    }
+}
+
+/// Which frames of a dataset, and how to read them.
+#[derive(Debug, Clone, clap::Args)]
+pub struct InputArgs {
+    /// Input format; `auto` picks KITTI only for the benchmark layout.
+    #[arg(long, value_enum, default_value_t = Format::Auto)]
+    pub format: Format,
+    /// Frames to use, `A..B` (B excluded), `A..` or `..B`, by frame index.
+    #[arg(long)]
+    pub frames: Option<FrameRange>,
+    /// Bag/MCAP topic (default: the only PointCloud2 topic).
+    #[arg(long)]
+    pub topic: Option<String>,
+    /// How to decode a sensor recording.
+    #[command(flatten)]
+    pub sensor: SensorArgs,
+}
+
+/// How to decode sensor packets (a pcap recording, `live`).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct SensorArgs {
+    /// The sensor of a pcap recording; `auto`: Ouster if `--meta` is given, else Velodyne
+    /// with the model the packets name.
+    #[arg(long, value_enum, default_value_t = SensorKind::Auto)]
+    pub sensor: SensorKind,
+    /// Ouster metadata JSON (as `ouster-cli` saves it beside a recording); Ouster needs it.
+    #[arg(long)]
+    pub meta: Option<PathBuf>,
+    /// Velodyne calibration (XML or YAML); models with published angles need none.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// UDP port of the sensor's data packets [default: Velodyne 2368 (else the port its
+    /// packets are on), Ouster the metadata's lidar port, else 7502].
+    #[arg(long)]
+    pub port: Option<u16>,
+    /// Velodyne: azimuth (degrees) where one sweep ends and the next begins [default: a full
+    /// turn from where the recording starts].
+    #[arg(long, allow_negative_numbers = true)]
+    pub cut_angle: Option<f64>,
+}
+
+impl SensorArgs {
+    /// The decoder's options.
+    pub fn options(&self) -> SensorOptions {
+        SensorOptions {
+            sensor: self.sensor,
+            port: self.port,
+            meta: self.meta.clone(),
+            calibration: self.calibration.clone(),
+            cut_angle_deg: self.cut_angle,
+        }
+    }
+}
+
+impl InputArgs {
+    /// The frame range (all frames when not given).
+    pub fn range(&self) -> FrameRange {
+        self.frames.unwrap_or_default()
+    }
+
+    /// Options for `io::open`: read at most `scan_points` points of a frame (the core's
+    /// `Capacities::scan_points`, which ignores the rest anyway).
+    pub fn open_options(&self, scan_points: usize) -> OpenOptions {
+        OpenOptions {
+            topic: self.topic.clone(),
+            scan_points,
+            sensor: self.sensor.options(),
+        }
+    }
+}
+
+/// The pipeline's parameters.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PipelineArgs {
+    /// Settings file: TOML, as `run` writes to `config.toml`, or kiss-icp's YAML (a .yaml or
+    /// .yml name); flags override it.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Maximum range r_max (m) [default: 100].
+    #[arg(long, allow_negative_numbers = true)]
+    pub max_range: Option<f64>,
+    /// Minimum range (m) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub min_range: Option<f64>,
+    /// Map voxel size v (m) [default: max_range / 100].
+    #[arg(long, allow_negative_numbers = true)]
+    pub voxel_size: Option<f64>,
+    /// Deskew scans that carry per-point timestamps (the default).
+    #[arg(long, overrides_with = "no_deskew")]
+    pub deskew: bool,
+    /// Do not deskew.
+    #[arg(long, overrides_with = "deskew")]
+    pub no_deskew: bool,
+    /// Registration along directions the scene does not constrain: `reference` (kiss-icp),
+    /// `robust` (the reference, but frames it leaves degenerate are registered again with
+    /// point-to-plane terms where the map is planar, flagged `planes`: for open ground, and
+    /// with --plane-gate 1 --voxel-size 0.5 for tunnels and corridors; on a car add
+    /// --lateral-prior 1, and in tunnels --prediction-prior 0.01) or `hold` (held at the
+    /// constant-velocity prediction) [default: reference].
+    #[arg(long, value_enum)]
+    pub degeneracy: Option<DegeneracyMode>,
+    /// Robust mode registers a frame again with plane terms when the reference registration's
+    /// observability is below this; 1: every frame, without the reference registration
+    /// [default: 0.015].
+    #[arg(long)]
+    pub plane_gate: Option<f64>,
+    /// Robust mode: weight per correspondence pulling a registration with plane terms to the
+    /// constant-velocity prediction, so what the scene leaves free stays there [default: 0].
+    #[arg(long)]
+    pub prediction_prior: Option<f64>,
+    /// Robust mode: weight per correspondence against sideways motion along the sensor's y
+    /// axis, for a car-like vehicle with the sensor's x axis forward; in a corridor a turn
+    /// then tells how far it went [default: 0].
+    #[arg(long)]
+    pub lateral_prior: Option<f64>,
+    /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
+    /// would spend more keeps its last complete iterate and is flagged `budget`. With the
+    /// capacities it bounds a frame's time on a given target (README "Deadlines") [default:
+    /// none, the reference's behaviour].
+    #[arg(long)]
+    pub budget: Option<u64>,
+}
+
+/// How the core runs.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CoreArgs {
+    /// Scalar type of the core [default: f64].
+    #[arg(long, value_enum)]
+    pub scalar: Option<Scalar>,
+    /// Map point storage [default: exact, which agrees with the reference; quantized uses 6
+    /// bytes a point].
+    #[arg(long, value_enum)]
+    pub storage: Option<Storage>,
+    /// Capacity preset of the core's buffers [default: full].
+    #[arg(long, value_enum)]
+    pub capacities: Option<Preset>,
+    /// Worker threads for the correspondence search, 0 = all cores, at most the machine's
+    /// cores; results are identical for any count [default: the settings' (all cores)].
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// `--config` of the commands that compare with the reference.
+pub const CONFIG_HELP_WITH_REFERENCE: &str = "Settings file: TOML, as `run` writes to \
+    `config.toml`, or kiss-icp's YAML (a .yaml or .yml name); flags override it. The reference \
+    gets only the range, voxel size and deskewing, so every other pipeline setting must keep \
+    its default";
+
+/// `--threads` of the commands that compare with the reference.
+pub const THREADS_HELP_WITH_REFERENCE: &str = "Threads for both implementations (the \
+    reference's TBB threads), 0 = all cores, at most the machine's cores [default: 1: the \
+    reference is nondeterministic with more, and one thread compares like with like]";
+
+/// Where the reference kiss-icp 1.3.0 is.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ReferenceArgs {
+    /// Python with kiss-icp 1.3.0 [default: $KISS_ODOM_PYTHON, else python3].
+    #[arg(long)]
+    pub python: Option<PathBuf>,
+    /// The reference driver [default: $KISS_ODOM_DRIVER, else tests/reference/driver.py above
+    /// the working directory or the executable, else in this source tree].
+    #[arg(long)]
+    pub driver: Option<PathBuf>,
+}
+
+/// Capacity presets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Preset {
+    /// `Capacities::FULL_SCALE` (KITTI-like sensors at 100 m).
+    Full,
+    /// `Capacities::SMALL` (microcontroller budget).
+    Small,
+    /// `Capacities::TINY` (a 16-beam sensor in 512 KiB); also sets the parameters it was sized
+    /// for (`Config::tiny`: max range 50 m, voxel 2 m, 10 points a voxel) unless given.
+    Tiny,
+}
+
+impl Preset {
+    /// The capacities of the preset.
+    pub fn capacities(self) -> Capacities {
+        match self {
+            Preset::Full => Capacities::FULL_SCALE,
+            Preset::Small => Capacities::SMALL,
+            Preset::Tiny => Capacities::TINY,
+        }
+    }
+}
+
+/// Resolves the settings: defaults, then `--config`, then the flags. A command whose thread
+/// count must not follow the file (bench and crosscheck time and compare single-threaded
+/// runs) gives it as `threads`, which only `--threads` overrides. The result is validated,
+/// errors naming the setting at fault.
+pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Result<Settings> {
+    let mut s = match &p.config {
+        Some(path) => Settings::load(path)?,
+        None => Settings::default(),
+    };
+    if let Some(t) = threads {
+        s.runtime.threads = t;
+    }
+    if c.capacities == Some(Preset::Tiny) {
+        let t = kiss_odom_core::Config::<f64>::tiny();
+        s.data.max_range = t.max_range;
+        s.mapping.voxel_size = Some(t.voxel_size);
+        s.mapping.max_points_per_voxel = t.max_points_per_voxel;
+    }
+    if let Some(r) = p.max_range {
+        s.data.max_range = r;
+    }
+    if let Some(r) = p.min_range {
+        s.data.min_range = r;
+    }
+    if let Some(v) = p.voxel_size {
+        s.mapping.voxel_size = Some(v);
+    }
+    if p.deskew {
+        s.data.deskew = true;
+    }
+    if p.no_deskew {
+        s.data.deskew = false;
+    }
+    if let Some(d) = p.degeneracy {
+        s.registration.degeneracy = d;
+    }
+    if let Some(g) = p.plane_gate {
+        s.registration.plane_gate = g;
+    }
+    if let Some(w) = p.prediction_prior {
+        s.registration.prediction_prior = w;
+    }
+    if let Some(w) = p.lateral_prior {
+        s.registration.lateral_prior = w;
+    }
+    if let Some(b) = p.budget {
+        s.registration.work_budget = Some(b);
+    }
+    if let Some(x) = c.scalar {
+        s.runtime.scalar = x;
+    }
+    if let Some(x) = c.storage {
+        s.runtime.map_storage = x;
+    }
+    if let Some(preset) = c.capacities {
+        s.capacities = preset.capacities().into();
+    }
+    if let Some(t) = c.threads {
+        s.runtime.threads = t;
+    }
+    s.validate()?;
+    Ok(s)
+}
+
+/// Refuses settings the reference would not share: it takes only the range, voxel size and
+/// deskewing, so any other pipeline setting away from its default would be compared against a
+/// reference that did not use it.
+pub fn check_reference_compatible(s: &Settings) -> Result<()> {
+    let changed = s.changed_beyond_reference();
+    if !changed.is_empty() {
+        bail!(
+            "the reference takes only max_range, min_range, voxel_size and deskew; these \
+             settings differ from their defaults: {}",
+            changed.join(", ")
+        );
+    }
+    Ok(())
+}
+
+impl ReferenceArgs {
+    /// The interpreter: `--python`, else `KISS_ODOM_PYTHON`, else `python3`.
+    pub fn python(&self) -> PathBuf {
+        self.python
+            .clone()
+            .or_else(|| std::env::var_os("KISS_ODOM_PYTHON").map(PathBuf::from))
+            .unwrap_or_else(|| PathBuf::from("python3"))
+    }
+
+    /// The driver script: `--driver`, else `KISS_ODOM_DRIVER`, else
+    /// `tests/reference/driver.py` in the first ancestor of the working directory or of the
+    /// executable that has it, else in the source tree this binary was built from.
+    pub fn driver(&self) -> Result<PathBuf> {
+        let given = self
+            .driver
+            .clone()
+            .or_else(|| std::env::var_os("KISS_ODOM_DRIVER").map(PathBuf::from));
+        if let Some(p) = given {
+            if !p.is_file() {
+                bail!(
+                    "{}: no such driver script (give --driver, or --no-reference to bench)",
+                    p.display()
+                );
+            }
+            return Ok(p);
+        }
+        let mut bases: Vec<PathBuf> = Vec::new();
+        if let Ok(cwd) = std::env::current_dir() {
+            bases.extend(cwd.ancestors().map(Path::to_path_buf));
+        }
+        if let Ok(exe) = std::env::current_exe() {
+            bases.extend(exe.ancestors().skip(1).map(Path::to_path_buf));
+        }
+        bases.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."));
+        bases
+            .iter()
+            .map(|b| b.join(DRIVER_IN_REPO))
+            .find(|p| p.is_file())
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "cannot find {DRIVER_IN_REPO} above the working directory or the \
+                     executable; give --driver"
+                )
+            })
+    }
+}
+
+/// The reference driver script relative to the repository root.
+pub const DRIVER_IN_REPO: &str = "tests/reference/driver.py";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        pipeline: PipelineArgs,
+        #[command(flatten)]
+        core: CoreArgs,
+    }
+
+    fn resolve(argv: &[&str], threads: Option<usize>) -> Result<Settings> {
+        let w = Wrap::try_parse_from(std::iter::once("x").chain(argv.iter().copied())).unwrap();
+        settings(&w.pipeline, &w.core, threads)
+    }
+
+    #[test]
+    fn flags_override_the_file_which_overrides_the_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("c.toml");
+        std::fs::write(&file, "[data]\nmax_range = 60.0\n[runtime]\nthreads = 3\n").unwrap();
+        let f = file.to_str().unwrap();
+        let s = resolve(&["--config", f], None).unwrap();
+        assert_eq!((s.data.max_range, s.runtime.threads), (60.0, 3));
+        let s = resolve(&["--config", f], Some(1)).unwrap();
+        assert_eq!(
+            s.runtime.threads, 1,
+            "bench and crosscheck keep their default"
+        );
+        let s = resolve(
+            &["--config", f, "--max-range", "50", "--threads", "2"],
+            None,
+        )
+        .unwrap();
+        assert_eq!((s.data.max_range, s.runtime.threads), (50.0, 2));
+        let s = resolve(&["--no-deskew", "--capacities", "small"], Some(1)).unwrap();
+        assert!(!s.data.deskew && s.runtime.threads == 1);
+        assert_eq!(s.capacities, Capacities::SMALL.into());
+        let s = resolve(&[], None).unwrap();
+        assert_eq!(s.runtime.threads, 0, "run's default: all cores");
+    }
+
+    #[test]
+    fn only_what_the_reference_takes_may_change_for_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("c.toml");
+        std::fs::write(&file, "[registration]\nkernel_scale = 0.5\n").unwrap();
+        let s = resolve(&["--max-range", "50", "--scalar", "f32"], None).unwrap();
+        check_reference_compatible(&s).unwrap();
+        let s = resolve(&["--config", file.to_str().unwrap()], None).unwrap();
+        let e = check_reference_compatible(&s).unwrap_err().to_string();
+        assert!(e.contains("registration.kernel_scale"), "{e}");
+    }
+}

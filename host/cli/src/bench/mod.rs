@@ -1,0 +1,560 @@
+//! `kiss-odom bench`: speed, latency and memory of kiss-odom next to the reference kiss-icp
+//! 1.3.0 on the same frames.
+//!
+//! The frames are read into memory first (file reading is never timed) and handed to the
+//! reference byte for byte ([`mod@reference`]); then both implementations run over all of them,
+//! each run a fresh pipeline, taking turns (ours, ref, ref, ours, ...) so that machine drift
+//! hits both alike. Only the per-frame odometry call is timed. The headline is the ratio
+//! ours/reference of frames per second, paired run by run; absolute times are context, since
+//! the machine may be shared. Latency percentiles are taken over the per-frame median of the
+//! timed runs, after the first `--latency-from` frames (the map is still filling there).
+
+mod print;
+pub mod reference;
+
+use crate::args::{CommonArgs, ReferenceArgs};
+use crate::memory::{peak_rss_bytes, reset_peak_rss, rss_bytes};
+use crate::stats::{median, percentile};
+use anyhow::{bail, Context, Result};
+use kiss_odom_core::Capacities;
+use kiss_odom_drive::settings::{Scalar, Settings, Storage};
+use kiss_odom_drive::{Driver, Preloaded, Step};
+use kiss_odom_io::pose::{pose_difference, pose_of_row_major};
+use kiss_odom_io::Selection;
+use kiss_odom_io::{self as io, Frame, Item};
+use nalgebra::Isometry3;
+use reference::{RefRun, Reference};
+use serde::Serialize;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// `kiss-odom bench` arguments.
+#[derive(Debug, clap::Args)]
+#[command(
+    mut_arg("config", |a| a.help(crate::args::CONFIG_HELP_WITH_REFERENCE)),
+    mut_arg("threads", |a| a.help(crate::args::THREADS_HELP_WITH_REFERENCE)),
+)]
+pub struct BenchArgs {
+    /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
+    /// .mcap file (read as `run` reads it).
+    pub dataset: PathBuf,
+    /// Timed runs per implementation (after one untimed warm-up run each).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Latency percentiles skip the frames before this one (the map is still filling there).
+    #[arg(long, default_value_t = 10)]
+    pub latency_from: usize,
+    /// Time kiss-odom alone.
+    #[arg(long)]
+    pub no_reference: bool,
+    /// Also write every figure (and the per-frame times) to this JSON file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Input, pipeline and core options.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Where the reference is.
+    #[command(flatten, next_help_heading = "Reference")]
+    pub reference: ReferenceArgs,
+}
+
+/// One timed run of ours.
+#[derive(Clone, Debug, Serialize)]
+pub struct OurRun {
+    /// Seconds in the core's frame call, per frame.
+    pub seconds: Vec<f64>,
+    /// The calling thread's CPU seconds in that call, per frame.
+    pub cpu_seconds: Vec<f64>,
+    /// RSS when the run started (frames loaded).
+    pub rss_before_bytes: Option<u64>,
+    /// Peak RSS during the run.
+    pub peak_rss_bytes: Option<u64>,
+    /// Poses, widened to f64.
+    #[serde(skip)]
+    pub poses: Vec<Isometry3<f64>>,
+    /// ICP iterations per frame.
+    #[serde(skip)]
+    pub iterations: Vec<u32>,
+    /// Frames whose status was not ok.
+    pub degraded_frames: usize,
+    /// Empty frames (no usable point).
+    pub empty_frames: usize,
+    /// What the memory figures are made of.
+    #[serde(skip)]
+    pub memory: Option<Memory>,
+}
+
+/// Frame rate and latency of one implementation over the timed runs.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SideStats {
+    /// Frames per second of odometry time, per timed run.
+    pub fps_runs: Vec<f64>,
+    /// Their median.
+    pub fps: f64,
+    /// Per-frame latency percentiles (ms) of the per-frame median over runs.
+    pub p50_ms: f64,
+    /// 99th percentile.
+    pub p99_ms: f64,
+    /// Worst frame.
+    pub max_ms: f64,
+    /// Worst single frame time over every timed run (ms), noise included.
+    pub max_any_run_ms: f64,
+    /// The same percentiles of the calling thread's CPU time (ours, one thread): what the
+    /// frame costs without the time other processes took the core away.
+    pub cpu: Option<Spread>,
+    /// Largest peak RSS of a timed run.
+    pub peak_rss_bytes: Option<u64>,
+    /// Largest growth of RSS during a timed run (peak minus RSS at its start).
+    pub rss_growth_bytes: Option<u64>,
+}
+
+/// Per-frame time percentiles (ms) of the per-frame median over runs (wall-clock or CPU).
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Spread {
+    /// Median frame.
+    pub p50_ms: f64,
+    /// 99th percentile.
+    pub p99_ms: f64,
+    /// Worst frame.
+    pub max_ms: f64,
+}
+
+/// The first frame the latency figures count: `from`, or the last frame of a shorter run (so
+/// every figure is taken over at least one frame, never reported as 0).
+fn first_counted(from: usize, frames: usize) -> usize {
+    from.min(frames.saturating_sub(1))
+}
+
+/// Each frame's median over the runs (ms), from frame `from` on, sorted.
+fn per_frame_medians(runs: &[&[f64]], from: usize) -> Vec<f64> {
+    let n = runs.first().map_or(0, |r| r.len());
+    let mut v: Vec<f64> = (first_counted(from, n)..n)
+        .map(|i| median(&runs.iter().map(|r| r[i]).collect::<Vec<_>>()) * 1e3)
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+impl Spread {
+    fn of(runs: &[&[f64]], from: usize) -> Self {
+        let v = per_frame_medians(runs, from);
+        Self {
+            p50_ms: percentile(&v, 50.0),
+            p99_ms: percentile(&v, 99.0),
+            max_ms: v.last().copied().unwrap_or(0.0),
+        }
+    }
+}
+
+impl SideStats {
+    fn of(runs: &[(Vec<f64>, Option<u64>, Option<u64>)], latency_from: usize) -> Self {
+        let mut s = SideStats::default();
+        if runs.is_empty() {
+            return s;
+        }
+        s.fps_runs = runs
+            .iter()
+            .map(|(sec, _, _)| sec.len() as f64 / sec.iter().sum::<f64>().max(1e-12))
+            .collect();
+        s.fps = median(&s.fps_runs);
+        let seconds: Vec<&[f64]> = runs.iter().map(|r| r.0.as_slice()).collect();
+        let wall = Spread::of(&seconds, latency_from);
+        (s.p50_ms, s.p99_ms, s.max_ms) = (wall.p50_ms, wall.p99_ms, wall.max_ms);
+        s.max_any_run_ms = runs
+            .iter()
+            .flat_map(|r| r.0.iter().skip(first_counted(latency_from, r.0.len())))
+            .fold(0.0f64, |a, &b| a.max(b * 1e3));
+        s.peak_rss_bytes = runs.iter().filter_map(|r| r.2).max();
+        s.rss_growth_bytes = runs
+            .iter()
+            .filter_map(|r| Some(r.2?.saturating_sub(r.1?)))
+            .max();
+        s
+    }
+}
+
+/// Memory figures of ours and the reference's local map.
+#[derive(Clone, Debug, Serialize)]
+pub struct Memory {
+    /// Bytes of our whole core state, fixed at start.
+    pub state_bytes: usize,
+    /// Bytes the state would need with capacities equal to the high-water marks.
+    pub state_high_water_bytes: Option<usize>,
+    /// Bytes of our local map (voxel table and point pool), fixed at start.
+    pub map_bytes: usize,
+    /// Bytes of a map sized to the high-water marks.
+    pub map_high_water_bytes: usize,
+    /// High-water marks against capacities: merge, source, voxels, point slots.
+    pub high_water: serde_json::Value,
+    /// The reference's most voxels (after any frame).
+    pub reference_voxels: Option<usize>,
+    /// The reference's most points.
+    pub reference_points: Option<usize>,
+    /// Its point buffers: `max_points_per_voxel` x 24 B reserved per voxel.
+    pub reference_map_bytes: Option<usize>,
+    /// Plus malloc chunk headers and the robin-map bucket array (estimate, see BENCHMARKS.md).
+    pub reference_map_bytes_with_table: Option<usize>,
+}
+
+/// Everything `bench` measured.
+#[derive(Debug, Serialize)]
+pub struct Report {
+    /// Dataset path.
+    pub dataset: String,
+    /// Frames timed.
+    pub frames: usize,
+    /// Points in them.
+    pub points: usize,
+    /// Threads on both sides.
+    pub threads: usize,
+    /// f64 or f32.
+    pub scalar: Scalar,
+    /// Map point storage.
+    pub storage: Storage,
+    /// Timed runs per side.
+    pub repeats: usize,
+    /// First frame in the latency statistics (`--latency-from`, or the last frame of a shorter
+    /// dataset).
+    pub latency_from: usize,
+    /// Ours.
+    pub ours: SideStats,
+    /// The reference.
+    pub reference: Option<SideStats>,
+    /// Median of the per-repeat ratios ours/reference of frames per second.
+    pub speed_ratio: Option<f64>,
+    /// The per-repeat ratios.
+    pub speed_ratio_runs: Vec<f64>,
+    /// Memory.
+    pub memory: Memory,
+    /// Worst-case nearest-neighbour distance evaluations per frame from the capacities.
+    pub worst_case_distance_evaluations: u64,
+    /// Most ICP iterations of a frame.
+    pub max_iterations_seen: u32,
+    /// Largest position difference of our poses from the reference's (m).
+    pub pose_diff_m: Option<f64>,
+    /// Largest rotation difference (rad).
+    pub pose_diff_rad: Option<f64>,
+    /// Whether every run of ours gave the same poses bit for bit.
+    pub ours_repeatable: bool,
+    /// Frames with a non-ok status in our warm-up run.
+    pub degraded_frames: usize,
+    /// Share of the reference's frame time spent converting the input frame to a C++ vector.
+    pub reference_binding_share: Option<f64>,
+    /// Versions of the reference.
+    pub reference_versions: Option<serde_json::Value>,
+    /// Per-frame seconds of each timed run, ours then the reference's.
+    pub per_frame_seconds: serde_json::Value,
+}
+
+/// Reads the frames of `args.dataset` in range into memory; unreadable frames are left out.
+pub fn load(args: &BenchArgs, scan_points: usize, err: &mut dyn Write) -> Result<Vec<Frame>> {
+    let mut dataset = io::open(
+        &args.dataset,
+        args.common.input.format,
+        &args.common.input.open_options(scan_points),
+    )?;
+    let mut out = Vec::new();
+    for item in Selection::new(dataset.frames.as_mut(), args.common.input.range()) {
+        match item? {
+            Item::Frame(f) => {
+                for w in &f.warnings {
+                    writeln!(err, "warning: {w}")?;
+                }
+                out.push(f);
+            }
+            Item::Skipped { reason, .. } => writeln!(err, "warning: {reason} (left out)")?,
+        }
+    }
+    if out.is_empty() {
+        bail!("{}: no frames in range", args.dataset.display());
+    }
+    Ok(out)
+}
+
+/// Runs `kiss-odom bench`.
+pub fn execute(args: &BenchArgs, err: &mut dyn Write) -> Result<i32> {
+    if args.repeats == 0 {
+        bail!("--repeats must be at least 1");
+    }
+    if let Some(path) = &args.json {
+        kiss_odom_io::write::remove_stale_file(path)?;
+    }
+    let settings = args.common.settings(Some(1))?;
+    if !args.no_reference {
+        crate::args::check_reference_compatible(&settings)?;
+    }
+    if let Some(w) = settings.threads_warning() {
+        writeln!(err, "warning: {w}")?;
+    }
+    let threads = settings.threads();
+    let frames = load(args, settings.capacities()?.scan_points, err)?;
+    let mut reference = if args.no_reference {
+        None
+    } else {
+        let python = args.reference.python();
+        let driver = args.reference.driver()?;
+        Some(Reference::start(
+            &python, &driver, &frames, &settings, threads,
+        )?)
+    };
+    if let Some(r) = &reference {
+        if r.ready.frames != frames.len() {
+            bail!(
+                "the reference loaded {} frames, we have {}",
+                r.ready.frames,
+                frames.len()
+            );
+        }
+    }
+    let points: usize = frames.iter().map(|f| f.points.len()).sum();
+    let preloaded = Driver::new(&settings)?.preload(&frames);
+    drop(frames);
+    let report = measure(args, &settings, &preloaded, points, reference.as_mut(), err)?;
+    drop(reference);
+    print::print_report(&report);
+    if let Some(path) = &args.json {
+        let json = serde_json::to_string_pretty(&report)? + "\n";
+        kiss_odom_io::write::write(path, json.as_bytes())?;
+    }
+    Ok(0)
+}
+
+/// One run of a fresh driver over every preloaded frame, timing only the core's calls.
+fn run_ours(settings: &Settings, frames: &Preloaded) -> Result<OurRun> {
+    let reset = reset_peak_rss();
+    let rss_before = rss_bytes();
+    let mut driver = Driver::new(settings)?;
+    let n = frames.len();
+    let mut run = OurRun {
+        seconds: Vec::with_capacity(n),
+        cpu_seconds: Vec::with_capacity(n),
+        rss_before_bytes: rss_before,
+        peak_rss_bytes: None,
+        poses: Vec::with_capacity(n),
+        iterations: Vec::with_capacity(n),
+        degraded_frames: 0,
+        empty_frames: 0,
+        memory: None,
+    };
+    let mut max_input_points = 0;
+    for k in 0..n {
+        let o = driver.register_preloaded(frames, k)?;
+        run.seconds.push(o.latency.as_secs_f64());
+        run.cpu_seconds.push(o.cpu.as_secs_f64());
+        run.iterations.push(o.report().map_or(0, |r| r.iterations));
+        run.degraded_frames += usize::from(o.status().is_some_and(|s| !s.is_ok()));
+        run.empty_frames += usize::from(o.step == Step::Empty);
+        max_input_points = max_input_points.max(o.input_points);
+        run.poses.push(o.pose);
+    }
+    run.memory = Some(memory(&driver, max_input_points));
+    drop(driver);
+    run.peak_rss_bytes = if reset { peak_rss_bytes() } else { None };
+    Ok(run)
+}
+
+/// Our memory figures after a run: fixed, and what capacities at the high-water marks need.
+fn memory(driver: &Driver, max_input_points: usize) -> Memory {
+    let caps = driver.capacities();
+    let stored = driver.map_point_bytes();
+    let hw = driver.high_water();
+    let hw_caps = Capacities {
+        scan_points: max_input_points.clamp(1, caps.scan_points),
+        merge_points: hw.merge_points.max(1),
+        source_points: hw.source_points.max(1),
+        map_voxels: hw.map_voxels.max(1),
+        map_points: hw.map_point_slots.max(1),
+        plane_terms: caps.plane_terms,
+    };
+    Memory {
+        state_bytes: driver.state_bytes(),
+        state_high_water_bytes: hw_caps
+            .validate()
+            .ok()
+            .map(|_| driver.state_bytes_for(&hw_caps)),
+        map_bytes: caps.map_bytes(stored),
+        map_high_water_bytes: hw_caps.map_bytes(stored),
+        high_water: serde_json::json!({
+            "merge_points": [hw.merge_points, caps.merge_points],
+            "source_points": [hw.source_points, caps.source_points],
+            "map_voxels": [hw.map_voxels, caps.map_voxels],
+            "map_point_slots": [hw.map_point_slots, caps.map_points],
+        }),
+        reference_voxels: None,
+        reference_points: None,
+        reference_map_bytes: None,
+        reference_map_bytes_with_table: None,
+    }
+}
+
+/// The warm-up runs, then the timed runs taking turns, then every figure.
+fn measure(
+    args: &BenchArgs,
+    settings: &Settings,
+    frames: &Preloaded,
+    points: usize,
+    mut reference: Option<&mut Reference>,
+    err: &mut dyn Write,
+) -> Result<Report> {
+    let n = frames.len();
+    let threads = settings.threads();
+
+    // Warm-up: untimed, gives poses, high-water marks and the reference's map size.
+    writeln!(err, "bench: warm-up runs ({n} frames, {threads} thread(s))")?;
+    let warm = run_ours(settings, frames)?;
+    let ref_warm = match reference.as_deref_mut() {
+        Some(r) => Some(r.run(true, true)?),
+        None => None,
+    };
+
+    let mut ours_runs: Vec<OurRun> = Vec::new();
+    let mut ref_runs: Vec<RefRun> = Vec::new();
+    for r in 0..args.repeats {
+        writeln!(err, "bench: timed repeat {}/{}", r + 1, args.repeats)?;
+        // ABBA order: drift over the session hits both sides alike.
+        let ours_first = r % 2 == 0;
+        if ours_first {
+            ours_runs.push(run_ours(settings, frames)?);
+        }
+        if let Some(rf) = reference.as_deref_mut() {
+            ref_runs.push(rf.run(false, false)?);
+        }
+        if !ours_first {
+            ours_runs.push(run_ours(settings, frames)?);
+        }
+    }
+
+    let triples_ours: Vec<_> = ours_runs
+        .iter()
+        .map(|r| (r.seconds.clone(), r.rss_before_bytes, r.peak_rss_bytes))
+        .collect();
+    let mut ours = SideStats::of(&triples_ours, args.latency_from);
+    if threads == 1 {
+        let cpu: Vec<&[f64]> = ours_runs.iter().map(|r| r.cpu_seconds.as_slice()).collect();
+        ours.cpu = Some(Spread::of(&cpu, args.latency_from));
+    }
+    let ref_stats = reference.as_ref().map(|_| {
+        let t: Vec<_> = ref_runs
+            .iter()
+            .map(|r| (r.seconds.clone(), r.rss_before_bytes, r.peak_rss_bytes))
+            .collect();
+        SideStats::of(&t, args.latency_from)
+    });
+    let speed_ratio_runs: Vec<f64> = match &ref_stats {
+        Some(rs) => ours
+            .fps_runs
+            .iter()
+            .zip(&rs.fps_runs)
+            .map(|(a, b)| a / b)
+            .collect(),
+        None => Vec::new(),
+    };
+    let speed_ratio = (!speed_ratio_runs.is_empty()).then(|| median(&speed_ratio_runs));
+
+    // Poses: ours against the reference's warm-up run, and our runs against each other.
+    let ours_repeatable = ours_runs.iter().all(|r| r.poses == warm.poses);
+    let (mut pose_diff_m, mut pose_diff_rad) = (None, None);
+    if let Some(rp) = ref_warm.as_ref().and_then(|r| r.poses.as_ref()) {
+        let (mut dm, mut dr) = (0.0f64, 0.0f64);
+        for (a, b) in warm.poses.iter().zip(rp) {
+            let b = pose_of_row_major(b).context("the reference sent a malformed pose")?;
+            let (t, r) = pose_difference(a, &b);
+            dm = dm.max(t);
+            dr = dr.max(r);
+        }
+        pose_diff_m = Some(dm);
+        pose_diff_rad = Some(dr);
+    }
+
+    let mut memory = warm
+        .memory
+        .clone()
+        .context("the warm-up run has no memory figures")?;
+    let ref_voxels = ref_warm.as_ref().and_then(|r| r.map_voxels_peak);
+    let n_max = settings.mapping.max_points_per_voxel as usize;
+    memory.reference_voxels = ref_voxels;
+    memory.reference_points = ref_warm.as_ref().and_then(|r| r.map_points_peak);
+    memory.reference_map_bytes = ref_voxels.map(|v| v * n_max * 24);
+    memory.reference_map_bytes_with_table = ref_voxels.map(|v| reference_map_estimate(v, n_max));
+    let reference_binding_share = ref_warm.as_ref().and_then(|r| {
+        let b: f64 = r.binding_seconds.as_ref()?.iter().sum();
+        Some(b / r.seconds.iter().sum::<f64>())
+    });
+    let caps = settings.capacities()?;
+    let worst_case_distance_evaluations = caps.source_points as u64
+        * 27
+        * settings.mapping.max_points_per_voxel as u64
+        * settings.registration.max_num_iterations as u64;
+    Ok(Report {
+        dataset: args.dataset.display().to_string(),
+        frames: n,
+        points,
+        threads,
+        scalar: settings.runtime.scalar,
+        storage: settings.runtime.map_storage,
+        repeats: args.repeats,
+        latency_from: first_counted(args.latency_from, n),
+        ours,
+        reference: ref_stats,
+        speed_ratio,
+        speed_ratio_runs,
+        memory,
+        worst_case_distance_evaluations,
+        max_iterations_seen: warm.iterations.iter().copied().max().unwrap_or(0),
+        pose_diff_m,
+        pose_diff_rad,
+        ours_repeatable,
+        degraded_frames: warm.degraded_frames,
+        reference_binding_share,
+        reference_versions: reference.as_ref().map(|r| r.ready.versions.clone()),
+        per_frame_seconds: serde_json::json!({
+            "ours": ours_runs.iter().map(|r| &r.seconds).collect::<Vec<_>>(),
+            "reference": ref_runs.iter().map(|r| &r.seconds).collect::<Vec<_>>(),
+        }),
+    })
+}
+
+/// The reference's local-map bytes for `voxels` voxels, counted generously for it: each voxel's
+/// `std::vector` reserves `n_max` points of 24 B in one malloc chunk (glibc: request + 8 rounded
+/// up to 16), and the `tsl::robin_map` keeps a 48-byte bucket (16-bit probe distance, flag,
+/// then the 12-byte key and 24-byte vector aligned to 8) for each of its power-of-two buckets,
+/// at least twice the most voxels it held (max load 0.5; it never shrinks).
+pub fn reference_map_estimate(voxels: usize, n_max: usize) -> usize {
+    let chunk = (n_max * 24 + 8).div_ceil(16) * 16;
+    let buckets = (2 * voxels).next_power_of_two();
+    voxels * chunk + buckets * 48
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_takes_each_frames_median_over_runs_from_the_first_counted_frame() {
+        // Frame 0 is the warm-up and left out; frame 3's outlier in one run is voted down.
+        let a = [9.0, 0.125, 0.25, 0.375];
+        let b = [9.0, 0.375, 0.5, 4.0];
+        let c = [9.0, 0.25, 0.75, 0.5];
+        let s = Spread::of(&[&a, &b, &c], 1);
+        // Medians (ms): 250, 500, 500.
+        assert_eq!(
+            per_frame_medians(&[&a, &b, &c], 1),
+            vec![250.0, 500.0, 500.0]
+        );
+        assert_eq!((s.p50_ms, s.max_ms), (500.0, 500.0));
+        assert_eq!(per_frame_medians(&[&a, &b, &c], 0).last(), Some(&9000.0));
+    }
+
+    #[test]
+    fn latency_from_past_the_last_frame_counts_the_last_frame_not_nothing() {
+        let run = |t: &[f64]| (t.to_vec(), None, None);
+        let s = SideStats::of(&[run(&[0.5, 0.25]), run(&[0.5, 0.125])], 10);
+        // Both figures from frame 1 alone: median 187.5 ms, worst single run 250 ms.
+        assert_eq!(
+            (s.p50_ms, s.max_ms, s.max_any_run_ms),
+            (187.5, 187.5, 250.0)
+        );
+        let s = SideStats::of(&[run(&[0.5, 0.25]), run(&[0.5, 0.125])], 0);
+        assert_eq!(s.max_any_run_ms, 500.0);
+    }
+}

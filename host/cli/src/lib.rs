@@ -1,0 +1,26 @@
+//! The `kiss-odom` command: one module per command, and what they share (options, signals,
+//! plots, the Rerun and point-cloud observers). The odometry is `kiss-odom-core`, run through
+//! `kiss-odom-drive`; recordings are read and poses written by `kiss-odom-io`; `simulate`
+//! drives `kiss-odom-sim`. This crate is glue: argument parsing, the run loop and its outputs.
+//!
+//! [`run`] feeds a recording's frames to the driver and writes what each command writes;
+//! [`live`] is `run` on a socket, watching each pose as it comes; [`mod@bench`] and
+//! [`crosscheck`] time and compare the same frames against the reference kiss-icp.
+
+pub mod args;
+pub mod bench;
+pub mod cli;
+pub mod convert;
+pub mod crosscheck;
+pub mod eval;
+pub mod interrupt;
+pub mod live;
+pub mod memory;
+pub mod plot;
+pub mod replay;
+#[cfg(feature = "ros2")]
+pub mod ros2;
+pub mod run;
+pub mod simulate;
+pub mod stats;
+pub mod viz;

@@ -1,0 +1,191 @@
+//! `kiss-odom ros2 --play`: publishes a recording's clouds on a ROS 2 topic at their recorded
+//! pace, so the node (or any ROS 2 tool) can be fed without a robot.
+//!
+//! Frames come from the same readers as `kiss-odom run` ([`kiss_odom_io::open()`]), KITTI
+//! correction included, and go out as `sensor_msgs/PointCloud2` with x, y, z and (when the
+//! recording has per-point times) `t`, all FLOAT64: every value reaches the node exactly as
+//! `run` reads it. The header stamp is the frame's time; frame `k` is sent `(t_k - t_0) / rate`
+//! seconds after the first (frames without a time are `period` apart). With `lockstep` a
+//! cloud also waits for the odometry of the one before (its stamp on the node's odometry
+//! topic, at most `wait` seconds): a node on any machine then gets every cloud, none dropped,
+//! and the pace is the node's.
+
+use super::dds::{self, Writer};
+use super::msg::{Header, Odometry, PointCloud2, Time, ODOMETRY_TYPE, POINTCLOUD2_TYPE};
+use anyhow::{bail, Result};
+use kiss_odom_io::{self as io, Format, Item, OpenOptions};
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// What to play and how.
+#[derive(Clone, Debug)]
+pub struct PlayOptions {
+    /// Recording.
+    pub path: PathBuf,
+    /// Its format.
+    pub format: Format,
+    /// Topic inside a bag or MCAP (default: its only cloud topic).
+    pub source_topic: Option<String>,
+    /// ROS 2 topic to publish on.
+    pub points_topic: String,
+    /// `frame_id` of the published clouds.
+    pub frame_id: String,
+    /// Speed factor (2 = twice as fast).
+    pub rate: f64,
+    /// Time between frames that carry no time (s).
+    pub period: f64,
+    /// How long to wait for a subscriber before the first cloud (s), and with `lockstep` for
+    /// each cloud's odometry.
+    pub wait: f64,
+    /// The node's odometry topic: publish a cloud only once the odometry of the one before has
+    /// come on it (or `wait` passed).
+    pub lockstep: Option<String>,
+    /// DDS domain.
+    pub domain: u16,
+}
+
+/// Plays the recording; returns the number of clouds published.
+pub fn run(
+    opts: &PlayOptions,
+    stop: &AtomicBool,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<u64> {
+    if !(opts.rate.is_finite() && opts.rate > 0.0) {
+        bail!("--rate must be positive");
+    }
+    if !(opts.period.is_finite() && opts.period > 0.0) {
+        bail!("--period must be positive");
+    }
+    let mut dataset = io::open(
+        &opts.path,
+        opts.format,
+        &OpenOptions {
+            topic: opts.source_topic.clone(),
+            ..OpenOptions::default()
+        },
+    )?;
+    let dp = dds::participant(opts.domain)?;
+    let w: Writer<PointCloud2> = dds::writer(
+        &dp,
+        &opts.points_topic,
+        POINTCLOUD2_TYPE,
+        &dds::sensor_qos(),
+    )?;
+    let stopped = || stop.load(Ordering::SeqCst);
+    let wait = crate::interrupt::seconds(opts.wait);
+    let mut acks = opts
+        .lockstep
+        .as_ref()
+        .map(|topic| {
+            let r = dds::reader::<Odometry>(&dp, topic, ODOMETRY_TYPE, &dds::reliable_qos(10))?;
+            Ok::<_, anyhow::Error>((topic, r))
+        })
+        .transpose()?;
+    if !dds::wait_for_reader(&w, wait, &stopped) {
+        writeln!(
+            err,
+            "warning: no subscriber on {} after {} s; publishing anyway",
+            opts.points_topic, opts.wait
+        )?;
+    }
+    if let Some((topic, r)) = &acks {
+        if !dds::wait_for_writer(r, wait, &stopped) {
+            writeln!(
+                err,
+                "warning: no odometry on {topic} after {} s; --lockstep waits for each cloud anyway",
+                opts.wait
+            )?;
+        }
+    }
+    let mut first: Option<(f64, Instant)> = None;
+    let mut sent = 0u64;
+    let mut next_time = 0.0;
+    while !stopped() {
+        let frame = match dataset.frames.next_item()? {
+            None => break,
+            Some(Item::Skipped { reason, .. }) => {
+                writeln!(err, "warning: {reason}")?;
+                continue;
+            }
+            Some(Item::Frame(f)) => f,
+        };
+        for w in &frame.warnings {
+            writeln!(err, "warning: {w}")?;
+        }
+        let time = frame
+            .time
+            .or_else(|| {
+                dataset
+                    .info
+                    .frame_times
+                    .as_ref()
+                    .and_then(|t| t.get(frame.index).copied())
+            })
+            .unwrap_or(next_time);
+        next_time = time + opts.period;
+        let (t0, start) = *first.get_or_insert((time, Instant::now()));
+        // A tiny rate or a long gap is a long wait (past `Instant`'s range: until stopped).
+        let due = start.checked_add(crate::interrupt::seconds((time - t0) / opts.rate));
+        while !stopped() {
+            let left = due.map_or(Duration::MAX, |d| {
+                d.saturating_duration_since(Instant::now())
+            });
+            if left.is_zero() {
+                break;
+            }
+            std::thread::sleep(left.min(Duration::from_millis(50)));
+        }
+        let stamp = Time::from_seconds(time);
+        let header = Header {
+            stamp,
+            frame_id: opts.frame_id.clone(),
+        };
+        let msg = PointCloud2::xyzt(header, &frame.points, frame.stamps.as_deref());
+        w.write(msg, None)
+            .map_err(|e| anyhow::anyhow!("publishing {}: {e:?}", opts.points_topic))?;
+        writeln!(
+            out,
+            "published {sent} {} stamp {time:.6} points {}",
+            frame.name,
+            frame.points.len()
+        )?;
+        sent += 1;
+        if let Some((topic, r)) = &mut acks {
+            if !answered(r, stamp, wait, &stopped) && !stopped() {
+                writeln!(
+                    err,
+                    "warning: no odometry for stamp {time:.6} on {topic} after {} s (skipped \
+                     by the node?); publishing the next cloud",
+                    opts.wait
+                )?;
+            }
+        }
+    }
+    // Let the event loop put the last fragments on the wire before the participant goes.
+    std::thread::sleep(Duration::from_millis(500));
+    writeln!(out, "played {sent} clouds on {}", opts.points_topic)?;
+    Ok(sent)
+}
+
+/// Waits until odometry stamped `stamp` comes on `r` (older messages are passed over), `stop`
+/// says stop, or `wait` passes; returns whether it came.
+fn answered(
+    r: &mut dds::Reader<Odometry>,
+    stamp: Time,
+    wait: Duration,
+    stop: &dyn Fn() -> bool,
+) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < wait && !stop() {
+        while let Ok(Some(sample)) = r.take_next_sample() {
+            if sample.into_value().header.stamp == stamp {
+                return true;
+            }
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    false
+}

@@ -1,0 +1,565 @@
+//! `kiss-odom run`: odometry over a recording, with poses, per-frame records, a summary,
+//! metrics against ground truth and a plot written to the output folder.
+//!
+//! The frames go through the [`Driver`]; this module decides what stops a run and what is
+//! written, and hands every outcome to the observers of [`crate::viz`] (`--rerun`,
+//! `--save-map`, `--save-cloud`). The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
+//! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
+//! in which no frame could be registered ends with exit 1 and its own reason, never an output
+//! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
+//! every case the outputs hold the frames processed so far (pose files and the plot only when
+//! a frame was registered), written atomically, and no output of an earlier run stays beside
+//! them.
+
+mod files;
+
+pub use files::{FrameRow, Latency, PacketTotals, RowKind, Summary, OUTPUTS};
+
+use crate::args::CommonArgs;
+use crate::viz::{Observer, Seen, ViewArgs};
+use anyhow::{anyhow, Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use kiss_odom_core::stages::{se3_exp, se3_log};
+use kiss_odom_core::Flag;
+use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, Step};
+use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
+use kiss_odom_sensors::SweepEnd;
+use nalgebra::Isometry3;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+/// `kiss-odom run` arguments. Flags override `--config`, which overrides the defaults (the
+/// reference's: max range 100 m, voxel max_range/100, deskew on).
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
+    /// .mcap file, or a .pcap/.pcapng recording of Velodyne or Ouster packets.
+    pub path: PathBuf,
+    /// Outputs and how the run goes.
+    #[command(flatten)]
+    pub run: RunOptions,
+    /// Input, pipeline and core options.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Rerun recording and point-cloud exports.
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// What `run` and `live` share: where the outputs go and how the run goes.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunOptions {
+    /// Output folder (created if missing); the outputs of an earlier run there are replaced.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Treat a skipped frame, ignored timestamps or a dataset warning as an error (exit 1).
+    #[arg(long)]
+    pub strict: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// The instant within a deskewed sweep each pose refers to: the reference deskews to the
+    /// end; `start` and `middle` move the pose back along the frame's motion. The TUM file's
+    /// first line states it.
+    #[arg(long, value_enum, default_value_t = PoseTime::End)]
+    pub pose_time: PoseTime,
+}
+
+/// The instant within a sweep a pose refers to (`--pose-time`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PoseTime {
+    /// The end of the sweep (the reference's poses).
+    #[default]
+    End,
+    /// The start of the sweep.
+    Start,
+    /// The middle of the sweep.
+    Middle,
+}
+
+impl PoseTime {
+    /// The instant as a fraction of the sweep: 0 start, 1 end.
+    pub fn fraction(self) -> f64 {
+        match self {
+            Self::End => 1.0,
+            Self::Start => 0.0,
+            Self::Middle => 0.5,
+        }
+    }
+
+    /// `end`, `start` or `middle`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::End => "end",
+            Self::Start => "start",
+            Self::Middle => "middle",
+        }
+    }
+
+    /// The pose at this instant of a sweep whose end pose is `end`, `delta` being the motion
+    /// the sweep was deskewed with (the constant-velocity model before registration):
+    /// deskewing moved every point along `Exp((s - 1) Log(delta))` to the end, so the sensor at
+    /// fraction `s` is `end` times that. The map's own frames keep that convention; the motion
+    /// registration finds afterwards does not (the first deskewed frame's pose is relative to
+    /// undeskewed sweeps, which sit at their middle).
+    pub fn pose(self, end: &Isometry3<f64>, delta: &Isometry3<f64>) -> Isometry3<f64> {
+        if self == Self::End {
+            return *end;
+        }
+        let xi = se3_log(delta) * (self.fraction() - 1.0);
+        end * se3_exp(&xi)
+    }
+}
+
+/// How the frames arrive.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Mode {
+    /// From a file, as fast as the core goes.
+    #[default]
+    Recorded,
+    /// From a sensor as it sweeps (`live`): each pose is printed as it comes, and the time
+    /// from a sweep's last packet to its pose is measured.
+    Live,
+}
+
+/// Why the frame loop ended.
+enum End {
+    /// Every frame in range was read.
+    Finished,
+    /// An error: a damaged container, a `--strict` stop.
+    Failed(anyhow::Error),
+    /// SIGINT or SIGTERM.
+    Interrupted(i32),
+}
+
+/// What the run produced, frame by frame.
+#[derive(Default)]
+pub(crate) struct Record {
+    /// One row per frame.
+    pub rows: Vec<FrameRow>,
+    /// The pose after each frame.
+    pub poses: Vec<Isometry3<f64>>,
+    /// Each frame's time (its own, else `times.txt`'s), if known.
+    pub times: Vec<Option<f64>>,
+    /// Frame indices.
+    pub indices: Vec<usize>,
+    /// Warnings printed (dataset, frames, threads).
+    pub warnings: usize,
+    /// Whether the frames are sweeps decoded from sensor packets.
+    pub sweeps: bool,
+}
+
+impl Record {
+    fn registered(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| r.outcome == RowKind::Registered)
+            .count()
+    }
+}
+
+/// Runs `kiss-odom run`.
+pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
+    let open = |opts: &io::OpenOptions| io::open(&args.path, args.common.input.format, opts);
+    execute_on(args, open, Mode::Recorded, err)
+}
+
+/// Runs `run` on the dataset `open` gives (the options ask for the settings' scan
+/// capacity): `kiss-odom run`, and `live` with a socket for a dataset.
+///
+/// Every argument is checked and every input read before any file is removed: a run refused
+/// for its arguments changes nothing, and a `--config` inside the output folder is read
+/// before the folder's old outputs go. An input that cannot be opened refuses the run after
+/// those are removed, writing nothing; once it is open, `summary.json` is written however the
+/// run ends.
+pub(crate) fn execute_on(
+    args: &RunArgs,
+    open: impl FnOnce(&io::OpenOptions) -> Result<io::Dataset>,
+    mode: Mode,
+    err: &mut dyn Write,
+) -> Result<i32> {
+    let settings = args.common.settings(None)?;
+    let inputs = inputs(args);
+    crate::viz::check(&args.view, &inputs)?;
+    // The sensor files are read while the input opens; `--config` is read by now, and
+    // `config.toml` is the settings it gave, written back.
+    for name in OUTPUTS {
+        kiss_odom_io::write::refuse_input(&args.run.out.join(name), &inputs[1..3])?;
+    }
+    let mut driver = Driver::new(&settings)?;
+    let opened = open(
+        &args
+            .common
+            .input
+            .open_options(settings.capacities()?.scan_points),
+    );
+    // Whatever happens next, no output of an earlier run stays to be taken for this one's.
+    kiss_odom_io::write::remove_stale(&args.run.out, &OUTPUTS)?;
+    for path in crate::viz::files(&args.view) {
+        kiss_odom_io::write::remove_stale_file(path)?;
+    }
+    // An input that cannot be opened refuses the run before it starts: nothing is written.
+    let mut dataset = opened?;
+    std::fs::create_dir_all(&args.run.out)
+        .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
+    let mut record = Record::default();
+    // After the folder: a recording or cloud may be asked for inside it.
+    let mut observers = match crate::viz::observers(&args.view) {
+        Ok(o) => o,
+        Err(e) => {
+            let end = End::Failed(e);
+            return finish(args, &settings, &dataset.info, &driver, &record, end, err);
+        }
+    };
+    let mut warn = |record: &mut Record, bar: &ProgressBar, text: &str| {
+        bar.suspend(|| writeln!(err, "warning: {text}")).ok();
+        record.warnings += 1;
+    };
+    let hidden = ProgressBar::hidden();
+    if let Some(w) = settings.threads_warning() {
+        warn(&mut record, &hidden, &w);
+    }
+    let mut end = End::Finished;
+    for w in dataset_warnings(&dataset.info) {
+        warn(&mut record, &hidden, w);
+        if args.run.strict {
+            end = End::Failed(anyhow!("{w} (--strict)"));
+            break;
+        }
+    }
+    if matches!(end, End::Finished) {
+        let mut capacity = CapacityWarnings::new(driver.capacities(), settings.data.max_range);
+        end = frame_loop(
+            args,
+            &mut driver,
+            &mut capacity,
+            &mut dataset,
+            &mut record,
+            &mut observers,
+            mode,
+            &mut warn,
+        );
+    }
+    // What the source found after its last frame (a sensor recording's packets refused after
+    // the last sweep) is warned about and counted like a frame's findings.
+    let trailer = dataset.frames.trailer();
+    for w in &trailer.warnings {
+        warn(&mut record, &hidden, w);
+    }
+    if let (Some(p), Some(row)) = (
+        trailer.packets,
+        record.rows.iter_mut().rev().find(|r| r.packets.is_some()),
+    ) {
+        row.add_packets(&p);
+    }
+    if let (true, End::Finished, Some(w)) = (args.run.strict, &end, trailer.warnings.first()) {
+        end = End::Failed(anyhow!("{w} (--strict)"));
+    }
+    // The observers' files hold the frames processed, however the loop ended.
+    for observer in &mut observers {
+        match observer.finish(&driver) {
+            Ok(warnings) => warnings.iter().for_each(|w| warn(&mut record, &hidden, w)),
+            Err(e) if matches!(end, End::Finished) => end = End::Failed(e),
+            Err(e) => warn(&mut record, &hidden, &kiss_odom_drive::one_line(&e)),
+        }
+    }
+    let end = match end {
+        End::Finished if record.rows.is_empty() => {
+            End::Failed(anyhow!("{}: no frames in range", args.path.display()))
+        }
+        End::Finished if record.registered() == 0 => End::Failed(anyhow!(
+            "{}: {}",
+            args.path.display(),
+            nothing_registered(&record)
+        )),
+        other => other,
+    };
+    let code = finish(args, &settings, &dataset.info, &driver, &record, end, err);
+    drop(dataset); // readers' temporary files go now, before the process exits
+    code
+}
+
+/// The files this run reads, which no output of it may replace: the dataset, `--meta`,
+/// `--calibration`, `--config` (the ones not given are empty paths, which name nothing).
+fn inputs(args: &RunArgs) -> [&Path; 4] {
+    let sensor = &args.common.input.sensor;
+    let none = Path::new("");
+    [
+        Some(&args.path),
+        sensor.meta.as_ref(),
+        sensor.calibration.as_ref(),
+        args.common.pipeline.config.as_ref(),
+    ]
+    .map(|p| p.map_or(none, PathBuf::as_path))
+}
+
+/// An error from the frames: an interruption if a signal ended the input (a `live` socket
+/// closed by Ctrl-C before any packet came), else a failure.
+fn stopped_by(e: anyhow::Error) -> End {
+    match crate::interrupt::requested() {
+        Some(sig) => End::Interrupted(sig),
+        None => End::Failed(e),
+    }
+}
+
+/// Writes the outputs of a run that ended with `end` and gives its exit status: the stop
+/// reason is the error, a failed write after it only a warning.
+fn finish(
+    args: &RunArgs,
+    settings: &kiss_odom_drive::settings::Settings,
+    info: &io::DatasetInfo,
+    driver: &Driver,
+    record: &Record,
+    end: End,
+    err: &mut dyn Write,
+) -> Result<i32> {
+    let (interrupted, stop) = match &end {
+        End::Finished => (None, None),
+        End::Failed(e) => (None, Some(kiss_odom_drive::one_line(e))),
+        End::Interrupted(sig) => (Some(*sig), None),
+    };
+    let run = files::Run {
+        args,
+        settings,
+        info,
+        driver,
+        record,
+        interrupted,
+        stop,
+    };
+    let written = run.write();
+    let summary = match (written, end) {
+        (Ok(summary), End::Finished) => summary,
+        (Err(e), End::Finished) => return Err(e),
+        (written, End::Failed(e)) => {
+            if let Err(w) = written {
+                writeln!(
+                    err,
+                    "warning: outputs incomplete: {}",
+                    kiss_odom_drive::one_line(&w)
+                )?;
+            }
+            return Err(e);
+        }
+        (written, End::Interrupted(sig)) => {
+            let summary = written?;
+            writeln!(
+                err,
+                "interrupted by signal {sig} after {} frames: the outputs hold those frames",
+                summary.frames
+            )?;
+            return Ok(crate::interrupt::exit_status(sig));
+        }
+    };
+    if !args.run.quiet {
+        files::print_summary(&summary);
+    }
+    Ok(0)
+}
+
+/// Problems the dataset layer found before any frame (gaps, foreign files, length mismatches).
+fn dataset_warnings(info: &io::DatasetInfo) -> &[String] {
+    &info.warnings
+}
+
+fn nothing_registered(r: &Record) -> String {
+    let count = |k: RowKind| r.rows.iter().filter(|row| row.outcome == k).count();
+    format!(
+        "no frame could be registered ({} of {} unreadable, {} without a usable point)",
+        count(RowKind::Skipped),
+        r.rows.len(),
+        count(RowKind::Empty)
+    )
+}
+
+/// Feeds the frames in range to the driver, recording each outcome and showing it to the
+/// observers, until the end, an error, a `--strict` stop or a signal.
+#[allow(clippy::too_many_arguments)]
+fn frame_loop(
+    args: &RunArgs,
+    driver: &mut Driver,
+    capacity: &mut CapacityWarnings,
+    dataset: &mut io::Dataset,
+    record: &mut Record,
+    observers: &mut [Box<dyn Observer>],
+    mode: Mode,
+    warn: &mut dyn FnMut(&mut Record, &ProgressBar, &str),
+) -> End {
+    let info = &dataset.info;
+    // Ground truth in the estimate's frame: estimate times ground truth at the first frame
+    // that has both (as the metrics re-base them).
+    let mut gt_base: Option<Isometry3<f64>> = None;
+    let mut frames = Selection::new(dataset.frames.as_mut(), args.common.input.range());
+    let bar = progress_bar(frames.len_hint(), args.run.quiet);
+    let mut core_s = 0.0;
+    let end = loop {
+        if let Some(sig) = crate::interrupt::requested() {
+            break End::Interrupted(sig);
+        }
+        let item = match frames.next() {
+            // A live source ends when a signal arrives while it waits for packets.
+            None => match crate::interrupt::requested() {
+                Some(sig) => break End::Interrupted(sig),
+                None => break End::Finished,
+            },
+            Some(Err(e)) => break stopped_by(e),
+            Some(Ok(item)) => item,
+        };
+        let problems: Vec<String> = match &item {
+            Item::Skipped { reason, .. } => vec![reason.clone()],
+            Item::Frame(f) => f.warnings.clone(),
+        };
+        for p in &problems {
+            warn(record, &bar, p);
+        }
+        if let (true, Some(first)) = (args.run.strict, problems.first()) {
+            break End::Failed(anyhow!("{first} (--strict)"));
+        }
+        let (outcome, frame) = match item {
+            Item::Frame(frame) => (driver.register(&frame), Some(frame)),
+            skipped => (driver.feed(skipped), None),
+        };
+        let outcome = match outcome {
+            Ok(o) => o,
+            Err(e) => break End::Failed(e),
+        };
+        if let Some(report) = outcome.report() {
+            if args.run.strict && report.status.contains(Flag::TimestampsIgnored) {
+                break End::Failed(anyhow!(
+                    "{}: timestamps unusable ({:?}), frame not deskewed (--strict)",
+                    outcome.meta.source,
+                    report.stamp_problem
+                ));
+            }
+            core_s += outcome.latency.as_secs_f64();
+        }
+        // A capacity rule that can change a pose warns on its first frame.
+        let full = capacity.check(&outcome);
+        for w in &full {
+            warn(record, &bar, w);
+        }
+        if let (true, Some(first)) = (args.run.strict, full.first()) {
+            break End::Failed(anyhow!("{first} (--strict)"));
+        }
+        if outcome.step == Step::Empty {
+            warn(
+                record,
+                &bar,
+                &format!("{}: no usable point", outcome.meta.source),
+            );
+        }
+        let sweep = frame.as_ref().and_then(|f| f.sweep);
+        add(
+            record,
+            info,
+            &outcome,
+            sweep.as_ref(),
+            args.run.pose_time,
+            driver,
+        );
+        if mode == Mode::Live {
+            report_live(record, sweep.as_ref());
+        }
+        if !observers.is_empty() {
+            let ground_truth = info
+                .ground_truth
+                .as_ref()
+                .and_then(|g| g.get(outcome.meta.index))
+                .map(|g| *gt_base.get_or_insert(outcome.pose * g.inverse()) * g);
+            let seen = Seen {
+                driver,
+                outcome: &outcome,
+                points: frame.as_ref().map(|f| f.points.as_slice()),
+                time: record.times.last().copied().flatten(),
+                ground_truth,
+            };
+            if let Some(e) = observers.iter_mut().find_map(|o| o.frame(&seen).err()) {
+                break End::Failed(e);
+            }
+        }
+        bar.inc(1);
+        if core_s > 0.0 {
+            let hz = record.registered() as f64 / core_s;
+            bar.set_message(format!("{hz:.1} Hz"));
+        }
+    };
+    bar.finish_and_clear();
+    end
+}
+
+/// Records an outcome. A sweep decoded from packets gets its packet columns and the
+/// sensor-clock instant `pose_time` chooses; a deskewed frame's pose is moved to that instant
+/// along the motion its points were deskewed with (not the motion registration then found:
+/// on the first deskewed frame the two differ by half a sweep, see [`PoseTime::pose`]).
+fn add(
+    record: &mut Record,
+    info: &io::DatasetInfo,
+    o: &Outcome,
+    sweep: Option<&SweepInfo>,
+    pose_time: PoseTime,
+    driver: &Driver,
+) {
+    let index = o.meta.index;
+    let mut time = o.meta.time.or_else(|| {
+        info.frame_times
+            .as_ref()
+            .and_then(|t| t.get(index).copied())
+    });
+    let mut row = FrameRow::of(o);
+    if let Some(s) = sweep {
+        row = row.with_packets(&s.stats);
+        time = Some(s.start_s + pose_time.fraction() * (s.end_s - s.start_s));
+        record.sweeps = true;
+    }
+    let pose = match o.report() {
+        Some(r) if r.deskewed => pose_time.pose(&o.pose, &driver.scan_motion()),
+        _ => o.pose,
+    };
+    record.rows.push(row);
+    record.poses.push(pose);
+    record.times.push(time);
+    record.indices.push(index);
+}
+
+/// `live`: prints the pose just recorded as a TUM line (flushed, for a pipe) and measures the
+/// time since its sweep's last packet (for sweeps the sensor's data closed).
+fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
+    let (Some(pose), Some(&index)) = (record.poses.last(), record.indices.last()) else {
+        return;
+    };
+    let time = record
+        .times
+        .last()
+        .copied()
+        .flatten()
+        .unwrap_or(index as f64);
+    let line = io::poses::format_tum(&[io::poses::TimedPose { time, pose: *pose }]);
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(line.as_bytes()).and_then(|()| out.flush());
+    // A sweep the end of the stream closed was not done when its last packet came.
+    if let Some(s) = sweep.filter(|s| s.stats.end != SweepEnd::Finished) {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        // Microseconds, as frames.csv's core latency.
+        let ms = (now.saturating_sub(s.last_capture_ns) as f64 * 1e-3).round() / 1e3;
+        if let Some(row) = record.rows.last_mut() {
+            row.pose_latency_ms = Some(ms);
+        }
+    }
+}
+
+fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
+    }
+    let bar = match total {
+        Some(n) => ProgressBar::new(n as u64),
+        None => ProgressBar::new_spinner(),
+    };
+    let style =
+        ProgressStyle::with_template("{spinner} [{bar:40}] {pos}/{len} frames {msg} ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
+    bar
+}

@@ -1,0 +1,286 @@
+//! The frame driver: the one way frames go through the core on the host.
+//!
+//! A [`Driver`] owns the odometry (any scalar and map storage, chosen by the settings) and its
+//! worker pool, takes frames however they come, and answers each with an [`Outcome`]: the
+//! frame registered (with the core's report and the time of the core's call), empty (no usable
+//! point), or skipped (unreadable); after an empty or skipped frame the pose advances on the
+//! constant-velocity model, as the reference does, so there is one pose per frame. `run`,
+//! `bench` and `crosscheck` all use it, and so can whatever comes next:
+//!
+//! - a reader's items in a frame range: [`Selection`] then [`Driver::feed`] (`run`);
+//! - frames pushed one at a time from a callback (a ROS 2 node, a live sensor):
+//!   [`Driver::register`] or [`Driver::register_points`];
+//! - frames held in memory and timed (`bench`): [`Driver::preload`] then
+//!   [`Driver::register_preloaded`], which times only the core's call;
+//! - library and batch use: every method takes and returns plain `f64` data.
+//!
+//! After a frame, [`Driver::source_cloud`], [`Driver::merge_cloud`], [`Driver::map_points`] and
+//! [`Driver::deskewed_scan`] give its clouds for a viewer or a published message.
+
+use crate::engine::{self, Batch, Call, Engine};
+use crate::outcome::{FrameMeta, Outcome, Step};
+use crate::pool::Pool;
+use crate::settings::{Scalar, Settings, Storage};
+use anyhow::{bail, Result};
+use kiss_odom_core::{Capacities, FrameError, HighWater};
+use kiss_odom_io::{Frame, Item};
+use nalgebra::Isometry3;
+use std::time::Duration;
+
+/// Frames held in memory in one driver build's scalar (see [`Driver::preload`]).
+pub struct Preloaded {
+    scalar: Scalar,
+    batch: Batch,
+    frames: Vec<(FrameMeta, Option<Vec<f64>>)>,
+}
+
+impl Preloaded {
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+}
+
+/// What an empty frame (no usable point) does to the state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OnEmpty {
+    /// The pose advances on the constant-velocity model, one pose per frame, as the reference
+    /// does with a dataset's frames.
+    #[default]
+    Advance,
+    /// Nothing changes, as if the frame had never arrived (a live stream, where an empty
+    /// message is not a sweep: the ROS 2 node).
+    Ignore,
+}
+
+/// The odometry and its worker pool: see the module doc.
+pub struct Driver {
+    engine: Box<dyn Engine>,
+    on_empty: OnEmpty,
+    pool: Pool,
+    threads: usize,
+    scalar: Scalar,
+    storage: Storage,
+}
+
+impl Driver {
+    /// A driver for `settings` (already validated: the errors here are the core's); threads
+    /// as [`Settings::threads`] resolves them.
+    pub fn new(settings: &Settings) -> Result<Self> {
+        let threads = settings.threads();
+        Ok(Self {
+            engine: engine::build(settings)?,
+            on_empty: OnEmpty::Advance,
+            pool: Pool::new(threads)?,
+            threads,
+            scalar: settings.runtime.scalar,
+            storage: settings.runtime.map_storage,
+        })
+    }
+
+    /// Chooses what an empty frame does (default [`OnEmpty::Advance`]).
+    pub fn on_empty(&mut self, policy: OnEmpty) {
+        self.on_empty = policy;
+    }
+
+    /// Registers a frame read from a dataset.
+    pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
+        let mut out =
+            self.register_points(FrameMeta::of(frame), &frame.points, frame.stamps.as_deref())?;
+        out.warnings.clone_from(&frame.warnings);
+        Ok(out)
+    }
+
+    /// Registers a scan given as points (sensor frame, m) with optional per-point capture
+    /// times (one per point; any unit and offset).
+    pub fn register_points(
+        &mut self,
+        meta: FrameMeta,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+    ) -> Result<Outcome> {
+        let sigma = self.engine.sigma();
+        let call = self.engine.register(&self.pool, points, stamps);
+        self.conclude(meta, sigma, call)
+    }
+
+    /// A frame that could not be read (`reason` names the file): the pose advances on the
+    /// constant-velocity model.
+    pub fn skip(&mut self, meta: FrameMeta, reason: String) -> Outcome {
+        let sigma = self.engine.sigma();
+        self.engine.skip();
+        Outcome {
+            meta,
+            step: Step::Skipped(reason),
+            pose: self.engine.pose(),
+            sigma,
+            latency: Duration::ZERO,
+            cpu: Duration::ZERO,
+            input_points: 0,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// A reader's item: a frame is registered, an unreadable one skipped.
+    pub fn feed(&mut self, item: Item) -> Result<Outcome> {
+        match item {
+            Item::Frame(frame) => self.register(&frame),
+            Item::Skipped {
+                index,
+                name,
+                time,
+                reason,
+            } => Ok(self.skip(
+                FrameMeta {
+                    index,
+                    source: name,
+                    time,
+                },
+                reason,
+            )),
+        }
+    }
+
+    /// Converts `frames` to this driver's scalar ahead of time, so that timed runs
+    /// ([`Self::register_preloaded`]) neither read nor convert. Any driver of the same scalar
+    /// can use the result.
+    pub fn preload(&self, frames: &[Frame]) -> Preloaded {
+        Preloaded {
+            scalar: self.scalar,
+            batch: self
+                .engine
+                .batch(&mut frames.iter().map(|f| f.points.as_slice())),
+            frames: frames
+                .iter()
+                .map(|f| (FrameMeta::of(f), f.stamps.clone()))
+                .collect(),
+        }
+    }
+
+    /// Registers frame `k` of `frames`.
+    pub fn register_preloaded(&mut self, frames: &Preloaded, k: usize) -> Result<Outcome> {
+        let Some((meta, stamps)) = frames.frames.get(k) else {
+            bail!("preloaded frame {k} of {}: no such frame", frames.len());
+        };
+        if frames.scalar != self.scalar {
+            bail!(
+                "frames preloaded for {:?} given to a {:?} driver",
+                frames.scalar,
+                self.scalar
+            );
+        }
+        let sigma = self.engine.sigma();
+        let call = self
+            .engine
+            .register_batch(&self.pool, &frames.batch, k, stamps.as_deref());
+        let Some(call) = call else {
+            bail!("preloaded frame {k}: not in this driver's scalar");
+        };
+        self.conclude(meta.clone(), sigma, call)
+    }
+
+    /// The outcome of a core call; an empty scan advances on the constant-velocity model
+    /// unless [`OnEmpty::Ignore`] was chosen.
+    fn conclude(&mut self, meta: FrameMeta, sigma: f64, call: Call) -> Result<Outcome> {
+        let step = match call.result {
+            Ok(report) => Step::Registered(report),
+            Err(FrameError::EmptyScan) => {
+                if self.on_empty == OnEmpty::Advance {
+                    self.engine.skip();
+                }
+                Step::Empty
+            }
+            Err(e @ FrameError::Storage) => bail!("{}: {e}", meta.source),
+        };
+        Ok(Outcome {
+            meta,
+            step,
+            pose: self.engine.pose(),
+            sigma,
+            latency: call.latency,
+            cpu: call.cpu,
+            input_points: call.input_points,
+            warnings: Vec::new(),
+        })
+    }
+
+    /// Back to the state of a new driver (empty map, identity pose); the same frames then give
+    /// the same poses.
+    pub fn reset(&mut self) {
+        self.engine.reset();
+    }
+    /// The latest pose.
+    pub fn pose(&self) -> Isometry3<f64> {
+        self.engine.pose()
+    }
+    /// The latest motion: previous pose to latest, in the previous sensor frame.
+    pub fn last_delta(&self) -> Isometry3<f64> {
+        self.engine.last_delta()
+    }
+    /// The motion the latest frame was deskewed with: the constant-velocity model before that
+    /// frame was registered.
+    pub fn scan_motion(&self) -> Isometry3<f64> {
+        self.engine.scan_motion()
+    }
+    /// The constant-velocity prediction of the next frame's pose (Eq. (1)): where ICP starts.
+    pub fn prediction(&self) -> Isometry3<f64> {
+        self.engine.prediction()
+    }
+    /// Worker threads of the correspondence search.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+    /// The core's scalar.
+    pub fn scalar(&self) -> Scalar {
+        self.scalar
+    }
+    /// The map point storage.
+    pub fn storage(&self) -> Storage {
+        self.storage
+    }
+    /// High-water marks of the core's buffers since start.
+    pub fn high_water(&self) -> HighWater {
+        self.engine.high_water()
+    }
+    /// The core's capacities.
+    pub fn capacities(&self) -> Capacities {
+        self.engine.capacities()
+    }
+    /// Bytes of the core's state, fixed at construction.
+    pub fn state_bytes(&self) -> usize {
+        self.engine.state_bytes()
+    }
+    /// Bytes of state this build would need with capacities `caps`.
+    pub fn state_bytes_for(&self, caps: &Capacities) -> usize {
+        self.engine.state_bytes_for(caps)
+    }
+    /// Bytes of one stored map point in this build.
+    pub fn map_point_bytes(&self) -> usize {
+        self.engine.map_point_bytes()
+    }
+    /// The last registered frame's registration cloud (sensor frame, deskewed): what
+    /// kiss-icp's `register_frame` returns as `source`.
+    pub fn source_cloud(&self) -> Vec<[f64; 3]> {
+        self.engine.source()
+    }
+    /// The last registered frame's merge cloud (sensor frame, deskewed).
+    pub fn merge_cloud(&self) -> Vec<[f64; 3]> {
+        self.engine.merge_cloud()
+    }
+    /// The local map's points (world frame).
+    pub fn map_points(&self) -> Vec<[f64; 3]> {
+        self.engine.map_points()
+    }
+    /// The last registered frame's points deskewed and cropped (sensor frame); give it the
+    /// points and stamps that frame had.
+    pub fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
+        self.engine.deskewed_scan(points, stamps)
+    }
+}
+
+#[cfg(test)]
+mod tests;

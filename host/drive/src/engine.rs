@@ -1,0 +1,271 @@
+//! The four builds of the core behind one object-safe trait: `Odometry<T, P>` for `T` in
+//! f32/f64 and `P` in `Exact`/`Quantized`, owning its words (`Odometry::boxed`). The generic
+//! code is written once ([`Core`]); [`build`] is the only place that picks a build.
+//!
+//! Everything crosses the trait in `f64`: points are converted into a buffer the core reads
+//! (outside the timed call), reports and poses are widened.
+
+use crate::pool::Pool;
+use crate::settings::{Scalar, Settings, Storage};
+use crate::widen::{widen, widen_report};
+use anyhow::Result;
+use cpu_time::ThreadTime;
+use kiss_odom_core::{
+    Capacities, Exact, FrameError, FrameReport, HighWater, Odometry, PointCodec, Quantized, Real,
+};
+use nalgebra::Isometry3;
+use std::time::{Duration, Instant};
+
+/// What one frame call of the core gave, and how long the call took.
+pub(crate) struct Call {
+    pub result: Result<FrameReport<f64>, FrameError>,
+    pub latency: Duration,
+    /// The calling thread's CPU time in the call (all of it with one thread).
+    pub cpu: Duration,
+    pub input_points: usize,
+}
+
+/// Wall-clock and calling-thread CPU time of a stretch of work.
+struct Stopwatch(Instant, ThreadTime);
+
+impl Stopwatch {
+    fn start() -> Self {
+        Self(Instant::now(), ThreadTime::now())
+    }
+
+    /// (wall, cpu) since the start.
+    fn stop(self) -> (Duration, Duration) {
+        (self.0.elapsed(), self.1.elapsed())
+    }
+}
+
+/// Frames converted to the core's scalar ahead of time.
+pub(crate) enum Batch {
+    F64(Vec<Vec<[f64; 3]>>),
+    F32(Vec<Vec<[f32; 3]>>),
+}
+
+/// The scalars the host runs the core in, and where their preloaded frames live in a
+/// [`Batch`].
+pub(crate) trait HostScalar: Real {
+    fn batch(frames: Vec<Vec<[Self; 3]>>) -> Batch;
+    fn frames(batch: &Batch) -> Option<&[Vec<[Self; 3]>]>;
+}
+
+macro_rules! host_scalar {
+    ($t:ty, $variant:ident) => {
+        impl HostScalar for $t {
+            fn batch(frames: Vec<Vec<[$t; 3]>>) -> Batch {
+                Batch::$variant(frames)
+            }
+            fn frames(batch: &Batch) -> Option<&[Vec<[$t; 3]>]> {
+                match batch {
+                    Batch::$variant(f) => Some(f),
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+
+host_scalar!(f64, F64);
+host_scalar!(f32, F32);
+
+/// One build of the core, whatever its scalar and map storage.
+pub(crate) trait Engine: Send {
+    /// Registers a whole scan.
+    fn register(&mut self, pool: &Pool, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Call;
+    /// Registers frame `k` of a batch this engine made; `None` if it is not one.
+    fn register_batch(
+        &mut self,
+        pool: &Pool,
+        batch: &Batch,
+        k: usize,
+        stamps: Option<&[f64]>,
+    ) -> Option<Call>;
+    /// Converts frames to this engine's scalar.
+    fn batch(&self, frames: &mut dyn Iterator<Item = &[[f64; 3]]>) -> Batch;
+    /// Advances one frame on the constant-velocity model.
+    fn skip(&mut self);
+    /// Back to the state of a new odometry.
+    fn reset(&mut self);
+    /// The latest pose.
+    fn pose(&self) -> Isometry3<f64>;
+    /// The latest motion: from the previous pose to the latest, in the previous sensor frame.
+    fn last_delta(&self) -> Isometry3<f64>;
+    /// The motion the latest frame was deskewed with (the model before it was registered).
+    fn scan_motion(&self) -> Isometry3<f64>;
+    /// The next frame's prediction: the latest pose moved by the latest motion.
+    fn prediction(&self) -> Isometry3<f64>;
+    /// The threshold's current sigma.
+    fn sigma(&self) -> f64;
+    /// High-water marks since start.
+    fn high_water(&self) -> HighWater;
+    /// Capacities in use.
+    fn capacities(&self) -> Capacities;
+    /// Bytes of state, fixed at construction.
+    fn state_bytes(&self) -> usize;
+    /// Bytes of state this build would need with capacities `caps`.
+    fn state_bytes_for(&self, caps: &Capacities) -> usize;
+    /// Bytes of one stored map point.
+    fn map_point_bytes(&self) -> usize;
+    /// The last frame's registration cloud (sensor frame).
+    fn source(&self) -> Vec<[f64; 3]>;
+    /// The last frame's merge cloud (sensor frame).
+    fn merge_cloud(&self) -> Vec<[f64; 3]>;
+    /// The local map's points (world frame).
+    fn map_points(&self) -> Vec<[f64; 3]>;
+    /// `points` deskewed and cropped as the last frame was.
+    fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]>;
+}
+
+/// The build `settings.runtime` asks for.
+pub(crate) fn build(settings: &Settings) -> Result<Box<dyn Engine>> {
+    Ok(
+        match (settings.runtime.scalar, settings.runtime.map_storage) {
+            (Scalar::F64, Storage::Exact) => Box::new(Core::<f64, Exact>::new(settings)?),
+            (Scalar::F64, Storage::Quantized) => Box::new(Core::<f64, Quantized>::new(settings)?),
+            (Scalar::F32, Storage::Exact) => Box::new(Core::<f32, Exact>::new(settings)?),
+            (Scalar::F32, Storage::Quantized) => Box::new(Core::<f32, Quantized>::new(settings)?),
+        },
+    )
+}
+
+/// The odometry owning its words, and a buffer for points converted to its scalar.
+struct Core<T: Real, P: PointCodec<T>> {
+    odom: Odometry<T, P, Box<[u64]>>,
+    points: Vec<[T; 3]>,
+}
+
+impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
+    fn new(settings: &Settings) -> Result<Self> {
+        let odom = Odometry::boxed(settings.core_config::<T>()?, settings.capacities()?)
+            .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
+        Ok(Self {
+            odom,
+            points: Vec::new(),
+        })
+    }
+}
+
+fn narrow<T: Real>(points: &[[f64; 3]], out: &mut Vec<[T; 3]>) {
+    out.clear();
+    out.extend(
+        points
+            .iter()
+            .map(|p| [T::of(p[0]), T::of(p[1]), T::of(p[2])]),
+    );
+}
+
+fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
+    points
+        .iter()
+        .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()])
+        .collect()
+}
+
+/// Times the core's call on already converted points.
+fn timed<T: Real>(call: impl FnOnce() -> Result<FrameReport<T>, FrameError>, n: usize) -> Call {
+    let watch = Stopwatch::start();
+    let result = call();
+    let (latency, cpu) = watch.stop();
+    Call {
+        result: result.map(|r| widen_report(&r)),
+        latency,
+        cpu,
+        input_points: n,
+    }
+}
+
+impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
+    fn register(&mut self, pool: &Pool, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Call {
+        narrow(points, &mut self.points);
+        let (odom, pts) = (&mut self.odom, &self.points);
+        timed(|| odom.register_frame_with(pool, pts, stamps), pts.len())
+    }
+
+    fn register_batch(
+        &mut self,
+        pool: &Pool,
+        batch: &Batch,
+        k: usize,
+        stamps: Option<&[f64]>,
+    ) -> Option<Call> {
+        let pts = T::frames(batch)?.get(k)?;
+        let odom = &mut self.odom;
+        Some(timed(
+            || odom.register_frame_with(pool, pts, stamps),
+            pts.len(),
+        ))
+    }
+
+    fn batch(&self, frames: &mut dyn Iterator<Item = &[[f64; 3]]>) -> Batch {
+        T::batch(
+            frames
+                .map(|f| {
+                    let mut v = Vec::with_capacity(f.len());
+                    narrow(f, &mut v);
+                    v
+                })
+                .collect(),
+        )
+    }
+
+    fn skip(&mut self) {
+        self.odom.skip_frame();
+    }
+    fn reset(&mut self) {
+        self.odom.reset();
+    }
+    fn pose(&self) -> Isometry3<f64> {
+        widen(self.odom.pose())
+    }
+    fn last_delta(&self) -> Isometry3<f64> {
+        widen(self.odom.last_delta())
+    }
+    fn scan_motion(&self) -> Isometry3<f64> {
+        widen(self.odom.scan_motion())
+    }
+    fn prediction(&self) -> Isometry3<f64> {
+        widen(&(self.odom.last_pose() * self.odom.last_delta()))
+    }
+    fn sigma(&self) -> f64 {
+        self.odom.sigma().wide()
+    }
+    fn high_water(&self) -> HighWater {
+        self.odom.high_water()
+    }
+    fn capacities(&self) -> Capacities {
+        *self.odom.capacities()
+    }
+    fn state_bytes(&self) -> usize {
+        self.odom.state_bytes()
+    }
+    fn state_bytes_for(&self, caps: &Capacities) -> usize {
+        caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<T, P>>()
+    }
+    fn map_point_bytes(&self) -> usize {
+        core::mem::size_of::<P::Stored>()
+    }
+    fn source(&self) -> Vec<[f64; 3]> {
+        wide(self.odom.source())
+    }
+    fn merge_cloud(&self) -> Vec<[f64; 3]> {
+        wide(self.odom.merge_cloud())
+    }
+    fn map_points(&self) -> Vec<[f64; 3]> {
+        let mut out = Vec::new();
+        self.odom
+            .map()
+            .for_each_point(|_, p| out.push([p.x.wide(), p.y.wide(), p.z.wide()]));
+        out
+    }
+    fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
+        let mut pts = Vec::new();
+        narrow(points, &mut pts);
+        let mut out = vec![[T::zero(); 3]; pts.len()];
+        let kept = self.odom.deskewed_scan(&pts, stamps, &mut out);
+        out.truncate(kept.kept);
+        wide(&out)
+    }
+}

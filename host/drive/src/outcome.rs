@@ -1,0 +1,77 @@
+//! What the driver answers for each frame: where it came from, what became of it, the pose
+//! after it and what it cost.
+
+use kiss_odom_core::{FrameReport, Status};
+use kiss_odom_io::Frame;
+use nalgebra::Isometry3;
+use std::time::Duration;
+
+/// Where a frame came from, as the outcome reports it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameMeta {
+    /// The frame's identity in its dataset (or a running count for a live stream).
+    pub index: usize,
+    /// Its source: a file path, `file:topic@time` for a bag or MCAP message, a topic.
+    pub source: String,
+    /// Acquisition time (s), if known.
+    pub time: Option<f64>,
+}
+
+impl FrameMeta {
+    /// The meta data of a frame read from a dataset.
+    pub fn of(frame: &Frame) -> Self {
+        Self {
+            index: frame.index,
+            source: frame.name.clone(),
+            time: frame.time,
+        }
+    }
+}
+
+/// What became of a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Step {
+    /// Registered: the core's report (pose, status flags, ICP and buffer figures), in `f64`.
+    Registered(FrameReport<f64>),
+    /// No finite point within range (`FrameError::EmptyScan`).
+    Empty,
+    /// Could not be read; the reason names the file.
+    Skipped(String),
+}
+
+/// The answer to one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    /// Where the frame came from.
+    pub meta: FrameMeta,
+    /// What became of it.
+    pub step: Step,
+    /// The pose after it (sensor at the end of the sweep, in the frame of the first scan).
+    pub pose: Isometry3<f64>,
+    /// The threshold's sigma the frame was registered with (as it stood before the frame).
+    pub sigma: f64,
+    /// Time in the core's frame call (zero when skipped).
+    pub latency: Duration,
+    /// The calling thread's CPU time in that call: the whole call's with one thread, free of
+    /// other processes' share of the machine (zero when skipped).
+    pub cpu: Duration,
+    /// Points given.
+    pub input_points: usize,
+    /// What the reader noticed about the frame that did not stop it being used.
+    pub warnings: Vec<String>,
+}
+
+impl Outcome {
+    /// The core's report, if the frame was registered.
+    pub fn report(&self) -> Option<&FrameReport<f64>> {
+        match &self.step {
+            Step::Registered(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// The report's status, if the frame was registered.
+    pub fn status(&self) -> Option<Status> {
+        self.report().map(|r| r.status)
+    }
+}

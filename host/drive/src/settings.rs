@@ -1,0 +1,792 @@
+//! Every parameter of a run, as TOML: defaults, then `--config FILE`, then command-line flags.
+//! The `config.toml` a run writes holds the values actually used and can be passed back with
+//! `--config` to repeat the run. `--config` also reads kiss-icp's YAML (a `.yaml` or `.yml`
+//! file, [`Settings::from_kiss_icp_yaml`]).
+
+use anyhow::{bail, Context, Result};
+use kiss_odom_core::{Capacities, Config, Degeneracy, Real};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Scalar type the core runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Scalar {
+    /// Double precision: agrees with the reference to rounding.
+    F64,
+    /// Single precision: half the memory, what microcontrollers run.
+    F32,
+}
+
+/// How map points are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Storage {
+    /// Points as they are.
+    Exact,
+    /// 16-bit offsets inside the voxel (6 bytes a point).
+    Quantized,
+}
+
+/// Registration along directions the scene does not constrain (`kiss_odom_core::Degeneracy`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum DegeneracyMode {
+    /// As kiss-icp 1.3.0 (default).
+    #[default]
+    Reference,
+    /// Point-to-plane terms where the map is planar (tunnels, corridors, long walls, open
+    /// ground); with its own defaults for the voxel size, kernel and capacities.
+    Robust,
+    /// Hold unconstrained directions at the constant-velocity prediction (issue 17's candidate
+    /// (a), kept for comparison).
+    Hold,
+}
+
+impl From<DegeneracyMode> for Degeneracy {
+    fn from(m: DegeneracyMode) -> Self {
+        match m {
+            DegeneracyMode::Reference => Degeneracy::Reference,
+            DegeneracyMode::Robust => Degeneracy::Robust,
+            DegeneracyMode::Hold => Degeneracy::Hold,
+        }
+    }
+}
+
+/// Sensor data handling (the reference's `data` section).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Data {
+    /// `r_max` (m).
+    pub max_range: f64,
+    /// Minimum range (m).
+    pub min_range: f64,
+    /// Deskew scans with per-point timestamps.
+    pub deskew: bool,
+}
+
+/// Local map and downsampling (the reference's `mapping` section plus alpha/beta).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Mapping {
+    /// Voxel size `v` (m); omitted means `max_range / 100`.
+    pub voxel_size: Option<f64>,
+    /// `N_max`.
+    pub max_points_per_voxel: u32,
+    /// Merge-cloud voxel factor.
+    pub alpha: f64,
+    /// Registration-cloud voxel factor.
+    pub beta: f64,
+}
+
+/// Adaptive threshold.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Threshold {
+    /// `tau_0` (m).
+    pub initial_threshold: f64,
+    /// `delta_min` (m).
+    pub min_motion_th: f64,
+}
+
+/// ICP.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Registration {
+    /// Iteration cap.
+    pub max_num_iterations: u32,
+    /// `gamma`.
+    pub convergence_criterion: f64,
+    /// Geman-McClure scale as a multiple of sigma (reference 1, paper 1/3); omitted means 1.
+    pub kernel_scale: Option<f64>,
+    /// Correspondence threshold as a multiple of sigma.
+    pub max_correspondence_factor: f64,
+    /// Observability ratio below which a frame is flagged degenerate (and, in hold mode,
+    /// below which a direction is held).
+    pub degeneracy_ratio: f64,
+    /// Robust mode registers a frame again with plane terms when the reference registration's
+    /// observability is below this (`Config::plane_gate`); 1 or more: every frame.
+    pub plane_gate: f64,
+    /// Robust mode's hold prior per correspondence: registrations with plane terms are pulled
+    /// to the constant-velocity prediction (`Config::prediction_prior`); 0: none.
+    pub prediction_prior: f64,
+    /// Robust mode's vehicle prior per correspondence: no sideways motion along the sensor's
+    /// y axis (`Config::lateral_prior`); 0: none.
+    pub lateral_prior: f64,
+    /// `reference`, `robust` or `hold`.
+    pub degeneracy: DegeneracyMode,
+    /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
+    /// none, the reference's behaviour.
+    pub work_budget: Option<u64>,
+}
+
+/// Capacities of the core's buffers (see `kiss_odom_core::Capacities`). Each one left out is
+/// sized from the configuration (`Capacities::sized_for`: the range, voxel size and `N_max`,
+/// for a sensor of up to [`SCAN_POINTS`] points a sweep), so that the map does not fill.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Caps {
+    /// Input points considered per scan.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan_points: Option<usize>,
+    /// Merge cloud points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub merge_points: Option<usize>,
+    /// Registration cloud points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source_points: Option<usize>,
+    /// Map voxels.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_voxels: Option<usize>,
+    /// Map points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_points: Option<usize>,
+}
+
+/// Points per sweep the capacities sized from the configuration hold (an OS1-128 at 2048
+/// columns); a larger sweep is truncated with a warning.
+pub const SCAN_POINTS: usize = 262_144;
+
+/// How the core runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Runtime {
+    /// f64 or f32.
+    pub scalar: Scalar,
+    /// Map point storage.
+    pub map_storage: Storage,
+    /// Worker threads for the correspondence search (0 = all cores). Results do not depend on
+    /// it.
+    pub threads: usize,
+}
+
+/// All settings of a run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Settings {
+    /// Sensor data.
+    pub data: Data,
+    /// Map.
+    pub mapping: Mapping,
+    /// Threshold.
+    pub adaptive_threshold: Threshold,
+    /// ICP.
+    pub registration: Registration,
+    /// Buffers.
+    pub capacities: Caps,
+    /// Execution.
+    pub runtime: Runtime,
+}
+
+impl Default for Data {
+    fn default() -> Self {
+        Self {
+            max_range: 100.0,
+            min_range: 0.0,
+            deskew: true,
+        }
+    }
+}
+
+impl Default for Mapping {
+    fn default() -> Self {
+        Self {
+            voxel_size: None,
+            max_points_per_voxel: 20,
+            alpha: 0.5,
+            beta: 1.5,
+        }
+    }
+}
+
+impl Default for Threshold {
+    fn default() -> Self {
+        Self {
+            initial_threshold: 2.0,
+            min_motion_th: 0.1,
+        }
+    }
+}
+
+impl Default for Registration {
+    fn default() -> Self {
+        Self {
+            max_num_iterations: 500,
+            convergence_criterion: 1e-4,
+            kernel_scale: None,
+            max_correspondence_factor: 3.0,
+            degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
+            plane_gate: Config::<f64>::new(100.0).plane_gate,
+            prediction_prior: Config::<f64>::new(100.0).prediction_prior,
+            lateral_prior: Config::<f64>::new(100.0).lateral_prior,
+            degeneracy: DegeneracyMode::Reference,
+            work_budget: None,
+        }
+    }
+}
+
+impl From<Capacities> for Caps {
+    fn from(c: Capacities) -> Self {
+        Self {
+            scan_points: Some(c.scan_points),
+            merge_points: Some(c.merge_points),
+            source_points: Some(c.source_points),
+            map_voxels: Some(c.map_voxels),
+            map_points: Some(c.map_points),
+        }
+    }
+}
+
+impl Default for Runtime {
+    fn default() -> Self {
+        Self {
+            scalar: Scalar::F64,
+            map_storage: Storage::Exact,
+            threads: 0,
+        }
+    }
+}
+
+impl Settings {
+    /// Reads a settings file: kiss-icp's YAML when its name ends in `.yaml` or `.yml`, else
+    /// TOML (the layout of `config.toml`). Unknown keys are errors (a typo must not silently
+    /// fall back).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        let yaml = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+        if yaml {
+            return Self::from_kiss_icp_yaml(&text).with_context(|| {
+                format!("{}: invalid kiss-icp YAML configuration", path.display())
+            });
+        }
+        toml::from_str(&text).with_context(|| {
+            format!(
+                "{}: invalid configuration (read as TOML; a kiss-icp YAML file needs a .yaml \
+                 or .yml name)",
+                path.display()
+            )
+        })
+    }
+
+    /// Settings from kiss-icp's YAML configuration (`kiss_icp.config.load_config`'s file), read
+    /// as the Python package reads it: its sections are ours (`data`, `mapping`,
+    /// `adaptive_threshold`, `registration`, plus our `capacities` and `runtime`), with
+    /// `registration.max_num_threads` as `runtime.threads`, `out_dir` (its pipeline's) ignored,
+    /// `null` as not given, and the voxel size made explicit at `max_range / 100` when not given,
+    /// as kiss-icp does. `adaptive_threshold.fixed_threshold` is refused: the core always adapts.
+    pub fn from_kiss_icp_yaml(text: &str) -> Result<Self> {
+        use serde_yaml_ng::Value;
+        let doc: Value = serde_yaml_ng::from_str(text)?;
+        let mut s = Settings::default();
+        let top = match doc {
+            Value::Null => return Ok(s.with_explicit_voxel()),
+            Value::Mapping(m) => m,
+            _ => bail!("expected sections (data:, mapping:, ...) at the top"),
+        };
+        // `null` is kiss-icp's "not given" (pydantic's None), except where it means "derive".
+        let given = |section: &str, value: &Value| -> Result<Value> {
+            let Value::Mapping(m) = value else {
+                bail!("`{section}` is not a mapping of settings");
+            };
+            let kept = m
+                .iter()
+                .filter(|(k, v)| !v.is_null() || k.as_str() == Some("voxel_size"))
+                .map(|(k, v)| (k.clone(), v.clone()));
+            Ok(Value::Mapping(kept.collect()))
+        };
+        fn section<T: serde::de::DeserializeOwned>(name: &str, v: Value) -> Result<T> {
+            serde_yaml_ng::from_value(v).with_context(|| format!("`{name}`"))
+        }
+        let mut threads = None;
+        for (key, value) in &top {
+            let name = key.as_str().unwrap_or_default();
+            if value.is_null() {
+                continue;
+            }
+            match name {
+                "out_dir" => {}
+                "data" => s.data = section(name, given(name, value)?)?,
+                "mapping" => s.mapping = section(name, given(name, value)?)?,
+                "adaptive_threshold" => {
+                    let mut v = given(name, value)?;
+                    if let Some(t) = v.as_mapping_mut().and_then(|m| m.remove("fixed_threshold")) {
+                        bail!(
+                            "adaptive_threshold.fixed_threshold = {}: not supported, kiss-odom's \
+                             core always adapts the threshold (set initial_threshold instead)",
+                            serde_yaml_ng::to_string(&t).unwrap_or_default().trim()
+                        );
+                    }
+                    s.adaptive_threshold = section(name, v)?;
+                }
+                "registration" => {
+                    let mut v = given(name, value)?;
+                    threads = v.as_mapping_mut().and_then(|m| m.remove("max_num_threads"));
+                    s.registration = section(name, v)?;
+                }
+                "capacities" => s.capacities = section(name, given(name, value)?)?,
+                "runtime" => s.runtime = section(name, given(name, value)?)?,
+                _ => bail!(
+                    "unknown section `{}` (kiss-icp's: data, mapping, adaptive_threshold, \
+                     registration, out_dir; kiss-odom's: capacities, runtime)",
+                    serde_yaml_ng::to_string(key).unwrap_or_default().trim()
+                ),
+            }
+        }
+        let runtime_threads = top
+            .get("runtime")
+            .and_then(|r| r.get("threads"))
+            .is_some_and(|t| !t.is_null());
+        if let (Some(t), false) = (threads, runtime_threads) {
+            s.runtime.threads = section("registration.max_num_threads", t)
+                .map(|t: Option<usize>| t.unwrap_or(0))?;
+        }
+        Ok(s.with_explicit_voxel())
+    }
+
+    /// These settings with the voxel size given (`max_range / 100` when it was not).
+    fn with_explicit_voxel(mut self) -> Self {
+        self.mapping.voxel_size = Some(self.voxel_size());
+        self
+    }
+
+    /// The TOML text of these settings, with the voxel size and capacities made explicit (an
+    /// omitted kernel scale stays omitted).
+    pub fn to_toml(&self) -> Result<String> {
+        let mut s = self.clone();
+        s.mapping.voxel_size = Some(self.voxel_size());
+        s.capacities = self.caps().into();
+        Ok(toml::to_string(&s)?)
+    }
+
+    /// `v`: explicit, or `max_range / 100` as in the paper (in every mode).
+    pub fn voxel_size(&self) -> f64 {
+        self.mapping
+            .voxel_size
+            .unwrap_or_else(|| Config::new(self.data.max_range).voxel_size)
+    }
+
+    /// The Geman-McClure scale over sigma of the reference's registration: explicit, or 1 as
+    /// kiss-icp (robust mode's plane terms use `PLANE_KERNEL_SCALE`).
+    pub fn kernel_scale(&self) -> f64 {
+        self.registration
+            .kernel_scale
+            .unwrap_or_else(|| Config::new(self.data.max_range).kernel_scale)
+    }
+
+    /// The capacities given, the rest sized from the configuration; room for plane terms in
+    /// robust mode only.
+    fn caps(&self) -> Capacities {
+        let c = &self.capacities;
+        let mut cfg = Config::<f64>::new(self.data.max_range);
+        cfg.voxel_size = self.voxel_size();
+        cfg.beta = self.mapping.beta;
+        cfg.max_points_per_voxel = self.mapping.max_points_per_voxel;
+        let sized = Capacities::sized_for(&cfg, c.scan_points.unwrap_or(SCAN_POINTS));
+        Capacities {
+            scan_points: sized.scan_points,
+            merge_points: c.merge_points.unwrap_or(sized.merge_points),
+            source_points: c.source_points.unwrap_or(sized.source_points),
+            map_voxels: c.map_voxels.unwrap_or(sized.map_voxels),
+            map_points: c.map_points.unwrap_or(sized.map_points),
+            plane_terms: self.registration.degeneracy == DegeneracyMode::Robust,
+        }
+    }
+
+    /// The core's configuration in scalar `T`; [`Self::validate`] names the setting at fault.
+    pub fn core_config<T: Real>(&self) -> Result<Config<T>> {
+        let mut c = Config::<T>::new(T::of(self.data.max_range));
+        c.min_range = T::of(self.data.min_range);
+        c.voxel_size = T::of(self.voxel_size());
+        c.alpha = T::of(self.mapping.alpha);
+        c.beta = T::of(self.mapping.beta);
+        c.max_points_per_voxel = self.mapping.max_points_per_voxel;
+        c.initial_threshold = T::of(self.adaptive_threshold.initial_threshold);
+        c.min_motion_threshold = T::of(self.adaptive_threshold.min_motion_th);
+        c.convergence_criterion = T::of(self.registration.convergence_criterion);
+        c.max_iterations = self.registration.max_num_iterations;
+        c.deskew = self.data.deskew;
+        c.kernel_scale = T::of(self.kernel_scale());
+        c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
+        c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
+        c.plane_gate = T::of(self.registration.plane_gate);
+        c.prediction_prior = T::of(self.registration.prediction_prior);
+        c.lateral_prior = T::of(self.registration.lateral_prior);
+        c.degeneracy = self.registration.degeneracy.into();
+        c.work_budget = self.registration.work_budget;
+        if let Err(e) = c.validate() {
+            bail!("invalid configuration: {e}");
+        }
+        Ok(c)
+    }
+
+    /// The core's capacities.
+    pub fn capacities(&self) -> Result<Capacities> {
+        let caps = self.caps();
+        if let Err(e) = caps.validate() {
+            bail!("invalid capacities: {e}");
+        }
+        Ok(caps)
+    }
+
+    /// What the core would refuse in these settings, if anything.
+    fn fault(&self) -> Option<anyhow::Error> {
+        self.core_config::<f64>()
+            .err()
+            .or_else(|| self.capacities().err())
+    }
+
+    /// Checks every value the core will get. The error names the setting at fault and its
+    /// value: the one that, put back to its default, makes the settings valid (several when
+    /// more than one would).
+    pub fn validate(&self) -> Result<()> {
+        self.refuse_non_finite()?;
+        let Some(e) = self.fault() else {
+            return Ok(());
+        };
+        let defaults = Settings::default();
+        let culprits: Vec<String> = fields()
+            .iter()
+            .filter(|f| {
+                let mut fixed = self.clone();
+                (f.reset)(&mut fixed, &defaults);
+                f.show(&fixed) != f.show(self) && fixed.fault().is_none()
+            })
+            .map(|f| format!("{} = {}", f.name, f.show(self)))
+            .collect();
+        if culprits.is_empty() {
+            return Err(e);
+        }
+        Err(e.context(culprits.join(" or ")))
+    }
+
+    /// Refuses NaN and inf, naming each setting: they pass some of the core's range checks
+    /// (`inf >= 1`), fail others with no name, and JSON has no way to write them.
+    pub fn refuse_non_finite(&self) -> Result<()> {
+        let non_finite: Vec<String> = fields()
+            .iter()
+            .filter(|f| matches!((f.value)(self), Some(toml::Value::Float(v)) if !v.is_finite()))
+            .map(|f| format!("{} = {}", f.name, f.show(self)))
+            .collect();
+        if !non_finite.is_empty() {
+            bail!("{}: not a finite number", non_finite.join(", "));
+        }
+        Ok(())
+    }
+
+    /// The pipeline settings away from their defaults that the reference's driver does not
+    /// take (it takes the range, voxel size and deskewing; capacities, the degeneracy ratio and
+    /// the plane gate are ours alone and do not change poses outside hold and robust mode, which
+    /// `degeneracy` names).
+    pub fn changed_beyond_reference(&self) -> Vec<&'static str> {
+        // A kernel scale written out (as `run` does) is not a change when it is the default's.
+        let resolved = |s: &Settings| {
+            let mut s = s.clone();
+            s.registration.kernel_scale = Some(s.kernel_scale());
+            s
+        };
+        let (this, defaults) = (resolved(self), resolved(&Settings::default()));
+        fields()
+            .iter()
+            .filter(|f| !f.reference_takes && f.show(&this) != f.show(&defaults))
+            .map(|f| f.name)
+            .collect()
+    }
+
+    /// Threads to use: 0 means all cores, and a count above the machine's cores is capped to
+    /// them (more only contend, and a huge count would take minutes to start).
+    pub fn threads(&self) -> usize {
+        let cores = cores();
+        match self.runtime.threads {
+            0 => cores,
+            n => n.min(cores),
+        }
+    }
+
+    /// The warning to print when [`Self::threads`] capped the count asked for.
+    pub fn threads_warning(&self) -> Option<String> {
+        let (asked, cores) = (self.runtime.threads, cores());
+        (asked > cores).then(|| {
+            format!("{asked} threads asked for, but the machine has {cores} cores: using {cores}")
+        })
+    }
+}
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// A setting by its TOML name: how to print its value, how to put back its default, and
+/// whether the reference's driver takes it (or it does not change poses).
+struct Field {
+    name: &'static str,
+    /// The value as TOML writes it (`nan` and `inf` included); `None` when not given.
+    value: fn(&Settings) -> Option<toml::Value>,
+    reset: fn(&mut Settings, &Settings),
+    reference_takes: bool,
+}
+
+impl Field {
+    /// The value as an error message names it.
+    fn show(&self, s: &Settings) -> String {
+        (self.value)(s).map_or_else(|| "none".into(), |v| v.to_string())
+    }
+}
+
+macro_rules! field {
+    ($section:ident . $name:ident, $takes:expr) => {
+        Field {
+            name: concat!(stringify!($section), ".", stringify!($name)),
+            value: |s| toml::Value::try_from(&s.$section.$name).ok(),
+            reset: |s, d| s.$section.$name = d.$section.$name.clone(),
+            reference_takes: $takes,
+        }
+    };
+}
+
+/// Every setting the core gets.
+fn fields() -> [Field; 23] {
+    [
+        field!(data.max_range, true),
+        field!(data.min_range, true),
+        field!(mapping.voxel_size, true),
+        field!(mapping.max_points_per_voxel, false),
+        field!(mapping.alpha, false),
+        field!(mapping.beta, false),
+        field!(adaptive_threshold.initial_threshold, false),
+        field!(adaptive_threshold.min_motion_th, false),
+        field!(registration.max_num_iterations, false),
+        field!(registration.convergence_criterion, false),
+        field!(registration.kernel_scale, false),
+        field!(registration.max_correspondence_factor, false),
+        field!(registration.degeneracy_ratio, true),
+        field!(registration.plane_gate, true),
+        field!(registration.prediction_prior, true),
+        field!(registration.lateral_prior, true),
+        field!(registration.degeneracy, false),
+        field!(registration.work_budget, false),
+        field!(capacities.scan_points, true),
+        field!(capacities.merge_points, true),
+        field!(capacities.source_points, true),
+        field!(capacities.map_voxels, true),
+        field!(capacities.map_points, true),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn written_settings_load_back_identical() {
+        let mut s = Settings::default();
+        s.data.max_range = 60.0;
+        s.runtime.scalar = Scalar::F32;
+        s.capacities.map_points = Some(12345);
+        let text = s.to_toml().unwrap();
+        let back: Settings = toml::from_str(&text).unwrap();
+        assert_eq!(back.voxel_size(), 0.6);
+        assert_eq!(back.data, s.data);
+        assert_eq!(back.runtime, s.runtime);
+        // Written out, the capacities are explicit: the ones given and those sized from the
+        // configuration, so the file says what the run used.
+        assert_eq!(back.capacities.map_points, Some(12345));
+        assert_eq!(back.capacities().unwrap(), s.capacities().unwrap());
+        assert_eq!(back.capacities, s.capacities().unwrap().into());
+        // An omitted kernel stays omitted, so the text loads back to the
+        // same settings as the ones written: the Python bindings compare them.
+        assert_eq!(back.registration, s.registration);
+        assert_eq!(back.registration.kernel_scale, None);
+    }
+
+    #[test]
+    fn degeneracy_mode_is_read_and_reaches_the_core() {
+        let s: Settings = toml::from_str("[registration]\ndegeneracy = \"robust\"\n").unwrap();
+        assert_eq!(
+            s.core_config::<f32>().unwrap().degeneracy,
+            Degeneracy::Robust
+        );
+        let d = Settings::default().core_config::<f64>().unwrap();
+        assert_eq!(d.degeneracy, Degeneracy::Reference);
+        let h: Settings = toml::from_str("[registration]\ndegeneracy = \"hold\"\n").unwrap();
+        assert_eq!(h.core_config::<f64>().unwrap().degeneracy, Degeneracy::Hold);
+        assert!(!h.capacities().unwrap().plane_terms);
+        assert!(toml::from_str::<Settings>("[registration]\ndegeneracy = \"on\"\n").is_err());
+    }
+
+    #[test]
+    fn robust_mode_brings_its_defaults_and_keeps_what_is_given() {
+        let robust = |text: &str| {
+            let s: Settings =
+                toml::from_str(&format!("[registration]\ndegeneracy = \"robust\"\n{text}"))
+                    .unwrap();
+            (s.core_config::<f64>().unwrap(), s.capacities().unwrap())
+        };
+        let (c, caps) = robust("");
+        assert_eq!(c, Config::robust(100.0));
+        assert_eq!(
+            (c.voxel_size, c.kernel_scale, c.plane_gate),
+            (1.0, 1.0, 0.015)
+        );
+        assert_eq!(caps, Capacities::sized_for(&c, SCAN_POINTS));
+        assert!(caps.plane_terms);
+        let (c, caps) = robust(
+            "kernel_scale = 0.5\nplane_gate = 1.0\n[mapping]\nvoxel_size = 0.7\n[capacities]\nmap_voxels = 5000\n",
+        );
+        assert_eq!(
+            (c.voxel_size, c.kernel_scale, c.plane_gate),
+            (0.7, 0.5, 1.0)
+        );
+        assert_eq!(caps.map_voxels, 5000);
+        assert!(
+            caps.plane_terms,
+            "robust mode needs room for its plane terms"
+        );
+        // What is not given is sized from the configuration (0.7 m voxels).
+        assert_eq!(
+            caps.map_points,
+            Capacities::sized_for(&c, SCAN_POINTS).map_points
+        );
+        // Reference mode keeps kiss-icp's parameters, with capacities sized from them.
+        let d = Settings::default();
+        assert_eq!(d.core_config::<f64>().unwrap(), Config::new(100.0));
+        let sized = Capacities::sized_for(&Config::<f64>::new(100.0), SCAN_POINTS);
+        assert_eq!(d.capacities().unwrap(), sized);
+        assert!(!sized.plane_terms);
+        // Written out, the robust defaults are explicit and load back to the same.
+        let s: Settings = toml::from_str("[registration]\ndegeneracy = \"robust\"\n").unwrap();
+        let back: Settings = toml::from_str(&s.to_toml().unwrap()).unwrap();
+        assert_eq!(
+            back.core_config::<f64>().unwrap(),
+            s.core_config::<f64>().unwrap()
+        );
+        assert_eq!(back.capacities().unwrap(), s.capacities().unwrap());
+    }
+
+    #[test]
+    fn a_written_default_kernel_is_no_change_from_the_reference() {
+        let mut s = Settings::default();
+        s.registration.kernel_scale = Some(1.0);
+        assert!(s.changed_beyond_reference().is_empty());
+        s.registration.kernel_scale = Some(0.5);
+        assert_eq!(s.changed_beyond_reference(), ["registration.kernel_scale"]);
+        let written: Settings = toml::from_str(&Settings::default().to_toml().unwrap()).unwrap();
+        assert!(written.changed_beyond_reference().is_empty());
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_refused() {
+        assert!(toml::from_str::<Settings>("[data]\nmax_rnage = 3.0\n").is_err());
+        let mut s = Settings::default();
+        s.data.min_range = 200.0;
+        assert!(s.core_config::<f64>().is_err());
+    }
+
+    #[test]
+    fn a_value_the_core_refuses_is_named_with_its_setting() {
+        let msg = |edit: fn(&mut Settings)| {
+            let mut s = Settings::default();
+            edit(&mut s);
+            format!("{:#}", s.validate().unwrap_err())
+        };
+        let m = msg(|s| s.registration.kernel_scale = Some(0.0));
+        assert!(m.starts_with("registration.kernel_scale = 0.0: "), "{m}");
+        let m = msg(|s| s.data.min_range = 200.0);
+        assert!(m.starts_with("data.min_range = 200.0: "), "{m}");
+        let m = msg(|s| s.capacities.map_voxels = Some(0));
+        assert!(m.starts_with("capacities.map_voxels = 0: "), "{m}");
+        let m = msg(|s| s.mapping.voxel_size = Some(-1.0));
+        assert!(m.starts_with("mapping.voxel_size = -1.0: "), "{m}");
+        Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn non_finite_values_are_refused_by_name_and_printed_as_toml_writes_them() {
+        let msg = |edit: fn(&mut Settings)| {
+            let mut s = Settings::default();
+            edit(&mut s);
+            format!("{:#}", s.validate().unwrap_err())
+        };
+        let m = msg(|s| s.data.max_range = f64::NAN);
+        assert_eq!(m, "data.max_range = nan: not a finite number");
+        // inf would pass a `>= 1` check (plane_gate: every frame) and is still refused.
+        let m = msg(|s| s.registration.plane_gate = f64::INFINITY);
+        assert_eq!(m, "registration.plane_gate = inf: not a finite number");
+        let m = msg(|s| s.mapping.voxel_size = Some(f64::NEG_INFINITY));
+        assert!(m.starts_with("mapping.voxel_size = -inf"), "{m}");
+        let text = "[adaptive_threshold]\nmin_motion_th = nan\n";
+        let s: Settings = toml::from_str(text).unwrap();
+        let m = format!("{:#}", s.validate().unwrap_err());
+        assert_eq!(
+            m,
+            "adaptive_threshold.min_motion_th = nan: not a finite number"
+        );
+    }
+
+    #[test]
+    fn kiss_icps_yaml_reads_as_its_python_package_reads_it() {
+        // kiss-icp 1.3.0's own config/advanced.yaml layout.
+        let yaml = "out_dir: results\n\
+            data:\n  deskew: false\n  max_range: 60.0\n  min_range: 5.0\n\
+            mapping:\n  voxel_size: null\n  max_points_per_voxel: 10\n\
+            adaptive_threshold:\n  fixed_threshold: null\n  initial_threshold: 1.5\n  min_motion_th: 0.2\n\
+            registration:\n  max_num_iterations: 300\n  convergence_criterion: 0.001\n  max_num_threads: 2\n";
+        let s = Settings::from_kiss_icp_yaml(yaml).unwrap();
+        let mut want = Settings {
+            data: Data {
+                max_range: 60.0,
+                min_range: 5.0,
+                deskew: false,
+            },
+            adaptive_threshold: Threshold {
+                initial_threshold: 1.5,
+                min_motion_th: 0.2,
+            },
+            ..Settings::default()
+        };
+        want.mapping.voxel_size = Some(0.6); // kiss-icp's max_range / 100, made explicit
+        want.mapping.max_points_per_voxel = 10;
+        want.registration.max_num_iterations = 300;
+        want.registration.convergence_criterion = 0.001;
+        want.runtime.threads = 2;
+        assert_eq!(s, want);
+        // Empty is the defaults; ours sections are read too; runtime.threads wins.
+        let d = Settings::from_kiss_icp_yaml("").unwrap();
+        assert_eq!(d.voxel_size(), 1.0);
+        assert_eq!(d.core_config::<f64>().unwrap(), Config::new(100.0));
+        let both = "registration:\n  max_num_threads: 2\nruntime:\n  threads: 1\n  scalar: f32\n";
+        let s = Settings::from_kiss_icp_yaml(both).unwrap();
+        assert_eq!((s.runtime.threads, s.runtime.scalar), (1, Scalar::F32));
+        // What the Python package refuses, this refuses, naming it.
+        for (bad, named) in [
+            (
+                "adaptive_threshold:\n  fixed_threshold: 0.3\n",
+                "fixed_threshold = 0.3",
+            ),
+            ("data:\n  max_rnage: 3.0\n", "max_rnage"),
+            ("dataa:\n  max_range: 3.0\n", "unknown section `dataa`"),
+            ("data:\n  max_range: [1]\n", "`data`"),
+        ] {
+            let e = format!("{:#}", Settings::from_kiss_icp_yaml(bad).unwrap_err());
+            assert!(e.contains(named), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn threads_are_capped_to_the_cores_with_a_warning() {
+        let mut s = Settings::default();
+        let cores = cores();
+        assert_eq!((s.threads(), s.threads_warning()), (cores, None));
+        s.runtime.threads = usize::MAX;
+        assert_eq!(s.threads(), cores);
+        let w = s.threads_warning().unwrap();
+        assert!(w.contains(&usize::MAX.to_string()), "{w}");
+        s.runtime.threads = 1;
+        assert_eq!((s.threads(), s.threads_warning()), (1, None));
+    }
+}

@@ -1,0 +1,131 @@
+//! Sensor sweeps as frames: a pcap recording (or a live socket) decoded by
+//! [`sweeps`](super::sweeps) becomes a [`FrameSource`], so `run` and `live` drive
+//! its sweeps through the same frame loop as any dataset.
+//!
+//! Frame `k` is the `k`-th sweep decoded, named `file#k`; it carries its per-point times (for
+//! deskewing) and its [`SweepInfo`](crate::SweepInfo) (packet statistics for
+//! `frames.csv`, the instants `--pose-time` chooses from), at most `scan_points` points (the
+//! rest counted and warned about as the sweep fills), and a warning when the decoder took a
+//! new timeline before it. What only the whole recording shows (packets from a second
+//! sender, refused packets, frames the capture could not read) is reported once, naming the
+//! file, when the source has ended: as warnings of the last frame if it had ended by then,
+//! otherwise in the [`Trailer`]; packets refused after the last sweep are added to the last
+//! frame's statistics or the trailer's. A capture that ends in damage ends the stream with
+//! its error.
+
+use super::sweeps::{self, PcapSweeps};
+use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions, Trailer};
+use anyhow::Result;
+use kiss_odom_sensors::{SweepStats, RESYNC_PACKETS};
+use std::path::Path;
+
+/// Sweeps of a decoder as frames.
+pub struct SweepFrames {
+    sweeps: PcapSweeps,
+    name: String,
+    next: usize,
+    scan_points: usize,
+    /// Whether the end-of-stream report has been handed on.
+    reported: bool,
+}
+
+impl SweepFrames {
+    /// Frames of `sweeps`, named after `name`, each at most `scan_points` points.
+    pub fn new(mut sweeps: PcapSweeps, name: &str, scan_points: usize) -> Self {
+        sweeps.limit_points(scan_points);
+        Self {
+            sweeps,
+            name: name.to_string(),
+            next: 0,
+            scan_points,
+            reported: false,
+        }
+    }
+
+    /// The report of the whole stream, once.
+    fn end_report(&mut self) -> Trailer {
+        self.reported = true;
+        let file = &self.name;
+        let after = self.sweeps.after_last_sweep();
+        let refused = after.lost_packets + after.out_of_order + after.bad_packets;
+        Trailer {
+            warnings: (self.sweeps.report().warnings().iter())
+                .map(|w| format!("{file}: {w}"))
+                .collect(),
+            packets: (refused + after.other_sensor > 0).then_some(after),
+        }
+    }
+}
+
+/// Opens a pcap or pcapng recording as a dataset.
+pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
+    let sweeps = sweeps::open(path, &opts.sensor)?;
+    Ok(Dataset {
+        frames: Box::new(SweepFrames::new(
+            sweeps,
+            &path.display().to_string(),
+            opts.scan_points,
+        )),
+        info: DatasetInfo {
+            format: Some(Format::Pcap),
+            ..DatasetInfo::default()
+        },
+    })
+}
+
+/// Adds packets refused or lost outside every sweep to a sweep's statistics.
+pub fn add_refusals(into: &mut SweepStats, from: &SweepStats) {
+    into.lost_packets = into.lost_packets.saturating_add(from.lost_packets);
+    into.out_of_order = into.out_of_order.saturating_add(from.out_of_order);
+    into.bad_packets = into.bad_packets.saturating_add(from.bad_packets);
+    into.other_sensor = into.other_sensor.saturating_add(from.other_sensor);
+}
+
+impl FrameSource for SweepFrames {
+    fn len_hint(&self) -> Option<usize> {
+        None
+    }
+
+    fn next_item(&mut self) -> Result<Option<Item>> {
+        let Some(sweep) = self.sweeps.next().transpose()? else {
+            return Ok(None);
+        };
+        let index = self.next;
+        self.next += 1;
+        let name = format!("{}#{index}", self.name);
+        let (beyond, resyncs) = (sweep.beyond_capacity, sweep.stats.resyncs);
+        let mut frame = sweep.into_frame(index, name);
+        if beyond > 0 {
+            frame.warnings.push(format!(
+                "{}: {} points, only the first {} read (the core's scan capacity)",
+                frame.name,
+                frame.points.len() as u64 + beyond,
+                self.scan_points
+            ));
+        }
+        if resyncs > 0 {
+            frame.warnings.push(format!(
+                "{}: the packets' clock or frame ids jumped and stayed there (a sensor restart, \
+                 a clock step, a packet far ahead): decoding resynchronised to them after {} \
+                 packets refused as older than the sweep",
+                frame.name,
+                RESYNC_PACKETS - 1
+            ));
+        }
+        if self.sweeps.exhausted() && !self.reported {
+            let t = self.end_report();
+            frame.warnings.extend(t.warnings);
+            if let (Some(p), Some(s)) = (t.packets, &mut frame.sweep) {
+                add_refusals(&mut s.stats, &p);
+            }
+        }
+        Ok(Some(Item::Frame(frame)))
+    }
+
+    fn trailer(&mut self) -> Trailer {
+        if self.reported {
+            return Trailer::default();
+        }
+        self.end_report()
+    }
+}

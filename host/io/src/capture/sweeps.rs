@@ -1,0 +1,705 @@
+//! Sensor recordings to sweeps: a pcap of Velodyne or Ouster packets, decoded by
+//! `kiss-odom-sensors`, one [`Sweep`] at a time with per-point times and per-sweep packet
+//! statistics.
+//!
+//! The sensor is told by the options or found in the capture: Velodyne data packets are 1206
+//! bytes on port 2368 unless `--port` says otherwise (the model is in each packet's product
+//! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
+//! need the sensor's metadata JSON (`--meta`). Only one sender is decoded: the first whose
+//! packets decode on the port; other senders on that port (a second sensor) are skipped,
+//! counted as another sensor's in the sweep they arrive in and named in the [`PcapReport`].
+//! Damage confined to a packet is a counted skip in the sweep's statistics; a capture with no
+//! decodable packet, or cut in the middle, or Ouster packets that contradict the metadata
+//! before the first sweep is complete, is an error naming the file and the reason. A sweep
+//! keeps at most the points it is asked to ([`PcapSweeps::limit_points`]: the core's scan
+//! capacity), however long the sensor takes to end it.
+
+use super::pcap::{self, Capture, Datagram, Record};
+use super::{ouster_meta, velodyne_calib};
+use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
+use anyhow::{anyhow, bail, Result};
+use kiss_odom_sensors::velodyne::{self, Model};
+use kiss_odom_sensors::{
+    ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart, SweepStats,
+};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+/// Velodyne data port.
+pub const VELODYNE_PORT: u16 = 2368;
+/// Ouster lidar port (when the metadata does not say).
+pub const OUSTER_PORT: u16 = 7502;
+
+/// One decoded sweep.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sweep {
+    /// Sensor-frame points, metres.
+    pub points: Vec<[f64; 3]>,
+    /// Per-point capture time, seconds since `stats.start_ns` (sensor clock).
+    pub times: Vec<f64>,
+    /// Ring, column, return and intensity of each point.
+    pub meta: Vec<PointMeta>,
+    /// Packet statistics.
+    pub stats: SweepStats,
+    /// Capture (host) time of the sweep's first packet, ns since the Unix epoch.
+    pub capture_ns: u64,
+    /// Capture (host) time of the last packet that gave the sweep points.
+    pub last_capture_ns: u64,
+    /// Points the sweep had beyond the most it keeps ([`PcapSweeps::limit_points`]): dropped.
+    pub beyond_capacity: u64,
+}
+
+impl Sweep {
+    /// The sweep as a [`Frame`] for the odometry (times become the per-point stamps).
+    pub fn into_frame(self, index: usize, name: String) -> Frame {
+        let (lo, hi) = self
+            .times
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &t| {
+                (lo.min(t), hi.max(t))
+            });
+        let start = self.stats.start_ns as f64 * 1e-9;
+        let sweep = SweepInfo {
+            stats: self.stats,
+            start_s: start + if lo.is_finite() { lo } else { 0.0 },
+            end_s: start + if hi.is_finite() { hi } else { 0.0 },
+            last_capture_ns: self.last_capture_ns,
+        };
+        Frame {
+            index,
+            name,
+            points: self.points,
+            stamps: Some(self.times),
+            time: Some(self.capture_ns as f64 * 1e-9),
+            warnings: Vec::new(),
+            intensity: Some(self.meta.iter().map(|m| f32::from(m.intensity)).collect()),
+            sweep: Some(sweep),
+        }
+    }
+}
+
+/// What the capture held besides the decoded sweeps.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PcapReport {
+    /// The sensor decoded, e.g. `Velodyne VLP-16` or `Ouster OS-1-128 122201000998`.
+    pub sensor: String,
+    /// The port decoded.
+    pub port: u16,
+    /// The sender decoded.
+    pub source: Option<SocketAddr>,
+    /// Datagrams on the port from the decoded sender (or before one was chosen).
+    pub on_port: u64,
+    /// Packets decoded.
+    pub decoded: u64,
+    /// Packets refused, by reason.
+    pub refused: BTreeMap<String, u64>,
+    /// Datagrams on the port from other senders (skipped).
+    pub other_sources: BTreeMap<SocketAddr, u64>,
+    /// Datagrams on other ports (skipped), by port.
+    pub other_ports: BTreeMap<u16, u64>,
+    /// Of those, datagrams of the sensor's data-packet length, by port: another sensor there?
+    pub data_elsewhere: BTreeMap<u16, u64>,
+    /// What else the capture, the metadata and the packets' timing showed (frames not read,
+    /// fragments lost, a model the timing contradicts), one line each; complete at the end.
+    pub notes: Vec<String>,
+}
+
+impl PcapReport {
+    /// One line per thing a person should know: other senders, refused packets, packets of
+    /// the sensor's length elsewhere, and the notes.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if !self.other_sources.is_empty() {
+            let list: Vec<_> = self
+                .other_sources
+                .iter()
+                .map(|(s, n)| format!("{s} ({n})"))
+                .collect();
+            w.push(format!(
+                "packets from {} other sender(s) on port {} skipped (two sensors on one port?): {}",
+                list.len(),
+                self.port,
+                list.join(", ")
+            ));
+        }
+        for (reason, n) in &self.refused {
+            w.push(format!("{n} packet(s) refused: {reason}"));
+        }
+        if self.decoded > 0 {
+            for (port, n) in &self.data_elsewhere {
+                w.push(format!(
+                    "{n} packet(s) of the sensor's data length on port {port} not decoded (a \
+                     second sensor? --port {port} decodes them instead)"
+                ));
+            }
+        }
+        w.extend(self.notes.iter().cloned());
+        w
+    }
+}
+
+enum Decoder {
+    Velodyne(Box<velodyne::Decoder>),
+    Ouster(Box<ouster::Decoder>),
+}
+
+impl Decoder {
+    /// Pushes the packet, and again if it began a new sweep ([`Pushed::Again`]; the second
+    /// push never answers that).
+    fn push(&mut self, bytes: &[u8], sink: &mut Collect) -> Result<(), PacketError> {
+        let mut r = Ok(Pushed::Again);
+        for _ in 0..2 {
+            r = match self {
+                Self::Velodyne(d) => d.push(bytes, sink),
+                Self::Ouster(d) => d.push(bytes, sink),
+            };
+            if r != Ok(Pushed::Again) {
+                break;
+            }
+        }
+        r.map(|_| ())
+    }
+    fn finish(&mut self, sink: &mut Collect) {
+        match self {
+            Self::Velodyne(d) => d.finish(sink),
+            Self::Ouster(d) => d.finish(sink),
+        }
+    }
+    fn between_sweeps(&self) -> SweepStats {
+        match self {
+            Self::Velodyne(d) => *d.between_sweeps(),
+            Self::Ouster(d) => *d.between_sweeps(),
+        }
+    }
+}
+
+/// Packets refused here, before the decoder (damaged, other senders), that no sweep's
+/// statistics hold yet: they go to the sweep that ends next.
+#[derive(Clone, Copy, Debug, Default)]
+struct Refused {
+    bad: u32,
+    other_sensor: u32,
+}
+
+impl Refused {
+    fn add_to(self, s: &mut SweepStats) {
+        s.bad_packets = s.bad_packets.saturating_add(self.bad);
+        s.other_sensor = s.other_sensor.saturating_add(self.other_sensor);
+    }
+}
+
+/// Gathers the decoder's chunks into whole sweeps of at most `capacity` points.
+struct Collect {
+    current: Option<Sweep>,
+    done: VecDeque<Sweep>,
+    capture_ns: u64,
+    capacity: usize,
+    refused: Refused,
+    /// Sweeps ended so far.
+    ended: u64,
+}
+
+impl Default for Collect {
+    fn default() -> Self {
+        Self {
+            current: None,
+            done: VecDeque::new(),
+            capture_ns: 0,
+            capacity: usize::MAX,
+            refused: Refused::default(),
+            ended: 0,
+        }
+    }
+}
+
+impl SweepSink for Collect {
+    fn begin_sweep(&mut self, _: &SweepStart) {
+        self.current = Some(Sweep {
+            capture_ns: self.capture_ns,
+            ..Sweep::default()
+        });
+    }
+    fn points(&mut self, c: Chunk<'_>) {
+        if let Some(s) = &mut self.current {
+            s.last_capture_ns = self.capture_ns;
+            let n = c
+                .xyz
+                .len()
+                .min(self.capacity.saturating_sub(s.points.len()));
+            s.points.extend_from_slice(&c.xyz[..n]);
+            s.times.extend_from_slice(&c.times[..n]);
+            s.meta.extend_from_slice(&c.meta[..n]);
+            s.beyond_capacity += (c.xyz.len() - n) as u64;
+        }
+    }
+    fn end_sweep(&mut self, stats: &SweepStats) {
+        if let Some(mut s) = self.current.take() {
+            s.stats = *stats;
+            std::mem::take(&mut self.refused).add_to(&mut s.stats);
+            self.done.push_back(s);
+            self.ended += 1;
+        }
+    }
+}
+
+/// Where datagrams come from: a capture file, or a socket (`kiss-odom live`).
+pub trait DatagramSource {
+    /// The next datagram, `Ok(None)` at the end, or an error naming the source when nothing
+    /// after it can be read.
+    fn next_datagram(&mut self) -> Result<Option<Datagram>>;
+    /// The next datagram, whole or damaged ([`Record`]); a source that never holds damaged
+    /// ones (a socket) need not say.
+    fn next_record(&mut self) -> Result<Option<Record>> {
+        Ok(self.next_datagram()?.map(Record::Datagram))
+    }
+    /// What the source could not hand on (frames not read, fragments lost), one line each.
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+impl DatagramSource for Capture {
+    fn next_datagram(&mut self) -> Result<Option<Datagram>> {
+        Capture::next_datagram(self)
+    }
+    fn next_record(&mut self) -> Result<Option<Record>> {
+        Capture::next_record(self)
+    }
+    fn warnings(&self) -> Vec<String> {
+        self.counts().warnings()
+    }
+}
+
+/// A recording being decoded, sweep by sweep.
+pub struct PcapSweeps {
+    path: PathBuf,
+    capture: Box<dyn DatagramSource>,
+    decoder: Decoder,
+    sink: Collect,
+    meta_path: Option<PathBuf>,
+    /// Whether `--sensor` named the Velodyne model.
+    model_given: bool,
+    report: PcapReport,
+    /// Ouster packets contradicting the metadata before the first sweep: the stream's end.
+    fatal: Option<anyhow::Error>,
+    finished: bool,
+}
+
+/// The first datagrams of a capture (up to any damage, which the decoding pass reports):
+/// whole ones by port and length, the ports of damaged ones, and what the capture could not
+/// hand on.
+struct Survey {
+    seen: BTreeMap<(u16, usize), u64>,
+    damaged: BTreeSet<u16>,
+    notes: Vec<String>,
+}
+
+fn survey(path: &Path) -> Result<Survey> {
+    let mut capture = pcap::open(path)?;
+    let mut s = Survey {
+        seen: BTreeMap::new(),
+        damaged: BTreeSet::new(),
+        notes: Vec::new(),
+    };
+    for _ in 0..2000 {
+        match capture.next_record() {
+            Ok(Some(Record::Datagram(d))) => {
+                *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
+            }
+            Ok(Some(Record::Damaged { port, .. })) => {
+                s.damaged.insert(port);
+            }
+            Ok(None) | Err(_) => break,
+        }
+    }
+    s.notes = capture.counts().warnings();
+    Ok(s)
+}
+
+fn describe(s: &Survey) -> String {
+    let mut text = if s.seen.is_empty() {
+        "no UDP packets at all".to_string()
+    } else {
+        let list: Vec<_> = s
+            .seen
+            .iter()
+            .map(|((p, l), n)| format!("{n} x {l} bytes on port {p}"))
+            .collect();
+        format!("UDP seen: {}", list.join(", "))
+    };
+    for n in &s.notes {
+        text.push_str("; ");
+        text.push_str(n);
+    }
+    text
+}
+
+/// Opens a recording (see the module doc).
+pub fn open(path: &Path, opts: &SensorOptions) -> Result<PcapSweeps> {
+    decode(path, Box::new(pcap::open(path)?), opts)
+}
+
+/// The `--sensor` value of a model.
+fn sensor_flag(m: Model) -> &'static str {
+    match m {
+        Model::Vlp16 => "vlp16",
+        Model::PuckHiRes => "puck-hi-res",
+        Model::Vlp32c => "vlp32c",
+        Model::Hdl32e => "hdl32e",
+    }
+}
+
+/// Decodes the datagrams of `capture`, named `path` in messages; without `opts.port` a
+/// Velodyne recording at `path` is looked at first, for an error that says what it holds.
+pub fn decode(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+) -> Result<PcapSweeps> {
+    let ouster = opts.meta.is_some() || opts.sensor == SensorKind::Ouster;
+    let mut notes = Vec::new();
+    let (decoder, port, sensor) = if ouster {
+        let Some(meta_path) = &opts.meta else {
+            bail!(
+                "{}: an Ouster recording needs the sensor's metadata JSON (--meta)",
+                path.display()
+            );
+        };
+        let meta = ouster_meta::read(meta_path)?;
+        let dec = ouster::Decoder::new(&meta.info)
+            .map_err(|e| anyhow!("{}: {e}", meta_path.display()))?;
+        let port = opts.port.or(meta.udp_port_lidar).unwrap_or(OUSTER_PORT);
+        let name = format!(
+            "Ouster {} {} ({})",
+            meta.prod_line, meta.serial, meta.firmware
+        );
+        notes.extend(
+            meta.warnings
+                .iter()
+                .map(|w| format!("{}: {w}", meta_path.display())),
+        );
+        (Decoder::Ouster(Box::new(dec)), port, name)
+    } else {
+        let model = match opts.sensor {
+            SensorKind::Vlp16 => Some(Model::Vlp16),
+            SensorKind::PuckHiRes => Some(Model::PuckHiRes),
+            SensorKind::Vlp32c => Some(Model::Vlp32c),
+            SensorKind::Hdl32e => Some(Model::Hdl32e),
+            SensorKind::Auto | SensorKind::Ouster => None,
+        };
+        let port = opts.port.unwrap_or(VELODYNE_PORT);
+        if opts.port.is_none() {
+            let s = survey(path)?;
+            let data = s
+                .seen
+                .keys()
+                .any(|(_, len)| *len == velodyne::wire::field::LEN)
+                || s.damaged.contains(&port);
+            if !data {
+                if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
+                    bail!(
+                        "{}: packets on port {OUSTER_PORT} look like an Ouster's: give its \
+                         metadata JSON (--meta)",
+                        path.display()
+                    );
+                }
+                bail!(
+                    "{}: no Velodyne data packets (1206 bytes); {}",
+                    path.display(),
+                    describe(&s)
+                );
+            }
+        }
+        let calibration = opts
+            .calibration
+            .as_deref()
+            .map(velodyne_calib::read)
+            .transpose()?;
+        let config = velodyne::Config {
+            model,
+            calibration,
+            cut_angle_deg: opts.cut_angle_deg,
+        };
+        let dec = velodyne::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        (
+            Decoder::Velodyne(Box::new(dec)),
+            port,
+            "Velodyne".to_string(),
+        )
+    };
+    Ok(PcapSweeps {
+        path: path.to_path_buf(),
+        capture,
+        decoder,
+        sink: Collect::default(),
+        meta_path: opts.meta.clone(),
+        model_given: !matches!(opts.sensor, SensorKind::Auto | SensorKind::Ouster),
+        report: PcapReport {
+            sensor,
+            port,
+            notes,
+            ..PcapReport::default()
+        },
+        fatal: None,
+        finished: false,
+    })
+}
+
+impl PcapSweeps {
+    /// What was read so far; complete once the iterator has ended.
+    pub fn report(&self) -> &PcapReport {
+        &self.report
+    }
+
+    /// Keeps at most `points` points of each sweep from now on; the rest are counted in
+    /// [`Sweep::beyond_capacity`], so memory follows the capacity, not the recording.
+    pub fn limit_points(&mut self, points: usize) {
+        self.sink.capacity = points;
+    }
+
+    /// Whether the source has ended and every sweep was taken: the report is complete.
+    pub fn exhausted(&self) -> bool {
+        self.finished && self.sink.done.is_empty()
+    }
+
+    /// Packets refused or lost since the last sweep ended, which no sweep holds: once
+    /// [`Self::exhausted`], what came after the last sweep.
+    pub fn after_last_sweep(&self) -> SweepStats {
+        let mut s = self.decoder.between_sweeps();
+        self.sink.refused.add_to(&mut s);
+        s
+    }
+
+    /// The length of the sensor's data packets.
+    fn data_len(&self) -> usize {
+        match &self.decoder {
+            Decoder::Velodyne(_) => velodyne::wire::field::LEN,
+            Decoder::Ouster(d) => d.layout().packet_len(),
+        }
+    }
+
+    fn feed(&mut self, record: Record) {
+        let (time_ns, source, port) = match &record {
+            Record::Datagram(d) => (d.time_ns, d.source, d.port),
+            Record::Damaged {
+                time_ns,
+                source,
+                port,
+                ..
+            } => (*time_ns, *source, *port),
+        };
+        let data_len = self.data_len();
+        let r = &mut self.report;
+        if port != r.port {
+            *r.other_ports.entry(port).or_insert(0) += 1;
+            if matches!(&record, Record::Datagram(d) if d.payload.len() == data_len) {
+                *r.data_elsewhere.entry(port).or_insert(0) += 1;
+            }
+            return;
+        }
+        if r.source.is_some_and(|s| s != source) {
+            *r.other_sources.entry(source).or_insert(0) += 1;
+            self.sink.refused.other_sensor = self.sink.refused.other_sensor.saturating_add(1);
+            return;
+        }
+        r.on_port += 1;
+        self.sink.capture_ns = time_ns;
+        let d = match record {
+            Record::Datagram(d) => d,
+            Record::Damaged { damage, .. } => {
+                *r.refused.entry(damage.to_string()).or_insert(0) += 1;
+                self.sink.refused.bad = self.sink.refused.bad.saturating_add(1);
+                return;
+            }
+        };
+        match self.decoder.push(&d.payload, &mut self.sink) {
+            Ok(()) => {
+                r.decoded += 1;
+                if r.source.is_none() {
+                    r.source = Some(d.source);
+                    if let Decoder::Velodyne(v) = &self.decoder {
+                        let model = v.model().unwrap_or(Model::Vlp16);
+                        r.sensor = format!("Velodyne {}", model.name());
+                    }
+                }
+            }
+            Err(e) => {
+                *r.refused.entry(e.to_string()).or_insert(0) += 1;
+                let contradiction =
+                    matches!(e, PacketError::ColumnWindow | PacketError::ColumnRate);
+                if contradiction && self.sink.ended == 0 && self.fatal.is_none() {
+                    self.fatal = Some(self.contradicted(e));
+                }
+            }
+        }
+    }
+
+    /// The error for Ouster packets that contradict the metadata.
+    fn contradicted(&self, e: PacketError) -> anyhow::Error {
+        let meta = self
+            .meta_path
+            .as_deref()
+            .map_or_else(String::new, |m| format!(" {}", m.display()));
+        anyhow!(
+            "{}: packet {} on port {} contradicts the metadata{meta}: {e}; give the metadata \
+             saved with this recording",
+            self.path.display(),
+            self.report.on_port,
+            self.report.port
+        )
+    }
+
+    /// What the capture and the packets' timing showed, for the report's notes.
+    fn end_notes(&self) -> Vec<String> {
+        let mut notes = self.capture.warnings();
+        if let Decoder::Velodyne(v) = &self.decoder {
+            notes.extend(timing_note(v, self.model_given));
+        }
+        notes
+    }
+
+    /// The reason nothing decoded, naming the file.
+    fn nothing_decoded(&self) -> anyhow::Error {
+        let r = &self.report;
+        let file = self.path.display();
+        if r.on_port == 0 {
+            let ports: Vec<_> = r
+                .other_ports
+                .iter()
+                .map(|(p, n)| format!("{n} on port {p}"))
+                .collect();
+            let seen = if ports.is_empty() {
+                "no UDP packets at all".to_string()
+            } else {
+                format!("UDP seen: {}", ports.join(", "))
+            };
+            let elsewhere: Vec<_> = r
+                .data_elsewhere
+                .iter()
+                .map(|(p, n)| format!("{n} on port {p} (--port {p})"))
+                .collect();
+            let hint = if elsewhere.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; packets of the sensor's data length ({} bytes): {}",
+                    self.data_len(),
+                    elsewhere.join(", ")
+                )
+            };
+            let notes: String = r.notes.iter().map(|n| format!("; {n}")).collect();
+            return anyhow!(
+                "{file}: no packets on port {} ({seen}){hint}{notes}",
+                r.port
+            );
+        }
+        let (reason, _) = r
+            .refused
+            .iter()
+            .max_by_key(|(_, n)| **n)
+            .map(|(k, n)| (k.clone(), *n))
+            .unwrap_or_default();
+        let hint = match &self.meta_path {
+            Some(m)
+                if reason.contains("metadata")
+                    || reason.contains("longer")
+                    || reason.contains("shorter") =>
+            {
+                format!(" (is {} the metadata of this sensor?)", m.display())
+            }
+            _ => String::new(),
+        };
+        anyhow!(
+            "{file}: {} packets on port {}, none decoded: {reason}{hint}",
+            r.on_port,
+            r.port
+        )
+    }
+}
+
+/// A warning when the packets' spacing contradicts the Velodyne model decoded (from the
+/// product byte, or `--sensor`): which models send packets that far apart.
+fn timing_note(v: &velodyne::Decoder, model_given: bool) -> Option<String> {
+    let (model, nominal, step) = (v.model()?, v.packet_us()?, v.shortest_step_us()?);
+    let spacing = f64::from(step);
+    if spacing <= 1.5 * nominal && spacing >= nominal / 1.5 {
+        return None;
+    }
+    let dual = (nominal - model.packet_us(true)).abs() < 1e-6;
+    let fitting: Vec<Model> = Model::ALL
+        .into_iter()
+        .filter(|m| (m.packet_us(dual) - spacing).abs() <= 0.02 * spacing)
+        .collect();
+    let names: Vec<&str> = fitting.iter().map(|m| m.name()).collect();
+    let flags: Vec<String> = fitting
+        .iter()
+        .map(|m| format!("--sensor {}", sensor_flag(*m)))
+        .collect();
+    let said = if model_given {
+        "--sensor"
+    } else {
+        "the packets' product byte"
+    };
+    let (why, fix) = if fitting.is_empty() {
+        (
+            "packets are lost in between, or the model is wrong".to_string(),
+            "--sensor with the unit's model".to_string(),
+        )
+    } else {
+        (
+            format!("as from a {}", names.join(" or ")),
+            flags.join(" or "),
+        )
+    };
+    Some(format!(
+        "{said} says {name}, but they come {step} us apart at the closest, {why} ({name}: one \
+         every {nominal:.0} us): decoded as {name}, losses counted from the packets' own \
+         spacing; if the model is wrong, give {fix}",
+        name = model.name()
+    ))
+}
+
+impl Iterator for PcapSweeps {
+    type Item = Result<Sweep>;
+
+    fn next(&mut self) -> Option<Result<Sweep>> {
+        loop {
+            if let Some(e) = self.fatal.take() {
+                self.finished = true;
+                self.sink.done.clear();
+                return Some(Err(e));
+            }
+            if let Some(s) = self.sink.done.pop_front() {
+                return Some(Ok(s));
+            }
+            if self.finished {
+                return None;
+            }
+            match self.capture.next_record() {
+                Ok(Some(r)) => self.feed(r),
+                Ok(None) => {
+                    self.finished = true;
+                    let notes = self.end_notes();
+                    self.report.notes.extend(notes);
+                    if self.report.decoded == 0 {
+                        return Some(Err(self.nothing_decoded()));
+                    }
+                    self.decoder.finish(&mut self.sink);
+                }
+                Err(e) => {
+                    self.finished = true;
+                    self.sink.done.clear();
+                    return Some(Err(e));
+                }
+            }
+        }
+    }
+}
+
+/// Every sweep of a recording and the report, or the first error (naming the file).
+pub fn read_all(path: &Path, opts: &SensorOptions) -> Result<(Vec<Sweep>, PcapReport)> {
+    let mut it = open(path, opts)?;
+    let sweeps = it.by_ref().collect::<Result<Vec<_>>>()?;
+    Ok((sweeps, it.report.clone()))
+}

@@ -1,0 +1,246 @@
+//! The vocabulary every reader shares: frames, what a source yields, formats and options.
+//!
+//! Every input format is a [`FrameSource`]: a stream of scans read one at a time, so a long
+//! recording never has to fit in memory, and no frame costs more than the scan capacity
+//! ([`OpenOptions::scan_points`]) whatever its file says. A frame's [`Frame::index`] is its
+//! identity in the dataset (the number in its file name, its place in time order), so ground
+//! truth and times pair with it whatever was lost before it.
+//!
+//! What the layer finds is reported through three channels the run loop prints, counts and
+//! turns into exit 1 under `--strict`: [`DatasetInfo::warnings`] for the dataset as a whole
+//! (ignored files, side files of the wrong length, a recording out of time order), a
+//! [`Frame::warnings`] entry for a frame used despite a problem, and [`Item::Skipped`] for a
+//! frame that cannot be used (missing, truncated, garbage). Names that cannot be told apart
+//! are refused when the dataset is opened; damage to a container (a bag or MCAP file cut in
+//! the middle) ends the stream with an error after the frames before it.
+
+use anyhow::Result;
+use kiss_odom_sensors::SweepStats;
+use nalgebra::Isometry3;
+use std::path::PathBuf;
+
+/// One scan as read from disk, in the sensor frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frame {
+    /// The frame's identity: the number in its file name, or its place in time order (name
+    /// times, bag and MCAP messages), 0-based, counting skipped frames. Row `index` of the
+    /// ground truth and of `times.txt` belongs to it.
+    pub index: usize,
+    /// Where it came from: a file path, or `file:topic@stamp` for bags and MCAP files.
+    pub name: String,
+    /// Points in metres, sensor frame.
+    pub points: Vec<[f64; 3]>,
+    /// Per-point capture times in any unit and offset (one per point), if the format has them.
+    pub stamps: Option<Vec<f64>>,
+    /// Acquisition time of the frame in seconds, if known.
+    pub time: Option<f64>,
+    /// Problems that did not stop the frame from being used (e.g. timestamps ignored).
+    pub warnings: Vec<String>,
+    /// Per-point intensity (reflectivity), where the reader keeps it (sensor recordings).
+    pub intensity: Option<Vec<f32>>,
+    /// For a sweep decoded from sensor packets: its packet statistics and time span.
+    pub sweep: Option<SweepInfo>,
+}
+
+/// What a source yields.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Item {
+    /// A usable frame.
+    Frame(Frame),
+    /// A frame that could not be read; `reason` names the file and what was wrong.
+    Skipped {
+        /// The frame's identity (see [`Frame::index`]).
+        index: usize,
+        /// Where it was expected: a file path, or `file:topic@time`.
+        name: String,
+        /// Its time in seconds, if known without reading it.
+        time: Option<f64>,
+        /// One-line reason, naming the file.
+        reason: String,
+    },
+}
+
+impl Item {
+    /// The frame's identity.
+    pub fn index(&self) -> usize {
+        match self {
+            Item::Frame(f) => f.index,
+            Item::Skipped { index, .. } => *index,
+        }
+    }
+
+    /// The frame's time in seconds, if known.
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            Item::Frame(f) => f.time,
+            Item::Skipped { time, .. } => *time,
+        }
+    }
+}
+
+/// What a source found that none of its items carries (a sensor recording's refusals after
+/// its last sweep, a second sender), asked for once after the last item.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Trailer {
+    /// Warnings naming the source: to print, count and, under `--strict`, refuse.
+    pub warnings: Vec<String>,
+    /// Sensor packets refused or lost after the last sweep, for the packet totals.
+    pub packets: Option<SweepStats>,
+}
+
+/// A stream of scans.
+pub trait FrameSource {
+    /// Number of frames if known in advance.
+    fn len_hint(&self) -> Option<usize>;
+    /// The next frame, `Ok(None)` at the end, or `Err` when the container is damaged and
+    /// nothing after this point can be trusted.
+    fn next_item(&mut self) -> Result<Option<Item>>;
+    /// Positions the stream so that the next item has index `index`, if the format can seek;
+    /// returns false otherwise (the caller then reads and drops frames).
+    fn seek(&mut self, _index: usize) -> bool {
+        false
+    }
+    /// What the stream found that none of its items carried; ask once it has ended (or
+    /// stopped being read). Empty for most formats.
+    fn trailer(&mut self) -> Trailer {
+        Trailer::default()
+    }
+}
+
+/// Input formats (`--format`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// KITTI if the folder has the benchmark layout, otherwise the generic layout.
+    Auto,
+    /// KITTI odometry benchmark layout (`sequences/XX`).
+    Kitti,
+    /// Generic layout with `.bin` frames.
+    Bin,
+    /// Generic layout with `.ply` frames.
+    Ply,
+    /// Generic layout with `.pcd` frames.
+    Pcd,
+    /// ROS 1 bag with `sensor_msgs/PointCloud2`.
+    Bag,
+    /// ROS 2 MCAP with `sensor_msgs/msg/PointCloud2`.
+    Mcap,
+    /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `--port`).
+    Pcap,
+}
+
+/// Everything known about a dataset besides its frames.
+#[derive(Clone, Debug, Default)]
+pub struct DatasetInfo {
+    /// Ground truth in the LiDAR frame, row `i` for frame `i` (see [`Frame::index`]).
+    pub ground_truth: Option<Vec<Isometry3<f64>>>,
+    /// Where the ground truth came from.
+    pub ground_truth_path: Option<PathBuf>,
+    /// Frame times in seconds (`times.txt`), row `i` for frame `i`, if present.
+    pub frame_times: Option<Vec<f64>>,
+    /// The format actually used (never `Auto`).
+    pub format: Option<Format>,
+    /// Whether the reference's KITTI vertical-angle correction is applied to every scan.
+    pub kitti_correction: bool,
+    /// Findings about the dataset as a whole, one line each, naming the file: to print, count
+    /// and, under `--strict`, refuse.
+    pub warnings: Vec<String>,
+}
+
+impl DatasetInfo {
+    /// Ground truth of the frames `indices`, re-based to the first of them that has one;
+    /// `None` for a frame without ground truth.
+    pub fn ground_truth_for(&self, indices: &[usize]) -> Vec<Option<Isometry3<f64>>> {
+        let Some(all) = &self.ground_truth else {
+            return vec![None; indices.len()];
+        };
+        let rows: Vec<Option<Isometry3<f64>>> =
+            indices.iter().map(|&i| all.get(i).copied()).collect();
+        let Some(first) = rows.iter().flatten().next().map(Isometry3::inverse) else {
+            return rows;
+        };
+        rows.into_iter().map(|p| p.map(|p| first * p)).collect()
+    }
+}
+
+/// An opened dataset: its frames and what else is known about it.
+pub struct Dataset {
+    /// The frames.
+    pub frames: Box<dyn FrameSource>,
+    /// Ground truth, times, format.
+    pub info: DatasetInfo,
+}
+
+/// Options that affect how a dataset is opened.
+#[derive(Clone, Debug)]
+pub struct OpenOptions {
+    /// Topic to read from a bag or MCAP file (default: the only point-cloud topic).
+    pub topic: Option<String>,
+    /// Most points read from one frame (the core's `Capacities::scan_points`, which ignores
+    /// the rest anyway); a larger frame is truncated with a warning.
+    pub scan_points: usize,
+    /// How to decode a sensor recording (pcap).
+    pub sensor: SensorOptions,
+}
+
+impl Default for OpenOptions {
+    fn default() -> Self {
+        Self {
+            topic: None,
+            sensor: SensorOptions::default(),
+            scan_points: kiss_odom_core::Capacities::FULL_SCALE.scan_points,
+        }
+    }
+}
+
+/// What a frame decoded from sensor packets carries besides its points: the sweep's packet
+/// statistics (for `frames.csv`), the sensor-clock instants of its first and last point (the
+/// instants a pose can refer to, `--pose-time`) and when its last packet was captured.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SweepInfo {
+    /// Packet statistics.
+    pub stats: SweepStats,
+    /// Sensor-clock time of the sweep's first point, s.
+    pub start_s: f64,
+    /// Sensor-clock time of the sweep's last point, s.
+    pub end_s: f64,
+    /// Capture (host) time of the last packet that gave the sweep points, ns since the Unix
+    /// epoch.
+    pub last_capture_ns: u64,
+}
+
+/// Which sensor a recording is from (`--sensor`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum SensorKind {
+    /// Ouster if metadata is given, otherwise Velodyne with the model from the packets.
+    #[default]
+    Auto,
+    /// Velodyne VLP-16 / Puck.
+    Vlp16,
+    /// Velodyne VLP-16 Hi-Res.
+    PuckHiRes,
+    /// Velodyne VLP-32C.
+    Vlp32c,
+    /// Velodyne HDL-32E.
+    Hdl32e,
+    /// Ouster (needs the metadata JSON).
+    Ouster,
+}
+
+/// How to read a recording.
+#[derive(Clone, Debug, Default)]
+pub struct SensorOptions {
+    /// The sensor.
+    pub sensor: SensorKind,
+    /// UDP port (default: 2368 for Velodyne, the metadata's or 7502 for Ouster).
+    pub port: Option<u16>,
+    /// Ouster metadata JSON.
+    pub meta: Option<PathBuf>,
+    /// Velodyne calibration (XML or YAML).
+    pub calibration: Option<PathBuf>,
+    /// Velodyne cut angle, degrees (default: a full turn from wherever the last sweep ended).
+    pub cut_angle_deg: Option<f64>,
+}

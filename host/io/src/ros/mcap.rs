@@ -1,0 +1,886 @@
+//! ROS 2 MCAP files carrying `sensor_msgs/msg/PointCloud2`.
+//!
+//! The container is read with the `mcap` crate's sans-io readers fed from a buffered file, so
+//! neither the file nor more than a few chunks of it have to fit in memory, and no record
+//! larger than the limit the scan capacity sets ([`pointcloud2::record_limit`]) is read. The
+//! summary at the end of the file says which topics exist and how many messages each holds;
+//! with its chunk index the messages of the chosen topic are read in log-time order (as
+//! `ros2 bag play` plays them) whatever order they were written in, and a file written out of
+//! order says so in a dataset warning. Without a summary (a file cut short) or chunks, a linear
+//! reader streams the data section in file order and warns at the first message out of order.
+//! The message body is CDR; [`message`](super::message) parses it into a
+//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and [`pointcloud2`] decodes it.
+
+use super::message::parse_cdr;
+use super::pointcloud2::{self, MessageAt};
+use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
+use anyhow::{anyhow, bail, Context, Result};
+use mcap::records::{op, Record};
+use mcap::sans_io::indexed_reader::ReadOrder;
+use mcap::sans_io::{
+    IndexedReadEvent, IndexedReader, IndexedReaderOptions, LinearReadEvent, LinearReader,
+    LinearReaderOptions, SummaryReadEvent, SummaryReader, SummaryReaderOptions,
+};
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::Path;
+
+/// Schema name of the messages this reader decodes.
+pub const POINTCLOUD2_SCHEMA: &str = "sensor_msgs/msg/PointCloud2";
+
+/// Message encoding of ROS 2 messages.
+pub const CDR_ENCODING: &str = "cdr";
+
+/// Chunks whose time ranges overlap are held decompressed together while reading in log-time
+/// order; more than this many limits' worth is read in file order instead.
+const OVERLAP_BUDGET: u64 = 4;
+
+/// Opens an MCAP file and streams the PointCloud2 messages of `opts.topic`, or of the only
+/// PointCloud2 topic in the file.
+pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
+    let label = path.display().to_string();
+    let limit = pointcloud2::record_limit(opts.scan_points);
+    let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
+    let len = file
+        .metadata()
+        .with_context(|| format!("{label}: cannot stat"))?
+        .len();
+    let mut magic = [0u8; 8];
+    if file.read_exact(&mut magic).is_err() || magic != mcap::MAGIC {
+        bail!("{label}: not an MCAP file (no MCAP magic at the start)");
+    }
+    let mut input = BufReader::with_capacity(1 << 16, file);
+    let mut warnings = Vec::new();
+    let summary = read_summary(&mut input, len, limit).ok().flatten();
+    let catalog = match &summary {
+        Some(summary) if !summary.channels.is_empty() => Catalog::of(summary),
+        // No summary (cut short, or written without one): learn the channels by reading once.
+        _ => {
+            input
+                .seek(SeekFrom::Start(0))
+                .with_context(|| format!("{label}: cannot read"))?;
+            warnings.push(format!(
+                "{label}: MCAP file has no summary (cut short or not finished); its topics were \
+                 found by scanning"
+            ));
+            scan(&mut input, limit)
+        }
+    };
+
+    let topics: Vec<(String, String)> = catalog
+        .channels
+        .values()
+        .map(|c| {
+            (
+                c.topic.clone(),
+                catalog.schema_name(c.schema_id).to_string(),
+            )
+        })
+        .collect();
+    let topic = pointcloud2::choose_topic(
+        &label,
+        &topics,
+        |s| s == POINTCLOUD2_SCHEMA,
+        POINTCLOUD2_SCHEMA,
+        opts.topic.as_deref(),
+    )
+    .map_err(|e| anyhow!(e))?;
+    let total = catalog.counts.as_ref().map(|counts| {
+        catalog
+            .channels
+            .iter()
+            .filter(|(_, c)| c.topic == topic)
+            .map(|(id, _)| counts.get(id).copied().unwrap_or(0) as usize)
+            .sum()
+    });
+    let indexed = summary
+        .as_ref()
+        .filter(|s| !s.chunk_indexes.is_empty() && !s.channels.is_empty())
+        .and_then(|s| {
+            indexed_reader(&label, &topic, s, &mut input, limit, &mut warnings)
+                .ok()
+                .flatten()
+        });
+    input
+        .seek(SeekFrom::Start(0))
+        .with_context(|| format!("{label}: cannot read"))?;
+    let (reader, channels) = match indexed {
+        Some(reader) => (Reader::Indexed(reader), catalog.channels.clone()),
+        None => (
+            Reader::Linear(LinearReader::new_with_options(reader_options(limit))),
+            HashMap::new(),
+        ),
+    };
+    let source = McapSource {
+        input,
+        reader,
+        chunk: Vec::new(),
+        total,
+        done: false,
+        topic: Topic {
+            file: label,
+            name: topic,
+            schemas: catalog.schemas.clone(),
+            channels,
+            index: 0,
+            max_points: opts.scan_points,
+            latest: None,
+        },
+    };
+    Ok(Dataset {
+        frames: Box::new(source),
+        info: DatasetInfo {
+            format: Some(Format::Mcap),
+            warnings,
+            ..DatasetInfo::default()
+        },
+    })
+}
+
+/// Most bytes handed to the mcap reader per read. The reader asks for what a record header
+/// declares and grows its buffer by that much before anything is read, so a damaged length
+/// field would cost gigabytes; in pieces, its buffer grows only by bytes the file really has.
+const READ_PIECE: usize = 1 << 16;
+
+fn reader_options(limit: u64) -> LinearReaderOptions {
+    LinearReaderOptions::default()
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX))
+}
+
+/// A channel: its topic, schema id and message encoding.
+#[derive(Clone, Debug)]
+struct ChannelInfo {
+    topic: String,
+    schema_id: u16,
+    encoding: String,
+}
+
+/// Channels and schemas known before streaming, and how many messages each channel has.
+#[derive(Debug, Default)]
+struct Catalog {
+    channels: HashMap<u16, ChannelInfo>,
+    schemas: HashMap<u16, String>,
+    counts: Option<HashMap<u16, u64>>,
+}
+
+impl Catalog {
+    fn of(summary: &mcap::Summary) -> Self {
+        let channels = summary
+            .channels
+            .iter()
+            .map(|(&id, c)| {
+                let info = ChannelInfo {
+                    topic: c.topic.clone(),
+                    schema_id: c.schema.as_ref().map_or(0, |s| s.id),
+                    encoding: c.message_encoding.clone(),
+                };
+                (id, info)
+            })
+            .collect();
+        let schemas = summary
+            .schemas
+            .iter()
+            .map(|(&id, s)| (id, s.name.clone()))
+            .collect();
+        let counts = summary
+            .stats
+            .as_ref()
+            .map(|s| s.channel_message_counts.clone().into_iter().collect());
+        Catalog {
+            channels,
+            schemas,
+            counts,
+        }
+    }
+
+    fn schema_name(&self, id: u16) -> &str {
+        self.schemas.get(&id).map_or("", String::as_str)
+    }
+}
+
+/// Reads the summary section; `Ok(None)` when the file has none.
+fn read_summary(
+    input: &mut BufReader<File>,
+    len: u64,
+    limit: u64,
+) -> mcap::McapResult<Option<mcap::Summary>> {
+    let mut reader = SummaryReader::new_with_options(
+        SummaryReaderOptions::default()
+            .with_file_size(len)
+            .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX)),
+    );
+    while let Some(event) = reader.next_event() {
+        match event? {
+            SummaryReadEvent::ReadRequest(need) => {
+                let n = input.read(reader.insert(need.min(READ_PIECE)))?;
+                reader.notify_read(n);
+            }
+            SummaryReadEvent::SeekRequest(to) => {
+                let pos = input.seek(to)?;
+                reader.notify_seeked(pos);
+            }
+        }
+    }
+    Ok(reader.finish())
+}
+
+/// Reads the whole data section once, counting messages per channel, up to the first error.
+fn scan(input: &mut BufReader<File>, limit: u64) -> Catalog {
+    let mut reader = LinearReader::new_with_options(reader_options(limit));
+    let mut catalog = Catalog::default();
+    let mut counts: HashMap<u16, u64> = HashMap::new();
+    while let Some(Ok(event)) = reader.next_event() {
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = input.read(reader.insert(need.min(READ_PIECE))).unwrap_or(0);
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data) {
+                Ok(Record::Schema { header, .. }) => {
+                    catalog.schemas.insert(header.id, header.name);
+                }
+                Ok(Record::Channel(c)) => {
+                    let info = ChannelInfo {
+                        topic: c.topic,
+                        schema_id: c.schema_id,
+                        encoding: c.message_encoding,
+                    };
+                    catalog.channels.insert(c.id, info);
+                }
+                Ok(Record::Message { header, .. }) => {
+                    *counts.entry(header.channel_id).or_default() += 1;
+                }
+                Ok(_) => {}
+                Err(_) => break,
+            },
+        }
+    }
+    catalog.counts = Some(counts);
+    catalog
+}
+
+/// A reader of the messages of `topic` in log-time order, if the chunk index allows it within
+/// memory; warns (in `warnings`) when the file was written out of order, naming the first
+/// message out of order, and when it is but cannot be reordered.
+fn indexed_reader(
+    label: &str,
+    topic: &str,
+    summary: &mcap::Summary,
+    input: &mut BufReader<File>,
+    limit: u64,
+    warnings: &mut Vec<String>,
+) -> Result<Option<IndexedReader>> {
+    let ours: Vec<u16> = summary
+        .channels
+        .iter()
+        .filter(|(_, c)| c.topic == topic)
+        .map(|(&id, _)| id)
+        .collect();
+    let mut chunks = summary.chunk_indexes.clone();
+    chunks.sort_by_key(|c| c.chunk_start_offset);
+    // Log times of our messages in file order, from the message indexes after each chunk.
+    let mut times = Vec::new();
+    for chunk in &chunks {
+        let mut entries = Vec::new();
+        for id in &ours {
+            let Some(&at) = chunk.message_index_offsets.get(id) else {
+                continue;
+            };
+            input.seek(SeekFrom::Start(at))?;
+            let mut head = [0u8; 9];
+            input.read_exact(&mut head)?;
+            let len = u64::from_le_bytes(head[1..].try_into()?);
+            if head[0] != op::MESSAGE_INDEX || len > limit {
+                bail!("no message index at byte {at}");
+            }
+            let mut body = vec![0u8; len as usize];
+            input.read_exact(&mut body)?;
+            if let Record::MessageIndex(index) = mcap::parse_record(op::MESSAGE_INDEX, &body)? {
+                entries.extend(index.records.into_iter().map(|e| (e.offset, e.log_time)));
+            }
+        }
+        entries.sort_unstable();
+        times.extend(entries.into_iter().map(|(_, t)| t));
+    }
+    let mut order: Vec<u64> = times.clone();
+    let warning = pointcloud2::time_order(label, topic, &mut order, |t| *t);
+    // Chunks overlapping in time are held together; bound how many.
+    let mut spans: Vec<(u64, u64, u64)> = chunks
+        .iter()
+        .map(|c| {
+            (
+                c.message_start_time,
+                c.message_end_time,
+                c.uncompressed_size,
+            )
+        })
+        .collect();
+    spans.sort_unstable();
+    let mut held = 0u64;
+    for (i, &(start, _, _)) in spans.iter().enumerate() {
+        let overlapping: u64 = spans[..=i]
+            .iter()
+            .filter(|(_, end, _)| *end >= start)
+            .map(|(_, _, size)| *size)
+            .sum();
+        held = held.max(overlapping);
+    }
+    if held > OVERLAP_BUDGET.saturating_mul(limit) {
+        if let Some(w) = warning {
+            warnings.push(format!(
+                "{w} would need {held} bytes of chunks at once, so frames are read in file order"
+            ));
+        }
+        return Ok(None);
+    }
+    warnings.extend(warning);
+    let options = IndexedReaderOptions::new()
+        .with_order(ReadOrder::LogTime)
+        .include_topics([topic])
+        .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX));
+    Ok(Some(IndexedReader::new_with_options(summary, options)?))
+}
+
+/// How the data section is read.
+enum Reader {
+    /// Record by record in file order.
+    Linear(LinearReader),
+    /// The chosen topic's messages in log-time order, chunk by chunk.
+    Indexed(IndexedReader),
+}
+
+/// The frames of one topic of an open MCAP file.
+struct McapSource {
+    input: BufReader<File>,
+    reader: Reader,
+    /// Buffer for a chunk the indexed reader asks for.
+    chunk: Vec<u8>,
+    total: Option<usize>,
+    done: bool,
+    topic: Topic,
+}
+
+/// What turns messages of the data section into items of the chosen topic.
+struct Topic {
+    file: String,
+    name: String,
+    /// Schema names by id (from the summary, or as met in the data section).
+    schemas: HashMap<u16, String>,
+    /// Channels by id (from the summary, or as met in the data section).
+    channels: HashMap<u16, ChannelInfo>,
+    index: usize,
+    max_points: usize,
+    /// Latest log time and message index so far, for the order warning of linear reading.
+    latest: Option<(u64, usize)>,
+}
+
+impl Topic {
+    /// The item of a message, `None` for a message of another topic.
+    fn item(&mut self, channel_id: u16, log_time: u64, data: &[u8]) -> Result<Option<Item>> {
+        let (file, index) = (&self.file, self.index);
+        let Some(channel) = self.channels.get(&channel_id) else {
+            bail!("{file}: message on channel {channel_id} before its channel record");
+        };
+        if channel.topic != self.name {
+            return Ok(None);
+        }
+        let topic = &self.name;
+        let schema = self
+            .schemas
+            .get(&channel.schema_id)
+            .map_or("no schema", String::as_str);
+        if schema != POINTCLOUD2_SCHEMA || channel.encoding != CDR_ENCODING {
+            bail!(
+                "{file}: message {index} on {topic} is {schema} ({}), not {POINTCLOUD2_SCHEMA} \
+                 ({CDR_ENCODING})",
+                channel.encoding
+            );
+        }
+        let at = MessageAt {
+            index,
+            file,
+            topic,
+            received: log_time,
+        };
+        let mut item = pointcloud2::message_item(at, parse_cdr(data), self.max_points);
+        match self.latest {
+            Some((t, k)) if log_time < t => {
+                if let Item::Frame(f) = &mut item {
+                    f.warnings.push(format!(
+                        "{file}: message {index} on {topic} was logged at {}, before message {k} \
+                         ({}): the file is out of time order and cannot be reordered (no chunk \
+                         index); frames are read in file order",
+                        pointcloud2::stamp_of_nanos(log_time),
+                        pointcloud2::stamp_of_nanos(t)
+                    ));
+                }
+            }
+            _ => self.latest = Some((log_time, index)),
+        }
+        self.index += 1;
+        Ok(Some(item))
+    }
+}
+
+impl FrameSource for McapSource {
+    fn len_hint(&self) -> Option<usize> {
+        self.total
+    }
+
+    fn next_item(&mut self) -> Result<Option<Item>> {
+        if self.done {
+            return Ok(None);
+        }
+        let result = self.next_frame();
+        if !matches!(result, Ok(Some(_))) {
+            self.done = true;
+        }
+        result
+    }
+}
+
+impl McapSource {
+    /// Reads the data section up to the next message on the chosen topic.
+    fn next_frame(&mut self) -> Result<Option<Item>> {
+        let file = self.topic.file.clone();
+        loop {
+            match &mut self.reader {
+                Reader::Linear(reader) => {
+                    let event = match reader.next_event() {
+                        None => return Ok(None),
+                        Some(Err(e)) => {
+                            let hint = match e {
+                                mcap::McapError::UnexpectedEof => " (the file looks cut short)",
+                                _ => "",
+                            };
+                            bail!("{file}: {e}{hint}");
+                        }
+                        Some(Ok(event)) => event,
+                    };
+                    match event {
+                        LinearReadEvent::ReadRequest(need) => {
+                            let n = self
+                                .input
+                                .read(reader.insert(need.min(READ_PIECE)))
+                                .with_context(|| file.clone())?;
+                            reader.notify_read(n);
+                        }
+                        LinearReadEvent::Record { opcode, data } => {
+                            let record = mcap::parse_record(opcode, data).map_err(|e| {
+                                anyhow!("{file}: bad record (opcode {opcode:#04x}): {e}")
+                            })?;
+                            let topic = &mut self.topic;
+                            match record {
+                                Record::Schema { header, .. } => {
+                                    topic.schemas.insert(header.id, header.name);
+                                }
+                                Record::Channel(c) => {
+                                    let info = ChannelInfo {
+                                        topic: c.topic,
+                                        schema_id: c.schema_id,
+                                        encoding: c.message_encoding,
+                                    };
+                                    topic.channels.insert(c.id, info);
+                                }
+                                Record::Message { header, data } => {
+                                    let item =
+                                        topic.item(header.channel_id, header.log_time, &data)?;
+                                    if item.is_some() {
+                                        return Ok(item);
+                                    }
+                                }
+                                _ => {}
+                            }
+                        }
+                    }
+                }
+                Reader::Indexed(reader) => match reader.next_event() {
+                    None => return Ok(None),
+                    Some(Err(e)) => bail!("{file}: {e}"),
+                    Some(Ok(IndexedReadEvent::ReadChunkRequest { offset, length })) => {
+                        self.chunk.resize(length, 0);
+                        self.input
+                            .seek(SeekFrom::Start(offset))
+                            .and_then(|_| self.input.read_exact(&mut self.chunk))
+                            .with_context(|| format!("{file}: cannot read a chunk"))?;
+                        reader
+                            .insert_chunk_record_data(offset, &self.chunk)
+                            .with_context(|| file.clone())?;
+                    }
+                    Some(Ok(IndexedReadEvent::Message { header, data })) => {
+                        let item = self.topic.item(header.channel_id, header.log_time, data)?;
+                        if item.is_some() {
+                            return Ok(item);
+                        }
+                    }
+                },
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ros::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
+    use crate::ros::pointcloud2::Stamp;
+    use mcap::records::MessageHeader;
+    use std::collections::BTreeMap;
+
+    /// CDR serialization of `c` written from the IDL: 4-byte encapsulation header, then every
+    /// primitive aligned to its size counted from the end of that header.
+    fn cdr_body(c: &RawCloud, big_endian: bool) -> Vec<u8> {
+        struct W {
+            b: Vec<u8>,
+            big: bool,
+        }
+        impl W {
+            fn u32(&mut self, v: u32) {
+                while (self.b.len() - 4) % 4 != 0 {
+                    self.b.push(0);
+                }
+                let bytes = if self.big {
+                    v.to_be_bytes()
+                } else {
+                    v.to_le_bytes()
+                };
+                self.b.extend_from_slice(&bytes);
+            }
+            fn string(&mut self, s: &str) {
+                self.u32(s.len() as u32 + 1);
+                self.b.extend_from_slice(s.as_bytes());
+                self.b.push(0);
+            }
+        }
+        let mut w = W {
+            b: vec![0, if big_endian { 0 } else { 1 }, 0, 0],
+            big: big_endian,
+        };
+        w.u32(c.sec);
+        w.u32(c.nsec);
+        w.string(&c.frame_id);
+        w.u32(c.height);
+        w.u32(c.width);
+        w.u32(c.fields.len() as u32);
+        for f in &c.fields {
+            w.string(&f.name);
+            w.u32(f.offset);
+            w.b.push(f.datatype);
+            w.u32(f.count);
+        }
+        w.b.push(u8::from(c.is_bigendian));
+        w.u32(c.point_step);
+        w.u32(c.row_step);
+        w.u32(c.data.len() as u32);
+        w.b.extend_from_slice(&c.data);
+        w.b.push(u8::from(c.is_dense));
+        w.b
+    }
+
+    const STRING_SCHEMA: &str = "std_msgs/msg/String";
+
+    /// Writes an MCAP file with the `mcap` crate: channels (topic, schema name), messages
+    /// (channel position, body), `chunk_size` None for one record per message outside chunks.
+    fn write_mcap(
+        channels: &[(&str, &str)],
+        msgs: &[(usize, Vec<u8>)],
+        chunk_size: Option<u64>,
+        compression: Option<mcap::Compression>,
+    ) -> Vec<u8> {
+        let mut w = mcap::WriteOptions::new()
+            .compression(compression)
+            .chunk_size(chunk_size)
+            .use_chunks(chunk_size.is_some())
+            .create(std::io::Cursor::new(Vec::new()))
+            .unwrap();
+        let ids: Vec<u16> = channels
+            .iter()
+            .map(|(topic, schema)| {
+                let sid = w.add_schema(schema, "ros2msg", b"# test").unwrap();
+                w.add_channel(sid, topic, CDR_ENCODING, &BTreeMap::new())
+                    .unwrap()
+            })
+            .collect();
+        for (seq, (ch, body)) in msgs.iter().enumerate() {
+            let header = MessageHeader {
+                channel_id: ids[*ch],
+                sequence: seq as u32,
+                log_time: seq as u64,
+                publish_time: seq as u64,
+            };
+            w.write_to_known_channel(&header, body).unwrap();
+        }
+        w.finish().unwrap();
+        w.into_inner().into_inner()
+    }
+
+    fn cloud_msg(k: u32) -> Vec<u8> {
+        cdr_body(&xyzt(k, 6), false)
+    }
+
+    fn string_msg() -> Vec<u8> {
+        vec![0, 1, 0, 0, 3, 0, 0, 0, b'h', b'i', 0]
+    }
+
+    fn open_mcap(path: &Path, topic: Option<&str>) -> Result<Dataset> {
+        open(
+            path,
+            &OpenOptions {
+                topic: topic.map(String::from),
+                ..OpenOptions::default()
+            },
+        )
+    }
+
+    fn mixed_messages() -> Vec<(usize, Vec<u8>)> {
+        (0..5u32)
+            .flat_map(|k| [(0, cloud_msg(k)), (1, string_msg())])
+            .collect()
+    }
+
+    #[test]
+    fn reads_every_cloud_of_the_only_pointcloud2_topic_chunked_or_not_compressed_or_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [("/points", POINTCLOUD2_SCHEMA), ("/chatter", STRING_SCHEMA)];
+        let layouts = [
+            (None, None),
+            (Some(300), None),
+            (Some(1 << 20), Some(mcap::Compression::Zstd)),
+            (Some(500), Some(mcap::Compression::Lz4)),
+        ];
+        for (chunk_size, compression) in layouts {
+            let bytes = write_mcap(&channels, &mixed_messages(), chunk_size, compression);
+            let p = save(&dir, "a.mcap", &bytes);
+            let mut ds = open_mcap(&p, None).unwrap();
+            assert_eq!(ds.info.format, Some(Format::Mcap));
+            assert_eq!(ds.frames.len_hint(), Some(5));
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(err, None);
+            assert_eq!(items.len(), 5, "{chunk_size:?} {compression:?}");
+            for (k, item) in items.iter().enumerate() {
+                let f = frame(item);
+                assert_frame_k(f, k, k as u32);
+                assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+            }
+        }
+    }
+
+    #[test]
+    fn big_endian_cdr_reads_the_same_values() {
+        let body = cdr_body(&xyzt(3, 6), true);
+        let le = cdr_body(&xyzt(3, 6), false);
+        assert_ne!(body, le);
+        assert_eq!(parse_cdr(&body).unwrap(), parse_cdr(&le).unwrap());
+        assert_eq!(
+            parse_cdr(&body).unwrap().stamp,
+            Stamp {
+                sec: 1_700_000_003,
+                nsec: 250_000_000
+            }
+        );
+    }
+
+    #[test]
+    fn file_cut_inside_a_message_yields_the_frames_before_then_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [("/points", POINTCLOUD2_SCHEMA), ("/chatter", STRING_SCHEMA)];
+        for chunk_size in [None, Some(400), Some(1 << 20)] {
+            let bytes = write_mcap(&channels, &mixed_messages(), chunk_size, None);
+            // Cut halfway through the body of cloud 3: clouds 0, 1, 2 are whole.
+            let body = cloud_msg(3);
+            let at = bytes
+                .windows(body.len())
+                .position(|w| w == body.as_slice())
+                .unwrap();
+            let p = save(&dir, "cut.mcap", &bytes[..at + body.len() / 2]);
+            let mut ds = open_mcap(&p, None).unwrap();
+            assert_eq!(ds.frames.len_hint(), Some(3), "{chunk_size:?}");
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(items.len(), 3, "{chunk_size:?}");
+            for (k, item) in items.iter().enumerate() {
+                assert_frame_k(frame(item), k, k as u32);
+            }
+            assert!(ds.info.warnings[0].contains("no summary"));
+            let err = err.expect("a cut file must end with an error");
+            assert!(
+                err.contains(&p.display().to_string()) && err.contains("cut short"),
+                "{err}"
+            );
+        }
+    }
+
+    #[test]
+    fn other_schema_on_the_chosen_topic_ends_the_stream_after_the_frames_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [("/points", POINTCLOUD2_SCHEMA), ("/points", STRING_SCHEMA)];
+        let msgs = vec![
+            (0, cloud_msg(0)),
+            (0, cloud_msg(1)),
+            (1, string_msg()),
+            (0, cloud_msg(2)),
+        ];
+        let p = save(
+            &dir,
+            "mixed.mcap",
+            &write_mcap(&channels, &msgs, Some(1 << 20), None),
+        );
+        let (items, err) = drain(open_mcap(&p, None).unwrap().frames.as_mut());
+        assert_eq!(items.len(), 2);
+        let err = err.unwrap();
+        assert!(
+            err.contains(STRING_SCHEMA) && err.contains(&p.display().to_string()),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn inconsistent_point_step_is_a_skipped_frame_and_the_stream_goes_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut bad = xyzt(1, 6);
+        bad.point_step = 12;
+        let msgs = vec![
+            (0, cloud_msg(0)),
+            (0, cdr_body(&bad, false)),
+            (0, cloud_msg(2)),
+        ];
+        let p = save(
+            &dir,
+            "step.mcap",
+            &write_mcap(&[("/points", POINTCLOUD2_SCHEMA)], &msgs, None, None),
+        );
+        let (items, err) = drain(open_mcap(&p, None).unwrap().frames.as_mut());
+        assert_eq!(err, None);
+        assert_eq!(items.len(), 3);
+        assert_frame_k(frame(&items[0]), 0, 0);
+        match &items[1] {
+            Item::Skipped { index, reason, .. } => {
+                assert_eq!(*index, 1);
+                assert!(
+                    reason.contains(&p.display().to_string()) && reason.contains("point_step 12"),
+                    "{reason}"
+                );
+            }
+            other => panic!("expected a skip, got {other:?}"),
+        }
+        assert_frame_k(frame(&items[2]), 2, 2);
+    }
+
+    #[test]
+    fn messages_out_of_log_time_order_are_reordered_with_a_chunk_index_and_flagged_without() {
+        let dir = tempfile::tempdir().unwrap();
+        let order = [0u32, 2, 1, 4, 3];
+        for chunked in [true, false] {
+            let mut w = mcap::WriteOptions::new()
+                .use_chunks(chunked)
+                .chunk_size(Some(400))
+                .create(std::io::Cursor::new(Vec::new()))
+                .unwrap();
+            let sid = w
+                .add_schema(POINTCLOUD2_SCHEMA, "ros2msg", b"# test")
+                .unwrap();
+            let ch = w
+                .add_channel(sid, "/points", CDR_ENCODING, &BTreeMap::new())
+                .unwrap();
+            for (seq, &k) in order.iter().enumerate() {
+                let header = MessageHeader {
+                    channel_id: ch,
+                    sequence: seq as u32,
+                    log_time: u64::from(k) * 100_000_000,
+                    publish_time: u64::from(k) * 100_000_000,
+                };
+                w.write_to_known_channel(&header, &cloud_msg(k)).unwrap();
+            }
+            w.finish().unwrap();
+            let p = save(&dir, "late.mcap", &w.into_inner().into_inner());
+            let mut ds = open_mcap(&p, None).unwrap();
+            let (items, err) = drain(ds.frames.as_mut());
+            assert_eq!(err, None);
+            let ks: Vec<f64> = items.iter().map(|i| frame(i).points[0][0]).collect();
+            if chunked {
+                let w = ds.info.warnings.join("\n");
+                assert!(
+                    w.contains("not in time order") && w.contains("message 2"),
+                    "{w}"
+                );
+                for (k, item) in items.iter().enumerate() {
+                    assert_frame_k(frame(item), k, k as u32);
+                }
+            } else {
+                // No chunk index to reorder by: file order, and the late frames say so.
+                assert_eq!(ks, [0.0, 2.0, 1.0, 4.0, 3.0]);
+                let late: Vec<usize> = (0..5)
+                    .filter(|&i| {
+                        frame(&items[i])
+                            .warnings
+                            .iter()
+                            .any(|w| w.contains("out of time order"))
+                    })
+                    .collect();
+                assert_eq!(late, [2, 4]);
+            }
+        }
+    }
+
+    #[test]
+    fn several_cloud_topics_need_a_topic_and_the_chosen_one_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let channels = [
+            ("/b", POINTCLOUD2_SCHEMA),
+            ("/a", POINTCLOUD2_SCHEMA),
+            ("/chatter", STRING_SCHEMA),
+        ];
+        let msgs = vec![
+            (0, cloud_msg(0)),
+            (1, cloud_msg(1)),
+            (2, string_msg()),
+            (1, cloud_msg(2)),
+        ];
+        let p = save(
+            &dir,
+            "two.mcap",
+            &write_mcap(&channels, &msgs, Some(1 << 20), None),
+        );
+        let err = format!("{:#}", open_mcap(&p, None).err().unwrap());
+        assert!(err.contains("/a, /b") && err.contains("--topic"), "{err}");
+        let err = format!("{:#}", open_mcap(&p, Some("/chatter")).err().unwrap());
+        assert!(err.contains(STRING_SCHEMA), "{err}");
+        let mut ds = open_mcap(&p, Some("/a")).unwrap();
+        assert_eq!(ds.frames.len_hint(), Some(2));
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(err, None);
+        let xs: Vec<f64> = items.iter().map(|i| frame(i).points[0][0]).collect();
+        assert_eq!(xs, vec![1.0, 2.0], "only /a's clouds (frames 1 and 2)");
+    }
+
+    #[test]
+    fn cdr_body_cut_anywhere_or_with_other_encapsulation_is_an_error_not_a_panic() {
+        let body = cloud_msg(2);
+        for cut in 0..body.len() {
+            assert!(parse_cdr(&body[..cut]).is_err(), "cut at {cut}");
+        }
+        let mut padded = body.clone();
+        padded.extend_from_slice(&[0, 0, 0]);
+        assert!(
+            parse_cdr(&padded).is_ok(),
+            "up to 3 bytes of end padding are allowed"
+        );
+        padded.push(0);
+        assert!(parse_cdr(&padded).unwrap_err().contains("4 bytes after"));
+        let mut xcdr2 = body.clone();
+        xcdr2[1] = 0x07;
+        assert!(parse_cdr(&xcdr2).unwrap_err().contains("not plain CDR"));
+    }
+
+    #[test]
+    fn files_that_are_not_mcap_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = save(&dir, "x.mcap", b"#ROSBAG V2.0\n");
+        let err = format!("{:#}", open_mcap(&p, None).err().unwrap());
+        assert!(
+            err.contains("not an MCAP file") && err.contains(&p.display().to_string()),
+            "{err}"
+        );
+    }
+}

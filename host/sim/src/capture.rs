@@ -1,0 +1,123 @@
+//! Writes simulated packets as a pcap capture (Ethernet, IPv4, UDP, as Wireshark or VeloView
+//! record a sensor) and, for an Ouster, the metadata JSON that describes it.
+//!
+//! The last step of `simulate --format pcap`, after [`crate::packets`]. Datagrams are not
+//! fragmented: an OS1-64 packet (12 544 bytes) travels in one jumbo frame.
+
+use crate::packets::{os1, Packet, PacketSensor};
+use anyhow::{Context, Result};
+use etherparse::PacketBuilder;
+use pcap_file::pcap::{PcapHeader, PcapPacket, PcapWriter};
+use pcap_file::DataLink;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// The capture's file name in the output folder.
+pub const PCAP_NAME: &str = "packets.pcap";
+/// The Ouster metadata's file name in the output folder.
+pub const META_NAME: &str = "packets.json";
+
+/// A pcap file being written.
+pub struct CaptureWriter {
+    path: PathBuf,
+    writer: PcapWriter<BufWriter<File>>,
+    port: u16,
+    source: [u8; 4],
+    /// Sequence time of trajectory time 0 (s).
+    start_time: f64,
+}
+
+impl CaptureWriter {
+    /// Creates `path` for `sensor`'s packets; `start_time` is the sequence time of the first.
+    pub fn create(path: &Path, sensor: PacketSensor, start_time: f64) -> Result<Self> {
+        let file = File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        // Little-endian, as Wireshark and tcpdump write on the usual hosts.
+        let header = PcapHeader {
+            datalink: DataLink::ETHERNET,
+            endianness: pcap_file::Endianness::Little,
+            ..PcapHeader::default()
+        };
+        let writer = PcapWriter::with_header(BufWriter::new(file), header)
+            .with_context(|| format!("writing {}", path.display()))?;
+        let (port, source) = match sensor {
+            PacketSensor::Os1 => (7502, [192, 168, 1, 100]),
+            _ => (2368, [192, 168, 1, 201]),
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            writer,
+            port,
+            source,
+            start_time,
+        })
+    }
+
+    /// Appends one packet, stamped with the time it leaves the sensor.
+    pub fn write(&mut self, packet: &Packet) -> Result<()> {
+        let builder = PacketBuilder::ethernet2([0x60, 0x76, 0x88, 0, 0, 1], [0xFF; 6])
+            .ipv4(self.source, [192, 168, 1, 2], 64)
+            .udp(self.port, self.port);
+        let mut frame = Vec::with_capacity(builder.size(packet.payload.len()));
+        builder
+            .write(&mut frame, &packet.payload)
+            .context("building a UDP frame")?;
+        let time = Duration::from_secs_f64((self.start_time + packet.offset).max(0.0));
+        let record = PcapPacket::new(time, frame.len() as u32, &frame);
+        self.writer
+            .write_packet(&record)
+            .with_context(|| format!("writing {}", self.path.display()))?;
+        Ok(())
+    }
+
+    /// Flushes the file.
+    pub fn finish(self) -> Result<()> {
+        let mut w = self.writer.into_writer();
+        std::io::Write::flush(&mut w).with_context(|| format!("writing {}", self.path.display()))
+    }
+}
+
+/// The OS1-64's metadata in the sensor's own (firmware 2.x, `json_calibration_version` 4)
+/// layout, which ouster-sdk and `io::ouster_meta` read.
+pub fn ouster_metadata(rate_hz: f64) -> serde_json::Value {
+    let beams = 0..os1::BEAMS;
+    let width = f64::from(os1::WIDTH);
+    let shift: Vec<i64> = beams
+        .clone()
+        .map(|u| libm::round(os1::azimuth_deg(u) / 360.0 * width) as i64)
+        .collect();
+    let identity_imu = [
+        1.0, 0.0, 0.0, 6.253, 0.0, 1.0, 0.0, -11.775, 0.0, 0.0, 1.0, 7.645, 0.0, 0.0, 0.0, 1.0,
+    ];
+    serde_json::json!({
+        "base_pn": "", "base_sn": "", "hostname": "", "proto_rev": "",
+        "beam_altitude_angles": beams.clone().map(os1::altitude_deg).collect::<Vec<_>>(),
+        "beam_azimuth_angles": beams.map(os1::azimuth_deg).collect::<Vec<_>>(),
+        "build_date": "2022-04-14T21:11:47Z",
+        "build_rev": "v2.3.0",
+        "client_version": "ouster_client 0.3.0",
+        "data_format": {
+            "column_window": [0, os1::WIDTH - 1],
+            "columns_per_frame": os1::WIDTH,
+            "columns_per_packet": os1::COLUMNS_PER_PACKET,
+            "pixel_shift_by_row": shift,
+            "pixels_per_column": os1::BEAMS,
+            "udp_profile_imu": "LEGACY",
+            "udp_profile_lidar": "RNG19_RFL8_SIG16_NIR16",
+        },
+        "image_rev": "kiss-odom simulate",
+        "imu_to_sensor_transform": identity_imu,
+        "initialization_id": os1::INIT_ID,
+        "json_calibration_version": 4,
+        "lidar_mode": format!("{}x{}", os1::WIDTH, rate_hz as u32),
+        "lidar_origin_to_beam_origin_mm": os1::BEAM_ORIGIN_MM,
+        "lidar_to_sensor_transform": os1::LIDAR_TO_SENSOR,
+        "prod_line": "OS-1-64",
+        "prod_pn": "840-102145-D",
+        "prod_sn": os1::SERIAL.to_string(),
+        "status": "RUNNING",
+        "udp_port_imu": 7503,
+        "udp_port_lidar": 7502,
+    })
+}

@@ -1,0 +1,446 @@
+//! The simulated sweeps as a real sensor's UDP packets (`simulate --sensor ... --format pcap`).
+//!
+//! Sits between the ray caster and the capture writer ([`crate::capture`]): each laser fires at
+//! the instant its sensor's firing sequence says (Velodyne's published timing tables, Ouster's
+//! per-column timestamps), from the pose at that instant, along its own beam (per-laser
+//! elevation, azimuth offset and beam origin), and the range is written in the packet's unit
+//! (2 or 4 mm, 1 mm). The exact point before that quantisation, with its firing time, is the
+//! sweep's ground truth, in the order a decoder emits points.
+//!
+//! A Velodyne spins a whole number of packets per turn (the rate is rounded to make it so) and
+//! the turn starts 1.5 blocks after azimuth 0, so the packet whose last block passes azimuth 0
+//! is the last of each sweep: decoders cutting at 0 degrees see the simulator's sweeps (without
+//! a cut angle, `run` takes a full turn from the first packet: the same sweeps one packet
+//! later). An Ouster's sweep is one frame id.
+
+use crate::rng::{key, Purpose, Stream};
+use crate::sensor::Frame;
+use crate::simulation::Simulation;
+use crate::trajectory::PoseM;
+use kiss_odom_sensors::velodyne::{self, Calibration, Model};
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// A sensor whose packets the simulator writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum PacketSensor {
+    /// Velodyne VLP-16, strongest return, 2 mm ranges.
+    #[cfg_attr(feature = "clap", value(name = "vlp16"))]
+    #[serde(rename = "vlp16")]
+    Vlp16,
+    /// Velodyne VLP-32C, strongest return, 4 mm ranges.
+    #[cfg_attr(feature = "clap", value(name = "vlp32c"))]
+    #[serde(rename = "vlp32c")]
+    Vlp32c,
+    /// Ouster OS1-64, 1024 columns, profile RNG19_RFL8_SIG16_NIR16 (metadata JSON beside).
+    #[cfg_attr(feature = "clap", value(name = "os1-64"))]
+    #[serde(rename = "os1-64")]
+    Os1,
+}
+
+/// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
+/// layout), beam origins 15.806 mm off the axis, the lidar frame turned half a turn about z and
+/// 36.18 mm below the sensor frame (the OS1's `lidar_to_sensor_transform`).
+pub mod os1 {
+    /// Beams.
+    pub const BEAMS: usize = 64;
+    /// Columns per frame.
+    pub const WIDTH: u16 = 1024;
+    /// Columns per packet.
+    pub const COLUMNS_PER_PACKET: u16 = 16;
+    /// Beam origin distance from the lidar axis, mm.
+    pub const BEAM_ORIGIN_MM: f64 = 15.806;
+    /// Lidar frame to sensor frame, 4x4 row-major, mm.
+    pub const LIDAR_TO_SENSOR: [f64; 16] = [
+        -1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 36.18, 0.0, 0.0, 0.0, 1.0,
+    ];
+    /// Metadata `initialization_id`, also in every packet header.
+    pub const INIT_ID: u32 = 0x51_4D_55;
+    /// Serial number (`prod_sn`), also in every packet header.
+    pub const SERIAL: u64 = 992_000_000_001;
+    /// Beam azimuth offsets, degrees, repeating every four beams.
+    const AZIMUTH: [f64; 4] = [4.2, 1.4, -1.4, -4.2];
+
+    /// Beam `u`'s altitude, degrees (top first), to 0.01 degree as metadata gives it.
+    pub fn altitude_deg(u: usize) -> f64 {
+        let a = 22.5 - 45.0 * u as f64 / (BEAMS - 1) as f64;
+        libm::round(a * 100.0) / 100.0
+    }
+    /// Beam `u`'s azimuth offset, degrees.
+    pub fn azimuth_deg(u: usize) -> f64 {
+        AZIMUTH[u % 4]
+    }
+}
+
+/// One packet: its UDP payload and the trajectory time it leaves the sensor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Packet {
+    /// Trajectory time of its last firing (s).
+    pub offset: f64,
+    /// The UDP payload.
+    pub payload: Vec<u8>,
+}
+
+/// One firing of one laser: when, from where and where to, in the sensor frame.
+struct Firing {
+    offset: f64,
+    origin: Vector3<f64>,
+    dir: Vector3<f64>,
+}
+
+/// A return: range (m, with noise), intensity; `None` when nothing came back.
+type Echo = Option<(f64, f32)>;
+
+/// A simulated sweep: ground-truth points and the packets carrying them.
+pub struct Sweep {
+    /// Exact points, times and surfaces, in decoder order.
+    pub frame: Frame,
+    /// The packets, in sending order.
+    pub packets: Vec<Packet>,
+}
+
+/// The packets of a simulation for one sensor.
+pub struct PacketSim<'a> {
+    sim: &'a Simulation,
+    sensor: PacketSensor,
+    model: Model,
+    calib: Calibration,
+    /// Velodyne: packets per turn; Ouster: packets per frame.
+    per_sweep: u64,
+}
+
+impl PacketSensor {
+    /// Velodyne packet period (s), single return.
+    fn velodyne_packet_s(model: Model) -> f64 {
+        model.group_us() * velodyne::wire::field::BLOCKS as f64 * 1e-6
+    }
+
+    fn model(self) -> Model {
+        match self {
+            Self::Vlp32c => Model::Vlp32c,
+            _ => Model::Vlp16,
+        }
+    }
+
+    /// The sweep rate the sensor runs at when asked for `rate_hz`: a whole number of packets
+    /// per turn (Velodyne), or the Ouster mode's 10 or 20 Hz.
+    pub fn rate_hz(self, rate_hz: f64) -> Result<f64, String> {
+        match self {
+            Self::Os1 if rate_hz == 10.0 || rate_hz == 20.0 => Ok(rate_hz),
+            Self::Os1 => Err("an OS1 runs at 10 or 20 Hz (--rate-hz)".into()),
+            _ => {
+                let packet = Self::velodyne_packet_s(self.model());
+                let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
+                Ok(1.0 / (per_turn * packet))
+            }
+        }
+    }
+}
+
+impl<'a> PacketSim<'a> {
+    /// Packets for `sim`, whose sensor rate is already `sensor.rate_hz(...)`.
+    pub fn new(sim: &'a Simulation, sensor: PacketSensor) -> Self {
+        let model = sensor.model();
+        let period = sim.params().sensor.period();
+        let per_sweep = match sensor {
+            PacketSensor::Os1 => u64::from(os1::WIDTH / os1::COLUMNS_PER_PACKET),
+            _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
+        };
+        Self {
+            sim,
+            sensor,
+            model,
+            calib: Calibration::nominal(model),
+            per_sweep,
+        }
+    }
+
+    /// Packets in one sweep.
+    pub fn packets_per_sweep(&self) -> u64 {
+        self.per_sweep
+    }
+
+    /// Trajectory time of sweep `k`'s last firing.
+    pub fn end_offset(&self, k: u64) -> f64 {
+        match self.sensor {
+            PacketSensor::Os1 => self.column_offset(k, os1::WIDTH - 1),
+            _ => {
+                let last = (k + 1) * self.per_sweep - 1;
+                let n = velodyne::wire::field::BLOCKS - 1;
+                self.packet_offset(last) + self.model.firing_time_s(n, 31)
+            }
+        }
+    }
+
+    /// Ground truth of sweep `k`: its end in the frame of sweep 0's end.
+    pub fn ground_truth(&self, k: u64) -> PoseM {
+        if k == 0 {
+            return PoseM::identity();
+        }
+        let t = self.sim.trajectory();
+        t.pose(self.end_offset(0)).inverse() * t.pose(self.end_offset(k))
+    }
+
+    /// Casts and encodes sweep `k`.
+    pub fn sweep(&self, k: u64) -> Sweep {
+        let (first, n) = (k * self.per_sweep, self.per_sweep);
+        let parts: Vec<(Packet, Vec<Truth>)> = (first..first + n)
+            .into_par_iter()
+            .map(|p| match self.sensor {
+                PacketSensor::Os1 => self.ouster_packet(k, p - first),
+                _ => self.velodyne_packet(p),
+            })
+            .collect();
+        let start = self.sim.params().start_time;
+        let mut frame = Frame {
+            index: k,
+            points: Vec::new(),
+            stamps: Vec::new(),
+            surfaces: Vec::new(),
+            end_time: start + self.end_offset(k),
+        };
+        let mut packets = Vec::with_capacity(parts.len());
+        for (packet, truth) in parts {
+            for (p, t, s) in truth {
+                frame.points.push(p);
+                frame.stamps.push(start + t);
+                frame.surfaces.push(s);
+            }
+            packets.push(packet);
+        }
+        Sweep { frame, packets }
+    }
+
+    /// Casts one firing; the echo and, for a return, the exact point.
+    fn cast(&self, f: &Firing, ray: [u64; 2]) -> (Echo, Option<Truth>) {
+        let l = &self.sim.params().sensor;
+        let pose = self.sim.trajectory().pose(f.offset);
+        let origin = pose * Point3::from(f.origin);
+        let dw = pose.rotation * f.dir;
+        let Some(hit) = self.sim.scene().cast(&origin, &dw, l.max_range) else {
+            return (None, None);
+        };
+        let seed = self.sim.params().seed;
+        // Keys apart from the generic sweeps' (which use the frame index third).
+        let tag = 1 << 62 | self.sensor as u64;
+        let mut rng = Stream::from_key(key(&[seed, Purpose::Ray as u64, tag, ray[0], ray[1]]));
+        let [n_range, n_speckle] = rng.normal_pair();
+        let range = hit.t + l.noise * n_range;
+        if rng.chance(l.dropout) || range < l.min_range || range > l.max_range {
+            return (None, None);
+        }
+        let cos_inc = hit.normal.dot(&dw).abs();
+        let intensity =
+            hit.reflectivity as f64 * (0.3 + 0.7 * cos_inc) * (1.0 - 0.25 * range / l.max_range)
+                + 0.02 * n_speckle;
+        let intensity = (libm::round(intensity.clamp(0.0, 1.0) * 255.0) / 255.0) as f32;
+        let p = f.origin + f.dir * range;
+        let point = [p.x as f32, p.y as f32, p.z as f32, intensity];
+        (
+            Some((range, intensity)),
+            Some((point, f.offset, hit.surface)),
+        )
+    }
+
+    /// Trajectory time of Velodyne packet `p`'s timestamp: whole microseconds, as the sensor's
+    /// clock counts them.
+    fn packet_offset(&self, p: u64) -> f64 {
+        let us = self.model.group_us() * velodyne::wire::field::BLOCKS as f64;
+        libm::floor(p as f64 * us) * 1e-6
+    }
+
+    /// Rotor azimuth at trajectory time `t`, degrees (clockwise, unwrapped).
+    fn azimuth_deg(&self, t: f64) -> f64 {
+        let block = 360.0 / (self.per_sweep as f64 * velodyne::wire::field::BLOCKS as f64);
+        1.5 * block + 360.0 * t * self.sim.params().sensor.rate_hz
+    }
+
+    fn velodyne_packet(&self, p: u64) -> (Packet, Vec<Truth>) {
+        use velodyne::wire::{field, AZIMUTH_UNITS, HOUR_US};
+        let start_us = libm::round(self.sim.params().start_time * 1e6) as i64;
+        let t0 = self.packet_offset(p);
+        let mut buf = vec![0u8; field::LEN];
+        let mut truth = Vec::new();
+        let lasers = self.model.lasers();
+        for g in 0..field::BLOCKS {
+            let block = &mut buf[g * field::BLOCK_LEN..(g + 1) * field::BLOCK_LEN];
+            block[field::FLAG].copy_from_slice(&[0xFF, 0xEE]);
+            let az = libm::round(self.azimuth_deg(t0 + self.model.firing_time_s(g, 0)) * 100.0);
+            let az = (az as i64).rem_euclid(i64::from(AZIMUTH_UNITS)) as u16;
+            block[field::AZIMUTH].copy_from_slice(&az.to_le_bytes());
+            for c in 0..field::CHANNELS {
+                let laser = &self.calib.lasers[c % lasers];
+                let offset = t0 + self.model.firing_time_s(g, c);
+                let theta = (self.azimuth_deg(offset) + laser.azimuth_offset_deg).to_radians();
+                let (s, co) = (libm::sin(theta), libm::cos(theta));
+                let v = laser.vertical_deg.to_radians();
+                let h = laser.horizontal_offset_m;
+                let firing = Firing {
+                    offset,
+                    origin: Vector3::new(h * s, h * co, laser.vertical_offset_m),
+                    dir: Vector3::new(libm::cos(v) * co, -libm::cos(v) * s, libm::sin(v)),
+                };
+                let (echo, point) = self.cast(&firing, [p, (g * field::CHANNELS + c) as u64]);
+                let raw = echo.map_or(0.0, |(r, _)| {
+                    libm::round(r / self.calib.distance_resolution_m)
+                });
+                if raw < 1.0 || raw > f64::from(u16::MAX) {
+                    continue;
+                }
+                let at = field::DATA.start + c * field::CHANNEL_LEN;
+                block[at..at + 2].copy_from_slice(&(raw as u16).to_le_bytes());
+                block[at + 2] = echo.map_or(0, |(_, i)| libm::roundf(i * 255.0) as u8);
+                truth.extend(point);
+            }
+        }
+        let stamp = (start_us + libm::round(t0 * 1e6) as i64).rem_euclid(i64::from(HOUR_US));
+        buf[field::TIMESTAMP].copy_from_slice(&(stamp as u32).to_le_bytes());
+        buf[field::RETURN_MODE] = 0x37;
+        buf[field::PRODUCT] = self.model.product();
+        let last = t0
+            + self
+                .model
+                .firing_time_s(field::BLOCKS - 1, field::CHANNELS - 1);
+        (
+            Packet {
+                offset: last,
+                payload: buf,
+            },
+            truth,
+        )
+    }
+
+    /// Trajectory time of column `m` of Ouster frame `k`: whole nanoseconds.
+    fn column_offset(&self, k: u64, m: u16) -> f64 {
+        let period_ns = libm::round(1e9 / self.sim.params().sensor.rate_hz);
+        let ns =
+            k as f64 * period_ns + libm::round(f64::from(m) * period_ns / f64::from(os1::WIDTH));
+        ns * 1e-9
+    }
+
+    fn ouster_packet(&self, k: u64, i: u64) -> (Packet, Vec<Truth>) {
+        const HEADER: usize = 32;
+        const COLUMN_HEADER: usize = 12;
+        const PIXEL: usize = 12;
+        let cpp = usize::from(os1::COLUMNS_PER_PACKET);
+        let column_len = COLUMN_HEADER + os1::BEAMS * PIXEL;
+        let mut buf = vec![0u8; HEADER + cpp * column_len + 32];
+        buf[0..2].copy_from_slice(&1u16.to_le_bytes());
+        buf[2..4].copy_from_slice(&(k as u16).to_le_bytes());
+        buf[4..7].copy_from_slice(&os1::INIT_ID.to_le_bytes()[..3]);
+        buf[7..12].copy_from_slice(&os1::SERIAL.to_le_bytes()[..5]);
+        let start_ns = libm::round(self.sim.params().start_time.max(0.0) * 1e9) as u64;
+        let l2s = &os1::LIDAR_TO_SENSOR;
+        let rotate = |v: [f64; 3]| {
+            Vector3::from_fn(|r, _| {
+                l2s[4 * r] * v[0] + l2s[4 * r + 1] * v[1] + l2s[4 * r + 2] * v[2]
+            })
+        };
+        let lift = Vector3::new(l2s[3], l2s[7], l2s[11]) * 1e-3;
+        let mut truth = Vec::new();
+        let mut last = 0.0;
+        for j in 0..cpp {
+            let m = (i as usize * cpp + j) as u16;
+            let offset = self.column_offset(k, m);
+            last = offset;
+            let col = &mut buf[HEADER + j * column_len..HEADER + (j + 1) * column_len];
+            let ns = start_ns + libm::round(offset * 1e9) as u64;
+            col[0..8].copy_from_slice(&ns.to_le_bytes());
+            col[8..10].copy_from_slice(&m.to_le_bytes());
+            col[10..12].copy_from_slice(&1u16.to_le_bytes());
+            let enc = 2.0 * core::f64::consts::PI * (1.0 - f64::from(m) / f64::from(os1::WIDTH));
+            let (ce, se) = (libm::cos(enc), libm::sin(enc));
+            for u in 0..os1::BEAMS {
+                let alt = os1::altitude_deg(u).to_radians();
+                let az = enc - os1::azimuth_deg(u).to_radians();
+                let d = [
+                    libm::cos(az) * libm::cos(alt),
+                    libm::sin(az) * libm::cos(alt),
+                    libm::sin(alt),
+                ];
+                let o = [ce * os1::BEAM_ORIGIN_MM, se * os1::BEAM_ORIGIN_MM, 0.0];
+                let firing = Firing {
+                    offset,
+                    origin: rotate(o) * 1e-3 + lift,
+                    dir: rotate(d),
+                };
+                let (echo, point) = self.cast(&firing, [k << 16 | u64::from(m), u as u64]);
+                // ouster-sdk measures range from the lidar axis, so the origin's offset is in it.
+                let mm = echo.map_or(0.0, |(r, _)| libm::round(r * 1000.0 + os1::BEAM_ORIGIN_MM));
+                if mm < 1.0 || mm > f64::from(0x7FFFFu32) {
+                    continue;
+                }
+                let px = &mut col[COLUMN_HEADER + u * PIXEL..COLUMN_HEADER + (u + 1) * PIXEL];
+                px[0..4].copy_from_slice(&(mm as u32).to_le_bytes());
+                let refl = echo.map_or(0, |(_, i)| libm::roundf(i * 255.0) as u8);
+                px[4] = refl;
+                px[6..8].copy_from_slice(&(u16::from(refl) * 4).to_le_bytes());
+                truth.extend(point);
+            }
+        }
+        (
+            Packet {
+                offset: last,
+                payload: buf,
+            },
+            truth,
+        )
+    }
+}
+
+/// One ground-truth point: x, y, z, intensity; trajectory time; surface.
+type Truth = ([f32; 4], f64, crate::scene::Surface);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::profile::Profile;
+    use crate::simulation::SimParams;
+
+    fn sim(sensor: PacketSensor, frames: u64) -> Simulation {
+        let mut p = SimParams::new(Profile::Fast, 5, frames);
+        p.sensor.noise = 0.0;
+        p.sensor.rate_hz = sensor.rate_hz(10.0).unwrap();
+        Simulation::new(p).unwrap()
+    }
+
+    #[test]
+    fn noiseless_points_lie_on_their_surface_from_the_pose_at_their_firing() {
+        for sensor in [PacketSensor::Vlp16, PacketSensor::Vlp32c, PacketSensor::Os1] {
+            let sim = sim(sensor, 40);
+            let ps = PacketSim::new(&sim, sensor);
+            let k = 38; // past the fast profile's launch: > 15 m/s
+            let sweep = ps.sweep(k);
+            let f = &sweep.frame;
+            assert!(sim.trajectory().speed(f.end_time) > 15.0);
+            let mut worst: f64 = 0.0;
+            for ((p, t), s) in f.points.iter().zip(&f.stamps).zip(&f.surfaces) {
+                let local = Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                let w = sim.world_pose(*t) * local;
+                worst = worst.max(sim.scene().distance_to(*s, &w).unwrap());
+            }
+            println!("{sensor:?}: worst distance {worst:.2e} m (tol 1e-4, f32 rounding)");
+            assert!(!f.points.is_empty() && worst < 1e-4);
+            // Every firing slot's time is inside the sweep and the sweep ends at its last.
+            let t0 = f.stamps[0];
+            assert!(f.stamps.iter().all(|&t| t >= t0 && t <= f.end_time));
+            assert!(f.end_time - t0 > 0.09, "a sweep spans most of its period");
+        }
+    }
+
+    #[test]
+    fn velodyne_turns_span_whole_packets_and_ouster_frames_are_one_frame_id() {
+        let vlp = PacketSensor::Vlp16.rate_hz(10.0).unwrap();
+        let turn = 1.0 / vlp;
+        let packet = PacketSensor::velodyne_packet_s(Model::Vlp16);
+        assert!((turn / packet - libm::round(turn / packet)).abs() < 1e-9);
+        assert!((vlp - 10.0).abs() < 0.1, "{vlp} Hz");
+        assert!(PacketSensor::Os1.rate_hz(15.0).is_err());
+        let sim = sim(PacketSensor::Os1, 2);
+        let sweep = PacketSim::new(&sim, PacketSensor::Os1).sweep(1);
+        assert_eq!(sweep.packets.len(), 64);
+        assert!(sweep.packets.iter().all(|p| p.payload[2..4] == [1, 0]));
+    }
+}

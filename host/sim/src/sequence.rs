@@ -1,0 +1,199 @@
+//! A whole simulated sequence written to a folder: the frames and ground truth in the generic
+//! layout ([`crate::writer`]), `sim.toml`, and with [`Format::Pcap`] the same sweeps as the
+//! sensor's packets ([`crate::packets`], [`crate::capture`]). The folder appears only once
+//! complete; a stop asked for between frames leaves none.
+
+use crate::capture;
+use crate::packets::{PacketSensor, PacketSim};
+use crate::profile::Profile;
+use crate::sensor::Lidar;
+use crate::simulation::{SimParams, Simulation};
+use crate::writer::DatasetWriter;
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// What a sequence is written as.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// The generic layout only.
+    #[default]
+    Generic,
+    /// The generic layout (exact points) and the same sweeps as the sensor's packets in
+    /// `packets.pcap` (needs a packet sensor; an Ouster's metadata goes to `packets.json`).
+    Pcap,
+}
+
+/// Everything that decides a written sequence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Request {
+    /// Scene, motion, sensor geometry.
+    pub params: SimParams,
+    /// A real sensor's beams, firing timing and packets instead of the generic sensor.
+    pub sensor: Option<PacketSensor>,
+    /// What to write.
+    pub format: Format,
+    /// Replace a sequence already in the folder.
+    pub overwrite: bool,
+}
+
+/// How writing a sequence ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Written {
+    /// Every frame was written.
+    Complete {
+        /// Points in all frames.
+        points: usize,
+        /// Length of the route driven (m).
+        route_m: f64,
+    },
+    /// `stop` asked to end after this many frames; nothing was left in the folder.
+    Stopped {
+        /// Frames written before the stop.
+        frames: u64,
+    },
+}
+
+/// What `sim.toml` records.
+#[derive(Serialize)]
+struct Provenance<'a> {
+    generator: &'static str,
+    version: &'static str,
+    profile: Profile,
+    seed: u64,
+    frames: u64,
+    start_time: f64,
+    /// What the files mean, for a reader without this source at hand.
+    layout: &'static str,
+    sensor: &'a Lidar,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    packets: Option<PacketSummary>,
+    scene: SceneSummary,
+}
+
+#[derive(Serialize)]
+struct PacketSummary {
+    /// The sensor whose beams, timing and packets were simulated.
+    sensor: PacketSensor,
+    packets_per_sweep: u64,
+    /// Whether `packets.pcap` was written.
+    pcap: bool,
+}
+
+#[derive(Serialize)]
+struct SceneSummary {
+    planes: usize,
+    solids: usize,
+    route_length_m: f64,
+}
+
+const LAYOUT: &str = "velodyne/NNNNNN.bin: f32 LE x y z intensity, sensor frame at capture \
+    time; timestamps/NNNNNN.bin: f64 LE capture time (s) per point; poses.txt: 3x4 sensor pose \
+    at the end of each sweep (its last column) in the frame of the first sweep's end; \
+    times.txt: end-of-sweep times (s); packets.pcap (if written): the same sweeps as the \
+    sensor's UDP packets, exact points above before range quantisation, in decoder order; \
+    packets.json: Ouster metadata";
+
+/// The simulation parameters of `request`, with the rate a packet sensor rounds to.
+pub fn params_of(request: &Request) -> Result<SimParams> {
+    let mut params = request.params;
+    if let Some(s) = request.sensor {
+        params.sensor.rate_hz = s
+            .rate_hz(params.sensor.rate_hz)
+            .map_err(anyhow::Error::msg)?;
+    }
+    if request.format == Format::Pcap && request.sensor.is_none() {
+        bail!("--format pcap needs --sensor (vlp16, vlp32c or os1-64)");
+    }
+    Ok(params)
+}
+
+/// Writes the sequence `request` asks for into `out`. `stop` is asked before every frame
+/// (a signal, a deadline); `progress` hears of every frame written.
+pub fn write(
+    request: &Request,
+    out: &Path,
+    stop: &dyn Fn() -> bool,
+    progress: &mut dyn FnMut(u64),
+) -> Result<Written> {
+    let params = params_of(request)?;
+    let sim = Simulation::new(params).context("invalid simulation parameters")?;
+    let packets = request.sensor.map(|s| PacketSim::new(&sim, s));
+    let last = params.frames - 1;
+    let end_offset = match &packets {
+        Some(p) => p.end_offset(last),
+        None => sim.end_offset(last),
+    };
+    let route_m = sim.trajectory().arc_length(end_offset);
+    let provenance = Provenance {
+        generator: "kiss-odom simulate",
+        version: env!("CARGO_PKG_VERSION"),
+        profile: params.profile,
+        seed: params.seed,
+        frames: params.frames,
+        start_time: params.start_time,
+        layout: LAYOUT,
+        sensor: &params.sensor,
+        packets: packets
+            .as_ref()
+            .zip(request.sensor)
+            .map(|(p, sensor)| PacketSummary {
+                sensor,
+                packets_per_sweep: p.packets_per_sweep(),
+                pcap: request.format == Format::Pcap,
+            }),
+        scene: SceneSummary {
+            planes: sim.scene().planes().count(),
+            solids: sim.scene().solids().len(),
+            route_length_m: route_m,
+        },
+    };
+    let mut writer = DatasetWriter::create(out, request.overwrite, &provenance)?;
+    let mut pcap = match (request.format, request.sensor) {
+        (Format::Pcap, Some(sensor)) => {
+            if sensor == PacketSensor::Os1 {
+                let path = writer.staging().join(capture::META_NAME);
+                let meta =
+                    serde_json::to_string_pretty(&capture::ouster_metadata(params.sensor.rate_hz))?;
+                std::fs::write(&path, meta)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            let path = writer.staging().join(capture::PCAP_NAME);
+            Some(capture::CaptureWriter::create(
+                &path,
+                sensor,
+                params.start_time,
+            )?)
+        }
+        _ => None,
+    };
+    let mut points = 0usize;
+    for k in 0..params.frames {
+        if stop() {
+            // The staging folder goes with the writer: no partial sequence is left.
+            return Ok(Written::Stopped { frames: k });
+        }
+        let (frame, truth) = match &packets {
+            Some(p) => {
+                let sweep = p.sweep(k);
+                if let Some(c) = pcap.as_mut() {
+                    for packet in &sweep.packets {
+                        c.write(packet)?;
+                    }
+                }
+                (sweep.frame, p.ground_truth(k))
+            }
+            None => (sim.frame(k), sim.ground_truth(k)),
+        };
+        points += frame.points.len();
+        writer.write_frame(&frame, &truth)?;
+        progress(k + 1);
+    }
+    if let Some(c) = pcap {
+        c.finish()?;
+    }
+    writer.finish()?;
+    Ok(Written::Complete { points, route_m })
+}

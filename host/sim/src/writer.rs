@@ -1,0 +1,268 @@
+//! Writes a simulated sequence in the generic layout:
+//!
+//! ```text
+//! DIR/velodyne/NNNNNN.bin    f32 LE x, y, z, intensity per point (sensor frame at capture time)
+//! DIR/timestamps/NNNNNN.bin  f64 LE capture time per point (s, sequence time)
+//! DIR/poses.txt              3x4 row-major end-of-sweep pose per frame, first one identity
+//! DIR/times.txt              end-of-sweep time per frame (s)
+//! DIR/sim.toml               the parameters used, for provenance
+//! DIR/packets.pcap           with --format pcap: the same sweeps as sensor packets
+//! DIR/packets.json           with --format pcap and an Ouster: its metadata
+//! ```
+//!
+//! Numbers in text files are written with Rust's shortest round-trip formatting, so parsing
+//! them gives back the exact `f64`. These writers are private to the simulator on purpose: the
+//! readers in `io/` are checked against them, not built from them.
+
+use crate::sensor::Frame;
+use crate::trajectory::PoseM;
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Files and folders the layout owns.
+const OWNED_FILES: [&str; 5] = [
+    "poses.txt",
+    "times.txt",
+    "sim.toml",
+    crate::capture::PCAP_NAME,
+    crate::capture::META_NAME,
+];
+const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
+
+/// Shortest text that parses back to exactly `x` (exponent form for very small or large).
+pub fn fmt_f64(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e16).contains(&a) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// One `poses.txt` line: the top 3x4 of the pose matrix, row-major.
+pub fn pose_line(pose: &PoseM) -> String {
+    let m = pose.to_homogeneous();
+    let mut s = String::with_capacity(12 * 24);
+    for r in 0..3 {
+        for c in 0..4 {
+            if r + c > 0 {
+                s.push(' ');
+            }
+            s.push_str(&fmt_f64(m[(r, c)]));
+        }
+    }
+    s
+}
+
+/// The name of frame `k`'s files: six digits, zero-padded (more digits past 999999).
+pub fn frame_name(k: u64) -> String {
+    format!("{k:06}.bin")
+}
+
+fn is_frame_name(name: &str) -> bool {
+    name.len() >= 10
+        && name.ends_with(".bin")
+        && name[..name.len() - 4].bytes().all(|b| b.is_ascii_digit())
+}
+
+/// Staging folders start with this (hidden, so no reader takes one for a dataset).
+const STAGING_PREFIX: &str = ".kiss-odom-simulate-";
+
+/// Streams a dataset to a folder, frame by frame, through a hidden staging folder inside it:
+/// the dataset appears in the folder only when [`Self::finish`] moves it there, frame folder
+/// last, so a later `run` never reads half a data set; dropped unfinished (an error, an
+/// interrupt), the staging folder goes and nothing appears.
+pub struct DatasetWriter {
+    dir: PathBuf,
+    staging: tempfile::TempDir,
+    poses: BufWriter<File>,
+    times: BufWriter<File>,
+}
+
+impl DatasetWriter {
+    /// Prepares `dir` and writes `provenance` to `sim.toml`. A folder that already holds a
+    /// dataset is refused unless `overwrite`, which removes only the layout's own files (frame
+    /// files, poses, times, sim.toml) so that no stale frame survives a shorter run; staging
+    /// folders a killed run left are removed too.
+    pub fn create(dir: &Path, overwrite: bool, provenance: &impl Serialize) -> Result<Self> {
+        let existing = OWNED_FILES
+            .iter()
+            .chain(OWNED_DIRS.iter())
+            .any(|n| dir.join(n).exists());
+        if existing && !overwrite {
+            bail!(
+                "{} already holds a dataset; pass --overwrite to replace it",
+                dir.display()
+            );
+        }
+        remove_owned(dir)?;
+        fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let staging = tempfile::Builder::new()
+            .prefix(STAGING_PREFIX)
+            .tempdir_in(dir)
+            .with_context(|| format!("creating a staging folder in {}", dir.display()))?;
+        let root = staging.path();
+        for sub in OWNED_DIRS {
+            let d = root.join(sub);
+            fs::create_dir_all(&d).with_context(|| format!("creating {}", d.display()))?;
+        }
+        let toml = toml::to_string(provenance).context("serialising sim.toml")?;
+        let header = "# Written by `kiss-odom simulate`: the parameters that generated this \
+                      dataset.\n# The same parameters (and kiss-odom version) give the same \
+                      bytes.\n\n";
+        let p = root.join("sim.toml");
+        fs::write(&p, format!("{header}{toml}"))
+            .with_context(|| format!("writing {}", p.display()))?;
+        let open = |name: &str| -> Result<BufWriter<File>> {
+            let p = root.join(name);
+            Ok(BufWriter::new(
+                File::create(&p).with_context(|| format!("creating {}", p.display()))?,
+            ))
+        };
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            poses: open("poses.txt")?,
+            times: open("times.txt")?,
+            staging,
+        })
+    }
+
+    /// The staging folder, for files beside the frames (moved into place by [`Self::finish`]).
+    pub fn staging(&self) -> &Path {
+        self.staging.path()
+    }
+
+    /// Writes one frame's scan and stamps and appends its ground truth.
+    pub fn write_frame(&mut self, frame: &Frame, ground_truth: &PoseM) -> Result<()> {
+        let name = frame_name(frame.index);
+        let mut bytes = Vec::with_capacity(frame.points.len() * 16);
+        for p in &frame.points {
+            for v in p {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let root = self.staging.path();
+        let p = root.join("velodyne").join(&name);
+        fs::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
+        bytes.clear();
+        for t in &frame.stamps {
+            bytes.extend_from_slice(&t.to_le_bytes());
+        }
+        let p = root.join("timestamps").join(&name);
+        fs::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
+        writeln!(self.poses, "{}", pose_line(ground_truth)).context("writing poses.txt")?;
+        writeln!(self.times, "{}", fmt_f64(frame.end_time)).context("writing times.txt")?;
+        Ok(())
+    }
+
+    /// Flushes the text files and moves the dataset into place, the frame folder last.
+    pub fn finish(mut self) -> Result<()> {
+        self.poses.flush().context("writing poses.txt")?;
+        self.times.flush().context("writing times.txt")?;
+        let names = OWNED_FILES.iter().chain(OWNED_DIRS.iter().rev());
+        for name in names {
+            let (from, to) = (self.staging.path().join(name), self.dir.join(name));
+            if !from.exists() {
+                continue; // an optional file (the capture, the metadata)
+            }
+            fs::rename(&from, &to)
+                .with_context(|| format!("moving {} into place", to.display()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Removes the dataset files the layout owns from `dir` (and the frame folders once empty),
+/// and staging folders a killed run left.
+fn remove_owned(dir: &Path) -> Result<()> {
+    for name in OWNED_FILES {
+        let path = dir.join(name);
+        if fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir()) {
+            fs::remove_file(&path)
+                .with_context(|| format!("{}: cannot remove the earlier output", path.display()))?;
+        }
+    }
+    for sub in OWNED_DIRS {
+        let d = dir.join(sub);
+        if !d.is_dir() {
+            continue;
+        }
+        for entry in fs::read_dir(&d).with_context(|| format!("listing {}", d.display()))? {
+            let entry = entry?;
+            let name = entry.file_name();
+            if name.to_str().is_some_and(is_frame_name) && entry.path().is_file() {
+                fs::remove_file(entry.path())
+                    .with_context(|| format!("removing {}", entry.path().display()))?;
+            }
+        }
+        fs::remove_dir(&d).with_context(|| {
+            format!(
+                "{} holds files that are not frames; move them away or choose another --out",
+                d.display()
+            )
+        })?;
+    }
+    let Ok(entries) = fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for entry in entries.flatten() {
+        let stale = entry
+            .file_name()
+            .to_string_lossy()
+            .starts_with(STAGING_PREFIX);
+        if stale && entry.path().is_dir() {
+            fs::remove_dir_all(entry.path())
+                .with_context(|| format!("removing {}", entry.path().display()))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Translation3, Vector3};
+
+    #[test]
+    fn numbers_round_trip_exactly_through_text() {
+        let mut rng = crate::rng::Stream::from_key(3);
+        for _ in 0..10_000 {
+            let exp = rng.range(-30.0, 30.0);
+            let x = rng.normal() * libm::pow(10.0, exp);
+            let s = fmt_f64(x);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");
+        }
+        assert_eq!(fmt_f64(1.0), "1");
+        assert_eq!(fmt_f64(0.0), "0");
+        assert_eq!(fmt_f64(1e-20), "1e-20");
+    }
+
+    #[test]
+    fn identity_pose_line_is_short_and_exact() {
+        assert_eq!(pose_line(&PoseM::identity()), "1 0 0 0 0 1 0 0 0 0 1 0");
+        let p = PoseM::from_parts(
+            Translation3::new(1.5, -2.0, 0.25),
+            Rotation3::from_axis_angle(&Vector3::z_axis(), 0.3),
+        );
+        let v: Vec<f64> = pose_line(&p)
+            .split(' ')
+            .map(|s| s.parse().unwrap())
+            .collect();
+        let m = p.to_homogeneous();
+        for r in 0..3 {
+            for c in 0..4 {
+                assert_eq!(v[4 * r + c].to_bits(), m[(r, c)].to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn frame_names_are_six_digits() {
+        assert_eq!(frame_name(0), "000000.bin");
+        assert_eq!(frame_name(42), "000042.bin");
+        assert!(is_frame_name("000042.bin") && !is_frame_name("notes.bin"));
+    }
+}
