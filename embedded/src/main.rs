@@ -26,6 +26,7 @@ macro_rules! out {
 
 #[cfg_attr(feature = "defmt", allow(dead_code))]
 mod lines;
+mod profile;
 #[cfg(feature = "packets")]
 mod stream;
 mod workload;
@@ -53,8 +54,8 @@ fn main() {
 }
 
 use kiss_odom_core::Words;
+use profile::ARENA_WORDS;
 use static_cell::ConstStaticCell;
-use workload::ARENA_WORDS;
 
 /// Exit status when the painted stack was used up (the stack ran into whatever lies below).
 pub const EXIT_STACK_OVERFLOW: i32 = 98;
@@ -101,7 +102,7 @@ fn app(stack: Option<(usize, usize)>, insns: fn() -> Option<u64>, counter: &str)
 
     let mut code = match STATE.try_take() {
         Some(state) => workload::run(state, insns, counter),
-        None => workload::EXIT_CONFIG_ERROR,
+        None => profile::EXIT_CONFIG_ERROR,
     };
 
     #[cfg(target_os = "none")]
