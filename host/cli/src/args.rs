@@ -224,13 +224,24 @@ impl Preset {
 /// runs) gives it as `threads`, which only `--threads` overrides. The result is validated,
 /// errors naming the setting at fault.
 pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Result<Settings> {
-    let mut s = match &p.config {
-        Some(path) => Settings::load(path)?,
-        None => Settings::default(),
-    };
+    let mut s = from_file(p)?;
     if let Some(t) = threads {
         s.runtime.threads = t;
     }
+    apply(&mut s, p, c)?;
+    Ok(s)
+}
+
+/// The defaults, then `--config`.
+pub fn from_file(p: &PipelineArgs) -> Result<Settings> {
+    match &p.config {
+        Some(path) => Settings::load(path),
+        None => Ok(Settings::default()),
+    }
+}
+
+/// The flags over `s`, then the check of the whole (errors name the setting at fault).
+pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     if c.capacities == Some(Preset::Tiny) {
         let t = kiss_odom_core::Config::<f64>::tiny();
         s.data.max_range = t.max_range;
@@ -279,8 +290,7 @@ pub fn settings(p: &PipelineArgs, c: &CoreArgs, threads: Option<usize>) -> Resul
     if let Some(t) = c.threads {
         s.runtime.threads = t;
     }
-    s.validate()?;
-    Ok(s)
+    s.validate()
 }
 
 /// Refuses settings the reference would not share: it takes only the range, voxel size and

@@ -355,8 +355,8 @@ fn run_ours(settings: &Settings, frames: &Preloaded) -> Result<OurRun> {
 
 /// Our memory figures after a run: fixed, and what capacities at the high-water marks need.
 fn memory(driver: &Driver, max_input_points: usize) -> Memory {
-    let caps = driver.capacities();
-    let stored = driver.map_point_bytes();
+    let caps = driver.build().capacities;
+    let stored = driver.build().map_point_bytes;
     let hw = driver.high_water();
     let hw_caps = Capacities {
         scan_points: max_input_points.clamp(1, caps.scan_points),
@@ -367,7 +367,7 @@ fn memory(driver: &Driver, max_input_points: usize) -> Memory {
         plane_terms: caps.plane_terms,
     };
     Memory {
-        state_bytes: driver.state_bytes(),
+        state_bytes: driver.build().state_bytes,
         state_high_water_bytes: hw_caps
             .validate()
             .ok()

@@ -10,13 +10,17 @@
 //! its pose (`pose_latency_ms`).
 
 use crate::args::{CommonArgs, CoreArgs, InputArgs, PipelineArgs, SensorArgs};
-use crate::run::{Mode, RunArgs, RunOptions};
+use crate::run::observe::{Observer, Seen};
+use crate::run::{FrameRow, RunArgs, RunOptions};
 use crate::viz::ViewArgs;
 use anyhow::{anyhow, bail, Context, Result};
+use kiss_odom_drive::Driver;
 use kiss_odom_io::capture::frames::SweepFrames;
 use kiss_odom_io::capture::pcap::Datagram;
 use kiss_odom_io::capture::sweeps::{self, DatagramSource};
+use kiss_odom_io::poses::{format_tum, TimedPose};
 use kiss_odom_io::{Dataset, DatasetInfo, Format};
+use kiss_odom_sensors::SweepEnd;
 use std::io::Write;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::{Path, PathBuf};
@@ -201,6 +205,37 @@ impl DatagramSource for Socket {
     }
 }
 
+/// Watches `run`'s loop for `live`: prints each pose as a TUM line as its sweep completes
+/// (flushed, for a pipe) and measures the time since the sweep's last packet (for sweeps the
+/// sensor's data closed; one the end of the stream closed was not done when its last packet
+/// came).
+struct Poses;
+
+impl Observer for Poses {
+    fn frame(&mut self, seen: &Seen<'_>, row: &mut FrameRow) -> Result<()> {
+        let time = seen.time.unwrap_or(seen.outcome.meta.index as f64);
+        let line = format_tum(&[TimedPose {
+            time,
+            pose: seen.pose,
+        }]);
+        let mut out = std::io::stdout().lock();
+        let _ = out.write_all(line.as_bytes()).and_then(|()| out.flush());
+        if let Some(s) = seen.sweep.filter(|s| s.stats.end != SweepEnd::Finished) {
+            let now = SystemTime::now()
+                .duration_since(UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos() as u64);
+            // Microseconds, as frames.csv's core latency.
+            let ms = (now.saturating_sub(s.last_capture_ns) as f64 * 1e-3).round() / 1e3;
+            row.pose_latency_ms = Some(ms);
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, _: &Driver) -> Result<Vec<String>> {
+        Ok(Vec::new())
+    }
+}
+
 /// Runs `kiss-odom live`.
 pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
     if args.sensor.port.is_some() {
@@ -244,7 +279,7 @@ pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
                 },
             })
         },
-        Mode::Live,
+        vec![Box::new(Poses)],
         err,
     )?;
     let dropped = dropped.map_or(0, |d| d.load(Ordering::Relaxed));

@@ -14,6 +14,7 @@ pub mod node;
 pub mod params;
 pub mod play;
 
+use crate::args::{CoreArgs, PipelineArgs};
 use anyhow::Result;
 use kiss_odom_drive::settings::Settings;
 use kiss_odom_io::Format;
@@ -37,9 +38,6 @@ pub struct Ros2Args {
     /// Node name looked up in the parameter file.
     #[arg(long, default_value = params::NODE_NAME)]
     pub node_name: String,
-    /// Odometry settings file (TOML or kiss-icp's YAML, as `kiss-odom run --config`).
-    #[arg(long)]
-    pub config: Option<PathBuf>,
     /// DDS domain (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long)]
     pub domain: Option<u16>,
@@ -55,9 +53,6 @@ pub struct Ros2Args {
     /// Publish the local map (every `local_map_period` seconds).
     #[arg(long)]
     pub local_map: bool,
-    /// Worker threads of the core (0 = all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
     /// Also write each published pose as a KITTI line to this file.
     #[arg(long)]
     pub poses: Option<PathBuf>,
@@ -91,6 +86,12 @@ pub struct Ros2Args {
     /// --odom), so that no cloud is dropped whatever the node's speed; the pace is the node's.
     #[arg(long)]
     pub lockstep: bool,
+    /// The node's pipeline parameters, as `run`'s.
+    #[command(flatten, next_help_heading = "Pipeline")]
+    pub pipeline: PipelineArgs,
+    /// How the node's core runs, as `run`'s.
+    #[command(flatten, next_help_heading = "Core")]
+    pub core: CoreArgs,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -145,10 +146,7 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
 
 /// Settings and node parameters from the defaults, `--config`, `--params` and the flags.
 pub fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)> {
-    let mut settings = match &args.config {
-        Some(p) => Settings::load(p)?,
-        None => Settings::default(),
-    };
+    let mut settings = crate::args::from_file(&args.pipeline)?;
     let mut p = params::NodeParams::default();
     if let Some(path) = &args.params {
         params::load_yaml(path, &args.node_name, &mut settings, &mut p)?;
@@ -171,9 +169,7 @@ pub fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)> {
     if args.local_map {
         p.publish_local_map = true;
     }
-    if let Some(t) = args.threads {
-        settings.runtime.threads = t;
-    }
+    crate::args::apply(&mut settings, &args.pipeline, &args.core)?;
     p.validate()?;
     Ok((settings, p))
 }

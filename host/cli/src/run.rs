@@ -2,8 +2,9 @@
 //! metrics against ground truth and a plot written to the output folder.
 //!
 //! The frames go through the [`Driver`]; this module decides what stops a run and what is
-//! written, and hands every outcome to the observers of [`crate::viz`] (`--rerun`,
-//! `--save-map`, `--save-cloud`). The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
+//! written ([`record`], `files`), and hands every outcome to its [`observe::Observer`]s: those
+//! of [`crate::viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
+//! (`live` prints each pose as it comes). The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
 //! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
 //! in which no frame could be registered ends with exit 1 and its own reason, never an output
 //! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
@@ -12,115 +13,23 @@
 //! them.
 
 mod files;
+pub mod observe;
+mod options;
+pub mod record;
 
-pub use files::{FrameRow, Latency, PacketTotals, RowKind, Summary, OUTPUTS};
+pub use files::{Latency, Summary, OUTPUTS};
+pub use options::{PoseTime, RunArgs, RunOptions};
+pub use record::{FrameRow, PacketTotals, Record, RowKind};
 
-use crate::args::CommonArgs;
-use crate::viz::{Observer, Seen, ViewArgs};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use kiss_odom_core::stages::{se3_exp, se3_log};
 use kiss_odom_core::Flag;
 use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, Step};
 use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
-use kiss_odom_sensors::SweepEnd;
 use nalgebra::Isometry3;
+use observe::{Observer, Seen};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
-
-/// `kiss-odom run` arguments. Flags override `--config`, which overrides the defaults (the
-/// reference's: max range 100 m, voxel max_range/100, deskew on).
-#[derive(Debug, clap::Args)]
-pub struct RunArgs {
-    /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
-    /// .mcap file, or a .pcap/.pcapng recording of Velodyne or Ouster packets.
-    pub path: PathBuf,
-    /// Outputs and how the run goes.
-    #[command(flatten)]
-    pub run: RunOptions,
-    /// Input, pipeline and core options.
-    #[command(flatten)]
-    pub common: CommonArgs,
-    /// Rerun recording and point-cloud exports.
-    #[command(flatten)]
-    pub view: ViewArgs,
-}
-
-/// What `run` and `live` share: where the outputs go and how the run goes.
-#[derive(Debug, Clone, clap::Args)]
-pub struct RunOptions {
-    /// Output folder (created if missing); the outputs of an earlier run there are replaced.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Treat a skipped frame, ignored timestamps or a dataset warning as an error (exit 1).
-    #[arg(long)]
-    pub strict: bool,
-    /// No progress bar.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// The instant within a deskewed sweep each pose refers to: the reference deskews to the
-    /// end; `start` and `middle` move the pose back along the frame's motion. The TUM file's
-    /// first line states it.
-    #[arg(long, value_enum, default_value_t = PoseTime::End)]
-    pub pose_time: PoseTime,
-}
-
-/// The instant within a sweep a pose refers to (`--pose-time`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum PoseTime {
-    /// The end of the sweep (the reference's poses).
-    #[default]
-    End,
-    /// The start of the sweep.
-    Start,
-    /// The middle of the sweep.
-    Middle,
-}
-
-impl PoseTime {
-    /// The instant as a fraction of the sweep: 0 start, 1 end.
-    pub fn fraction(self) -> f64 {
-        match self {
-            Self::End => 1.0,
-            Self::Start => 0.0,
-            Self::Middle => 0.5,
-        }
-    }
-
-    /// `end`, `start` or `middle`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::End => "end",
-            Self::Start => "start",
-            Self::Middle => "middle",
-        }
-    }
-
-    /// The pose at this instant of a sweep whose end pose is `end`, `delta` being the motion
-    /// the sweep was deskewed with (the constant-velocity model before registration):
-    /// deskewing moved every point along `Exp((s - 1) Log(delta))` to the end, so the sensor at
-    /// fraction `s` is `end` times that. The map's own frames keep that convention; the motion
-    /// registration finds afterwards does not (the first deskewed frame's pose is relative to
-    /// undeskewed sweeps, which sit at their middle).
-    pub fn pose(self, end: &Isometry3<f64>, delta: &Isometry3<f64>) -> Isometry3<f64> {
-        if self == Self::End {
-            return *end;
-        }
-        let xi = se3_log(delta) * (self.fraction() - 1.0);
-        end * se3_exp(&xi)
-    }
-}
-
-/// How the frames arrive.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum Mode {
-    /// From a file, as fast as the core goes.
-    #[default]
-    Recorded,
-    /// From a sensor as it sweeps (`live`): each pose is printed as it comes, and the time
-    /// from a sweep's last packet to its pose is measured.
-    Live,
-}
 
 /// Why the frame loop ended.
 enum End {
@@ -132,40 +41,15 @@ enum End {
     Interrupted(i32),
 }
 
-/// What the run produced, frame by frame.
-#[derive(Default)]
-pub(crate) struct Record {
-    /// One row per frame.
-    pub rows: Vec<FrameRow>,
-    /// The pose after each frame.
-    pub poses: Vec<Isometry3<f64>>,
-    /// Each frame's time (its own, else `times.txt`'s), if known.
-    pub times: Vec<Option<f64>>,
-    /// Frame indices.
-    pub indices: Vec<usize>,
-    /// Warnings printed (dataset, frames, threads).
-    pub warnings: usize,
-    /// Whether the frames are sweeps decoded from sensor packets.
-    pub sweeps: bool,
-}
-
-impl Record {
-    fn registered(&self) -> usize {
-        self.rows
-            .iter()
-            .filter(|r| r.outcome == RowKind::Registered)
-            .count()
-    }
-}
-
 /// Runs `kiss-odom run`.
 pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
     let open = |opts: &io::OpenOptions| io::open(&args.path, args.common.input.format, opts);
-    execute_on(args, open, Mode::Recorded, err)
+    execute_on(args, open, Vec::new(), err)
 }
 
 /// Runs `run` on the dataset `open` gives (the options ask for the settings' scan
-/// capacity): `kiss-odom run`, and `live` with a socket for a dataset.
+/// capacity), with `watchers` beside the observers the view options ask for: `kiss-odom run`,
+/// and `live` with a socket for a dataset and a watcher that prints its poses.
 ///
 /// Every argument is checked and every input read before any file is removed: a run refused
 /// for its arguments changes nothing, and a `--config` inside the output folder is read
@@ -175,7 +59,7 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
 pub(crate) fn execute_on(
     args: &RunArgs,
     open: impl FnOnce(&io::OpenOptions) -> Result<io::Dataset>,
-    mode: Mode,
+    watchers: Vec<Box<dyn Observer>>,
     err: &mut dyn Write,
 ) -> Result<i32> {
     let settings = args.common.settings(None)?;
@@ -205,7 +89,7 @@ pub(crate) fn execute_on(
     let mut record = Record::default();
     // After the folder: a recording or cloud may be asked for inside it.
     let mut observers = match crate::viz::observers(&args.view) {
-        Ok(o) => o,
+        Ok(o) => watchers.into_iter().chain(o).collect::<Vec<_>>(),
         Err(e) => {
             let end = End::Failed(e);
             return finish(args, &settings, &dataset.info, &driver, &record, end, err);
@@ -220,7 +104,7 @@ pub(crate) fn execute_on(
         warn(&mut record, &hidden, &w);
     }
     let mut end = End::Finished;
-    for w in dataset_warnings(&dataset.info) {
+    for w in &dataset.info.warnings {
         warn(&mut record, &hidden, w);
         if args.run.strict {
             end = End::Failed(anyhow!("{w} (--strict)"));
@@ -228,7 +112,8 @@ pub(crate) fn execute_on(
         }
     }
     if matches!(end, End::Finished) {
-        let mut capacity = CapacityWarnings::new(driver.capacities(), settings.data.max_range);
+        let mut capacity =
+            CapacityWarnings::new(driver.build().capacities, settings.data.max_range);
         end = frame_loop(
             args,
             &mut driver,
@@ -236,7 +121,6 @@ pub(crate) fn execute_on(
             &mut dataset,
             &mut record,
             &mut observers,
-            mode,
             &mut warn,
         );
     }
@@ -357,11 +241,6 @@ fn finish(
     Ok(0)
 }
 
-/// Problems the dataset layer found before any frame (gaps, foreign files, length mismatches).
-fn dataset_warnings(info: &io::DatasetInfo) -> &[String] {
-    &info.warnings
-}
-
 fn nothing_registered(r: &Record) -> String {
     let count = |k: RowKind| r.rows.iter().filter(|row| row.outcome == k).count();
     format!(
@@ -382,7 +261,6 @@ fn frame_loop(
     dataset: &mut io::Dataset,
     record: &mut Record,
     observers: &mut [Box<dyn Observer>],
-    mode: Mode,
     warn: &mut dyn FnMut(&mut Record, &ProgressBar, &str),
 ) -> End {
     let info = &dataset.info;
@@ -449,17 +327,7 @@ fn frame_loop(
             );
         }
         let sweep = frame.as_ref().and_then(|f| f.sweep);
-        add(
-            record,
-            info,
-            &outcome,
-            sweep.as_ref(),
-            args.run.pose_time,
-            driver,
-        );
-        if mode == Mode::Live {
-            report_live(record, sweep.as_ref());
-        }
+        add(record, info, &outcome, sweep.as_ref(), args.run.pose_time);
         if !observers.is_empty() {
             let ground_truth = info
                 .ground_truth
@@ -470,10 +338,15 @@ fn frame_loop(
                 driver,
                 outcome: &outcome,
                 points: frame.as_ref().map(|f| f.points.as_slice()),
+                pose: *record.poses.last().unwrap_or(&outcome.pose),
                 time: record.times.last().copied().flatten(),
+                sweep: sweep.as_ref(),
                 ground_truth,
             };
-            if let Some(e) = observers.iter_mut().find_map(|o| o.frame(&seen).err()) {
+            let Some(row) = record.rows.last_mut() else {
+                break End::Failed(anyhow!("{}: no row recorded", outcome.meta.source));
+            };
+            if let Some(e) = observers.iter_mut().find_map(|o| o.frame(&seen, row).err()) {
                 break End::Failed(e);
             }
         }
@@ -497,7 +370,6 @@ fn add(
     o: &Outcome,
     sweep: Option<&SweepInfo>,
     pose_time: PoseTime,
-    driver: &Driver,
 ) {
     let index = o.meta.index;
     let mut time = o.meta.time.or_else(|| {
@@ -512,41 +384,13 @@ fn add(
         record.sweeps = true;
     }
     let pose = match o.report() {
-        Some(r) if r.deskewed => pose_time.pose(&o.pose, &driver.scan_motion()),
+        Some(r) if r.deskewed => pose_time.pose(&o.pose, &o.scan_motion),
         _ => o.pose,
     };
     record.rows.push(row);
     record.poses.push(pose);
     record.times.push(time);
     record.indices.push(index);
-}
-
-/// `live`: prints the pose just recorded as a TUM line (flushed, for a pipe) and measures the
-/// time since its sweep's last packet (for sweeps the sensor's data closed).
-fn report_live(record: &mut Record, sweep: Option<&SweepInfo>) {
-    let (Some(pose), Some(&index)) = (record.poses.last(), record.indices.last()) else {
-        return;
-    };
-    let time = record
-        .times
-        .last()
-        .copied()
-        .flatten()
-        .unwrap_or(index as f64);
-    let line = io::poses::format_tum(&[io::poses::TimedPose { time, pose: *pose }]);
-    let mut out = std::io::stdout().lock();
-    let _ = out.write_all(line.as_bytes()).and_then(|()| out.flush());
-    // A sweep the end of the stream closed was not done when its last packet came.
-    if let Some(s) = sweep.filter(|s| s.stats.end != SweepEnd::Finished) {
-        let now = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos() as u64);
-        // Microseconds, as frames.csv's core latency.
-        let ms = (now.saturating_sub(s.last_capture_ns) as f64 * 1e-3).round() / 1e3;
-        if let Some(row) = record.rows.last_mut() {
-            row.pose_latency_ms = Some(ms);
-        }
-    }
 }
 
 fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {

@@ -1,5 +1,5 @@
-//! What a run shows beside its poses: observers the run loop calls after every frame and once
-//! at the end, each turning the [`Driver`]'s outcomes into one output. `--save-map` writes the
+//! What a run shows beside its poses: observers ([`Observer`]) the run loop calls after every
+//! frame and once at the end, each turning the driver's outcomes into one output. `--save-map` writes the
 //! final local map, `--save-cloud` the whole run's registered points voxel-thinned on the host
 //! ([`export`]), and `--rerun`/`--rerun-connect` record every frame for the Rerun viewer
 //! (`recording` module, cargo feature `rerun`). They never change what the driver computes: a run
@@ -9,9 +9,8 @@ pub mod export;
 #[cfg(feature = "rerun")]
 pub mod recording;
 
+use crate::run::observe::Observer;
 use anyhow::{bail, Result};
-use kiss_odom_drive::{Driver, Outcome};
-use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
 
 /// The run command's options for what a run shows (`kiss-odom run --help`, "View and export").
@@ -47,29 +46,6 @@ pub struct ViewArgs {
     /// with a warning.
     #[arg(long, value_name = "N", default_value_t = 5_000_000)]
     pub save_cloud_max_points: usize,
-}
-
-/// One frame as an observer sees it, after the driver registered (or skipped) it.
-pub struct Seen<'a> {
-    /// The driver, in the state the frame left it (its clouds are the frame's).
-    pub driver: &'a Driver,
-    /// What became of the frame.
-    pub outcome: &'a Outcome,
-    /// The frame's points as read (sensor frame), `None` when it could not be read.
-    pub points: Option<&'a [[f64; 3]]>,
-    /// The frame's time (s): its own, else the dataset's `times.txt`.
-    pub time: Option<f64>,
-    /// The frame's ground-truth pose, in the frame of the first ground-truth pose.
-    pub ground_truth: Option<Isometry3<f64>>,
-}
-
-/// An output built frame by frame from the run loop's outcomes.
-pub trait Observer {
-    /// Called after every frame, in order.
-    fn frame(&mut self, seen: &Seen<'_>) -> Result<()>;
-    /// Called once after the last frame (also after an interrupted or failed run, so that the
-    /// output holds the frames processed); returns the warnings to print.
-    fn finish(&mut self, driver: &Driver) -> Result<Vec<String>>;
 }
 
 /// Checks `args` without creating anything: the file types, the cloud's voxel, what this

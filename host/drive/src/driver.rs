@@ -62,9 +62,24 @@ pub struct Driver {
     engine: Box<dyn Engine>,
     on_empty: OnEmpty,
     pool: Pool,
-    threads: usize,
-    scalar: Scalar,
-    storage: Storage,
+    build: Build,
+}
+
+/// What a driver runs, fixed when it is made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Build {
+    /// Worker threads of the correspondence search.
+    pub threads: usize,
+    /// The core's scalar.
+    pub scalar: Scalar,
+    /// The map point storage.
+    pub storage: Storage,
+    /// The core's capacities.
+    pub capacities: Capacities,
+    /// Bytes of the core's state.
+    pub state_bytes: usize,
+    /// Bytes of one stored map point.
+    pub map_point_bytes: usize,
 }
 
 impl Driver {
@@ -72,13 +87,20 @@ impl Driver {
     /// as [`Settings::threads`] resolves them.
     pub fn new(settings: &Settings) -> Result<Self> {
         let threads = settings.threads();
-        Ok(Self {
-            engine: engine::build(settings)?,
-            on_empty: OnEmpty::Advance,
-            pool: Pool::new(threads)?,
+        let engine = engine::build(settings)?;
+        let build = Build {
             threads,
             scalar: settings.runtime.scalar,
             storage: settings.runtime.map_storage,
+            capacities: engine.capacities(),
+            state_bytes: engine.state_bytes(),
+            map_point_bytes: engine.map_point_bytes(),
+        };
+        Ok(Self {
+            engine,
+            on_empty: OnEmpty::Advance,
+            pool: Pool::new(threads)?,
+            build,
         })
     }
 
@@ -89,10 +111,7 @@ impl Driver {
 
     /// Registers a frame read from a dataset.
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
-        let mut out =
-            self.register_points(FrameMeta::of(frame), &frame.points, frame.stamps.as_deref())?;
-        out.warnings.clone_from(&frame.warnings);
-        Ok(out)
+        self.register_points(FrameMeta::of(frame), &frame.points, frame.stamps.as_deref())
     }
 
     /// Registers a scan given as points (sensor frame, m) with optional per-point capture
@@ -121,7 +140,7 @@ impl Driver {
             latency: Duration::ZERO,
             cpu: Duration::ZERO,
             input_points: 0,
-            warnings: Vec::new(),
+            scan_motion: self.engine.scan_motion(),
         }
     }
 
@@ -150,7 +169,7 @@ impl Driver {
     /// can use the result.
     pub fn preload(&self, frames: &[Frame]) -> Preloaded {
         Preloaded {
-            scalar: self.scalar,
+            scalar: self.build.scalar,
             batch: self
                 .engine
                 .batch(&mut frames.iter().map(|f| f.points.as_slice())),
@@ -166,11 +185,11 @@ impl Driver {
         let Some((meta, stamps)) = frames.frames.get(k) else {
             bail!("preloaded frame {k} of {}: no such frame", frames.len());
         };
-        if frames.scalar != self.scalar {
+        if frames.scalar != self.build.scalar {
             bail!(
                 "frames preloaded for {:?} given to a {:?} driver",
                 frames.scalar,
-                self.scalar
+                self.build.scalar
             );
         }
         let sigma = self.engine.sigma();
@@ -204,7 +223,7 @@ impl Driver {
             latency: call.latency,
             cpu: call.cpu,
             input_points: call.input_points,
-            warnings: Vec::new(),
+            scan_motion: self.engine.scan_motion(),
         })
     }
 
@@ -213,46 +232,17 @@ impl Driver {
     pub fn reset(&mut self) {
         self.engine.reset();
     }
-    /// The latest pose.
-    pub fn pose(&self) -> Isometry3<f64> {
-        self.engine.pose()
-    }
     /// The latest motion: previous pose to latest, in the previous sensor frame.
     pub fn last_delta(&self) -> Isometry3<f64> {
         self.engine.last_delta()
     }
-    /// The motion the latest frame was deskewed with: the constant-velocity model before that
-    /// frame was registered.
-    pub fn scan_motion(&self) -> Isometry3<f64> {
-        self.engine.scan_motion()
-    }
-    /// The constant-velocity prediction of the next frame's pose (Eq. (1)): where ICP starts.
-    pub fn prediction(&self) -> Isometry3<f64> {
-        self.engine.prediction()
-    }
-    /// Worker threads of the correspondence search.
-    pub fn threads(&self) -> usize {
-        self.threads
-    }
-    /// The core's scalar.
-    pub fn scalar(&self) -> Scalar {
-        self.scalar
-    }
-    /// The map point storage.
-    pub fn storage(&self) -> Storage {
-        self.storage
+    /// What this driver runs: fixed at construction.
+    pub fn build(&self) -> Build {
+        self.build
     }
     /// High-water marks of the core's buffers since start.
     pub fn high_water(&self) -> HighWater {
         self.engine.high_water()
-    }
-    /// The core's capacities.
-    pub fn capacities(&self) -> Capacities {
-        self.engine.capacities()
-    }
-    /// Bytes of the core's state, fixed at construction.
-    pub fn state_bytes(&self) -> usize {
-        self.engine.state_bytes()
     }
     /// Bytes of state this build would need with capacities `caps`.
     pub fn state_bytes_for(&self, caps: &Capacities) -> usize {

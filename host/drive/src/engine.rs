@@ -95,8 +95,6 @@ pub(crate) trait Engine: Send {
     fn last_delta(&self) -> Isometry3<f64>;
     /// The motion the latest frame was deskewed with (the model before it was registered).
     fn scan_motion(&self) -> Isometry3<f64>;
-    /// The next frame's prediction: the latest pose moved by the latest motion.
-    fn prediction(&self) -> Isometry3<f64>;
     /// The threshold's current sigma.
     fn sigma(&self) -> f64;
     /// High-water marks since start.
@@ -225,9 +223,6 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     }
     fn scan_motion(&self) -> Isometry3<f64> {
         widen(self.odom.scan_motion())
-    }
-    fn prediction(&self) -> Isometry3<f64> {
-        widen(&(self.odom.last_pose() * self.odom.last_delta()))
     }
     fn sigma(&self) -> f64 {
         self.odom.sigma().wide()

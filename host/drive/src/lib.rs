@@ -17,7 +17,7 @@ pub mod settings;
 pub mod widen;
 
 pub use capacity::CapacityWarnings;
-pub use driver::{Driver, OnEmpty, Preloaded};
+pub use driver::{Build, Driver, OnEmpty, Preloaded};
 pub use error::one_line;
 pub use outcome::{FrameMeta, Outcome, Step};
 pub use pool::Pool;

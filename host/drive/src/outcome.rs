@@ -57,8 +57,9 @@ pub struct Outcome {
     pub cpu: Duration,
     /// Points given.
     pub input_points: usize,
-    /// What the reader noticed about the frame that did not stop it being used.
-    pub warnings: Vec<String>,
+    /// The motion the frame was deskewed with: the constant-velocity model before it was
+    /// registered (a pose at another instant of the sweep moves along it).
+    pub scan_motion: Isometry3<f64>,
 }
 
 impl Outcome {

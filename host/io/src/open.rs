@@ -62,40 +62,6 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
     Ok(dataset)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn auto_recognises_containers_by_extension_and_kitti_by_calib() {
-        let dir = tempfile::tempdir().unwrap();
-        let bag = dir.path().join("run.BAG");
-        let mcap = dir.path().join("run.mcap");
-        std::fs::write(&bag, []).unwrap();
-        std::fs::write(&mcap, []).unwrap();
-        for name in ["rec.pcap", "rec.PCAPNG"] {
-            std::fs::write(dir.path().join(name), []).unwrap();
-            assert_eq!(detect(&dir.path().join(name)).unwrap(), Format::Pcap);
-        }
-        assert_eq!(detect(&bag).unwrap(), Format::Bag);
-        assert_eq!(detect(&mcap).unwrap(), Format::Mcap);
-        assert!(detect(&dir.path().join("missing")).is_err());
-
-        let seq = dir.path().join("seq");
-        std::fs::create_dir_all(seq.join("velodyne")).unwrap();
-        std::fs::write(seq.join("velodyne/000000.bin"), [0u8; 16]).unwrap();
-        assert_eq!(detect(&seq).unwrap(), Format::Bin);
-        std::fs::write(seq.join("calib.txt"), "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
-        let e = format!("{:#}", detect(&seq).unwrap_err());
-        assert!(e.contains("no Tr") && e.contains("--format kitti"), "{e}");
-        std::fs::write(seq.join("calib.txt"), "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
-        assert_eq!(detect(&seq).unwrap(), Format::Kitti);
-        // Per-point timestamps mark a generic layout even next to a calib file.
-        std::fs::create_dir(seq.join("timestamps")).unwrap();
-        assert_eq!(detect(&seq).unwrap(), Format::Bin);
-    }
-}
-
 /// Wraps every source: a frame whose time is earlier than the previous frame's gets a warning,
 /// so that times going backwards (a recording out of order, a wrong `times.txt`) are never
 /// silent.
@@ -137,5 +103,39 @@ impl FrameSource for TimeOrder {
 
     fn trailer(&mut self) -> Trailer {
         self.inner.trailer()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_recognises_containers_by_extension_and_kitti_by_calib() {
+        let dir = tempfile::tempdir().unwrap();
+        let bag = dir.path().join("run.BAG");
+        let mcap = dir.path().join("run.mcap");
+        std::fs::write(&bag, []).unwrap();
+        std::fs::write(&mcap, []).unwrap();
+        for name in ["rec.pcap", "rec.PCAPNG"] {
+            std::fs::write(dir.path().join(name), []).unwrap();
+            assert_eq!(detect(&dir.path().join(name)).unwrap(), Format::Pcap);
+        }
+        assert_eq!(detect(&bag).unwrap(), Format::Bag);
+        assert_eq!(detect(&mcap).unwrap(), Format::Mcap);
+        assert!(detect(&dir.path().join("missing")).is_err());
+
+        let seq = dir.path().join("seq");
+        std::fs::create_dir_all(seq.join("velodyne")).unwrap();
+        std::fs::write(seq.join("velodyne/000000.bin"), [0u8; 16]).unwrap();
+        assert_eq!(detect(&seq).unwrap(), Format::Bin);
+        std::fs::write(seq.join("calib.txt"), "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
+        let e = format!("{:#}", detect(&seq).unwrap_err());
+        assert!(e.contains("no Tr") && e.contains("--format kitti"), "{e}");
+        std::fs::write(seq.join("calib.txt"), "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
+        assert_eq!(detect(&seq).unwrap(), Format::Kitti);
+        // Per-point timestamps mark a generic layout even next to a calib file.
+        std::fs::create_dir(seq.join("timestamps")).unwrap();
+        assert_eq!(detect(&seq).unwrap(), Format::Bin);
     }
 }

@@ -125,7 +125,7 @@ mod tests {
                 assert!(gap < 1e-12, "delta from the identity is the pose ({gap})");
             }
             assert!(!d.map_points().is_empty());
-            assert!(d.state_bytes() > 0);
+            assert!(d.build().state_bytes > 0);
         }
     }
 }

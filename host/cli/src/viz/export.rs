@@ -6,7 +6,8 @@
 //! frame's pose, thinned to the first point per voxel and bounded in count, so a long run costs
 //! at most `max_points` points of memory; what the bound drops is counted and warned about.
 
-use super::{Observer, Seen};
+use crate::run::observe::{Observer, Seen};
+use crate::run::record::FrameRow;
 use anyhow::{bail, Result};
 use kiss_odom_drive::Driver;
 use nalgebra::Point3;
@@ -54,7 +55,7 @@ impl MapExport {
 }
 
 impl Observer for MapExport {
-    fn frame(&mut self, _: &Seen<'_>) -> Result<()> {
+    fn frame(&mut self, _: &Seen<'_>, _: &mut FrameRow) -> Result<()> {
         Ok(())
     }
 
@@ -139,7 +140,7 @@ impl CloudExport {
 }
 
 impl Observer for CloudExport {
-    fn frame(&mut self, seen: &Seen<'_>) -> Result<()> {
+    fn frame(&mut self, seen: &Seen<'_>, _: &mut FrameRow) -> Result<()> {
         if seen.outcome.report().is_none() {
             return Ok(());
         }

@@ -14,7 +14,9 @@
 //! Rerun stores positions as `f32`: logged poses agree with `poses_kitti.txt` to about 1e-7
 //! relative.
 
-use super::{Observer, Seen, ViewArgs};
+use super::ViewArgs;
+use crate::run::observe::{Observer, Seen};
+use crate::run::record::FrameRow;
 use anyhow::{Context, Result};
 use kiss_odom_core::Flag;
 use kiss_odom_drive::{Driver, Step};
@@ -159,7 +161,7 @@ fn transform(pose: &Isometry3<f64>) -> rr::Transform3D {
 }
 
 impl Observer for Recorder {
-    fn frame(&mut self, seen: &Seen<'_>) -> Result<()> {
+    fn frame(&mut self, seen: &Seen<'_>, _: &mut FrameRow) -> Result<()> {
         let (rec, o) = (&self.rec, seen.outcome);
         rec.set_time_sequence("frame", i64::try_from(o.meta.index).unwrap_or(i64::MAX));
         if let Some(t) = seen.time.filter(|t| t.is_finite()) {

@@ -79,7 +79,9 @@ pub fn record(scans: &[Scan]) -> Recorded {
         sigmas: Vec::new(),
     };
     for s in scans {
-        let guess = driver.prediction();
+        // Eq. (1): the latest pose moved by the latest motion.
+        let last = rec.poses.last().copied().unwrap_or_else(Pose::identity);
+        let guess = last * driver.last_delta();
         let o = driver
             .register_points(FrameMeta::default(), &s.points, s.stamps.as_deref())
             .unwrap();

@@ -75,7 +75,7 @@ fn the_driver_gives_the_cores_own_poses_and_reports() {
     assert!(got[3].report().unwrap().deskewed);
     assert!(got[3].pose.translation.vector.norm() > 1.0, "the car moved");
     assert_eq!(driver.high_water(), odom.high_water());
-    assert_eq!(driver.state_bytes(), odom.state_bytes());
+    assert_eq!(driver.build().state_bytes, odom.state_bytes());
     assert_eq!(driver.source_cloud().len(), odom.source().len());
     assert_eq!(driver.merge_cloud().len(), odom.merge_cloud().len());
     assert_eq!(driver.map_points().len(), odom.map().points());
@@ -100,7 +100,7 @@ fn every_build_registers_and_f32_stays_close_to_f64() {
         (Scalar::F32, Storage::Quantized),
     ] {
         let mut d = Driver::new(&settings(scalar, storage)).unwrap();
-        assert_eq!((d.scalar(), d.storage()), (scalar, storage));
+        assert_eq!((d.build().scalar, d.build().storage), (scalar, storage));
         let got = register_all(&mut d, &frames);
         for (o, want) in got.iter().zip(&reference) {
             assert!(o.report().is_some());
@@ -138,7 +138,7 @@ fn empty_and_unreadable_frames_advance_on_the_constant_velocity_model() {
         points: vec![[500.0, 0.0, 0.0], [f64::NAN, 0.0, 0.0]],
         ..Frame::default()
     };
-    let predicted = d.prediction();
+    let predicted = got[2].pose * d.last_delta();
     let empty = d.register(&far).unwrap();
     assert_eq!(empty.step, Step::Empty);
     let (t, r) = pose_difference(&empty.pose, &predicted);
@@ -173,7 +173,6 @@ fn reset_gives_the_poses_of_a_new_driver_and_the_first_frame_is_the_origin() {
     let mut d = Driver::new(&s).unwrap();
     let first = poses(&register_all(&mut d, &frames));
     d.reset();
-    assert_eq!(d.pose(), Isometry3::identity());
     assert_eq!(poses(&register_all(&mut d, &frames)), first);
     assert_eq!(first[0], Isometry3::identity());
 }
