@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 14: what a per-frame work budget costs and buys. For each budget: accuracy on kitti-mini
+# what a per-frame work budget costs and buys. For each budget: accuracy on kitti-mini
 # and on generated urban/fast drives (host, f32 + quantized map + SMALL capacities at 50 m, the
 # microcontroller configuration; the same work units as on the target), the worst frame's work,
 # and the Cortex-M7's instruction counts per frame under QEMU on the embedded kitti-mini 05

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Degenerate scenes (issue 17): kiss-odom reference mode, robust mode and GenZ-ICP 0.3.2 on the
-# same generated runs and on kitti-mini (BENCHMARKS.md, "Degenerate scenes (issue 17)").
+# Degenerate scenes: kiss-odom reference mode, robust mode and GenZ-ICP 0.3.2 on the
+# same generated runs and on kitti-mini (BENCHMARKS.md, "Degenerate scenes").
 #
 #   bench/degeneracy.sh [FRAMES] [SEEDS]     (default 500 frames, seeds "1 2 3")
 #

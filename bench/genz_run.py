@@ -1,5 +1,5 @@
 """Runs GenZ-ICP (PyPI `genz-icp`) on a folder in kiss-odom's generic layout and writes its
-poses in KITTI format (BENCHMARKS.md, "Degenerate scenes (issue 17)").
+poses in KITTI format (BENCHMARKS.md, "Degenerate scenes").
 
     genzvenv/bin/python bench/genz_run.py DATA OUT.txt [--preset NAME] [--no-deskew]
 

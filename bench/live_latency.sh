@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 19: `kiss-odom live` fed by `kiss-odom replay` over loopback UDP, the OS-1-128
+# `kiss-odom live` fed by `kiss-odom replay` over loopback UDP, the OS-1-128
 # recording (../shared/data/sensors/ouster, 3 sweeps) replayed N times at each rate. Prints a
 # markdown table: sweeps whose last packet to pose time was measured (frames.csv
 # pose_latency_ms), p50/p99/max of it, packets lost, and whether the poses are byte-equal to

@@ -1,4 +1,4 @@
-"""Where ouster-sdk's poses file for the OS-1-128 recording comes from (issue 19).
+"""Where ouster-sdk's poses file for the OS-1-128 recording comes from.
 
 The file `OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt` beside the recording is named as
 kiss-icp's pipeline names its output. This script replays what kiss-icp 0.2.10's Ouster

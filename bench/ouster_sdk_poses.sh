@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 19: which odometry made ouster-sdk's poses file beside the OS-1-128 recording, and at
+# which odometry made ouster-sdk's poses file beside the OS-1-128 recording, and at
 # which instant of the sweep its poses are (see bench/ouster_sdk_poses.py). Makes
 # target/kiss0210venv (kiss-icp 0.2.10 and numpy < 2, which its compiled module needs) and uses
 # target/sensorvenv (ouster-sdk 1.0.1, made by .ci/run) or KISS_ODOM_SENSOR_PYTHON.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 19: `kiss-odom run` on generated sensor recordings (packets) against the same run on the
+# `kiss-odom run` on generated sensor recordings (packets) against the same run on the
 # simulator's direct point output (the exact points the packets were made from), deskew on and
 # off. VLP-16 and OS1-64, urban and fast, 500 sweeps each, seeds 1-3. Prints a markdown table of
 # KITTI relative translation error and ATE against the simulator's ground truth, per drive and

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 14: TINY (f32, quantized map, Capacities::TINY, Config::tiny's r_max 50 m, v 2 m,
+# TINY (f32, quantized map, Capacities::TINY, Config::tiny's r_max 50 m, v 2 m,
 # N_max 10) against FULL_SCALE f64 exact with the same parameters, on generated VLP-16 drives
 # (16 beams, 1800 columns, +-15 degrees, 10 Hz), 500 sweeps each. Prints a markdown table:
 # ATE and KITTI relative error of both, their ratio, and TINY's capacity drops.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 6 tooling, run by .ci/run after the tests: the core's proptest properties (release),
+# The tooling, run by .ci/run after the tests: the core's proptest properties (release),
 # every cargo-fuzz target for a bounded time on its committed corpus, and Miri on the core's
 # unit tests. Fails on any finding. A stage is skipped, with the reason printed, only when its
 # tool cannot be installed.

@@ -24,7 +24,7 @@ pub enum Degeneracy {
     #[default]
     Reference,
     /// The reference, except on frames whose registration the reference leaves degenerate
-    /// (observability below `Config::plane_gate`): those are registered again with
+    /// (observability below `Robust::plane_gate`): those are registered again with
     /// point-to-plane terms wherever the map around a registration point is planar (GenZ-ICP's,
     /// see `registration::planes`), so sparse structure moves the pose along walls and ground;
     /// for tunnels, corridors, long walls, open ground. Nothing is held.
@@ -35,6 +35,12 @@ pub enum Degeneracy {
 }
 
 /// Pipeline parameters. [`Config::new`] gives the reference defaults for a maximum range.
+///
+/// The fields from `max_range` to `deskew` are the paper's Table I (with the reference's
+/// iteration cap), `kernel_scale` and `max_correspondence_factor` the reference's kernel and
+/// correspondence rules; what follows goes beyond the paper: flagging and handling degenerate
+/// frames (`degeneracy_ratio`, `degeneracy`, `robust`) and a bound on a frame's work
+/// (`work_budget`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config<T> {
@@ -70,34 +76,75 @@ pub struct Config<T> {
     pub degeneracy_ratio: T,
     /// What ICP does along directions the scene does not constrain: move as the reference
     /// does ([`Degeneracy::Reference`], the default), register the frames the reference finds
-    /// degenerate again with point-to-plane terms ([`Degeneracy::Robust`], see
-    /// [`Config::plane_gate`]) or hold them at the constant-velocity prediction
+    /// degenerate again with point-to-plane terms ([`Degeneracy::Robust`], tuned by
+    /// [`Config::robust`]) or hold them at the constant-velocity prediction
     /// ([`Degeneracy::Hold`]; see [`crate::FrameReport::held`]).
     pub degeneracy: Degeneracy,
-    /// Robust mode's gate: a frame whose reference registration leaves an observability
-    /// (see [`crate::FrameReport::observability`]) below this is registered again from the
-    /// prediction with point-to-plane terms where the map is planar, and flagged
-    /// [`crate::Flag::Planes`]; every other frame keeps the reference's pose, bit for bit.
-    /// 0.015 (BENCHMARKS.md section 12: tunnel and field frames 0-0.015, the weakest frames of
-    /// urban and fast runs 0.0125-0.024). 1 or more: every frame with plane terms, without the
-    /// reference registration first (observability is at most 1).
-    pub plane_gate: T,
-    /// Robust mode's hold prior: in a registration with plane terms, from the third frame, the
-    /// position is pulled to the constant-velocity prediction with this weight per
-    /// correspondence, so what no correspondence constrains stays at the prediction (see
-    /// `stages::MotionPrior`). 0 (the default): none.
-    pub prediction_prior: T,
-    /// Robust mode's vehicle prior: the same, for no motion along the sensor's `y` axis (a
-    /// car-like vehicle with the sensor's `x` axis forward does not slide sideways). In a
-    /// corridor, a turn's motion across it then fixes the motion along it. 0 (the default):
-    /// none; robust mode's tunnel setting uses 1 with a hold of 0.01 (BENCHMARKS.md section 12).
-    pub lateral_prior: T,
+    /// Robust mode's parameters; the other modes ignore them.
+    pub robust: Robust<T>,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
     /// exceed it, ICP keeps its last complete iterate and the frame is flagged
     /// [`crate::Flag::Budget`]. Together with the capacities this bounds a frame's work; see
     /// `Capacities` for the formula.
     pub work_budget: Option<u64>,
+}
+
+/// Robust mode's parameters ([`Degeneracy::Robust`]): when a frame is registered again with
+/// point-to-plane terms, and the motion prior that holds what no term constrains. The defaults
+/// ([`Robust::DEFAULT`]) gate at 0.015 with no prior; the measurements behind them, and robust
+/// mode's tunnel setting, are in BENCHMARKS.md ("Degenerate scenes").
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Robust<T> {
+    /// The gate: a frame whose reference registration leaves an observability (see
+    /// [`crate::FrameReport::observability`]) below this is registered again from the
+    /// prediction with point-to-plane terms where the map is planar, and flagged
+    /// [`crate::Flag::Planes`]; every other frame keeps the reference's pose, bit for bit. 1 or
+    /// more: every frame with plane terms, without the reference registration first
+    /// (observability is at most 1).
+    pub plane_gate: T,
+    /// The hold prior: in a registration with plane terms, from the third frame, the position
+    /// is pulled to the constant-velocity prediction with this weight per correspondence, so
+    /// what no correspondence constrains stays at the prediction (see `stages::MotionPrior`).
+    /// 0: none.
+    pub prediction_prior: T,
+    /// The vehicle prior: the same, for no motion along the sensor's `y` axis (a car-like
+    /// vehicle with the sensor's `x` axis forward does not slide sideways). In a corridor, a
+    /// turn's motion across it then fixes the motion along it. 0: none.
+    pub lateral_prior: T,
+}
+
+impl<T: Real> Robust<T> {
+    /// The gate at 0.015, no prior.
+    pub fn new() -> Self {
+        Self {
+            plane_gate: T::of(0.015),
+            prediction_prior: T::zero(),
+            lateral_prior: T::zero(),
+        }
+    }
+
+    /// Robust mode's tunnel setting for a car-like vehicle: plane terms on every frame, the
+    /// vehicle prior 1 and the hold prior 0.01 (use it with `r_max / 200` voxels).
+    pub fn tunnel() -> Self {
+        Self {
+            plane_gate: T::one(),
+            prediction_prior: T::of(0.01),
+            lateral_prior: T::one(),
+        }
+    }
+
+    fn validate(&self) -> bool {
+        let nonneg = |x: T| x.is_finite() && x >= T::zero();
+        nonneg(self.plane_gate) && nonneg(self.prediction_prior) && nonneg(self.lateral_prior)
+    }
+}
+
+impl<T: Real> Default for Robust<T> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl<T: Real> Config<T> {
@@ -119,9 +166,7 @@ impl<T: Real> Config<T> {
             max_correspondence_factor: T::of(3.0),
             degeneracy_ratio: T::of(0.02),
             degeneracy: Degeneracy::Reference,
-            plane_gate: T::of(0.015),
-            prediction_prior: T::zero(),
-            lateral_prior: T::zero(),
+            robust: Robust::new(),
             work_budget: None,
         }
     }
@@ -174,9 +219,7 @@ impl<T: Real> Config<T> {
             || !pos(self.kernel_scale)
             || !pos(self.max_correspondence_factor)
             || !nonneg(self.degeneracy_ratio)
-            || !nonneg(self.plane_gate)
-            || !nonneg(self.prediction_prior)
-            || !nonneg(self.lateral_prior)
+            || !self.robust.validate()
         {
             return Err(ConfigError::Threshold);
         }
@@ -348,8 +391,11 @@ mod tests {
     fn robust_is_the_reference_with_planes_and_its_gate_is_checked() {
         let (r, n) = (Config::<f64>::robust(80.0), Config::<f64>::new(80.0));
         assert_eq!(r.degeneracy, Degeneracy::Robust);
-        assert_eq!(n.plane_gate, 0.015);
-        assert_eq!((n.prediction_prior, n.lateral_prior), (0.0, 0.0));
+        assert_eq!(n.robust.plane_gate, 0.015);
+        assert_eq!(
+            (n.robust.prediction_prior, n.robust.lateral_prior),
+            (0.0, 0.0)
+        );
         assert_eq!(
             Config {
                 degeneracy: n.degeneracy,
@@ -360,25 +406,25 @@ mod tests {
         assert!(r.validate().is_ok());
         assert!(Capacities::ROBUST.validate().is_ok());
         for bad in [-0.1, f64::NAN, f64::INFINITY] {
-            let gate = Config {
+            let with = |robust| Config { robust, ..r };
+            let gate = with(Robust {
                 plane_gate: bad,
-                ..r
-            };
-            let hold = Config {
+                ..r.robust
+            });
+            let hold = with(Robust {
                 prediction_prior: bad,
-                ..r
-            };
-            let lateral = Config {
+                ..r.robust
+            });
+            let lateral = with(Robust {
                 lateral_prior: bad,
-                ..r
-            };
+                ..r.robust
+            });
             for (c, name) in [(gate, "plane_gate"), (hold, "hold"), (lateral, "lateral")] {
                 assert_eq!(c.validate(), Err(ConfigError::Threshold), "{name} {bad}");
             }
         }
         let priors = Config {
-            prediction_prior: 0.01,
-            lateral_prior: 1.0,
+            robust: Robust::tunnel(),
             ..r
         };
         assert!(priors.validate().is_ok());

@@ -74,7 +74,7 @@ mod voxel;
 #[cfg(test)]
 mod testutil;
 
-pub use config::{Capacities, Config, Degeneracy, MAX_RANGE_LIMIT};
+pub use config::{Capacities, Config, Degeneracy, Robust, MAX_RANGE_LIMIT};
 pub use deskew::StampProblem;
 pub use error::{ConfigError, FrameError};
 pub use geometry::{Point, Pose};

@@ -38,7 +38,7 @@ pub enum Flag {
     /// [`FrameReport::held`]).
     Held = 1 << 9,
     /// Robust mode registered the scan with point-to-plane terms where the map is planar: the
-    /// reference registration found it degenerate (see `Config::plane_gate`).
+    /// reference registration found it degenerate (see `Robust::plane_gate`).
     Planes = 1 << 10,
     /// The map was full: its farthest voxels were evicted to make room, which may have shrunk
     /// its radius below `r_max` (see [`FrameReport::map_radius`] and

@@ -103,8 +103,10 @@ fn const_constructed_words_hold_a_whole_odometry() {
         plane_terms: false,
     };
     const N: usize = CAPS.arena_words::<f32, Quantized>();
-    // Boxed only so the test thread's stack need not hold it; firmware puts it in a `static`.
-    let mut words: Box<Words<N>> = Box::new(Words::new());
+    // In a `static`, as firmware holds it: built at compile time, never on a stack (a debug
+    // build would build `Box::new(Words::new())` on the test thread's stack first).
+    static WORDS: std::sync::Mutex<Words<N>> = std::sync::Mutex::new(Words::new());
+    let mut words = WORDS.lock().unwrap();
     let mut odom =
         Odometry::<f32, Quantized, _>::new(Config::new(RANGE as f32), CAPS, &mut *words).unwrap();
     let frames = scans();

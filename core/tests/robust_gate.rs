@@ -1,11 +1,11 @@
-//! Robust mode's gate (`Config::plane_gate`, issue 17): a frame is registered again with
+//! Robust mode's gate (`Robust::plane_gate`): a frame is registered again with
 //! point-to-plane terms exactly when the reference registration's observability is below the
 //! gate, and every other frame keeps the reference's pose bit for bit.
 
 mod common;
 
 use common::*;
-use kiss_odom_core::{Capacities, Config, Degeneracy, Exact, Flag, FrameReport, Odometry};
+use kiss_odom_core::{Capacities, Config, Degeneracy, Exact, Flag, FrameReport, Odometry, Robust};
 
 const RANGE: f64 = 40.0;
 const FRAMES: usize = 8;
@@ -34,9 +34,13 @@ fn reports(config: Config<f64>, scans: &[Vec<[f64; 3]>]) -> Vec<FrameReport<f64>
 }
 
 fn robust(plane_gate: f64) -> Config<f64> {
+    let base = Config::robust(RANGE);
     Config {
-        plane_gate,
-        ..Config::robust(RANGE)
+        robust: Robust {
+            plane_gate,
+            ..base.robust
+        },
+        ..base
     }
 }
 
@@ -57,7 +61,10 @@ fn below_every_observability_the_gate_gives_the_reference_bit_for_bit() {
     assert!(planes(&gated).iter().all(|p| !p));
     // The gate only acts in robust mode.
     let wide = Config {
-        plane_gate: 1.0,
+        robust: Robust {
+            plane_gate: 1.0,
+            ..Robust::new()
+        },
         ..Config::new(RANGE)
     };
     let reference_wide = reports(wide, &s);
@@ -116,8 +123,11 @@ fn a_frame_is_registered_again_only_below_the_gate() {
 
 fn with_priors(config: Config<f64>, hold: f64, lateral: f64) -> Config<f64> {
     Config {
-        prediction_prior: hold,
-        lateral_prior: lateral,
+        robust: Robust {
+            prediction_prior: hold,
+            lateral_prior: lateral,
+            ..config.robust
+        },
         ..config
     }
 }

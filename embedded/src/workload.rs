@@ -11,7 +11,7 @@ use crate::profile::{
 };
 #[cfg(not(feature = "packets"))]
 use kiss_odom_core::FrameReport;
-use kiss_odom_core::{Config, Degeneracy, Odometry, Words};
+use kiss_odom_core::{Config, Degeneracy, Odometry, Robust, Words};
 
 #[cfg(not(feature = "packets"))]
 /// Points per push in the `tiny` profile: one VLP-16 data packet (12 blocks of 32 returns).
@@ -90,9 +90,7 @@ pub fn config() -> Config<Scalar> {
     if cfg!(feature = "robust") {
         Config {
             degeneracy: Degeneracy::Robust,
-            plane_gate: 1.0,
-            lateral_prior: 1.0,
-            prediction_prior: 0.01,
+            robust: Robust::tunnel(),
             ..base
         }
     } else {

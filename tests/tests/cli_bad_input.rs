@@ -652,7 +652,7 @@ fn no_frames_or_no_such_path_exit_1_with_the_reason() {
     assert!(line.contains("no frames"), "{line}");
 }
 
-/// Finding 12 of issue 12: `kiss-odom eval` on finite poses far enough apart for the error
+/// `kiss-odom eval` on finite poses far enough apart for the error
 /// sums to overflow reported the ATE as `null` (JSON has no inf) with exit 0.
 #[test]
 fn eval_with_an_infinite_ate_fails_naming_the_metric() {

@@ -1,4 +1,4 @@
-//! ROS 1 bags and ROS 2 MCAP files that are out of time order or damaged (issue 12), run end
+//! ROS 1 bags and ROS 2 MCAP files that are out of time order or damaged, run end
 //! to end through `kiss-odom run`. The fixtures were written by the Python `rosbags` library
 //! (`fixtures/bags/make_bags.py`), independent of our readers: `out_of_order.*` holds the
 //! Ouster-style clouds of frames 0..5 written in the order 0, 2, 1, 4, 3, each with the
@@ -14,7 +14,7 @@ fn fixture(name: &str) -> PathBuf {
     repo().join("fixtures/bags").join(name)
 }
 
-/// Finding 6: a bag (or MCAP file) recorded out of time order was processed in file order and
+/// a bag (or MCAP file) recorded out of time order was processed in file order and
 /// its TUM times went backwards.
 #[test]
 fn bags_and_mcap_files_out_of_time_order_are_read_in_time_order_with_a_warning() {
@@ -50,7 +50,7 @@ fn bags_and_mcap_files_out_of_time_order_are_read_in_time_order_with_a_warning()
     }
 }
 
-/// Finding 12: a ROS 1 bag cut inside its first chunk said "no PointCloud2 topic (topics:
+/// a ROS 1 bag cut inside its first chunk said "no PointCloud2 topic (topics:
 /// none)" instead of saying it is damaged.
 #[test]
 fn a_bag_cut_inside_its_first_chunk_is_reported_as_damaged() {

@@ -1,4 +1,4 @@
-//! Frame folders shaped the way real recordings arrive (issue 12): a frame lost in a transfer,
+//! Frame folders shaped the way real recordings arrive: a frame lost in a transfer,
 //! files copied from a Mac, frames of two formats, names that are times, a KITTI export without
 //! its extrinsic, side files of the wrong length. Each case is built from a copy of
 //! `fixtures/kitti-05-reduced` (10 real KITTI scans with calibration, times and ground truth)
@@ -65,7 +65,7 @@ fn same_first_poses(a: &Run, b: &Run, n: usize) {
     );
 }
 
-/// Finding 1: `rm velodyne/000005.bin` shifted every later frame onto the next frame's ground
+/// `rm velodyne/000005.bin` shifted every later frame onto the next frame's ground
 /// truth and time without a word (ATE 0.282 m instead of 0.019 m).
 #[test]
 fn a_frame_lost_from_a_kitti_sequence_is_skipped_and_later_frames_keep_their_ground_truth() {
@@ -92,7 +92,7 @@ fn a_frame_lost_from_a_kitti_sequence_is_skipped_and_later_frames_keep_their_gro
     strict.failed_with(&["000005.bin"]);
 }
 
-/// Finding 1, other shapes of a gap: a folder or a dangling symlink in place of a frame was
+/// Other shapes of a gap: a folder or a dangling symlink in place of a frame was
 /// skipped silently by the listing, with the same shift.
 #[test]
 fn a_folder_or_dangling_symlink_in_place_of_a_frame_is_a_skipped_frame_naming_it() {
@@ -112,7 +112,7 @@ fn a_folder_or_dangling_symlink_in_place_of_a_frame_is_a_skipped_frame_naming_it
     assert_eq!(r.tum_times(), full.tum_times());
 }
 
-/// Finding 1 in every folder layout: generic `.bin`, `.ply` and `.pcd` folders.
+/// Every folder layout: generic `.bin`, `.ply` and `.pcd` folders.
 #[test]
 fn a_frame_lost_from_a_generic_bin_ply_or_pcd_folder_is_skipped_and_pairing_holds() {
     let dir = tempfile::tempdir().unwrap();
@@ -134,7 +134,7 @@ fn a_frame_lost_from_a_generic_bin_ply_or_pcd_folder_is_skipped_and_pairing_hold
     }
 }
 
-/// Finding 2: macOS AppleDouble companions (`._000000.bin`, 4096 bytes) were read as frames of
+/// macOS AppleDouble companions (`._000000.bin`, 4096 bytes) were read as frames of
 /// garbage points and shifted every index.
 #[test]
 fn macos_appledouble_companions_are_ignored_with_one_warning() {
@@ -152,7 +152,7 @@ fn macos_appledouble_companions_are_ignored_with_one_warning() {
     assert_eq!(r.lines("poses_kitti.txt"), full.lines("poses_kitti.txt"));
 }
 
-/// Finding 2, other files that are not frames: hidden files, editor and download leftovers,
+/// Other files that are not frames: hidden files, editor and download leftovers,
 /// system files.
 #[test]
 fn hidden_editor_and_system_files_are_ignored_with_one_warning() {
@@ -180,7 +180,7 @@ fn hidden_editor_and_system_files_are_ignored_with_one_warning() {
     assert_eq!(r.lines("poses_kitti.txt"), full.lines("poses_kitti.txt"));
 }
 
-/// Finding 3: with `.ply` and `.bin` frames mixed, only the first file's format was read and
+/// with `.ply` and `.bin` frames mixed, only the first file's format was read and
 /// the other frames silently ignored.
 #[test]
 fn frames_of_two_formats_are_refused_under_auto_and_the_rest_named_under_an_explicit_format() {
@@ -211,7 +211,7 @@ fn rename_frames(data: &Path, names: &[String]) {
     }
 }
 
-/// Finding 4: frames named by time with decimals (`100.0.bin` ... `100.45.bin`) were taken
+/// frames named by time with decimals (`100.0.bin` ... `100.45.bin`) were taken
 /// in the order 0, 2, 4, 6, 8, 1, 3, 5, 7, 9.
 #[test]
 fn frames_named_by_decimal_seconds_are_read_in_time_order_with_their_times() {
@@ -236,7 +236,7 @@ fn frames_named_by_decimal_seconds_are_read_in_time_order_with_their_times() {
     assert_eq!(r.tum_times(), want);
 }
 
-/// Finding 4, other time names: integer nanoseconds and microsecond decimals give the times
+/// Other time names: integer nanoseconds and microsecond decimals give the times
 /// in seconds (they were frame numbers), and a long interval is reported as lost frames.
 #[test]
 fn frames_named_by_nanoseconds_or_microseconds_carry_their_times_and_gaps_are_reported() {
@@ -281,7 +281,7 @@ fn frames_named_by_nanoseconds_or_microseconds_carry_their_times_and_gaps_are_re
     }
 }
 
-/// Finding 5: a KITTI-shaped folder whose `calib.txt` has no `Tr` was read as a generic folder:
+/// a KITTI-shaped folder whose `calib.txt` has no `Tr` was read as a generic folder:
 /// no KITTI correction, camera-frame ground truth scored as LiDAR poses (final error 7.25 m).
 #[test]
 fn a_kitti_folder_without_tr_is_refused_or_read_as_kitti_without_ground_truth() {
@@ -316,7 +316,7 @@ fn side_file(data: &Path, name: &str, rows: usize) {
     std::fs::write(data.join(name), out.join("\n") + "\n").unwrap();
 }
 
-/// Finding 7, ground truth: a `poses.txt` shorter than the frames gave `metrics: null` with
+/// Ground truth: a `poses.txt` shorter than the frames gave `metrics: null` with
 /// `warnings: 0`; a longer one went unremarked.
 #[test]
 fn ground_truth_shorter_or_longer_than_the_frames_is_reported_and_paired_by_frame() {
@@ -341,7 +341,7 @@ fn ground_truth_shorter_or_longer_than_the_frames_is_reported_and_paired_by_fram
     assert_eq!(l.summary()["metrics"], full.summary()["metrics"]);
 }
 
-/// Finding 7, times: a `times.txt` shorter than the frames mixed seconds and frame numbers in
+/// Times: a `times.txt` shorter than the frames mixed seconds and frame numbers in
 /// `poses_tum.txt`.
 #[test]
 fn times_shorter_or_longer_than_the_frames_are_reported_and_never_mixed_with_frame_numbers() {
@@ -378,7 +378,7 @@ fn duplicate_frame_numbers_and_unnumbered_names_are_refused_with_the_names() {
     r.failed_with(&["scan.bin"]);
 }
 
-/// Finding 12: a PLY that declares `x` twice was read at the wrong stride (ply-rs keeps one
+/// a PLY that declares `x` twice was read at the wrong stride (ply-rs keeps one
 /// property per name).
 #[test]
 fn a_ply_declaring_a_property_twice_is_skipped_with_the_reason() {

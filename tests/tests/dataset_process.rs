@@ -1,4 +1,4 @@
-//! Dataset reading that needs a process of its own (issue 12): a memory limit set with
+//! Dataset reading that needs a process of its own: a memory limit set with
 //! `ulimit -v`, or a `TMPDIR` the run must not touch. This test binary starts itself again as
 //! the child (the `child` test below, given its arguments in an environment variable), so the
 //! limit applies to `kiss-odom run` alone.
@@ -66,7 +66,7 @@ fn sparse(path: &Path, head: &[u8]) {
     f.set_len(2 << 30).unwrap();
 }
 
-/// Finding 9: a `.bin` frame was read whole before its first `scan_points` points were taken;
+/// a `.bin` frame was read whole before its first `scan_points` points were taken;
 /// a 2 GB frame aborted the process (`memory allocation of 3221225472 bytes failed`) and lost
 /// the run. The PLY and PCD readers are held to the same bound.
 #[test]
@@ -111,7 +111,7 @@ fn a_two_gigabyte_frame_is_truncated_with_a_warning_under_a_one_gigabyte_limit()
     }
 }
 
-/// Finding 10: a damaged bag was read from a full-size temporary copy in `TMPDIR`, left behind
+/// a damaged bag was read from a full-size temporary copy in `TMPDIR`, left behind
 /// when the run was interrupted. The bag is now read in place: with no usable `TMPDIR` at all
 /// the frames before the damage are still processed.
 #[test]

@@ -1,4 +1,4 @@
-//! The degeneracy modes (issue 17) end to end on generated data. Robust mode
+//! The degeneracy modes end to end on generated data. Robust mode
 //! (`--degeneracy robust`: frames the reference leaves degenerate registered again with
 //! point-to-plane terms) follows an open field from a standing start where reference mode turns
 //! away, and with its tunnel setting (plane terms on every frame, finer voxels) a tunnel where

@@ -1,5 +1,5 @@
 //! Reliability of the core on bad input, full buffers and degenerate scenes, measured against
-//! the simulator's ground truth (issue 6).
+//! the simulator's ground truth.
 //!
 //! Each test feeds `kiss_odom_core::Odometry` something that should not break it and checks
 //! the promise the core makes for it: an error or a counted skip, a status flag, a documented

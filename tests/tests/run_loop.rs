@@ -1,4 +1,4 @@
-//! The rules of the run loop (README, "Failure behaviour"; issue 12), end to end through the
+//! The rules of the run loop (the book's failure reference), end to end through the
 //! command line in-process: thread counts are capped, the reason a run stopped is never masked
 //! by an output error, a run that registered nothing fails, a setting out of range is named,
 //! no output of an earlier command survives beside a failed one, and `frames.csv` says where

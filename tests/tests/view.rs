@@ -1,4 +1,4 @@
-//! What a run shows beside its poses (issue 16): `--save-map` and `--save-cloud` files read
+//! What a run shows beside its poses: `--save-map` and `--save-cloud` files read
 //! back with our readers and with independent ones (plyfile, pypcd4), `diagnostics.png`
 //! decoded, and the `--rerun` recording read back with Rerun's own dataframe API. The
 //! independent readers live in the venv `.ci/run` makes from `tests/rerun/requirements.txt`,

@@ -1,4 +1,4 @@
-//! The per-frame work budget through the tool (issue 14): on the hardest inputs we have
+//! The per-frame work budget through the tool: on the hardest inputs we have
 //! (generated fast and corridor drives, kitti-mini, scenes of random points) no frame's counted
 //! work (`frames.csv` `work`) exceeds `--budget`, the frames it stopped are flagged and counted,
 //! the frames before the first stop are the unbudgeted run's bit for bit, and the thread count

@@ -88,9 +88,11 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
             _ => Weakness::NONE,
         };
         let robust = cfg.degeneracy == Degeneracy::Robust;
-        let always = robust && !first_frame && cfg.plane_gate >= T::one();
+        let always = robust && !first_frame && cfg.robust.plane_gate >= T::one();
         let first = self.once(at, map, work, always, &weak);
-        let degenerate = first.observability.is_none_or(|o| o < cfg.plane_gate);
+        let degenerate = first
+            .observability
+            .is_none_or(|o| o < cfg.robust.plane_gate);
         if robust && !first.planes && !first_frame && degenerate {
             self.once(at, map, work, true, &weak)
         } else {
@@ -115,7 +117,7 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
     ) -> Registered<T> {
         let cfg = self.cfg;
         let (kernel, prior) = if planes {
-            let (hold, sideways) = (cfg.prediction_prior, cfg.lateral_prior);
+            let (hold, sideways) = (cfg.robust.prediction_prior, cfg.robust.lateral_prior);
             let prior =
                 (at.frames >= 2).then(|| MotionPrior::new(&at.last_pose, &at.pose, hold, sideways));
             (T::of(PLANE_KERNEL_SCALE), prior)

@@ -1,4 +1,4 @@
-//! Point-to-plane terms for robust mode (issue 17; after GenZ-ICP, Lee et al., RA-L 2024).
+//! Point-to-plane terms for robust mode (after GenZ-ICP, Lee et al., RA-L 2024).
 //!
 //! Step 4's point-to-point residual `s - q` is as stiff along a wall as across it, so in a
 //! tunnel the thousands of wall and floor points pin the pose where the prediction put it and

@@ -1,5 +1,5 @@
 //! Robust mode's motion prior: what the scene leaves free, the sensor's motion decides
-//! (issue 17).
+//!.
 //!
 //! In a bare corridor no scan says how far the sensor went along the axis, and plane terms
 //! (see `planes`) leave that direction without any information: Gauss-Newton then steps along
@@ -18,7 +18,7 @@
 //! left-multiplied twist (`dt = rho + phi x t`): the hold is a point-to-point term of the point
 //! `t` against `t_pred`, the lateral one a point-to-plane term of `t` against the plane through
 //! `t_{t-1}` with normal `l`. Their weights are per correspondence of the iteration
-//! (`Config::prediction_prior`, `Config::lateral_prior`), so they keep their share whatever the
+//! (`Robust::prediction_prior`, `Robust::lateral_prior`), so they keep their share whatever the
 //! scan's size; neither counts as a correspondence.
 
 use super::planes::accumulate_plane;

@@ -1,4 +1,4 @@
-//! SIGINT and SIGTERM sent to a real `kiss-odom` process (issue 12): `run` stops after the
+//! SIGINT and SIGTERM sent to a real `kiss-odom` process: `run` stops after the
 //! current frame, writes what it has (poses up to that frame, `frames.csv`, `summary.json`
 //! with `"interrupted": true`), leaves no temporary file and exits with 128 + the signal;
 //! `simulate` leaves no partial data set. These need the binary, which cargo builds for this

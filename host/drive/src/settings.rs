@@ -4,7 +4,7 @@
 //! file, [`Settings::from_kiss_icp_yaml`]).
 
 use anyhow::{bail, Context, Result};
-use kiss_odom_core::{Capacities, Config, Degeneracy, Real};
+use kiss_odom_core::{Capacities, Config, Degeneracy, Real, Robust};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -41,8 +41,7 @@ pub enum DegeneracyMode {
     /// Point-to-plane terms where the map is planar (tunnels, corridors, long walls, open
     /// ground); with its own defaults for the voxel size, kernel and capacities.
     Robust,
-    /// Hold unconstrained directions at the constant-velocity prediction (issue 17's candidate
-    /// (a), kept for comparison).
+    /// Hold unconstrained directions at the constant-velocity prediction (/// (a), kept for comparison).
     Hold,
 }
 
@@ -108,13 +107,13 @@ pub struct Registration {
     /// below which a direction is held).
     pub degeneracy_ratio: f64,
     /// Robust mode registers a frame again with plane terms when the reference registration's
-    /// observability is below this (`Config::plane_gate`); 1 or more: every frame.
+    /// observability is below this (`Robust::plane_gate`); 1 or more: every frame.
     pub plane_gate: f64,
     /// Robust mode's hold prior per correspondence: registrations with plane terms are pulled
-    /// to the constant-velocity prediction (`Config::prediction_prior`); 0: none.
+    /// to the constant-velocity prediction (`Robust::prediction_prior`); 0: none.
     pub prediction_prior: f64,
     /// Robust mode's vehicle prior per correspondence: no sideways motion along the sensor's
-    /// y axis (`Config::lateral_prior`); 0: none.
+    /// y axis (`Robust::lateral_prior`); 0: none.
     pub lateral_prior: f64,
     /// `reference`, `robust` or `hold`.
     pub degeneracy: DegeneracyMode,
@@ -219,9 +218,9 @@ impl Default for Registration {
             kernel_scale: None,
             max_correspondence_factor: 3.0,
             degeneracy_ratio: Config::<f64>::new(100.0).degeneracy_ratio,
-            plane_gate: Config::<f64>::new(100.0).plane_gate,
-            prediction_prior: Config::<f64>::new(100.0).prediction_prior,
-            lateral_prior: Config::<f64>::new(100.0).lateral_prior,
+            plane_gate: Robust::<f64>::new().plane_gate,
+            prediction_prior: Robust::<f64>::new().prediction_prior,
+            lateral_prior: Robust::<f64>::new().lateral_prior,
             degeneracy: DegeneracyMode::Reference,
             work_budget: None,
         }
@@ -414,9 +413,11 @@ impl Settings {
         c.kernel_scale = T::of(self.kernel_scale());
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);
-        c.plane_gate = T::of(self.registration.plane_gate);
-        c.prediction_prior = T::of(self.registration.prediction_prior);
-        c.lateral_prior = T::of(self.registration.lateral_prior);
+        c.robust = Robust {
+            plane_gate: T::of(self.registration.plane_gate),
+            prediction_prior: T::of(self.registration.prediction_prior),
+            lateral_prior: T::of(self.registration.lateral_prior),
+        };
         c.degeneracy = self.registration.degeneracy.into();
         c.work_budget = self.registration.work_budget;
         if let Err(e) = c.validate() {
@@ -630,7 +631,7 @@ mod tests {
         let (c, caps) = robust("");
         assert_eq!(c, Config::robust(100.0));
         assert_eq!(
-            (c.voxel_size, c.kernel_scale, c.plane_gate),
+            (c.voxel_size, c.kernel_scale, c.robust.plane_gate),
             (1.0, 1.0, 0.015)
         );
         assert_eq!(caps, Capacities::sized_for(&c, SCAN_POINTS));
@@ -639,7 +640,7 @@ mod tests {
             "kernel_scale = 0.5\nplane_gate = 1.0\n[mapping]\nvoxel_size = 0.7\n[capacities]\nmap_voxels = 5000\n",
         );
         assert_eq!(
-            (c.voxel_size, c.kernel_scale, c.plane_gate),
+            (c.voxel_size, c.kernel_scale, c.robust.plane_gate),
             (0.7, 0.5, 1.0)
         );
         assert_eq!(caps.map_voxels, 5000);

@@ -96,13 +96,13 @@ pub struct FrameRow {
     pub dropped_map_points_full: Option<u32>,
     /// Observability ratio (empty on the first frame and when nothing was measured).
     pub observability: Option<f64>,
-    /// Robust mode: the sensor axes held at the constant-velocity prediction, `|`-joined
+    /// Hold mode: the sensor axes held at the constant-velocity prediction, `|`-joined
     /// (`tx|ty|yaw`); empty when none was (the `held` flag column says whether any
     /// direction was).
     pub held_axes: String,
-    /// Robust mode: weakest over strongest eigenvalue of the translation information.
+    /// Hold mode: weakest over strongest eigenvalue of the translation information.
     pub weak_t: Option<f64>,
-    /// Robust mode: the same for rotation.
+    /// Hold mode: the same for rotation.
     pub weak_r: Option<f64>,
     /// Sensor packets decoded into the sweep (empty for frames not decoded from packets).
     pub packets: Option<u32>,

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Issue 14's host figures in one go: speed against the reference (f64, exact, 1 thread, poses
+# The host figures in one go: speed against the reference (f64, exact, 1 thread, poses
 # compared by the harness) on every kitti-mini sequence and a generated urban drive, with the
 # latency spread after frame 10 on the urban drive unbudgeted and budgeted, and the quantized
 # full-scale map against the reference's on kitti-mini 01 and the urban drive.
 #
-#   KISS_ODOM_PYTHON=target/refvenv/bin/python bench/issue14.sh > target/issue14.txt
+#   KISS_ODOM_PYTHON=target/refvenv/bin/python bench/realtime.sh > target/issue14.txt
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p kiss-odom
