@@ -11,9 +11,11 @@
 
 mod compare;
 mod driver;
+mod map_stages;
 mod report;
 mod scans;
 mod sequence;
+mod stage_kit;
 mod stages;
 
 pub use report::{Outcome, Report, Row, Section, TableStyle};
@@ -330,7 +332,11 @@ fn sequence_checks(
     let input = sequence::ref_input(drv, &args.dataset, format, range, &frames)?;
 
     // The reference first: stage checks use its poses and sigmas.
-    let ref_frames = if run_e2e { n } else { stages::frames_needed(n) };
+    let ref_frames = if run_e2e {
+        n
+    } else {
+        stage_kit::frames_needed(n)
+    };
     progress(
         args,
         err,
@@ -374,7 +380,7 @@ fn sequence_checks(
     if run_stages {
         progress(args, err, "stage checks")?;
         let label = |k: usize| format!("frame {}", frames[k].index);
-        let inp = stages::SequenceInput {
+        let inp = stage_kit::SequenceInput {
             frames: &frames,
             ref_poses: &reference.poses,
             ref_sigmas: &reference.sigmas,

@@ -5,7 +5,7 @@
 use super::compare::{order_difference, set_difference};
 use super::driver::{arg, pose_arg, read_points, Driver};
 use super::report::{Row, Section};
-use super::stages::{downsample, downsample_cmd, points_row, TOL_REAL_DESKEW_M};
+use super::stage_kit::{downsample, downsample_cmd, points_row, TOL_REAL_DESKEW_M};
 use anyhow::{bail, Context, Result};
 use kiss_odom_core::stages::preprocess;
 use kiss_odom_drive::settings::Settings;

@@ -4,7 +4,7 @@
 use super::compare::{slope, summary, Agreement};
 use super::driver::{arg, read_json, Driver};
 use super::report::{sci, Row, Section};
-use super::stages::{TOL_REGISTRATION, TOL_SIGMA_REL};
+use super::stage_kit::{TOL_REGISTRATION, TOL_SIGMA_REL};
 use anyhow::{bail, Context, Result};
 use kiss_odom_core::{Flag, Status};
 use kiss_odom_drive::settings::{Scalar, Settings};
