@@ -2,7 +2,7 @@
 //! and what a user of kiss-icp's `KissICP` reaches for (last pose and delta, the deskewed scan,
 //! the registration cloud, the local map's points).
 
-mod common;
+use crate::common;
 
 use common::*;
 use kiss_odom_core::stages::{

@@ -2,7 +2,7 @@
 //! whichever executor runs the chunks, and without it (or with one above what a frame needs)
 //! nothing changes.
 
-mod common;
+use crate::common;
 
 use common::*;
 use kiss_odom_core::{Capacities, Config, Exact, Executor, Flag, FrameReport, Odometry};

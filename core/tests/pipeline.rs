@@ -1,7 +1,7 @@
 //! Whole-pipeline properties of `Odometry`: it tracks, it is deterministic, and bad input is
 //! skipped, counted and reported without disturbing the pose.
 
-mod common;
+use crate::common;
 
 use common::*;
 use kiss_odom_core::{

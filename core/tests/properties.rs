@@ -10,7 +10,7 @@
 //! would take hours under the interpreter.
 #![cfg(not(miri))]
 
-mod common;
+use crate::common;
 
 use common::street;
 use kiss_odom_core::stages::{

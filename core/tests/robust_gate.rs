@@ -2,7 +2,7 @@
 //! point-to-plane terms exactly when the reference registration's observability is below the
 //! gate, and every other frame keeps the reference's pose bit for bit.
 
-mod common;
+use crate::common;
 
 use common::*;
 use kiss_odom_core::{Capacities, Config, Degeneracy, Exact, Flag, FrameReport, Odometry, Robust};

@@ -14,7 +14,7 @@
 //! 20k points each), copied byte for byte or rewritten as PLY/PCD, or carried as the payload of
 //! a PointCloud2 message.
 
-mod common;
+use crate::common;
 
 use common::*;
 use kiss_odom_io::folders::{pcd, ply};

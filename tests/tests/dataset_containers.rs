@@ -4,8 +4,7 @@
 //! Ouster-style clouds of frames 0..5 written in the order 0, 2, 1, 4, 3, each with the
 //! receive time and header stamp of its frame; `ouster.*` holds frames 0..4 in order.
 //!
-//! Each test failed on the main branch before the readers learnt time order (the finding it
-//! holds is named in its comment).
+//! Each test failed before the readers learnt time order (its comment says what went wrong).
 
 use kiss_odom_tests::{repo, run};
 use std::path::PathBuf;
@@ -14,7 +13,7 @@ fn fixture(name: &str) -> PathBuf {
     repo().join("fixtures/bags").join(name)
 }
 
-/// a bag (or MCAP file) recorded out of time order was processed in file order and
+/// A bag (or MCAP file) recorded out of time order was processed in file order and
 /// its TUM times went backwards.
 #[test]
 fn bags_and_mcap_files_out_of_time_order_are_read_in_time_order_with_a_warning() {
@@ -50,7 +49,7 @@ fn bags_and_mcap_files_out_of_time_order_are_read_in_time_order_with_a_warning()
     }
 }
 
-/// a ROS 1 bag cut inside its first chunk said "no PointCloud2 topic (topics:
+/// A ROS 1 bag cut inside its first chunk said "no PointCloud2 topic (topics:
 /// none)" instead of saying it is damaged.
 #[test]
 fn a_bag_cut_inside_its_first_chunk_is_reported_as_damaged() {

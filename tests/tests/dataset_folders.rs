@@ -180,7 +180,7 @@ fn hidden_editor_and_system_files_are_ignored_with_one_warning() {
     assert_eq!(r.lines("poses_kitti.txt"), full.lines("poses_kitti.txt"));
 }
 
-/// with `.ply` and `.bin` frames mixed, only the first file's format was read and
+/// With `.ply` and `.bin` frames mixed, only the first file's format was read and
 /// the other frames silently ignored.
 #[test]
 fn frames_of_two_formats_are_refused_under_auto_and_the_rest_named_under_an_explicit_format() {
@@ -211,7 +211,7 @@ fn rename_frames(data: &Path, names: &[String]) {
     }
 }
 
-/// frames named by time with decimals (`100.0.bin` ... `100.45.bin`) were taken
+/// Frames named by time with decimals (`100.0.bin` ... `100.45.bin`) were taken
 /// in the order 0, 2, 4, 6, 8, 1, 3, 5, 7, 9.
 #[test]
 fn frames_named_by_decimal_seconds_are_read_in_time_order_with_their_times() {
@@ -281,7 +281,7 @@ fn frames_named_by_nanoseconds_or_microseconds_carry_their_times_and_gaps_are_re
     }
 }
 
-/// a KITTI-shaped folder whose `calib.txt` has no `Tr` was read as a generic folder:
+/// A KITTI-shaped folder whose `calib.txt` has no `Tr` was read as a generic folder:
 /// no KITTI correction, camera-frame ground truth scored as LiDAR poses (final error 7.25 m).
 #[test]
 fn a_kitti_folder_without_tr_is_refused_or_read_as_kitti_without_ground_truth() {
@@ -378,7 +378,7 @@ fn duplicate_frame_numbers_and_unnumbered_names_are_refused_with_the_names() {
     r.failed_with(&["scan.bin"]);
 }
 
-/// a PLY that declares `x` twice was read at the wrong stride (ply-rs keeps one
+/// A PLY that declares `x` twice was read at the wrong stride (ply-rs keeps one
 /// property per name).
 #[test]
 fn a_ply_declaring_a_property_twice_is_skipped_with_the_reason() {

@@ -1,53 +1,28 @@
 //! Dataset reading that needs a process of its own: a memory limit set with
-//! `ulimit -v`, or a `TMPDIR` the run must not touch. This test binary starts itself again as
-//! the child (the `child` test below, given its arguments in an environment variable), so the
-//! limit applies to `kiss-odom run` alone.
+//! `ulimit -v`, or a `TMPDIR` the run must not touch. The command runs as a child under `sh`,
+//! so the limit applies to `kiss-odom run` alone.
 //!
-//! Each test failed on the main branch (the finding it holds is named in its comment).
+//! Each test failed before the fix it holds (its comment says what went wrong).
 
 use kiss_odom_tests::{kitti_copy, repo, Run};
-use std::ffi::OsString;
 use std::path::Path;
 use std::process::Command;
-
-/// Arguments of `kiss-odom` for the child, one per line.
-const CHILD_ARGS: &str = "KISS_ODOM_TEST_CHILD_ARGS";
 
 /// Address-space limit of the memory test, KiB (`ulimit -v`): about 1 GB, half a 2 GiB frame.
 const ADDRESS_SPACE_KIB: u64 = 1_000_000;
 
-/// Not a test on its own: run as a child by the tests below, runs `kiss-odom` with the
-/// arguments of [`CHILD_ARGS`] and exits with its status.
-#[test]
-fn child() {
-    let Ok(args) = std::env::var(CHILD_ARGS) else {
-        return;
-    };
-    let mut argv: Vec<OsString> = vec!["kiss-odom".into()];
-    argv.extend(args.lines().map(OsString::from));
-    let code = kiss_odom::cli::main_with(argv, &mut std::io::stderr());
-    std::process::exit(code);
-}
-
 /// `kiss-odom run INPUT --out OUT --quiet` in a child process started by `sh -c` after the
 /// shell commands `setup`, with the environment `env` added.
 fn run_child(input: &Path, out: &Path, setup: &str, env: &[(&str, &Path)]) -> Run {
-    let args = [
-        "run".into(),
-        input.display().to_string(),
-        "--out".into(),
-        out.display().to_string(),
-        "--quiet".into(),
-    ]
-    .join("\n");
-    let exe = std::env::current_exe().unwrap();
     let mut cmd = Command::new("sh");
     cmd.arg("-c")
-        .arg(format!(
-            "{setup} exec \"$0\" --exact child --nocapture --test-threads=1"
-        ))
-        .arg(exe)
-        .env(CHILD_ARGS, args);
+        .arg(format!("{setup} exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+        .arg("run")
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet");
     for (k, v) in env {
         cmd.env(k, v);
     }
@@ -66,7 +41,7 @@ fn sparse(path: &Path, head: &[u8]) {
     f.set_len(2 << 30).unwrap();
 }
 
-/// a `.bin` frame was read whole before its first `scan_points` points were taken;
+/// A `.bin` frame was read whole before its first `scan_points` points were taken;
 /// a 2 GB frame aborted the process (`memory allocation of 3221225472 bytes failed`) and lost
 /// the run. The PLY and PCD readers are held to the same bound.
 #[test]
@@ -111,7 +86,7 @@ fn a_two_gigabyte_frame_is_truncated_with_a_warning_under_a_one_gigabyte_limit()
     }
 }
 
-/// a damaged bag was read from a full-size temporary copy in `TMPDIR`, left behind
+/// A damaged bag was read from a full-size temporary copy in `TMPDIR`, left behind
 /// when the run was interrupted. The bag is now read in place: with no usable `TMPDIR` at all
 /// the frames before the damage are still processed.
 #[test]

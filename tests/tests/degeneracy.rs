@@ -8,7 +8,7 @@
 //! along it is the constant-velocity prediction, where reference mode moves; on an urban street
 //! it holds nothing and gives the reference's poses bit for bit.
 
-mod common;
+use crate::common;
 
 use common::{distance, run, RunExt};
 use nalgebra::Matrix4;

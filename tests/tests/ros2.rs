@@ -10,7 +10,7 @@
 //! was registered, never how many were. The Cyclone test needs `KISS_ODOM_ROS2_PYTHON` (a Python with
 //! `tests/ros2/requirements.txt`, which `.ci/run` makes) and prints SKIP without it.
 
-mod ros2_common;
+use crate::ros2_common;
 
 use kiss_odom::ros2::dds;
 use kiss_odom::ros2::node::twist_of;

@@ -2,7 +2,7 @@
 //! odometry is as if the bad cloud had never arrived (the poses after it are `kiss-odom run`'s
 //! on the good clouds alone). And Ctrl-C ends a node process cleanly with its summary.
 
-mod ros2_common;
+use crate::ros2_common;
 
 use kiss_odom::ros2::dds::{self, Writer};
 use kiss_odom::ros2::msg::{Field, Header, PointCloud2, Time, POINTCLOUD2_TYPE};

@@ -5,7 +5,7 @@
 //! each row came from and which flags the core set. Signals sent to a real process are in
 //! `host/cli/tests/interrupt.rs`.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::ffi::OsString;

@@ -16,7 +16,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod sensor_dump;
+use crate::sensor_dump;
 use sensor_dump::{code, counts_of, read_dump, Key, RefPoint};
 
 const VELODYNE_TOL_M: f64 = 1e-4;

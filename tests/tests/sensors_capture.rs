@@ -4,8 +4,8 @@
 //! pcapng interfaces with their own timestamp resolution, and IP fragments that are lost or
 //! whose IP ID is reused. Every capture is built here from a simulated recording.
 
-mod capture_kit;
-mod common;
+use crate::capture_kit;
+use crate::common;
 
 use capture_kit::{datagrams, ethernet, ethernet_frames, ipv4, simulate, write_pcap, Frame};
 use common::run;

@@ -6,7 +6,7 @@
 //! and this process stays small (its RSS at the start is printed).
 #![cfg(target_os = "linux")]
 
-mod capture_kit;
+use crate::capture_kit;
 
 use capture_kit::{datagrams, ethernet, ethernet_frames, simulate, velodyne, Frame, PcapOut};
 use std::path::Path;

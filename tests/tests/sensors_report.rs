@@ -6,8 +6,8 @@
 //! losses and `--sensor vlp16` overrides the byte; a Velodyne clock jump, an Ouster frame id
 //! far ahead and an Ouster restart resynchronise the decoder with a warning.
 
-mod capture_kit;
-mod common;
+use crate::capture_kit;
+use crate::common;
 
 use capture_kit::{datagrams, ethernet_frames, ouster, simulate, velodyne, write_pcap};
 use common::run;

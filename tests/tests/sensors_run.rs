@@ -10,7 +10,7 @@
 //! Also the run-level messages for bad recordings, and what `--pose-time` means: the start
 //! of a sweep is the end of the one before.
 
-mod common;
+use crate::common;
 
 use common::run;
 use kiss_odom_io::capture::pcap::{self, Datagram};

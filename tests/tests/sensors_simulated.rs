@@ -21,7 +21,7 @@ use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod sensor_dump;
+use crate::sensor_dump;
 use sensor_dump::{code, counts_of, read_dump, Key};
 
 const TIME_TOL_S: f64 = 1e-6;

@@ -4,7 +4,7 @@
 //! independent readers live in the venv `.ci/run` makes from `tests/rerun/requirements.txt`,
 //! found through `KISS_ODOM_RERUN_PYTHON`; without it those parts print SKIP.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};

@@ -1,8 +1,8 @@
 //! SIGINT and SIGTERM sent to a real `kiss-odom` process: `run` stops after the
 //! current frame, writes what it has (poses up to that frame, `frames.csv`, `summary.json`
 //! with `"interrupted": true`), leaves no temporary file and exits with 128 + the signal;
-//! `simulate` leaves no partial data set. These need the binary, which cargo builds for this
-//! package's integration tests (`CARGO_BIN_EXE_kiss-odom`).
+//! `simulate` leaves no partial data set. These need the binary (`kiss-odom-cli`, this package's
+//! copy of the command).
 #![cfg(target_os = "linux")]
 
 use std::path::{Path, PathBuf};
@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 /// A generic folder of `n` real scans, links to the 10 of the KITTI sample forth and back, so
 /// the motion stays smooth and the run takes seconds.
 fn long_dataset(root: &Path, n: usize) -> PathBuf {
-    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/kitti-05-reduced");
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/kitti-05-reduced");
     let sample = sample.canonicalize().unwrap().join("velodyne");
     let frames = root.join("velodyne");
     std::fs::create_dir_all(&frames).unwrap();
@@ -76,7 +76,7 @@ fn an_interrupted_run_writes_the_frames_so_far_and_exits_with_the_signal() {
         let out = dir.path().join(format!("out-{name}"));
         let tmp = dir.path().join(format!("tmp-{name}"));
         std::fs::create_dir(&tmp).unwrap();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_kiss-odom"))
+        let mut child = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
             .arg("run")
             .arg(&data)
             .arg("--out")
@@ -128,7 +128,7 @@ fn an_interrupted_run_writes_the_frames_so_far_and_exits_with_the_signal() {
 fn an_interrupted_simulate_leaves_no_data_set() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sim");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_kiss-odom"))
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
         .arg("simulate")
         .arg("--out")
         .arg(&out)
@@ -157,7 +157,7 @@ fn an_interrupted_simulate_leaves_no_data_set() {
     assert!(left.is_empty(), "an interrupted simulate left {left:?}");
 
     // And `run` finds nothing to take for a data set.
-    let run = Command::new(env!("CARGO_BIN_EXE_kiss-odom"))
+    let run = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
         .arg("run")
         .arg(&out)
         .arg("--out")

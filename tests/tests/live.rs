@@ -18,7 +18,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 fn data() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sensors/ouster")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/sensors/ouster")
 }
 
 fn recording() -> Option<(PathBuf, PathBuf)> {
@@ -40,7 +40,7 @@ fn serial() -> std::sync::MutexGuard<'static, ()> {
 }
 
 fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_kiss-odom"))
+    Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
 }
 
 fn s(p: &Path) -> &str {

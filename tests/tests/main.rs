@@ -1,0 +1,38 @@
+//! The workspace's end-to-end tests in one binary: the command run in process and as a
+//! process, every reader, the sensor path, ROS 2 interop, the bare-metal builds and the
+//! cross-checks against the reference kiss-icp and the sensors' own decoders. One module per
+//! subject; `interrupted_bag`, `mcap_memory` and `long_run` are binaries of their own because
+//! they need the whole process (a raised stop flag, the process's peak memory).
+
+mod bags;
+mod capture_kit;
+mod cli_bad_input;
+mod common;
+mod crosscheck;
+mod dataset_containers;
+mod dataset_folders;
+mod dataset_process;
+mod degeneracy;
+mod embedded;
+mod golden;
+mod live;
+mod metrics;
+mod readers;
+mod reliability;
+mod ros2;
+mod ros2_bad_input;
+mod ros2_common;
+mod run_loop;
+mod sensor_dump;
+mod sensors;
+mod sensors_bad_input;
+mod sensors_capture;
+mod sensors_memory;
+mod sensors_report;
+mod sensors_run;
+mod sensors_simulated;
+mod signals;
+mod simulate;
+mod threads;
+mod view;
+mod work_budget;
