@@ -39,7 +39,7 @@ have_nightly() {
 props() {
   step "tooling: proptest properties of the core (release)"
   # Also part of `cargo test --workspace --release`; run on its own here to report it.
-  if ! cargo test -p kiss-odom-core --release --test properties -- --nocapture; then
+  if ! cargo test -p kiss-odom-core --release --test core properties:: -- --nocapture; then
     FAILED+=("proptest properties")
   fi
 }

@@ -557,7 +557,7 @@ fn correct_kitti(p: [f64; 3]) -> [f64; 3] {
 /// Needs `KISS_ODOM_KITTI_MINI` (default `../shared/data/kitti-mini` beside the repository)
 /// and `KISS_ODOM_REFERENCE_POSES`, a folder of `XX.txt` poses written by
 /// `driver.py pipeline --format kitti` (default: the 9-decimal poses shipped with kitti-mini).
-/// Run with `cargo test --release -p kiss-odom-tests --test golden -- --ignored --nocapture`.
+/// Run with `cargo test --release -p kiss-odom-tests --test workspace golden:: -- --ignored --nocapture`.
 #[test]
 #[ignore = "needs kitti-mini and reference poses outside the repository"]
 fn whole_pipeline_poses_match_the_reference_on_kitti_mini() {

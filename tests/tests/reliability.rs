@@ -169,7 +169,7 @@ fn sprinkle(s: &Scan, point: [f64; 3], count: usize) -> (Vec<[f64; 3]>, Vec<f64>
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn points_at_the_origin_are_cropped_counted_and_change_no_pose_bit() {
     // 100 returns at the sensor origin per scan (what many drivers write for "no return").
@@ -231,7 +231,7 @@ fn points_at_the_origin_are_cropped_counted_and_change_no_pose_bit() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn huge_coordinates_are_cropped_in_f64_and_f32_and_change_no_pose_bit() {
     let seq = urban();
@@ -303,7 +303,7 @@ fn huge_coordinates_are_cropped_in_f64_and_f32_and_change_no_pose_bit() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn duplicated_points_track_as_well_as_the_clean_scan() {
     // Every point twice, in place. Voxel downsampling keeps one of each pair, but the doubled
@@ -351,7 +351,7 @@ fn duplicated_points_track_as_well_as_the_clean_scan() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn a_scan_over_capacity_keeps_exactly_its_first_scan_points_points() {
     // The documented rule: truncation keeps the first `scan_points` points. The scan's times
@@ -388,7 +388,7 @@ fn a_scan_over_capacity_keeps_exactly_its_first_scan_points_points() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn a_single_point_frame_is_flagged_and_stays_near_the_prediction() {
     let seq = urban();
@@ -423,7 +423,7 @@ fn a_single_point_frame_is_flagged_and_stays_near_the_prediction() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn negative_decreasing_and_backward_jumping_stamps_are_used_as_given() {
     // Per-point times are normalised per scan, so any offset (negative, or a clock that jumps
@@ -512,7 +512,7 @@ fn fast() -> &'static Sequence {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn a_map_full_for_many_frames_gives_up_its_farthest_voxels_says_so_and_keeps_tracking() {
     let seq = urban();
@@ -576,7 +576,7 @@ fn a_map_full_for_many_frames_gives_up_its_farthest_voxels_says_so_and_keeps_tra
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn a_frame_with_zero_correspondences_is_flagged_and_keeps_the_prediction() {
     let seq = urban();
@@ -617,7 +617,7 @@ fn sky() -> Vec<[f64; 3]> {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn icp_stopped_by_the_iteration_cap_says_so() {
     let seq = urban();
@@ -690,7 +690,7 @@ fn degenerate_run(seq: &Sequence) -> (usize, usize, f64, f64) {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn every_corridor_frame_is_flagged_degenerate_with_a_finite_pose() {
     let seq = generate(Profile::Corridor, 0, 0, 20, (64, 1024));
@@ -705,7 +705,7 @@ fn every_corridor_frame_is_flagged_degenerate_with_a_finite_pose() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn every_ground_plane_frame_is_flagged_degenerate_from_the_first_one() {
     // Single scan rings on the ground used to read as lines constraining the horizontal
@@ -725,7 +725,7 @@ fn every_ground_plane_frame_is_flagged_degenerate_from_the_first_one() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn urban_frames_are_not_flagged_degenerate() {
     // The other side of the two tests above: a structured street is not degenerate.
@@ -778,7 +778,7 @@ const AT: usize = 12;
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "heavy: cargo test --release --test reliability"
+    ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn normal_frames_after_any_fault_return_to_normal_accuracy() {
     let seq = urban();

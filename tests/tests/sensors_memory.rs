@@ -1,9 +1,7 @@
 //! Memory of `kiss-odom run` on hostile sensor recordings follows the configuration, not the
 //! file: 100,000 IP fragments that never complete, and a Velodyne sweep whose azimuth never
-//! advances (millions of returns in one sweep), each stay under 64 MB of peak RSS. Each
-//! measures a child process (`wait4`'s resource usage of that child alone). Linux counts a
-//! child's pages from before its `exec` too, so the captures are written as they are made
-//! and this process stays small (its RSS at the start is printed).
+//! advances (millions of returns in one sweep), each stay under 64 MB of peak RSS, as the run
+//! itself measures it (`summary.json`), in a process of its own.
 #![cfg(target_os = "linux")]
 
 use crate::capture_kit;
@@ -14,16 +12,11 @@ use std::process::{Command, Stdio};
 
 const LIMIT_BYTES: u64 = 64 << 20;
 
-/// `kiss-odom run INPUT --out OUT --quiet EXTRA...` as a child: exit status, stderr and peak
-/// RSS in bytes.
+/// `kiss-odom run INPUT --out OUT --quiet EXTRA...` as a child: exit status, stderr and the
+/// peak RSS in bytes the run itself measured (`summary.json`'s `peak_rss_bytes`, the
+/// process's `VmHWM`, which its `exec` started afresh: none of this process's pages count).
 fn run_measured(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, u64) {
-    println!(
-        "this process at the start of the child: {:.1} MiB",
-        mib(kiss_odom::memory::rss_bytes().unwrap_or(0))
-    );
-    // Reaped by the wait4 below, which also gives its resource usage.
-    #[allow(clippy::zombie_processes)]
-    let child = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+    let output = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
         .arg("run")
         .arg(input)
         .arg("--out")
@@ -31,32 +24,13 @@ fn run_measured(input: &Path, out: &Path, extra: &[&str]) -> (i32, String, u64) 
         .arg("--quiet")
         .args(extra)
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
+        .output()
         .unwrap();
-    let pid = child.id() as libc::pid_t;
-    // Read stderr while the child runs, so a full pipe cannot stall it.
-    let mut err = child.stderr.unwrap();
-    let reader = std::thread::spawn(move || {
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut err, &mut s).unwrap();
-        s
-    });
-    let mut status = 0;
-    // SAFETY: `rusage` is plain old data that wait4 fills; `pid` is our child, not yet waited
-    // for (std's `Child` was consumed without waiting), so this reaps exactly it.
-    let (waited, usage) = unsafe {
-        let mut usage: libc::rusage = std::mem::zeroed();
-        (libc::wait4(pid, &mut status, 0, &mut usage), usage)
-    };
-    assert_eq!(waited, pid, "wait4");
-    let code = if libc::WIFEXITED(status) {
-        libc::WEXITSTATUS(status)
-    } else {
-        -1
-    };
-    // Linux gives ru_maxrss in KiB.
-    (code, reader.join().unwrap(), usage.ru_maxrss as u64 * 1024)
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let peak = summary["peak_rss_bytes"].as_u64().expect("peak_rss_bytes");
+    (output.status.code().unwrap_or(-1), stderr, peak)
 }
 
 fn mib(b: u64) -> f64 {
