@@ -5,8 +5,8 @@
 //!   on owned storage; every frame runs with the GIL released);
 //! - [`stages`]: the classes and functions kiss-icp 1.3.0's Python layer imports from its
 //!   compiled `kiss_icp_pybind`, on the core's stage functions (`kiss_odom.backend`);
-//! - [`host`]: the `kiss-odom` command as a library call (batch runs), the metrics, the
-//!   KITTI scan correction and ground truth, from the `kiss-odom` host crate.
+//! - [`io`]: the trajectory metrics, the KITTI scan correction and ground truth, from
+//!   `kiss-odom-io`.
 //!
 //! Conversions between numpy arrays and points or poses live in [`convert`]; anything that
 //! is not an Nx3 or 4x4 array of numbers becomes a `ValueError`, never a crash.
@@ -14,7 +14,7 @@
 use pyo3::prelude::*;
 
 pub mod convert;
-pub mod host;
+pub mod io;
 pub mod odometry;
 pub mod stages;
 
@@ -24,6 +24,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     odometry::register(m)?;
     stages::register(m)?;
-    host::register(m)?;
+    io::register(m)?;
     Ok(())
 }

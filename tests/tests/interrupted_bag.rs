@@ -2,7 +2,7 @@
 //! without an index in place). Alone in its file because it raises the
 //! process-wide stop flag (`kiss_odom::interrupt::raise`, what a SIGINT handler does) and
 //! points `TMPDIR` at a folder of its own. The signal itself, sent to a real process, is in
-//! `host/cli/tests/interrupt.rs`.
+//! `tests/tests/signals.rs`.
 
 mod common;
 

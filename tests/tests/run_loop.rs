@@ -3,7 +3,7 @@
 //! by an output error, a run that registered nothing fails, a setting out of range is named,
 //! no output of an earlier command survives beside a failed one, and `frames.csv` says where
 //! each row came from and which flags the core set. Signals sent to a real process are in
-//! `host/cli/tests/interrupt.rs`.
+//! `tests/tests/signals.rs`.
 
 use crate::common;
 

@@ -148,7 +148,7 @@ pub struct PipelineArgs {
     pub lateral_prior: Option<f64>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
     /// would spend more keeps its last complete iterate and is flagged `budget`. With the
-    /// capacities it bounds a frame's time on a given target (README "Deadlines") [default:
+    /// capacities it bounds a frame's time on a given target (the book's "Embedded and deadlines") [default:
     /// none, the reference's behaviour].
     #[arg(long)]
     pub budget: Option<u64>,

@@ -4,7 +4,7 @@
 //! The frames go through the [`Driver`]; this module decides what stops a run and what is
 //! written ([`record`], `files`), and hands every outcome to its [`observe::Observer`]s: those
 //! of [`crate::viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
-//! (`live` prints each pose as it comes). The rules (README, "Failure behaviour"): a frame-level problem is a warning and a
+//! (`live` prints each pose as it comes). The rules (the book's failure reference): a frame-level problem is a warning and a
 //! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
 //! in which no frame could be registered ends with exit 1 and its own reason, never an output
 //! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In

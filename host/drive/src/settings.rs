@@ -41,7 +41,8 @@ pub enum DegeneracyMode {
     /// Point-to-plane terms where the map is planar (tunnels, corridors, long walls, open
     /// ground); with its own defaults for the voxel size, kernel and capacities.
     Robust,
-    /// Hold unconstrained directions at the constant-velocity prediction (/// (a), kept for comparison).
+    /// Hold unconstrained directions at the constant-velocity prediction (kept for comparison
+    /// with robust mode).
     Hold,
 }
 

@@ -1,7 +1,7 @@
 //! `diagnostics.png`: what went wrong where, beside `trajectory.png`. Stacked panels: the
 //! position error against distance travelled (when there is ground truth), then the core's
 //! latency and ICP iterations per frame; frames the core flagged degenerate or stopped at the
-//! iteration cap, stopped by the work budget or held by robust mode are marked in every panel.
+//! iteration cap, stopped by the work budget or held by hold mode are marked in every panel.
 
 use super::{font_available, titled, ESTIMATE_COLOR};
 use anyhow::{anyhow, bail, Context, Result};

@@ -1,6 +1,6 @@
 //! `--rerun FILE.rrd` and `--rerun-connect ADDR`: every frame of a run logged for the Rerun
 //! viewer, on two time lines, `frame` (the frame index) and `time` (the frame's time in
-//! seconds, when known). The entity paths (README, "Viewing a run"):
+//! seconds, when known). The entity paths (the book's "Viewing a run"):
 //!
 //! - `world/sensor`: the pose after the frame (`Transform3D`, sensor to world);
 //! - `world/sensor/scan`: the input scan as read, every `--rerun-scan-stride`th point;
