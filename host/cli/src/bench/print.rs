@@ -1,6 +1,6 @@
 //! The table `kiss-odom bench` prints.
 
-use super::{Report, SideStats};
+use super::report::{Report, SideStats};
 
 fn mib(b: u64) -> f64 {
     b as f64 / (1u64 << 20) as f64

@@ -3,7 +3,7 @@
 //! latency and ICP iterations per frame; frames the core flagged degenerate or stopped at the
 //! iteration cap, stopped by the work budget or held by hold mode are marked in every panel.
 
-use super::{font_available, titled, ESTIMATE_COLOR};
+use super::style::{font_available, titled, ESTIMATE_COLOR};
 use anyhow::{anyhow, bail, Context, Result};
 use kiss_odom_core::{Flag, Status};
 use plotters::coord::Shift;
@@ -165,8 +165,8 @@ fn panel(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{count, decode};
     use super::*;
+    use crate::plot::style::png_pixels::{count, decode};
 
     fn frames(n: usize, with_error: bool) -> Vec<FramePoint> {
         (0..n)

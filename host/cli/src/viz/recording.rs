@@ -14,7 +14,7 @@
 //! Rerun stores positions as `f32`: logged poses agree with `poses_kitti.txt` to about 1e-7
 //! relative.
 
-use super::ViewArgs;
+use super::options::ViewArgs;
 use crate::run::observe::{Observer, Seen};
 use crate::run::record::FrameRow;
 use anyhow::{Context, Result};
