@@ -92,7 +92,7 @@ pub struct Config<T> {
 
 /// Robust mode's parameters ([`Degeneracy::Robust`]): when a frame is registered again with
 /// point-to-plane terms, and the motion prior that holds what no term constrains. The defaults
-/// ([`Robust::DEFAULT`]) gate at 0.015 with no prior; the measurements behind them, and robust
+/// ([`Robust::new`]) gate at 0.015 with no prior; the measurements behind them, and robust
 /// mode's tunnel setting, are in BENCHMARKS.md ("Degenerate scenes").
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

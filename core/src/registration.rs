@@ -12,13 +12,15 @@
 //! bit-identical whichever [`Executor`] ran the chunks and on how many threads.
 
 pub use chunk::{
-    chunk_len, chunks_for, moved_points, work_words, Chunk, PlaneChunk, CHUNK_LEN, PLANE_CHUNK_LEN,
-    SYSTEM_LEN,
+    chunk_len, chunks_for, moved_points, work_words, Chunk, PlaneChunk, CHUNK, CHUNK_LEN,
+    PLANE_CHUNK_LEN,
 };
 use chunk::{load, Parts, WorkChunk, KEPT};
 use planes::{accumulate_plane, Cached, CACHED};
 pub use planes::{MIN_POINTS, PLANARITY, PLANE_KERNEL_SCALE};
 pub use prior::MotionPrior;
+pub use system::SYSTEM_LEN;
+use system::{accumulate, upper};
 
 use crate::geometry::{Point, Pose};
 use crate::hold::Hold;
@@ -27,9 +29,6 @@ use crate::local_map::{MapView, Nearest, PointCodec};
 use crate::scalar::{sqrt_lt, Real};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
-/// Source points per chunk: the unit of parallel work and of the fixed reduction order (chunk
-/// sums are added in chunk order whatever the thread count).
-pub const CHUNK: usize = 64;
 /// Runs ICP's per-chunk work, possibly in parallel. The core cuts the work into [`Chunk`]s and
 /// hands them all over; an executor only decides who runs which chunk, so it cannot change
 /// the chunking, drop points or reorder the reduction.
@@ -92,45 +91,6 @@ pub struct Alignment<T: Real> {
     /// Whether the budget stopped ICP (an iteration that could not finish within it was
     /// abandoned; the pose is the iterate before it).
     pub budget_spent: bool,
-}
-
-/// Index of `(r, c)`, `r <= c`, in the packed upper triangle of a 6x6 matrix.
-const fn upper(r: usize, c: usize) -> usize {
-    r * 6 - r * (r + 1) / 2 + c
-}
-
-/// Adds one weighted correspondence `w J^T J`, `w J^T r` for `J = [I, -[s]x]` to `acc`.
-#[inline]
-fn accumulate<T: Real>(acc: &mut [T; SYSTEM_LEN], s: &Vector3<T>, r: &Vector3<T>, w: T) {
-    let (x, y, z) = (s.x, s.y, s.z);
-    // Translation block: w I.
-    acc[upper(0, 0)] += w;
-    acc[upper(1, 1)] += w;
-    acc[upper(2, 2)] += w;
-    // Cross block: -w [s]x.
-    acc[upper(0, 4)] += w * z;
-    acc[upper(0, 5)] -= w * y;
-    acc[upper(1, 3)] -= w * z;
-    acc[upper(1, 5)] += w * x;
-    acc[upper(2, 3)] += w * y;
-    acc[upper(2, 4)] -= w * x;
-    // Rotation block: w [s]x^T [s]x = w (|s|^2 I - s s^T).
-    acc[upper(3, 3)] += w * (y * y + z * z);
-    acc[upper(3, 4)] -= w * x * y;
-    acc[upper(3, 5)] -= w * x * z;
-    acc[upper(4, 4)] += w * (x * x + z * z);
-    acc[upper(4, 5)] -= w * y * z;
-    acc[upper(5, 5)] += w * (x * x + y * y);
-    // J^T r = [r; s x r].
-    let c = s.cross(r);
-    acc[21] += w * r.x;
-    acc[22] += w * r.y;
-    acc[23] += w * r.z;
-    acc[24] += w * c.x;
-    acc[25] += w * c.y;
-    acc[26] += w * c.z;
-    acc[27] += T::one();
-    acc[28] += r.norm_squared();
 }
 
 /// The system ICP solves from the summed chunk systems: the point-to-point one as it is when
@@ -521,5 +481,6 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
 mod chunk;
 mod planes;
 mod prior;
+mod system;
 #[cfg(test)]
 mod tests;

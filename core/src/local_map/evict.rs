@@ -8,8 +8,9 @@
 //! the scan's points inside the new radius then fit, the ones beyond it are left out. One
 //! eviction per update, two passes over the table and one over the rest of the scan.
 
+use super::codec::PointCodec;
+use super::layout::BLOCK;
 use super::update::MapMut;
-use super::{PointCodec, BLOCK};
 use crate::geometry::{Point, Pose};
 use crate::scalar::Real;
 use crate::storage::{view, words_for};

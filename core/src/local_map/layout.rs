@@ -1,9 +1,12 @@
 //! Where the map's buffers sit in the storage, and their typed views.
 
-use super::BLOCK;
 use crate::error::ConfigError;
 use crate::storage::{split_off, view, view_ref, words_for, Carver, Region};
 use crate::voxel::{slots_for, VoxelKey};
+
+/// Points per map block; a voxel owns a chain of blocks, so memory follows the points a voxel
+/// really holds instead of reserving `N_max` for each one.
+pub const BLOCK: usize = 4;
 
 /// Where the map's buffers sit, in `u64` words: the voxel table (slots for `voxels` at load
 /// <= 3/4) and the block pool (`points / BLOCK` blocks, rounded up).

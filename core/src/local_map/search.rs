@@ -14,7 +14,8 @@
 //! by small steps as it converges, so it can keep answers instead of searching again, and the
 //! answer kept is the one a new search would give, bit for bit.
 
-use super::{MapView, PointCodec};
+use super::codec::PointCodec;
+use super::view::MapView;
 use crate::scalar::{norm_lt, sqrt_lt, Real};
 use crate::voxel::{point_to_voxel, VoxelKey, NEIGHBOUR_SHIFTS};
 

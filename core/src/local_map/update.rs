@@ -1,8 +1,12 @@
 //! The map update (Sec. III-C): points join with the reference's admission rule, voxels
 //! beyond the radius are pruned.
 
+use super::codec::PointCodec;
 use super::layout::MapBuffers;
-use super::{MapCapacity, MapLayout, MapState, MapView, PointCodec, UpdateStats, BLOCK, NONE};
+use super::layout::MapLayout;
+use super::layout::BLOCK;
+use super::state::{MapCapacity, MapState, UpdateStats, NONE};
+use super::view::MapView;
 use crate::error::ConfigError;
 use crate::geometry::{Point, Pose};
 use crate::scalar::{sqrt_lt, Real};

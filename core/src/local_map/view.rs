@@ -1,6 +1,9 @@
 //! Read access to the map: voxel lookup and its points (the search is in `search`).
 
-use super::{MapLayout, MapState, PointCodec, BLOCK, NONE};
+use super::codec::PointCodec;
+use super::layout::MapLayout;
+use super::layout::BLOCK;
+use super::state::{MapState, NONE};
 use crate::error::ConfigError;
 use crate::geometry::Point;
 use crate::scalar::Real;

@@ -2,15 +2,15 @@
 //! [`Chunk`] and robust mode's [`PlaneChunk`], their parts, and the words they need.
 
 use super::planes::{Cached, CACHED};
-use super::CHUNK;
+use super::system::SYSTEM_LEN;
 use crate::geometry::Point;
 use crate::scalar::Real;
 use crate::storage::{view, words_for};
 use bytemuck::Pod;
 
-/// Scalars in one partial linear system: 21 (upper triangle of `J^T J`) + 6 (`J^T r`) +
-/// correspondence count + sum of squared residuals.
-pub const SYSTEM_LEN: usize = 29;
+/// Source points per chunk: the unit of parallel work and of the fixed reduction order (chunk
+/// sums are added in chunk order whatever the thread count).
+pub const CHUNK: usize = 64;
 /// Scalars per point kept from its last search: the answer's `x, y, z` (infinite: none), and the
 /// search's `others` and `face` bounds less the distance the point moved since (and a rounding
 /// allowance per step).

@@ -22,7 +22,7 @@
 //! again only when it moves into another voxel: the same normals as reading every time, a plane
 //! fit a point and voxel instead of a point and iteration.
 
-use super::SYSTEM_LEN;
+use super::system::SYSTEM_LEN;
 use crate::eigen::jacobi_eigen;
 use crate::geometry::Point;
 use crate::local_map::{MapView, PointCodec};

@@ -22,7 +22,7 @@
 //! scan's size; neither counts as a correspondence.
 
 use super::planes::accumulate_plane;
-use super::{accumulate, SYSTEM_LEN};
+use super::system::{accumulate, SYSTEM_LEN};
 use crate::geometry::Pose;
 use crate::scalar::Real;
 use nalgebra::Vector3;

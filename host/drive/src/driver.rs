@@ -7,7 +7,7 @@
 //! constant-velocity model, as the reference does, so there is one pose per frame. `run`,
 //! `bench` and `crosscheck` all use it, and so can whatever comes next:
 //!
-//! - a reader's items in a frame range: [`Selection`] then [`Driver::feed`] (`run`);
+//! - a reader's items in a frame range: `kiss_odom_io::Selection` then [`Driver::feed`] (`run`);
 //! - frames pushed one at a time from a callback (a ROS 2 node, a live sensor):
 //!   [`Driver::register`] or [`Driver::register_points`];
 //! - frames held in memory and timed (`bench`): [`Driver::preload`] then

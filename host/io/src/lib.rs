@@ -3,7 +3,7 @@
 //!
 //! Every input is a [`FrameSource`]: a stream of scans read one at a time, so a long recording
 //! never has to fit in memory and no frame costs more than the scan capacity
-//! ([`OpenOptions::scan_points`]) whatever its file says. [`open`] picks the reader and
+//! ([`OpenOptions::scan_points`]) whatever its file says. [`open()`] picks the reader and
 //! [`Selection`] keeps the frames of a [`FrameRange`]. The readers
 //! come in three families:
 //!
@@ -12,7 +12,7 @@
 //! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`.
 //!
 //! [`poses`] reads and writes trajectories (KITTI, TUM), [`metrics`] scores them against ground
-//! truth as kiss-icp does, [`pose`] holds the pose helpers they share, and [`write`] is how
+//! truth as kiss-icp does, [`pose`] holds the pose helpers they share, and [`mod@write`] is how
 //! every file is written: whole or not at all. Nothing here depends on the command line.
 
 pub mod capture;

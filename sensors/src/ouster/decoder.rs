@@ -1,8 +1,8 @@
 //! Ouster packets to sweeps: layout and identity checks, frame-id sweep boundaries, column
 //! bookkeeping for losses and order, then each return to a point.
 
-use super::wire::{Column, Layout, Packet};
-use super::{spacing_fits, SensorInfo, MAX_BEAMS, MAX_COLUMNS};
+use super::info::{spacing_fits, SensorInfo, MAX_BEAMS, MAX_COLUMNS};
+use super::wire::{Column, Layout, Packet, Profile};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats, RESYNC_PACKETS,
@@ -281,7 +281,7 @@ impl Decoder {
     fn column<S: SweepSink>(&mut self, c: &Column<'_>, m: u16, time: f64, sink: &mut S) {
         let encoder = 2.0 * PI - f64::from(m) * (2.0 * PI / f64::from(self.width));
         let (ce, se) = (libm::cos(encoder), libm::sin(encoder));
-        let dual = self.layout.profile == super::Profile::Rng19Rfl8Sig16Nir16Dual;
+        let dual = self.layout.profile == Profile::Rng19Rfl8Sig16Nir16Dual;
         for (u, b) in self.beams.iter().take(self.layout.beams).enumerate() {
             let r1 = c.range_mm(u);
             let r2 = if dual { c.range2_mm(u) } else { 0 };

@@ -8,7 +8,6 @@
 //! eUDP:    header 32 | columns_per_packet x [header 12 | pixels x (12|16|4) bytes] | footer 32
 //! ```
 
-use super::Profile;
 use crate::error::PacketError;
 
 /// Byte ranges of the packet, its column headers and its pixels.
@@ -260,6 +259,33 @@ impl Column<'_> {
                 self.pixel(beam).get(7).copied().map(u16::from).unwrap_or(0)
             }
             _ => 0,
+        }
+    }
+}
+
+/// The lidar packet profile (`udp_profile_lidar`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Profile {
+    /// `LEGACY`: firmware before 2.2, and later firmware configured so.
+    Legacy,
+    /// `RNG19_RFL8_SIG16_NIR16`: one return.
+    Rng19Rfl8Sig16Nir16,
+    /// `RNG19_RFL8_SIG16_NIR16_DUAL`: two returns.
+    Rng19Rfl8Sig16Nir16Dual,
+    /// `RNG15_RFL8_NIR8`: low bandwidth, range in 8 mm units.
+    Rng15Rfl8Nir8,
+}
+
+impl Profile {
+    /// The profile the metadata names (`udp_profile_lidar`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "LEGACY" => Some(Self::Legacy),
+            "RNG19_RFL8_SIG16_NIR16" => Some(Self::Rng19Rfl8Sig16Nir16),
+            "RNG19_RFL8_SIG16_NIR16_DUAL" => Some(Self::Rng19Rfl8Sig16Nir16Dual),
+            "RNG15_RFL8_NIR8" => Some(Self::Rng15Rfl8Nir8),
+            _ => None,
         }
     }
 }

@@ -1,8 +1,8 @@
 //! Velodyne packets to sweeps: checks, time unwrapping, loss and order detection, the cut,
 //! then each return to a point.
 
+use super::model::{Calibration, Config, Model, MAX_LASERS};
 use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
-use super::{Calibration, Config, Model, MAX_LASERS};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats, RESYNC_PACKETS,

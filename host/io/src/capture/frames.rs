@@ -1,5 +1,5 @@
 //! Sensor sweeps as frames: a pcap recording (or a live socket) decoded by
-//! [`sweeps`](super::sweeps) becomes a [`FrameSource`], so `run` and `live` drive
+//! [`super::sweeps`] becomes a [`FrameSource`], so `run` and `live` drive
 //! its sweeps through the same frame loop as any dataset.
 //!
 //! Frame `k` is the `k`-th sweep decoded, named `file#k`; it carries its per-point times (for
