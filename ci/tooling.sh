@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The tooling, run by .ci/run after the tests: the core's proptest properties (release),
-# every cargo-fuzz target for a bounded time on its committed corpus, and Miri on the core's
-# unit tests. Fails on any finding. A stage is skipped, with the reason printed, only when its
+# The tooling: the core's proptest properties (release; also part of the README's test command,
+# so .ci/run leaves this stage out), every cargo-fuzz target for a bounded time on its committed
+# corpus, and Miri on the core's unit tests. Fails on any finding. A stage is skipped, with the reason printed, only when its
 # tool cannot be installed.
 #
 #   ci/tooling.sh [props] [fuzz] [miri]     (default: all three)
@@ -25,7 +25,7 @@ MIRI_TIMEOUT=${MIRI_TIMEOUT:-900}
 CARGO_FUZZ_VERSION=0.13.2
 STAGES=${*:-props fuzz miri}
 
-step() { printf '\n=== %s\n' "$*"; }
+step() { printf '\n=== [%4d s] %s\n' "$SECONDS" "$*"; }
 skip() { printf 'SKIP: %s\n' "$*"; }
 FAILED=()
 FINDINGS=()
@@ -39,7 +39,7 @@ have_nightly() {
 props() {
   step "tooling: proptest properties of the core (release)"
   # Also part of `cargo test --workspace --release`; run on its own here to report it.
-  if ! cargo test -p kiss-odom-core --release --test core properties:: -- --nocapture; then
+  if ! cargo test --workspace --release --test core properties:: -- --nocapture; then
     FAILED+=("proptest properties")
   fi
 }

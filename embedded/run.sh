@@ -84,14 +84,22 @@ else
 fi
 # The tiny profile embeds sweeps of a generated VLP-16 drive (kiss-odom simulate, deterministic):
 # make them once, with the host tool of this repository (built for the host: without the
-# bare-metal code-generation flags this script may have exported above).
+# bare-metal code-generation flags this script may have exported above), or the one
+# KISS_ODOM_BIN names.
+kiss_odom() {
+  if [ -n "${KISS_ODOM_BIN:-}" ]; then
+    "$KISS_ODOM_BIN" "$@"
+  else
+    (cd "$here/.." && env -u RUSTFLAGS -u CARGO_ENCODED_RUSTFLAGS -u CARGO_BUILD_TARGET \
+      cargo run --release -q -p kiss-odom -- "$@")
+  fi
+}
 if [[ ",$features," == *",tiny,"* ]]; then
   vlp="${KISS_EMBED_VLP16:-$here/target/vlp16}"
   if [ ! -f "$vlp/sim.toml" ]; then
-    (cd "$here/.." && env -u RUSTFLAGS -u CARGO_ENCODED_RUSTFLAGS -u CARGO_BUILD_TARGET \
-      cargo run --release -q -p kiss-odom -- simulate --out "$vlp" --frames 40 \
+    kiss_odom simulate --out "$vlp" --frames 40 \
       --seed 11 --beams 16 --columns 1800 --fov-up 15 --fov-down -15 --max-range 100 \
-      --overwrite) >&2 || { echo "error: cannot generate the VLP-16 sweeps" >&2; exit 96; }
+      --overwrite >&2 || { echo "error: cannot generate the VLP-16 sweeps" >&2; exit 96; }
   fi
   export KISS_EMBED_VLP16="$vlp"
 fi
@@ -105,9 +113,8 @@ if [[ ",$features," == *",packets,"* ]]; then
     pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"; sim=(--frames 36)
   fi
   if [ ! -f "$pcapdir/sim.toml" ]; then
-    (cd "$here/.." && env -u RUSTFLAGS -u CARGO_ENCODED_RUSTFLAGS -u CARGO_BUILD_TARGET \
-      cargo run --release -q -p kiss-odom -- simulate --out "$pcapdir" "${sim[@]}" \
-      --seed 11 --sensor vlp16 --format pcap --max-range 100 --overwrite) >&2 \
+    kiss_odom simulate --out "$pcapdir" "${sim[@]}" \
+      --seed 11 --sensor vlp16 --format pcap --max-range 100 --overwrite >&2 \
       || { echo "error: cannot generate the VLP-16 pcap" >&2; exit 96; }
   fi
   export KISS_EMBED_PCAP="$pcapdir"

@@ -198,6 +198,10 @@ fn plane_terms_let_sparse_structure_move_a_corridor_s_free_axis() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "minutes under Miri; quicker tests reach the same storage"
+)]
 fn a_point_reads_its_plane_once_per_voxel_and_again_in_another() {
     // A floor (z = 0.5) under x < 3 and a wall (x = 8.5) beyond x = 6: 1 m voxels, so the
     // 27-voxel neighbourhoods around (1.5, 2.5, 0.5) and (8.5, 2.5, 1.5) see one plane each.
