@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The tooling: the core's proptest properties (release; also part of the README's test command,
 # so .ci/run leaves this stage out), every cargo-fuzz target for a bounded time on its committed
-# corpus, and Miri on the core's unit tests. Fails on any finding. A stage is skipped, with the reason printed, only when its
-# tool cannot be installed.
+# corpus, and Miri on the core's unit tests. Fails on any finding. A stage is skipped, with the
+# reason printed, only when its tool cannot be installed.
 #
 #   ci/tooling.sh [props] [fuzz] [miri]     (default: all three)
 #
@@ -16,6 +16,7 @@
 # malloc from a 3.5 kB file, found by this fuzzer), which the OS grants lazily and the parse
 # then rejects; the 2 GB RSS limit still catches memory really used.
 # FUZZ_TARGETS  space-separated subset of targets (default: all of `cargo fuzz list`)
+# TOOLING_JOBS  2: Miri runs beside the other stages (its log printed after theirs); default 1
 # MIRI_TIMEOUT  seconds before Miri counts as a failure (default 900)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -102,12 +103,34 @@ miri() {
   fi
 }
 
-for s in $STAGES; do
-  case "$s" in
-    props | fuzz | miri) "$s" ;;
-    *) echo "unknown stage $s (props, fuzz, miri)" >&2; exit 2 ;;
-  esac
-done
+run_stages() {
+  for s in "$@"; do
+    case "$s" in
+      props | fuzz | miri) "$s" ;;
+      *) echo "unknown stage $s (props, fuzz, miri)" >&2; exit 2 ;;
+    esac
+  done
+}
+
+if [ "${TOOLING_JOBS:-1}" = 2 ] && [[ " $STAGES " == *" miri "* ]]; then
+  # Miri runs on one core from start to end, and fuzzing after its build runs on one core too:
+  # side by side they finish together. Nightly is installed once, before both use it.
+  have_nightly || true
+  miri_log=$(mktemp)
+  (
+    miri
+    [ ${#FAILED[@]} -eq 0 ]
+  ) >"$miri_log" 2>&1 &
+  miri_job=$!
+  run_stages ${STAGES//miri/}
+  miri_status=0
+  wait "$miri_job" || miri_status=$?
+  cat "$miri_log"
+  rm -f "$miri_log"
+  if [ "$miri_status" != 0 ]; then FAILED+=("miri"); fi
+else
+  run_stages $STAGES
+fi
 
 step "tooling done in ${SECONDS} s"
 if [ ${#FINDINGS[@]} -gt 0 ]; then
