@@ -1,7 +1,8 @@
 //! SIGINT and SIGTERM sent to a real `kiss-odom` process: `run` stops after the
 //! current frame, writes what it has (poses up to that frame, `frames.csv`, `summary.json`
 //! with `"interrupted": true`), leaves no temporary file and exits with 128 + the signal;
-//! `simulate` leaves no partial data set. These need the binary (`kiss-odom-cli`, this package's
+//! `simulate` leaves no partial data set; help written into a pipe whose reader is gone is no
+//! panic. These need the binary (`kiss-odom-cli`, this package's
 //! copy of the command).
 #![cfg(target_os = "linux")]
 
@@ -167,4 +168,21 @@ fn an_interrupted_simulate_leaves_no_data_set() {
     assert_eq!(run.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(stderr.contains("no frames"), "{stderr}");
+}
+
+#[test]
+fn help_into_a_pipe_whose_reader_has_gone_ends_without_a_panic() {
+    // `kiss-odom run --help | head -1`: the reader is gone before the help is written. The help
+    // used to go through `print!`, which panics (exit 101, a backtrace) when the write fails.
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
+        .args(["run", "--help"])
+        .stdout(writer)
+        .stderr(Stdio::piped())
+        .output()
+        .expect("cannot start kiss-odom");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
 }

@@ -48,11 +48,12 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
         Err(e) => {
             // --help and --version exit 0; usage errors exit 1 like every other error.
             let code = if e.use_stderr() { 1 } else { 0 };
+            // Help read through a pipe that closes early (`--help | head`) is no error: a write
+            // that fails is not reported, where `print!` would panic.
             let _ = if e.use_stderr() {
                 write!(err, "{e}")
             } else {
-                print!("{e}");
-                Ok(())
+                write!(std::io::stdout(), "{e}")
             };
             return code;
         }
