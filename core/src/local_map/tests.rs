@@ -127,8 +127,7 @@ fn closest_neighbor_equals_brute_force_over_the_27_voxels() {
         n += 1;
     });
     assert!(n > 40);
-    let queries = 500;
-    for _ in 0..queries {
+    for _ in 0..500 {
         let q = Point::new(
             rng.next() * 5.0 - 0.5,
             rng.next() * 5.0 - 0.5,
