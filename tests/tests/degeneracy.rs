@@ -111,6 +111,10 @@ fn ate(data: &Path, r: &common::Run) -> f64 {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "heavy: cargo test --release --test workspace degeneracy::"
+)]
 fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
     let tunnel = ["--plane-gate", "1", "--voxel-size", "0.5"];
     let (robust, reference) = robust_and_reference("tunnel", 80, &tunnel, worst_error);
@@ -122,6 +126,10 @@ fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "heavy: cargo test --release --test workspace degeneracy::"
+)]
 fn robust_mode_follows_an_open_field_where_reference_mode_turns_away() {
     let (robust, reference) = robust_and_reference("field", 80, &[], ate);
     println!(
@@ -140,6 +148,10 @@ fn path_from(poses: &[Matrix4<f64>], from: usize) -> f64 {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "heavy: cargo test --release --test workspace degeneracy::"
+)]
 fn with_the_vehicle_prior_robust_mode_learns_a_bare_corridors_speed_from_its_turns() {
     // The bare corridor says nothing about motion along its axis; the vehicle starts at rest,
     // so every method stands still until the first turn. There a car-like vehicle's motion

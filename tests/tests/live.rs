@@ -262,8 +262,14 @@ fn signal_and_time_exit(child: &mut Child, name: &str) -> (ExitStatus, Duration,
 }
 
 /// What the tests below allow between a signal and the exit: the promise is 1 s; the rest is
-/// margin for a loaded machine (the figure measured is printed).
-const SIGNAL_TO_EXIT: Duration = Duration::from_secs(3);
+/// margin for a loaded machine (the figure measured is printed). Unoptimised, registering the
+/// sweep the signal cut takes seconds on its own (3.3-3.8 s measured with both cores busy); a
+/// signal held off by packets that keep coming would still reach the 60 s stop.
+const SIGNAL_TO_EXIT: Duration = if cfg!(debug_assertions) {
+    Duration::from_secs(15)
+} else {
+    Duration::from_secs(3)
+};
 
 #[test]
 fn sigint_ends_live_with_its_outputs_written() {

@@ -297,6 +297,10 @@ fn kitti_error(run: &Path, truth: &Path) -> f64 {
 }
 
 #[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "heavy: cargo test --release --test workspace sensors_simulated::"
+)]
 fn run_on_a_generated_pcap_tracks_as_well_as_on_the_direct_points() {
     // The OS1-64: with 16 beams the drift of a short drive hides the distortion.
     let case = &CASES[2];
