@@ -38,8 +38,9 @@ def anchors(md: Path) -> set:
 
 
 def top_level() -> set:
-    # `target/` holds what builds and CI make: not there on a clean clone.
-    return {p.name for p in REPO.iterdir() if not p.name.startswith(".")} - {"target"} | {".ci"}
+    # `target/` and `dist/` hold what builds and CI make: not there on a clean clone.
+    made = {"target", "dist"}
+    return {p.name for p in REPO.iterdir() if not p.name.startswith(".")} - made | {".ci"}
 
 
 def check(md: Path, roots: set) -> list:
