@@ -2,8 +2,12 @@
 //! `summary.json` and what `bench` and the long-run test measure around their runs.
 
 fn proc_status_bytes(field: &str) -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with(field))?;
+    status_field_bytes(&std::fs::read_to_string("/proc/self/status").ok()?, field)
+}
+
+/// One `kB` field of a `/proc/<pid>/status` text, in bytes.
+fn status_field_bytes(status: &str, field: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with(field))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
 }
@@ -29,12 +33,27 @@ mod tests {
     use super::*;
 
     #[test]
+    fn fields_are_read_in_bytes_and_a_missing_one_is_none() {
+        let status = "Name:\tkiss-odom\nVmHWM:\t   6276 kB\nVmRSS:\t   6284 kB\n";
+        assert_eq!(status_field_bytes(status, "VmHWM:"), Some(6276 * 1024));
+        assert_eq!(status_field_bytes(status, "VmRSS:"), Some(6284 * 1024));
+        assert_eq!(status_field_bytes(status, "VmSwap:"), None);
+        assert_eq!(status_field_bytes("VmRSS:\tmany kB\n", "VmRSS:"), None);
+    }
+
+    #[test]
     fn peak_is_at_least_current_on_linux() {
-        // The current size first: other tests of this process allocate in between, and the
-        // peak read after it can only have grown.
-        let now = rss_bytes();
-        if let (Some(peak), Some(now)) = (peak_rss_bytes(), now) {
+        // Both from one snapshot: other tests of this process allocate, free and reset the
+        // peak (`bench`) in between two separate reads.
+        let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
+            return;
+        };
+        let peak = status_field_bytes(&status, "VmHWM:");
+        let now = status_field_bytes(&status, "VmRSS:");
+        if let (Some(peak), Some(now)) = (peak, now) {
             assert!(peak >= now && now > 0, "peak {peak} now {now}");
         }
+        assert_eq!(peak.is_some(), peak_rss_bytes().is_some());
+        assert_eq!(now.is_some(), rss_bytes().is_some());
     }
 }
