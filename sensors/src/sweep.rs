@@ -16,16 +16,17 @@ pub const CHUNK: usize = 256;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Return {
-    /// Velodyne strongest return (strongest mode, or the strongest of a dual pair).
+    /// Strongest return (strongest mode, or the strongest of a dual pair).
     #[default]
     Strongest,
-    /// Velodyne last return (last mode, or the last of a dual pair).
+    /// Last return (last mode, or the last of a dual pair).
     Last,
-    /// Velodyne dual mode where the strongest return is also the last: one point.
+    /// Dual mode where both returns of the pair are the same echo: one point.
     Both,
-    /// Ouster first (legacy and single profiles: the only) return.
+    /// Ouster first (legacy and single profiles: the only) return; Hesai first return;
+    /// Livox single-return types, or the first of a dual pair.
     First,
-    /// Ouster second return (dual profiles).
+    /// Ouster second return (dual profiles); Livox second of a dual pair.
     Second,
 }
 
@@ -33,14 +34,16 @@ pub enum Return {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PointMeta {
-    /// Velodyne: ring, 0 the lowest laser. Ouster: beam (row), 0 the highest.
+    /// Velodyne: ring, 0 the lowest laser. Ouster: beam (row), 0 the highest. Hesai:
+    /// channel, 0 the highest. Livox (no rings): the point's tag byte.
     pub ring: u16,
     /// Velodyne: firing column in the sweep (velodyne-decoder's numbering). Ouster:
-    /// measurement id (column of the staggered image).
+    /// measurement id (column of the staggered image). Hesai: firing in the sweep. Livox:
+    /// firing in the packet.
     pub column: u16,
     /// Which return.
     pub ret: Return,
-    /// Velodyne reflectivity byte; Ouster reflectivity (8 bits in the eUDP profiles).
+    /// Velodyne and Hesai reflectivity byte; Ouster reflectivity (8 bits in the eUDP profiles).
     pub intensity: u16,
 }
 
@@ -63,7 +66,8 @@ pub struct SweepStart {
     pub index: u32,
     /// Sensor clock at the sweep's time origin, in ns. Velodyne: the first packet's
     /// timestamp (microseconds past the hour, counted on across hours). Ouster: the first
-    /// column's timestamp.
+    /// column's timestamp. Hesai: the first packet's first firing (UTC, ns since the Unix
+    /// epoch).
     pub start_ns: u64,
     /// Ouster frame id.
     pub frame_id: Option<u16>,
@@ -306,5 +310,80 @@ impl Assembly {
             stats.end = end;
             sink.end_sweep(&stats);
         }
+    }
+}
+
+/// Azimuth units per turn of the spinning sensors' packets (hundredths of a degree).
+pub(crate) const AZIMUTH_UNITS: u16 = 36000;
+
+/// `a` modulo one turn, in azimuth units.
+pub(crate) fn wrap_azimuth(a: i32) -> u32 {
+    a.rem_euclid(i32::from(AZIMUTH_UNITS)) as u32
+}
+
+/// Where a spinning sensor's sweep ends: at a fixed cut azimuth, or a full turn from wherever
+/// the last one ended (velodyne-decoder's coverage rule). Sweeps are whole packets: the packet
+/// whose last azimuth wraps past the start ends its sweep.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AzimuthCut {
+    cut: Option<u16>,
+    initial: Option<u16>,
+    coverage: u32,
+}
+
+impl AzimuthCut {
+    /// A cut at `cut_angle_deg` (`[0, 360)`), or by coverage for `None`.
+    pub fn new(cut_angle_deg: Option<f64>) -> Result<Self, crate::ConfigError> {
+        let cut = match cut_angle_deg {
+            None => None,
+            Some(a) if a.is_finite() && (0.0..360.0).contains(&a) => {
+                Some((libm::round(a * 100.0) as u32 % u32::from(AZIMUTH_UNITS)) as u16)
+            }
+            Some(_) => return Err(crate::ConfigError::CutAngle),
+        };
+        Ok(Self {
+            cut,
+            initial: cut,
+            coverage: 0,
+        })
+    }
+
+    /// A new sweep begins after the azimuth `last` (`None`: wherever the next packet is).
+    pub fn restart(&mut self, last: Option<u16>) {
+        self.initial = self.cut.or(last);
+        self.coverage = 0;
+    }
+
+    /// Whether a packet whose last azimuth is `last` completes the sweep: it wrapped past the
+    /// start after more than half a turn.
+    pub fn passed(&mut self, last: u16) -> bool {
+        let initial = *self.initial.get_or_insert(last);
+        let coverage = wrap_azimuth(i32::from(last) - i32::from(initial));
+        let complete = self.coverage > u32::from(AZIMUTH_UNITS) / 2 && self.coverage > coverage;
+        self.coverage = coverage;
+        complete
+    }
+}
+
+/// Consecutive packets refused as older than the last one accepted, and the last one's time
+/// (ns): after [`RESYNC_PACKETS`] of them whose times move on from one to the next, by at most
+/// a decoder's gap, their timeline is the sensor's.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LateRun(Option<(u32, u64)>);
+
+impl LateRun {
+    /// Counts a late packet of time `t`; true when it completes a run.
+    pub fn complete(&mut self, t: u64, gap_ns: u64) -> bool {
+        let n = match self.0 {
+            Some((n, last)) if t > last && t - last <= gap_ns => n + 1,
+            _ => 1,
+        };
+        self.0 = Some((n, t));
+        n >= RESYNC_PACKETS
+    }
+
+    /// A packet in order ends any run.
+    pub fn clear(&mut self) {
+        self.0 = None;
     }
 }

@@ -5,7 +5,8 @@ use super::model::{Calibration, Config, Model, MAX_LASERS};
 use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
-    Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats, RESYNC_PACKETS,
+    wrap_azimuth as wrap, Assembly, AzimuthCut, Decode, PointMeta, Pushed, Return, SweepEnd,
+    SweepSink, SweepStats, RESYNC_PACKETS,
 };
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
@@ -127,14 +128,12 @@ impl Sensor {
 pub struct Decoder {
     config_model: Option<Model>,
     calibration: Option<Calibration>,
-    cut: Option<u16>,
     sensor: Option<Sensor>,
     /// Sensor time of the last packet accepted, microseconds, counted on across hours.
     last_us: Option<i64>,
     last_azimuth: u16,
-    /// Sweep boundary state (velodyne-decoder's coverage rule).
-    initial_azimuth: Option<u16>,
-    coverage: u32,
+    /// Where sweeps end.
+    cut: AzimuthCut,
     sweep_first_us: i64,
     next_column: u16,
     /// Shortest time between consecutive packets seen, microseconds.
@@ -153,22 +152,14 @@ impl Decoder {
                 return Err(ConfigError::Calibration);
             }
         }
-        let cut = match config.cut_angle_deg {
-            None => None,
-            Some(a) if a.is_finite() && (0.0..360.0).contains(&a) => {
-                Some((libm::round(a * 100.0) as u32 % u32::from(AZIMUTH_UNITS)) as u16)
-            }
-            Some(_) => return Err(ConfigError::CutAngle),
-        };
+        let cut = AzimuthCut::new(config.cut_angle_deg)?;
         Ok(Self {
             config_model: config.model,
             calibration: config.calibration,
-            cut,
             sensor: None,
             last_us: None,
             last_azimuth: 0,
-            initial_azimuth: cut,
-            coverage: 0,
+            cut,
             sweep_first_us: 0,
             next_column: 0,
             shortest_step_us: None,
@@ -226,8 +217,7 @@ impl Decoder {
         self.shortest_step_us = None;
         let open = self.asm.open.is_some();
         self.asm.end(sink, SweepEnd::Resync);
-        self.initial_azimuth = self.cut;
-        self.coverage = 0;
+        self.cut.restart(None);
         self.asm.resynced();
         open
     }
@@ -306,8 +296,7 @@ impl Decoder {
 
         if self.asm.open.is_some() && now - self.sweep_first_us > GAP_US {
             self.asm.end(sink, SweepEnd::Gap);
-            self.initial_azimuth = self.cut.or(Some(self.last_azimuth));
-            self.coverage = 0;
+            self.cut.restart(Some(self.last_azimuth));
             return Ok(Pushed::Again);
         }
         if self.asm.open.is_none() {
@@ -345,14 +334,9 @@ impl Decoder {
         self.last_azimuth = last_az;
 
         // The cut: the sweep ends with the packet whose last azimuth wraps past the start.
-        let initial = *self.initial_azimuth.get_or_insert(last_az);
-        let coverage = wrap(i32::from(last_az) - i32::from(initial));
-        let complete = self.coverage > u32::from(AZIMUTH_UNITS) / 2 && self.coverage > coverage;
-        self.coverage = coverage;
-        if complete {
+        if self.cut.passed(last_az) {
             self.asm.end(sink, SweepEnd::Complete);
-            self.initial_azimuth = self.cut.or(Some(last_az));
-            self.coverage = 0;
+            self.cut.restart(Some(last_az));
             return Ok(Pushed::Ended);
         }
         Ok(Pushed::Decoded)
@@ -456,11 +440,6 @@ fn wrap_us(d: i64) -> i64 {
         d -= hour;
     }
     d
-}
-
-/// `a` modulo one turn, in azimuth units.
-fn wrap(a: i32) -> u32 {
-    a.rem_euclid(i32::from(AZIMUTH_UNITS)) as u32
 }
 
 /// The azimuth `dt` seconds after a block's, rounded to 0.01 degree: f32 arithmetic and
