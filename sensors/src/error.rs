@@ -13,23 +13,33 @@ pub enum PacketError {
     /// packet, Ouster IMU packet) or another Ouster profile/beam count than the metadata
     /// says. Skip it; if every packet says so, check the port and the metadata.
     Length,
+    /// The packet does not start with the format's start bytes (Hesai `EE FF`): another kind
+    /// of packet on the port, or corrupted. Skip it.
+    StartBytes,
+    /// A Hesai packet of a protocol version this crate does not decode (another Hesai model
+    /// on the port; skip it; if every packet says so, the sensor is not a PandarXT-32), or a
+    /// Livox packet whose version byte is not SDK 1's 5 (an SDK 2 sensor?).
+    Version,
     /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.
     BlockFlag,
-    /// A Velodyne azimuth at or above 360.00 degrees: corrupted. Skip it.
+    /// A Velodyne or Hesai azimuth at or above 360.00 degrees: corrupted. Skip it.
     Azimuth,
-    /// A Velodyne timestamp at or above one hour (it counts microseconds past the hour):
-    /// corrupted. Skip it.
+    /// A Velodyne timestamp at or above one hour (it counts microseconds past the hour), or a
+    /// Hesai date that does not exist: corrupted. Skip it.
     Timestamp,
     /// The Velodyne factory byte names a model this crate does not decode (or none, as old
-    /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`].
+    /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`]. Hesai: the
+    /// header's laser or block count or distance unit is not the PandarXT-32's.
     UnknownModel,
-    /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39).
+    /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
+    /// Hesai one is none of the six modes, or disagrees with the header's return count.
     UnknownReturnMode,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
     /// or an Ouster column whose measurement id is beyond the frame): two sensors on one
     /// port. Filter by source address, or give each sensor its own port.
     OtherSensor,
-    /// An Ouster packet whose type is not lidar data: skip it.
+    /// An Ouster packet whose type is not lidar data, or a Livox packet of a data type that
+    /// is not points (IMU) or not decoded: skip it.
     PacketType,
     /// The Ouster packet's initialisation id or serial number differs from the metadata's:
     /// the metadata JSON belongs to another sensor. Give the JSON saved with this recording.
@@ -54,13 +64,15 @@ impl core::fmt::Display for PacketError {
             Self::Length => {
                 "packet longer than the format's length (another packet kind or profile)"
             }
+            Self::StartBytes => "not the format's start bytes (Hesai: EE FF)",
+            Self::Version => "a protocol version not decoded (Hesai: 6.1 only; Livox: SDK 1)",
             Self::BlockFlag => "a data block without its 0xFFEE flag",
             Self::Azimuth => "an azimuth of 360 degrees or more",
             Self::Timestamp => "a timestamp of one hour or more",
-            Self::UnknownModel => "unknown Velodyne model byte",
-            Self::UnknownReturnMode => "unknown Velodyne return-mode byte",
+            Self::UnknownModel => "unknown model (Velodyne product byte, Hesai header)",
+            Self::UnknownReturnMode => "unknown return-mode byte",
             Self::OtherSensor => "packet of another sensor than the sweep's",
-            Self::PacketType => "not a lidar data packet",
+            Self::PacketType => "not a point data packet",
             Self::MetadataMismatch => "initialisation id or serial differs from the metadata",
             Self::ColumnWindow => {
                 "a valid column outside the metadata's column_window (metadata of another \
@@ -103,6 +115,8 @@ pub enum ConfigError {
     BeamAzimuth,
     /// The cut angle is not below 360 degrees.
     CutAngle,
+    /// The Livox frame period is zero or longer than [`crate::livox::GAP_NS`].
+    FramePeriod,
 }
 
 impl core::fmt::Display for ConfigError {
@@ -123,6 +137,7 @@ impl core::fmt::Display for ConfigError {
             Self::BeamAltitude => "beam_altitude_angles beyond +-90 degrees",
             Self::BeamAzimuth => "beam_azimuth_angles beyond +-45 degrees",
             Self::CutAngle => "cut angle not below 360 degrees",
+            Self::FramePeriod => "frame period zero or longer than 0.3 s",
         })
     }
 }

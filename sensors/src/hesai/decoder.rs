@@ -1,0 +1,260 @@
+//! Hesai packets to sweeps: checks, order and loss detection (by the UDP sequence number when
+//! the packets carry one, else by their times), the cut, then each return to a point.
+
+use super::model::{point_offset_ns, Config, ReturnMode, CHANNELS, DISTANCE_UNIT_M};
+use super::wire::{field, Packet};
+use crate::error::{ConfigError, PacketError};
+use crate::sweep::{
+    Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink,
+    SweepStats,
+};
+
+/// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
+/// new one: the sensor stopped, or the recording has a hole.
+pub const GAP_NS: u64 = 300_000_000;
+
+/// A sequence number this far ahead of the last is not a count of lost packets (a sensor
+/// restart): losses are then counted from the times.
+const MAX_SEQUENCE_STEP: u32 = 1 << 20;
+
+/// One channel, ready to use.
+#[derive(Clone, Copy, Debug, Default)]
+struct Beam {
+    cos_e: f64,
+    sin_e: f64,
+    azimuth_deg: f64,
+}
+
+/// Hesai PandarXT-32 packets in, sweeps out (see the module doc of [`crate::hesai`]).
+///
+/// ```
+/// use kiss_odom_sensors::{hesai, Chunk, Decode, SweepSink, SweepStart, SweepStats};
+/// struct Count(usize);
+/// impl SweepSink for Count {
+///     fn begin_sweep(&mut self, _: &SweepStart) {}
+///     fn points(&mut self, c: Chunk<'_>) { self.0 += c.xyz.len(); }
+///     fn end_sweep(&mut self, _: &SweepStats) {}
+/// }
+/// let mut dec = hesai::Decoder::new(hesai::Config::default()).unwrap();
+/// let mut sink = Count(0);
+/// // A 1076- or 1080-byte payload from UDP port 2368; anything else is refused with a reason.
+/// assert!(dec.push(&[0u8; 100], &mut sink).is_err());
+/// dec.finish(&mut sink);
+/// ```
+pub struct Decoder {
+    beams: [Beam; CHANNELS],
+    /// The return mode and its byte, fixed by the first packet decoded.
+    mode: Option<(ReturnMode, u8)>,
+    /// Time of the last packet accepted, ns since the Unix epoch.
+    last_ns: Option<u64>,
+    last_sequence: Option<u32>,
+    last_azimuth: u16,
+    cut: AzimuthCut,
+    /// The open sweep's time origin: its first packet's first firing, ns.
+    sweep_start_ns: u64,
+    /// Firings decoded into the open sweep.
+    column: u16,
+    late_run: LateRun,
+    asm: Assembly,
+}
+
+impl Decoder {
+    /// A decoder for `config`; nothing is decoded until the first packet.
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        let calibration = config.calibration.unwrap_or_default();
+        calibration.validate()?;
+        let mut beams = [Beam::default(); CHANNELS];
+        for (c, b) in beams.iter_mut().enumerate() {
+            let e = calibration.elevation_deg[c].to_radians();
+            *b = Beam {
+                cos_e: libm::cos(e),
+                sin_e: libm::sin(e),
+                azimuth_deg: calibration.azimuth_deg[c],
+            };
+        }
+        Ok(Self {
+            beams,
+            mode: None,
+            last_ns: None,
+            last_sequence: None,
+            last_azimuth: 0,
+            cut: AzimuthCut::new(config.cut_angle_deg)?,
+            sweep_start_ns: 0,
+            column: 0,
+            late_run: LateRun::default(),
+            asm: Assembly::new(),
+        })
+    }
+
+    /// The return mode, once a packet told it.
+    pub fn return_mode(&self) -> Option<ReturnMode> {
+        self.mode.map(|(m, _)| m)
+    }
+
+    fn identify(&mut self, p: &Packet<'_>) -> Result<ReturnMode, PacketError> {
+        let byte = p.return_mode();
+        if let Some((mode, b)) = self.mode {
+            return if b == byte {
+                Ok(mode)
+            } else {
+                Err(PacketError::OtherSensor)
+            };
+        }
+        let mode = ReturnMode::from_byte(byte).ok_or(PacketError::UnknownReturnMode)?;
+        if mode.returns() != usize::from(p.returns()) {
+            return Err(PacketError::UnknownReturnMode);
+        }
+        self.mode = Some((mode, byte));
+        Ok(mode)
+    }
+
+    /// Abandons the open sweep's clock; true if a sweep was open and has ended.
+    fn resync<S: SweepSink>(&mut self, sink: &mut S) -> bool {
+        self.late_run.clear();
+        self.last_ns = None;
+        self.last_sequence = None;
+        let open = self.asm.open.is_some();
+        self.asm.end(sink, SweepEnd::Resync);
+        self.cut.restart(None);
+        self.asm.resynced();
+        open
+    }
+
+    fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
+        let p = Packet::new_checked(bytes)?;
+        let mode = self.identify(&p)?;
+        let t = p.unix_ns().ok_or(PacketError::Timestamp)?;
+        let mut step = None;
+        if let Some(last) = self.last_ns {
+            if t <= last {
+                if !self.late_run.complete(t, GAP_NS) {
+                    return Err(PacketError::Late);
+                }
+                if self.resync(sink) {
+                    return Ok(Pushed::Again);
+                }
+            } else {
+                step = Some(t - last);
+            }
+        }
+        self.late_run.clear();
+        let returns = mode.returns();
+        if self.asm.open.is_some() && t.saturating_sub(self.sweep_start_ns) > GAP_NS {
+            self.asm.end(sink, SweepEnd::Gap);
+            self.cut.restart(Some(self.last_azimuth));
+            return Ok(Pushed::Again);
+        }
+        if self.asm.open.is_none() {
+            let start = t.saturating_add_signed(point_offset_ns(0, 0, returns));
+            self.asm.begin(sink, start, None);
+            self.sweep_start_ns = start;
+            self.column = 0;
+        }
+        let lost = self.lost_before(&p, step, returns);
+        self.decode(&p, t, mode, sink);
+        let stats = self.asm.stats();
+        stats.packets = stats.packets.saturating_add(1);
+        stats.lost_packets = stats.lost_packets.saturating_add(lost);
+        let last_az = p.azimuth(field::BLOCKS - 1);
+        self.last_ns = Some(t);
+        self.last_sequence = p.udp_sequence();
+        self.last_azimuth = last_az;
+        if self.cut.passed(last_az) {
+            self.asm.end(sink, SweepEnd::Complete);
+            self.cut.restart(Some(last_az));
+            return Ok(Pushed::Ended);
+        }
+        Ok(Pushed::Decoded)
+    }
+
+    /// Packets missing between the last one and `p`: the sequence numbers' step, or the
+    /// time step in packet periods when there are none.
+    fn lost_before(&self, p: &Packet<'_>, step_ns: Option<u64>, returns: usize) -> u32 {
+        let Some(step_ns) = step_ns else { return 0 };
+        if let (Some(now), Some(last)) = (p.udp_sequence(), self.last_sequence) {
+            let d = now.wrapping_sub(last);
+            if (1..MAX_SEQUENCE_STEP).contains(&d) {
+                return d - 1;
+            }
+        }
+        let period = (field::BLOCKS / returns) as f64 * super::model::FIRING_NS as f64;
+        let d = step_ns as f64;
+        if d > 1.5 * period {
+            (libm::round(d / period) - 1.0).min(f64::from(u32::MAX)) as u32
+        } else {
+            0
+        }
+    }
+
+    /// Every return of a checked packet of time `t` (ns).
+    fn decode<S: SweepSink>(&mut self, p: &Packet<'_>, t: u64, mode: ReturnMode, sink: &mut S) {
+        let returns = mode.returns();
+        let base = t as i64 - self.sweep_start_ns as i64;
+        for firing in 0..field::BLOCKS / returns {
+            let block = firing * returns;
+            let azimuth = f64::from(p.azimuth(block)) * 0.01;
+            for (c, beam) in self.beams.iter().enumerate() {
+                let time = (base + point_offset_ns(block, c, returns)) as f64 * 1e-9;
+                let mut emit = |raw: (u16, u8), ret| {
+                    let meta = PointMeta {
+                        ring: c as u16,
+                        column: self.column,
+                        ret,
+                        intensity: u16::from(raw.1),
+                    };
+                    self.asm.push(sink, point(beam, raw.0, azimuth), time, meta);
+                };
+                let first = p.channel(block, c);
+                match mode {
+                    ReturnMode::Single(ret) => {
+                        if first.0 != 0 {
+                            emit(first, ret);
+                        }
+                    }
+                    ReturnMode::Dual(ret_a, ret_b) => {
+                        let second = p.channel(block + 1, c);
+                        if first.0 == second.0 {
+                            if first.0 != 0 {
+                                emit(first, Return::Both);
+                            }
+                        } else {
+                            if first.0 != 0 {
+                                emit(first, ret_a);
+                            }
+                            if second.0 != 0 {
+                                emit(second, ret_b);
+                            }
+                        }
+                    }
+                }
+            }
+            self.column = self.column.wrapping_add(1);
+        }
+    }
+}
+
+impl Decode for Decoder {
+    fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
+        let r = self.accept(bytes, sink);
+        self.asm.counted(r)
+    }
+    fn finish<S: SweepSink>(&mut self, sink: &mut S) {
+        self.asm.end(sink, SweepEnd::Finished);
+    }
+    fn between_sweeps(&self) -> &SweepStats {
+        &self.asm.pending
+    }
+}
+
+/// A return in the sensor frame: x forward (azimuth 0), y left, z up (the ROS convention; the
+/// azimuth turns clockwise seen from above).
+fn point(beam: &Beam, raw: u16, block_azimuth_deg: f64) -> [f64; 3] {
+    let d = f64::from(raw) * DISTANCE_UNIT_M;
+    let theta = (block_azimuth_deg + beam.azimuth_deg).to_radians();
+    let xy = d * beam.cos_e;
+    [
+        xy * libm::cos(theta),
+        -xy * libm::sin(theta),
+        d * beam.sin_e,
+    ]
+}
