@@ -1,0 +1,177 @@
+//! Livox packets to frames: checks, order and loss detection by the packets' times, the cut
+//! every frame period, then each return to a point.
+
+use super::wire::{Packet, IMU};
+use super::{Config, Model};
+use crate::error::{ConfigError, PacketError};
+use crate::sweep::{
+    Assembly, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats,
+};
+
+/// Packets more than this apart (sensor time) are not one frame's: the sensor stopped, or the
+/// recording has a hole; the next packet begins a new frame.
+pub const GAP_NS: u64 = 300_000_000;
+
+/// Livox SDK 1 packets in, frames out (see the module doc of [`crate::livox`]).
+///
+/// ```
+/// use kiss_odom_sensors::{livox, Chunk, Decode, SweepSink, SweepStart, SweepStats};
+/// struct Count(usize);
+/// impl SweepSink for Count {
+///     fn begin_sweep(&mut self, _: &SweepStart) {}
+///     fn points(&mut self, c: Chunk<'_>) { self.0 += c.xyz.len(); }
+///     fn end_sweep(&mut self, _: &SweepStats) {}
+/// }
+/// let mut dec = livox::Decoder::new(livox::Config::default()).unwrap();
+/// let mut sink = Count(0);
+/// assert!(dec.push(&[5u8; 10], &mut sink).is_err());
+/// dec.finish(&mut sink);
+/// ```
+pub struct Decoder {
+    model: Model,
+    period: u64,
+    /// Sender (slot, lidar id) and data type, fixed by the first packet decoded.
+    sender: Option<((u8, u8), u8)>,
+    last_ns: Option<u64>,
+    /// The open frame's start, ns.
+    frame_start: u64,
+    late_run: LateRun,
+    asm: Assembly,
+}
+
+impl Decoder {
+    /// A decoder for `config`; nothing is decoded until the first packet.
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        if config.frame_period_ns == 0 || config.frame_period_ns > GAP_NS {
+            return Err(ConfigError::FramePeriod);
+        }
+        Ok(Self {
+            model: config.model,
+            period: config.frame_period_ns,
+            sender: None,
+            last_ns: None,
+            frame_start: 0,
+            late_run: LateRun::default(),
+            asm: Assembly::new(),
+        })
+    }
+
+    fn identify(&mut self, p: &Packet<'_>) -> Result<(), PacketError> {
+        if p.data_type() == IMU {
+            return Err(PacketError::PacketType);
+        }
+        let id = (p.sender(), p.data_type());
+        match self.sender {
+            Some(s) if s != id => Err(PacketError::OtherSensor),
+            Some(_) => Ok(()),
+            None => {
+                self.sender = Some(id);
+                Ok(())
+            }
+        }
+    }
+
+    /// Time a packet's firings span, ns.
+    fn packet_ns(&self, p: &Packet<'_>) -> f64 {
+        p.firings() as f64 * self.model.firing_ns()
+    }
+
+    fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
+        let p = Packet::new_checked(bytes)?;
+        self.identify(&p)?;
+        let t = p.time_ns().ok_or(PacketError::Timestamp)?;
+        let mut step = None;
+        if let Some(last) = self.last_ns {
+            if t <= last {
+                if !self.late_run.complete(t, GAP_NS) {
+                    return Err(PacketError::Late);
+                }
+                self.late_run.clear();
+                self.last_ns = None;
+                let open = self.asm.open.is_some();
+                self.asm.end(sink, SweepEnd::Resync);
+                self.asm.resynced();
+                if open {
+                    return Ok(Pushed::Again);
+                }
+            } else {
+                step = Some(t - last);
+            }
+        }
+        self.late_run.clear();
+        if self.asm.open.is_some() {
+            let end = if step.is_some_and(|s| s > GAP_NS) {
+                Some(SweepEnd::Gap)
+            } else if t >= self.frame_start.saturating_add(self.period) {
+                Some(SweepEnd::Complete)
+            } else {
+                None
+            };
+            if let Some(end) = end {
+                self.asm.end(sink, end);
+                if end == SweepEnd::Complete {
+                    // Frames keep their grid: the next starts at the period the packet is in.
+                    let periods = (t - self.frame_start) / self.period;
+                    self.frame_start += periods * self.period;
+                } else {
+                    self.frame_start = t;
+                }
+                return Ok(Pushed::Again);
+            }
+        } else {
+            if self.last_ns.is_none() || step.is_some_and(|s| s > GAP_NS) {
+                self.frame_start = t;
+            }
+            self.asm.begin(sink, self.frame_start, None);
+        }
+        let lost = match step {
+            Some(s) if s as f64 > 1.5 * self.packet_ns(&p) => {
+                (libm::round(s as f64 / self.packet_ns(&p)) - 1.0).min(f64::from(u32::MAX)) as u32
+            }
+            _ => 0,
+        };
+        self.decode(&p, t, sink);
+        let stats = self.asm.stats();
+        stats.packets = stats.packets.saturating_add(1);
+        stats.lost_packets = stats.lost_packets.saturating_add(lost);
+        self.last_ns = Some(t);
+        Ok(Pushed::Decoded)
+    }
+
+    fn decode<S: SweepSink>(&mut self, p: &Packet<'_>, t: u64, sink: &mut S) {
+        let base = (t - self.frame_start) as f64;
+        let dual = p.returns() == 2;
+        for k in 0..p.firings() {
+            let time = (base + k as f64 * self.model.firing_ns()) * 1e-9;
+            for r in 0..p.returns() {
+                let Some((xyz, reflectivity, tag)) = p.point(k, r) else {
+                    continue;
+                };
+                let ret = match (dual, r) {
+                    (true, 1) => Return::Second,
+                    _ => Return::First,
+                };
+                let meta = PointMeta {
+                    ring: u16::from(tag),
+                    column: k as u16,
+                    ret,
+                    intensity: u16::from(reflectivity),
+                };
+                self.asm.push(sink, xyz, time, meta);
+            }
+        }
+    }
+}
+
+impl Decode for Decoder {
+    fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
+        let r = self.accept(bytes, sink);
+        self.asm.counted(r)
+    }
+    fn finish<S: SweepSink>(&mut self, sink: &mut S) {
+        self.asm.end(sink, SweepEnd::Finished);
+    }
+    fn between_sweeps(&self) -> &SweepStats {
+        &self.asm.pending
+    }
+}

@@ -1,0 +1,262 @@
+//! The Livox SDK 1 decoder on synthetic packets: every data type's geometry, per-point times,
+//! frames by time, and how lost, late, foreign and malformed packets are counted.
+
+use kiss_odom_sensors::livox::{self, wire, Model};
+mod common;
+
+use common::{feed, with, Log};
+use kiss_odom_sensors::{ConfigError, Decode, PacketError, Pushed, Return, SweepEnd};
+
+const T0: u64 = 1_726_588_075_299_964_555;
+
+/// A packet of `data_type` at `t` ns whose firing `k` returns the point (1 + k, 2, -0.5) m
+/// (the second return twice as far), reflectivity k and tag 16; firing 3 returns nothing.
+fn packet(data_type: u8, t: u64) -> Vec<u8> {
+    let (size, n) = wire::layout(data_type).unwrap();
+    let mut b = vec![0u8; 18 + size * n];
+    b[0..4].copy_from_slice(&[5, 1, 1, 0]);
+    b[8] = 1;
+    b[9] = data_type;
+    b[10..18].copy_from_slice(&t.to_le_bytes());
+    for k in 0..n {
+        if k == 3 {
+            continue;
+        }
+        let at = 18 + size * k;
+        let p = &mut b[at..at + size];
+        let mm = |v: f64| ((v * 1000.0).round() as i32).to_le_bytes();
+        let xyz = [1.0 + k as f64, 2.0, -0.5];
+        let cart = |p: &mut [u8], s: f64| {
+            for (i, v) in xyz.iter().enumerate() {
+                p[4 * i..4 * i + 4].copy_from_slice(&mm(v * s));
+            }
+            p[12] = k as u8;
+        };
+        let r = (xyz[0] * xyz[0] + xyz[1] * xyz[1] + xyz[2] * xyz[2]).sqrt();
+        let zenith = ((xyz[2] / r).acos().to_degrees() * 100.0).round() as u16;
+        let azimuth = (xyz[1].atan2(xyz[0]).to_degrees() * 100.0).round() as u16;
+        let depth = |s: f64| ((r * s * 1000.0).round() as u32).to_le_bytes();
+        match data_type {
+            0 => cart(p, 1.0),
+            2 => {
+                cart(p, 1.0);
+                p[13] = 16;
+            }
+            4 => {
+                cart(p, 1.0);
+                p[13] = 16;
+                cart(&mut p[14..], 2.0);
+                p[27] = 16;
+            }
+            1 | 3 => {
+                p[0..4].copy_from_slice(&depth(1.0));
+                p[4..6].copy_from_slice(&zenith.to_le_bytes());
+                p[6..8].copy_from_slice(&azimuth.to_le_bytes());
+                p[8] = k as u8;
+                if data_type == 3 {
+                    p[9] = 16;
+                }
+            }
+            5 => {
+                p[0..2].copy_from_slice(&zenith.to_le_bytes());
+                p[2..4].copy_from_slice(&azimuth.to_le_bytes());
+                p[4..8].copy_from_slice(&depth(1.0));
+                p[8] = k as u8;
+                p[9] = 16;
+                p[10..14].copy_from_slice(&depth(2.0));
+                p[14] = k as u8;
+                p[15] = 16;
+            }
+            _ => {}
+        }
+    }
+    b
+}
+
+fn decoder() -> livox::Decoder {
+    livox::Decoder::new(livox::Config::default()).unwrap()
+}
+
+#[test]
+fn every_data_type_gives_the_same_points_at_their_firing_times() {
+    for data_type in 0..6u8 {
+        let mut dec = decoder();
+        let mut log = Log::default();
+        feed(&mut dec, &packet(data_type, T0), &mut log).unwrap();
+        dec.finish(&mut log);
+        let (_, n) = wire::layout(data_type).unwrap();
+        let dual = matches!(data_type, 4 | 5);
+        assert_eq!(
+            log.points.len(),
+            (n - 1) * if dual { 2 } else { 1 },
+            "type {data_type}"
+        );
+        assert_eq!(log.starts[0].start_ns, T0);
+        // Spherical types carry 0.01 degree angles: up to 1e-4 rad of a 100 m point.
+        let tol = if matches!(data_type, 1 | 3 | 5) {
+            2e-2
+        } else {
+            1e-12
+        };
+        for &(_, p, t, m) in &log.points {
+            let k = usize::from(m.column);
+            let s = if m.ret == Return::Second { 2.0 } else { 1.0 };
+            let want = [(1.0 + k as f64) * s, 2.0 * s, -0.5 * s];
+            for i in 0..3 {
+                assert!(
+                    (p[i] - want[i]).abs() < tol,
+                    "type {data_type}: {p:?} vs {want:?}"
+                );
+            }
+            assert_eq!(t, k as f64 * (1e9 / 240_000.0) * 1e-9);
+            assert_eq!(m.intensity, k as u16);
+            assert_eq!(m.ring, if data_type < 2 { 0 } else { 16 }, "the tag");
+            assert!(m.ret == Return::First || (dual && m.ret == Return::Second));
+        }
+    }
+}
+
+#[test]
+fn frames_are_cut_by_time_and_losses_counted_from_the_packet_times() {
+    let mut dec = livox::Decoder::new(livox::Config {
+        model: Model::Horizon,
+        frame_period_ns: 10_000_000,
+    })
+    .unwrap();
+    let mut log = Log::default();
+    let mut ended_at = Vec::new();
+    // 96 firings of 4.1667 us: 400 us a packet; 60 packets = 24 ms; lose packets 10..13.
+    for i in 0..60u64 {
+        if (10..13).contains(&i) {
+            continue;
+        }
+        let before = log.ends.len();
+        feed(&mut dec, &packet(2, T0 + 400_000 * i), &mut log).unwrap();
+        if log.ends.len() > before {
+            ended_at.push(i);
+        }
+    }
+    dec.finish(&mut log);
+    // Frames start at T0, T0 + 10 ms, T0 + 20 ms: packets 25 and 50 begin the next ones.
+    assert_eq!(ended_at, [25, 50]);
+    let starts: Vec<u64> = log.starts.iter().map(|s| s.start_ns).collect();
+    assert_eq!(starts, [T0, T0 + 10_000_000, T0 + 20_000_000]);
+    let lost: Vec<u32> = log.ends.iter().map(|s| s.lost_packets).collect();
+    assert_eq!(lost, [3, 0, 0]);
+    assert_eq!(log.ends[2].end, SweepEnd::Finished);
+    // A frame's times start at its start.
+    let first_of_second = log.points.iter().find(|p| p.0 == 1).unwrap();
+    assert_eq!(first_of_second.2, 0.0);
+    // A pause of more than 0.3 s ends the frame and starts the next at the packet.
+    let mut dec = decoder();
+    let mut log = Log::default();
+    feed(&mut dec, &packet(2, T0), &mut log).unwrap();
+    feed(&mut dec, &packet(2, T0 + 400_000_000), &mut log).unwrap();
+    assert_eq!(log.ends[0].end, SweepEnd::Gap);
+    assert_eq!(log.starts[1].start_ns, T0 + 400_000_000);
+    assert_eq!(
+        livox::Decoder::new(livox::Config {
+            frame_period_ns: 0,
+            ..livox::Config::default()
+        })
+        .err(),
+        Some(ConfigError::FramePeriod)
+    );
+}
+
+#[test]
+fn the_mid_40_fires_every_10_us() {
+    let mut dec = livox::Decoder::new(livox::Config {
+        model: Model::Mid40,
+        ..livox::Config::default()
+    })
+    .unwrap();
+    let mut log = Log::default();
+    feed(&mut dec, &packet(0, T0), &mut log).unwrap();
+    dec.finish(&mut log);
+    let last = log.points.last().unwrap();
+    assert_eq!(last.2, 99.0 * 10_000.0 * 1e-9);
+}
+
+#[test]
+fn gps_time_is_a_utc_date_and_microseconds_in_the_hour() {
+    let mut b = packet(2, 0);
+    b[8] = 3;
+    // 2024-09-17 15h, 47 min 55.2999 s into the hour.
+    b[10..14].copy_from_slice(&[24, 9, 17, 15]);
+    b[14..18].copy_from_slice(&2_875_299_964u32.to_le_bytes());
+    let p = livox::Packet::new_checked(&b).unwrap();
+    assert_eq!(p.time_ns(), Some(T0 - 555));
+    b[12] = 31;
+    assert_eq!(
+        livox::Packet::new_checked(&b).err(),
+        Some(PacketError::Timestamp)
+    );
+}
+
+#[test]
+fn imu_late_foreign_and_damaged_packets_are_refused_and_counted() {
+    let mut dec = decoder();
+    let mut log = Log::default();
+    let g = packet(2, T0 + 400_000);
+    feed(&mut dec, &g, &mut log).unwrap();
+    assert_eq!(
+        feed(&mut dec, &packet(2, T0), &mut log),
+        Err(PacketError::Late)
+    );
+    let mut other = packet(2, T0 + 800_000);
+    other[2] = 2;
+    assert_eq!(
+        feed(&mut dec, &other, &mut log),
+        Err(PacketError::OtherSensor)
+    );
+    assert_eq!(
+        feed(&mut dec, &packet(0, T0 + 800_000), &mut log),
+        Err(PacketError::OtherSensor)
+    );
+    let mut imu = packet(6, T0 + 800_000);
+    imu[18..22].copy_from_slice(&0.5f32.to_le_bytes());
+    imu[38..42].copy_from_slice(&(-1.0f32).to_le_bytes());
+    let sample = livox::Packet::new_checked(&imu).unwrap().imu().unwrap();
+    assert_eq!((sample.gyro[0], sample.accel_g[2]), (0.5, -1.0));
+    assert_eq!(feed(&mut dec, &imu, &mut log), Err(PacketError::PacketType));
+    let cases: [(Vec<u8>, PacketError); 5] = [
+        (g[..1000].to_vec(), PacketError::Truncated),
+        (g[..10].to_vec(), PacketError::Truncated),
+        ([g.as_slice(), &[0]].concat(), PacketError::Length),
+        (with(&g, 0, 1), PacketError::Version),
+        (with(&g, 9, 9), PacketError::PacketType),
+    ];
+    for (bytes, want) in &cases {
+        assert_eq!(feed(&mut dec, bytes, &mut log), Err(*want));
+    }
+    assert_eq!(
+        feed(&mut dec, &packet(2, T0 + 800_000), &mut log),
+        Ok(Pushed::Decoded)
+    );
+    dec.finish(&mut log);
+    let s = log.ends[0];
+    assert_eq!((s.packets, s.out_of_order, s.other_sensor), (2, 1, 2));
+    assert_eq!(s.bad_packets, cases.len() as u32 + 1, "with the IMU packet");
+}
+
+#[test]
+fn a_clock_step_back_is_followed_after_a_run_of_late_packets() {
+    let mut dec = decoder();
+    let mut log = Log::default();
+    for i in 0..5 {
+        feed(&mut dec, &packet(2, T0 + 400_000 * i), &mut log).unwrap();
+    }
+    let mut refused = 0;
+    for i in 0..30 {
+        if feed(&mut dec, &packet(2, 1_000 + 400_000 * i), &mut log) == Err(PacketError::Late) {
+            refused += 1;
+        }
+    }
+    dec.finish(&mut log);
+    assert_eq!(refused, kiss_odom_sensors::RESYNC_PACKETS - 1);
+    let ends: Vec<_> = log.ends.iter().map(|s| s.end).collect();
+    assert_eq!(ends, [SweepEnd::Resync, SweepEnd::Finished]);
+    assert_eq!(log.ends[1].resyncs, 1);
+    assert_eq!(log.starts[1].start_ns, 1_000 + 400_000 * u64::from(refused));
+}
