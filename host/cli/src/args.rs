@@ -53,23 +53,28 @@ pub struct InputArgs {
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct SensorArgs {
     /// The sensor of a pcap recording; `auto`: Ouster if `--meta` is given, else Velodyne
-    /// with the model the packets name.
+    /// with the model the packets name, or Hesai or Livox if their packets are there instead.
     #[arg(long, value_enum, default_value_t = SensorKind::Auto)]
     pub sensor: SensorKind,
     /// Ouster metadata JSON (as `ouster-cli` saves it beside a recording); Ouster needs it.
     #[arg(long)]
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML); models with published angles need none.
+    /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV); without one,
+    /// the model's published angles.
     #[arg(long)]
     pub calibration: Option<PathBuf>,
-    /// UDP port of the sensor's data packets [default: Velodyne 2368 (else the port its
-    /// packets are on), Ouster the metadata's lidar port, else 7502].
+    /// UDP port of the sensor's data packets [default: Velodyne and Hesai 2368, Ouster the
+    /// metadata's lidar port, else 7502, Livox 56001].
     #[arg(long)]
     pub port: Option<u16>,
-    /// Velodyne: azimuth (degrees) where one sweep ends and the next begins [default: a full
+    /// Velodyne and Hesai: azimuth (degrees) where one sweep ends and the next begins [default: a full
     /// turn from where the recording starts].
     #[arg(long, allow_negative_numbers = true)]
     pub cut_angle: Option<f64>,
+    /// Livox: seconds of points in a frame (the sensor has no sweep) [default: 0.1, the Livox
+    /// ROS driver's].
+    #[arg(long)]
+    pub frame_period: Option<f64>,
 }
 
 impl SensorArgs {
@@ -81,6 +86,7 @@ impl SensorArgs {
             meta: self.meta.clone(),
             calibration: self.calibration.clone(),
             cut_angle_deg: self.cut_angle,
+            frame_period_s: self.frame_period,
         }
     }
 }

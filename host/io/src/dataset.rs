@@ -228,6 +228,12 @@ pub enum SensorKind {
     Hdl32e,
     /// Ouster (needs the metadata JSON).
     Ouster,
+    /// Hesai PandarXT-32.
+    Xt32,
+    /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
+    Livox,
+    /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).
+    Mid40,
 }
 
 /// How to read a recording.
@@ -239,8 +245,10 @@ pub struct SensorOptions {
     pub port: Option<u16>,
     /// Ouster metadata JSON.
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML).
+    /// Velodyne calibration (XML or YAML), or Hesai angle correction (CSV).
     pub calibration: Option<PathBuf>,
-    /// Velodyne cut angle, degrees (default: a full turn from wherever the last sweep ended).
+    /// Livox frame period, seconds (default 0.1).
+    pub frame_period_s: Option<f64>,
+    /// Velodyne and Hesai cut angle, degrees (default: a full turn from wherever the last sweep ended).
     pub cut_angle_deg: Option<f64>,
 }

@@ -1,11 +1,14 @@
-//! Sensor recordings to sweeps: a pcap of Velodyne or Ouster packets, decoded by
+//! Sensor recordings to sweeps: a pcap of Velodyne, Ouster, Hesai or Livox packets, decoded by
 //! `kiss-odom-sensors`, one [`Sweep`] at a time with per-point times and per-sweep packet
 //! statistics.
 //!
 //! The sensor is told by the options or found in the capture: Velodyne data packets are 1206
 //! bytes on port 2368 unless `--port` says otherwise (the model is in each packet's product
 //! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
-//! need the sensor's metadata JSON (`--meta`). Only one sender is decoded: the first whose
+//! need the sensor's metadata JSON (`--meta`), Hesai PandarXT-32 packets are 1076 or 1080 bytes
+//! on port 2368 (found there without `--sensor xt32` when no Velodyne packets are), Livox SDK 1
+//! packets come to port 56001 (found there without `--sensor livox`; their IMU packets are
+//! counted, not decoded into points). Only one sender is decoded: the first whose
 //! packets decode on the port; other senders on that port (a second sensor) are skipped,
 //! counted as another sensor's in the sweep they arrive in and named in the [`PcapReport`].
 //! Damage confined to a packet is a counted skip in the sweep's statistics; a capture with no
@@ -15,19 +18,22 @@
 //! capacity), however long the sensor takes to end it.
 
 use super::pcap::{self, Capture, Datagram, Record};
-use super::{ouster_meta, velodyne_calib};
+use super::{hesai_calib, ouster_meta, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
-    ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart, SweepStats,
+    hesai, livox, ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart,
+    SweepStats,
 };
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
-/// Velodyne data port.
+/// Velodyne data port (and Hesai's).
 pub const VELODYNE_PORT: u16 = 2368;
+/// Livox SDK 1 data port on the host.
+pub const LIVOX_PORT: u16 = 56001;
 /// Ouster lidar port (when the metadata does not say).
 pub const OUSTER_PORT: u16 = 7502;
 
@@ -96,6 +102,8 @@ pub struct PcapReport {
     pub refused: BTreeMap<String, u64>,
     /// Datagrams on the port from other senders (skipped).
     pub other_sources: BTreeMap<SocketAddr, u64>,
+    /// Livox IMU packets on the port (not decoded into points).
+    pub imu_packets: u64,
     /// Datagrams on other ports (skipped), by port.
     pub other_ports: BTreeMap<u16, u64>,
     /// Of those, datagrams of the sensor's data-packet length, by port: another sensor there?
@@ -142,6 +150,8 @@ impl PcapReport {
 enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
     Ouster(Box<ouster::Decoder>),
+    Hesai(Box<hesai::Decoder>),
+    Livox(Box<livox::Decoder>),
 }
 
 impl Decoder {
@@ -153,6 +163,8 @@ impl Decoder {
             r = match self {
                 Self::Velodyne(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
+                Self::Hesai(d) => d.push(bytes, sink),
+                Self::Livox(d) => d.push(bytes, sink),
             };
             if r != Ok(Pushed::Again) {
                 break;
@@ -164,12 +176,16 @@ impl Decoder {
         match self {
             Self::Velodyne(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
+            Self::Hesai(d) => d.finish(sink),
+            Self::Livox(d) => d.finish(sink),
         }
     }
     fn between_sweeps(&self) -> SweepStats {
         match self {
             Self::Velodyne(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
+            Self::Hesai(d) => *d.between_sweeps(),
+            Self::Livox(d) => *d.between_sweeps(),
         }
     }
 }
@@ -386,17 +402,26 @@ pub fn decode(
             SensorKind::PuckHiRes => Some(Model::PuckHiRes),
             SensorKind::Vlp32c => Some(Model::Vlp32c),
             SensorKind::Hdl32e => Some(Model::Hdl32e),
-            SensorKind::Auto | SensorKind::Ouster => None,
+            _ => None,
         };
+        if matches!(opts.sensor, SensorKind::Livox | SensorKind::Mid40) {
+            return livox_decoder(path, capture, opts, opts.port.unwrap_or(LIVOX_PORT));
+        }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
-        if opts.port.is_none() {
+        let mut hesai = opts.sensor == SensorKind::Xt32;
+        if opts.port.is_none() && !hesai {
             let s = survey(path)?;
             let data = s
                 .seen
                 .keys()
                 .any(|(_, len)| *len == velodyne::wire::field::LEN)
                 || s.damaged.contains(&port);
-            if !data {
+            let auto = !data && opts.sensor == SensorKind::Auto;
+            hesai = auto && s.seen.keys().any(is_hesai);
+            if auto && !hesai && s.seen.keys().any(is_livox) {
+                return livox_decoder(path, capture, opts, LIVOX_PORT);
+            }
+            if !data && !hesai {
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
                     bail!(
                         "{}: packets on port {OUSTER_PORT} look like an Ouster's: give its \
@@ -405,11 +430,14 @@ pub fn decode(
                     );
                 }
                 bail!(
-                    "{}: no Velodyne data packets (1206 bytes); {}",
+                    "{}: no Velodyne (1206 bytes) or Hesai (1080 bytes on port 2368) data packets; {}",
                     path.display(),
                     describe(&s)
                 );
             }
+        }
+        if hesai {
+            return hesai_decoder(path, capture, opts, port);
         }
         let calibration = opts
             .calibration
@@ -428,13 +456,101 @@ pub fn decode(
             "Velodyne".to_string(),
         )
     };
-    Ok(PcapSweeps {
+    Ok(sweeps(path, capture, decoder, opts, (port, sensor, notes)))
+}
+
+/// Whether packets of this port and length look like a PandarXT-32's on its default port.
+fn is_hesai(&(port, len): &(u16, usize)) -> bool {
+    port == VELODYNE_PORT
+        && (len == hesai::wire::field::LEN || len == hesai::wire::field::LEN_WITH_SEQUENCE)
+}
+
+/// Whether packets of this port and length look like Livox SDK 1 point packets.
+fn is_livox(&(port, len): &(u16, usize)) -> bool {
+    port == LIVOX_PORT
+        && (0..6).any(|t| {
+            livox::wire::layout(t)
+                .is_some_and(|(size, n)| len == livox::wire::field::DATA + size * n)
+        })
+}
+
+/// The Livox SDK 1 decoder.
+fn livox_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    port: u16,
+) -> Result<PcapSweeps> {
+    let (model, name) = match opts.sensor {
+        SensorKind::Mid40 => (livox::Model::Mid40, "Livox Mid-40/70"),
+        _ => (livox::Model::Horizon, "Livox Horizon/Tele-15/Avia"),
+    };
+    let mut config = livox::Config {
+        model,
+        ..livox::Config::default()
+    };
+    if let Some(p) = opts.frame_period_s {
+        if !(p.is_finite() && p > 0.0) {
+            bail!("--frame-period {p}: give a positive number of seconds");
+        }
+        config.frame_period_ns = (p * 1e9).round() as u64;
+    }
+    let dec = livox::Decoder::new(config).map_err(|e| anyhow!("--frame-period: {e}"))?;
+    let decoder = Decoder::Livox(Box::new(dec));
+    Ok(sweeps(
+        path,
+        capture,
+        decoder,
+        opts,
+        (port, name.to_string(), Vec::new()),
+    ))
+}
+
+/// The PandarXT-32 decoder, with the angle correction file if one is given.
+fn hesai_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    port: u16,
+) -> Result<PcapSweeps> {
+    let calibration = opts
+        .calibration
+        .as_deref()
+        .map(hesai_calib::read)
+        .transpose()?;
+    let config = hesai::Config {
+        calibration,
+        cut_angle_deg: opts.cut_angle_deg,
+    };
+    let dec = hesai::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let sensor = "Hesai PandarXT-32".to_string();
+    let decoder = Decoder::Hesai(Box::new(dec));
+    Ok(sweeps(
+        path,
+        capture,
+        decoder,
+        opts,
+        (port, sensor, Vec::new()),
+    ))
+}
+
+fn sweeps(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    decoder: Decoder,
+    opts: &SensorOptions,
+    (port, sensor, notes): (u16, String, Vec<String>),
+) -> PcapSweeps {
+    PcapSweeps {
         path: path.to_path_buf(),
         capture,
         decoder,
         sink: Collect::default(),
         meta_path: opts.meta.clone(),
-        model_given: !matches!(opts.sensor, SensorKind::Auto | SensorKind::Ouster),
+        model_given: matches!(
+            opts.sensor,
+            SensorKind::Vlp16 | SensorKind::PuckHiRes | SensorKind::Vlp32c | SensorKind::Hdl32e
+        ),
         report: PcapReport {
             sensor,
             port,
@@ -443,7 +559,7 @@ pub fn decode(
         },
         fatal: None,
         finished: false,
-    })
+    }
 }
 
 impl PcapSweeps {
@@ -476,6 +592,9 @@ impl PcapSweeps {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
             Decoder::Ouster(d) => d.layout().packet_len(),
+            Decoder::Hesai(_) => hesai::wire::field::LEN_WITH_SEQUENCE,
+            // Data type 2, the SDK's default.
+            Decoder::Livox(_) => 1362,
         }
     }
 
@@ -497,6 +616,13 @@ impl PcapSweeps {
                 *r.data_elsewhere.entry(port).or_insert(0) += 1;
             }
             return;
+        }
+        // Livox IMU packets come to the data port from another source port.
+        if let (Decoder::Livox(_), Record::Datagram(d)) = (&self.decoder, &record) {
+            if livox::Packet::new_checked(&d.payload).is_ok_and(|p| p.imu().is_some()) {
+                r.imu_packets += 1;
+                return;
+            }
         }
         if r.source.is_some_and(|s| s != source) {
             *r.other_sources.entry(source).or_insert(0) += 1;
