@@ -240,6 +240,11 @@ def sensor_seeds():
         body = b"".join(bytes([0]) + ouster_packet(profile, 2, fid, first)
                         for fid in (3, 4) for first in range(0, 64, 4))
         put("ouster_packets", name, head + body)
+    hesai = udp_payloads(data.parent / "hesai" / "hesai-xt32-small.pcap", 2368)[:3]
+    put("hesai_packets", "xt32-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in hesai))
+    livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]
+    put("livox_packets", "tele15-6-packets",
+        bytes([0]) + b"".join(struct.pack("<H", 0x8000 | len(p)) + p for p in livox))
     put("sensor_pcap", "vli16-one-packet", (data / "VLI-16-one-packet.pcap").read_bytes())
     put("sensor_pcap", "vlp16-5-records", pcap_records(data / "velodyne_vlp16.pcap", 5))
 

@@ -101,7 +101,7 @@ fn packets_of_the_wrong_length_or_unknown_model_name_the_file_and_reason() {
     let e = err(&path, &SensorOptions::default());
     println!("{e}");
     assert!(
-        e.contains("unknown.pcap") && e.contains("unknown Velodyne model byte"),
+        e.contains("unknown.pcap") && e.contains("unknown model (Velodyne product byte"),
         "{e}"
     );
 }
