@@ -19,7 +19,7 @@ VENV=target/wheelvenv
 if ! "$VENV/bin/python" -c "import ziglang, auditwheel" 2>/dev/null ||
   ! [ -x "$VENV/bin/maturin" ]; then
   python3 -m venv "$VENV"
-  "$VENV/bin/pip" install --quiet maturin==1.16.0 ziglang==0.17.0 auditwheel==6.8.2
+  "$VENV/bin/pip" install --quiet -r python/wheel-requirements.txt
 fi
 export PATH="$PWD/$VENV/bin:$PATH"
 
