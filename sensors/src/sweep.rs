@@ -387,3 +387,13 @@ impl LateRun {
         self.0 = None;
     }
 }
+
+/// Packets missing in a time step of `step` between two consecutive packets sent `period`
+/// apart: none up to one and a half periods, else the step in whole periods less one.
+pub(crate) fn lost_in_step(step: f64, period: f64) -> u32 {
+    if step > 1.5 * period {
+        (libm::round(step / period) - 1.0).min(f64::from(u32::MAX)) as u32
+    } else {
+        0
+    }
+}

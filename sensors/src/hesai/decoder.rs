@@ -5,8 +5,8 @@ use super::model::{point_offset_ns, Config, ReturnMode, CHANNELS, DISTANCE_UNIT_
 use super::wire::{field, Packet};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
-    Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink,
-    SweepStats,
+    lost_in_step, Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd,
+    SweepSink, SweepStats,
 };
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
@@ -178,12 +178,7 @@ impl Decoder {
             }
         }
         let period = (field::BLOCKS / returns) as f64 * super::model::FIRING_NS as f64;
-        let d = step_ns as f64;
-        if d > 1.5 * period {
-            (libm::round(d / period) - 1.0).min(f64::from(u32::MAX)) as u32
-        } else {
-            0
-        }
+        lost_in_step(step_ns as f64, period)
     }
 
     /// Every return of a checked packet of time `t` (ns).

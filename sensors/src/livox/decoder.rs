@@ -5,7 +5,8 @@ use super::wire::{Packet, IMU};
 use super::{Config, Model};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
-    Assembly, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink, SweepStats,
+    lost_in_step, Assembly, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink,
+    SweepStats,
 };
 
 /// Packets more than this apart (sensor time) are not one frame's: the sensor stopped, or the
@@ -124,12 +125,7 @@ impl Decoder {
             }
             self.asm.begin(sink, self.frame_start, None);
         }
-        let lost = match step {
-            Some(s) if s as f64 > 1.5 * self.packet_ns(&p) => {
-                (libm::round(s as f64 / self.packet_ns(&p)) - 1.0).min(f64::from(u32::MAX)) as u32
-            }
-            _ => 0,
-        };
+        let lost = step.map_or(0, |s| lost_in_step(s as f64, self.packet_ns(&p)));
         self.decode(&p, t, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);

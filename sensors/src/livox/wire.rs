@@ -65,6 +65,14 @@ pub const fn layout(data_type: u8) -> Option<(usize, usize)> {
     })
 }
 
+/// Bytes of a packet of a data type, header included.
+pub const fn packet_len(data_type: u8) -> Option<usize> {
+    match layout(data_type) {
+        Some((size, count)) => Some(field::DATA + size * count),
+        None => None,
+    }
+}
+
 /// One return: metres in the sensor frame (x forward, y left, z up), reflectivity and tag;
 /// `None` where the sensor saw nothing (all zero).
 pub type Return = Option<([f64; 3], u8, u8)>;

@@ -5,8 +5,8 @@ use super::model::{Calibration, Config, Model, MAX_LASERS};
 use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
-    wrap_azimuth as wrap, Assembly, AzimuthCut, Decode, PointMeta, Pushed, Return, SweepEnd,
-    SweepSink, SweepStats, RESYNC_PACKETS,
+    lost_in_step, wrap_azimuth as wrap, Assembly, AzimuthCut, Decode, PointMeta, Pushed, Return,
+    SweepEnd, SweepSink, SweepStats, RESYNC_PACKETS,
 };
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
@@ -310,10 +310,8 @@ impl Decoder {
         let mut lost = 0;
         let mut jump = false;
         if let Some(d) = step {
-            let packets = libm::round(d as f64 / period);
-            if d as f64 > 1.5 * period {
-                lost = (packets - 1.0).min(f64::from(u32::MAX)) as u32;
-            } else {
+            lost = lost_in_step(d as f64, period);
+            if lost == 0 {
                 let span = wrap(i32::from(last_az) - i32::from(first_az));
                 let blocks = match sensor.mode {
                     Mode::Single(_) => field::BLOCKS - 1,

@@ -467,11 +467,7 @@ fn is_hesai(&(port, len): &(u16, usize)) -> bool {
 
 /// Whether packets of this port and length look like Livox SDK 1 point packets.
 fn is_livox(&(port, len): &(u16, usize)) -> bool {
-    port == LIVOX_PORT
-        && (0..6).any(|t| {
-            livox::wire::layout(t)
-                .is_some_and(|(size, n)| len == livox::wire::field::DATA + size * n)
-        })
+    port == LIVOX_PORT && (0..6).any(|t| livox::wire::packet_len(t) == Some(len))
 }
 
 /// The Livox SDK 1 decoder.
@@ -594,7 +590,7 @@ impl PcapSweeps {
             Decoder::Ouster(d) => d.layout().packet_len(),
             Decoder::Hesai(_) => hesai::wire::field::LEN_WITH_SEQUENCE,
             // Data type 2, the SDK's default.
-            Decoder::Livox(_) => 1362,
+            Decoder::Livox(_) => livox::wire::packet_len(2).unwrap_or(0),
         }
     }
 
