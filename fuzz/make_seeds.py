@@ -245,8 +245,27 @@ def sensor_seeds():
     livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]
     put("livox_packets", "tele15-6-packets",
         bytes([0]) + b"".join(struct.pack("<H", 0x8000 | len(p)) + p for p in livox))
+    put("livox_packets", "mid360-sdk2-packets", bytes([2 | 4]) + b"".join(
+        struct.pack("<H", 0x8000 | len(p)) + p for p in livox_sdk2_packets()))
     put("sensor_pcap", "vli16-one-packet", (data / "VLI-16-one-packet.pcap").read_bytes())
     put("sensor_pcap", "vlp16-5-records", pcap_records(data / "velodyne_vlp16.pcap", 5))
+
+
+def livox_sdk2_packets():
+    """Livox SDK 2 (Mid-360) packets: each point data type (1, 2, 3, 0x11) and an IMU sample,
+    96 points 5 us apart, CRC-32 over the timestamp and data as the sensor writes it."""
+    import zlib
+    out, t = [], 1_000_000_000
+    sizes = {0: 24, 1: 14, 2: 8, 3: 10, 0x11: 28}
+    for data_type in (1, 2, 3, 0x11, 0):
+        n = 1 if data_type == 0 else 96
+        body = bytes(rng.randrange(256) for _ in range(sizes[data_type] * n))
+        stamped = struct.pack("<Q", t) + body
+        head = struct.pack("<BHHHHBBB12s", 0, 36 + len(body), 4800, n, len(out), 0, data_type, 0,
+                           bytes(12))
+        out.append(head + struct.pack("<I", zlib.crc32(stamped)) + stamped)
+        t += 480_000
+    return out
 
 
 def ethernet_frames(path, count):

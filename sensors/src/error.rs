@@ -18,8 +18,12 @@ pub enum PacketError {
     StartBytes,
     /// A Hesai packet of a protocol version this crate does not decode (another Hesai model
     /// on the port; skip it; if every packet says so, the sensor is not a PandarXT-32), or a
-    /// Livox packet whose version byte is not SDK 1's 5 (an SDK 2 sensor?).
+    /// Livox packet whose version byte is not its protocol's (SDK 1: 5, SDK 2: 0; if every
+    /// packet says so, give the other model).
     Version,
+    /// A Livox SDK 2 packet whose CRC-32 does not match its bytes: corrupted on the way. Skip
+    /// it.
+    Checksum,
     /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.
     BlockFlag,
     /// A Velodyne or Hesai azimuth at or above 360.00 degrees: corrupted. Skip it.
@@ -65,7 +69,10 @@ impl core::fmt::Display for PacketError {
                 "packet longer than the format's length (another packet kind or profile)"
             }
             Self::StartBytes => "not the format's start bytes (Hesai: EE FF)",
-            Self::Version => "a protocol version not decoded (Hesai: 6.1 only; Livox: SDK 1)",
+            Self::Version => {
+                "a protocol version not decoded (Hesai: 6.1 only; Livox: not the model's SDK)"
+            }
+            Self::Checksum => "CRC does not match the packet's bytes (corrupted)",
             Self::BlockFlag => "a data block without its 0xFFEE flag",
             Self::Azimuth => "an azimuth of 360 degrees or more",
             Self::Timestamp => "a timestamp of one hour or more",

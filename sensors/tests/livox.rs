@@ -1,7 +1,7 @@
 //! The Livox SDK 1 decoder on synthetic packets: every data type's geometry, per-point times,
 //! frames by time, and how lost, late, foreign and malformed packets are counted.
 
-use kiss_odom_sensors::livox::{self, wire, Model};
+use kiss_odom_sensors::livox::{self, sdk1, Model};
 mod common;
 
 use common::{feed, with, Log};
@@ -12,7 +12,7 @@ const T0: u64 = 1_726_588_075_299_964_555;
 /// A packet of `data_type` at `t` ns whose firing `k` returns the point (1 + k, 2, -0.5) m
 /// (the second return twice as far), reflectivity k and tag 16; firing 3 returns nothing.
 fn packet(data_type: u8, t: u64) -> Vec<u8> {
-    let (size, n) = wire::layout(data_type).unwrap();
+    let (size, n) = sdk1::layout(data_type).unwrap();
     let mut b = vec![0u8; 18 + size * n];
     b[0..4].copy_from_slice(&[5, 1, 1, 0]);
     b[8] = 1;
@@ -84,7 +84,7 @@ fn every_data_type_gives_the_same_points_at_their_firing_times() {
         let mut log = Log::default();
         feed(&mut dec, &packet(data_type, T0), &mut log).unwrap();
         dec.finish(&mut log);
-        let (_, n) = wire::layout(data_type).unwrap();
+        let (_, n) = sdk1::layout(data_type).unwrap();
         let dual = matches!(data_type, 4 | 5);
         assert_eq!(
             log.points.len(),
@@ -185,11 +185,11 @@ fn gps_time_is_a_utc_date_and_microseconds_in_the_hour() {
     // 2024-09-17 15h, 47 min 55.2999 s into the hour.
     b[10..14].copy_from_slice(&[24, 9, 17, 15]);
     b[14..18].copy_from_slice(&2_875_299_964u32.to_le_bytes());
-    let p = livox::Packet::new_checked(&b).unwrap();
+    let p = livox::sdk1::Packet::new_checked(&b).unwrap();
     assert_eq!(p.time_ns(), Some(T0 - 555));
     b[12] = 31;
     assert_eq!(
-        livox::Packet::new_checked(&b).err(),
+        livox::sdk1::Packet::new_checked(&b).err(),
         Some(PacketError::Timestamp)
     );
 }
@@ -217,7 +217,10 @@ fn imu_late_foreign_and_damaged_packets_are_refused_and_counted() {
     let mut imu = packet(6, T0 + 800_000);
     imu[18..22].copy_from_slice(&0.5f32.to_le_bytes());
     imu[38..42].copy_from_slice(&(-1.0f32).to_le_bytes());
-    let sample = livox::Packet::new_checked(&imu).unwrap().imu().unwrap();
+    let sample = livox::sdk1::Packet::new_checked(&imu)
+        .unwrap()
+        .imu()
+        .unwrap();
     assert_eq!((sample.gyro[0], sample.accel_g[2]), (0.5, -1.0));
     assert_eq!(feed(&mut dec, &imu, &mut log), Err(PacketError::PacketType));
     let cases: [(Vec<u8>, PacketError); 5] = [

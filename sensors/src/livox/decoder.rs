@@ -1,8 +1,7 @@
 //! Livox packets to frames: checks, order and loss detection by the packets' times, the cut
 //! every frame period, then each return to a point.
 
-use super::wire::{Packet, IMU};
-use super::{Config, Model};
+use super::{sdk1, sdk2, Config, Model};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     lost_in_step, Assembly, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink,
@@ -13,7 +12,7 @@ use crate::sweep::{
 /// recording has a hole; the next packet begins a new frame.
 pub const GAP_NS: u64 = 300_000_000;
 
-/// Livox SDK 1 packets in, frames out (see the module doc of [`crate::livox`]).
+/// Livox packets in, frames out (see the module doc of [`crate::livox`]).
 ///
 /// ```
 /// use kiss_odom_sensors::{livox, Chunk, Decode, SweepSink, SweepStart, SweepStats};
@@ -31,7 +30,7 @@ pub const GAP_NS: u64 = 300_000_000;
 pub struct Decoder {
     model: Model,
     period: u64,
-    /// Sender (slot, lidar id) and data type, fixed by the first packet decoded.
+    /// Sender (SDK 1 slot and lidar id) and data type, fixed by the first packet decoded.
     sender: Option<((u8, u8), u8)>,
     last_ns: Option<u64>,
     /// The open frame's start, ns.
@@ -57,11 +56,16 @@ impl Decoder {
         })
     }
 
+    /// The model decoded.
+    pub fn model(&self) -> Model {
+        self.model
+    }
+
     fn identify(&mut self, p: &Packet<'_>) -> Result<(), PacketError> {
-        if p.data_type() == IMU {
+        if p.is_imu() {
             return Err(PacketError::PacketType);
         }
-        let id = (p.sender(), p.data_type());
+        let id = p.identity();
         match self.sender {
             Some(s) if s != id => Err(PacketError::OtherSensor),
             Some(_) => Ok(()),
@@ -72,15 +76,10 @@ impl Decoder {
         }
     }
 
-    /// Time a packet's firings span, ns.
-    fn packet_ns(&self, p: &Packet<'_>) -> f64 {
-        p.firings() as f64 * self.model.firing_ns()
-    }
-
     fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
-        let p = Packet::new_checked(bytes)?;
+        let p = Packet::new_checked(bytes, self.model)?;
         self.identify(&p)?;
-        let t = p.time_ns().ok_or(PacketError::Timestamp)?;
+        let t = p.time_ns();
         let mut step = None;
         if let Some(last) = self.last_ns {
             if t <= last {
@@ -125,7 +124,7 @@ impl Decoder {
             }
             self.asm.begin(sink, self.frame_start, None);
         }
-        let lost = step.map_or(0, |s| lost_in_step(s as f64, self.packet_ns(&p)));
+        let lost = step.map_or(0, |s| lost_in_step(s as f64, p.span_ns()));
         self.decode(&p, t, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
@@ -137,8 +136,9 @@ impl Decoder {
     fn decode<S: SweepSink>(&mut self, p: &Packet<'_>, t: u64, sink: &mut S) {
         let base = (t - self.frame_start) as f64;
         let dual = p.returns() == 2;
+        let firing_ns = p.firing_ns();
         for k in 0..p.firings() {
-            let time = (base + k as f64 * self.model.firing_ns()) * 1e-9;
+            let time = (base + k as f64 * firing_ns) * 1e-9;
             for r in 0..p.returns() {
                 let Some((xyz, reflectivity, tag)) = p.point(k, r) else {
                     continue;
@@ -155,6 +155,76 @@ impl Decoder {
                 };
                 self.asm.push(sink, xyz, time, meta);
             }
+        }
+    }
+}
+
+/// A checked packet of either protocol, as the decoder reads it.
+enum Packet<'a> {
+    Sdk1(sdk1::Packet<'a>, f64),
+    Sdk2(sdk2::Packet<'a>),
+}
+
+impl<'a> Packet<'a> {
+    /// The model says the protocol (and, on SDK 1, the firing interval).
+    fn new_checked(bytes: &'a [u8], model: Model) -> Result<Self, PacketError> {
+        Ok(match model.firing_ns() {
+            Some(firing_ns) => {
+                let p = sdk1::Packet::new_checked(bytes)?;
+                Self::Sdk1(p, firing_ns)
+            }
+            None => Self::Sdk2(sdk2::Packet::new_checked(bytes)?),
+        })
+    }
+    /// What must stay the same from packet to packet: SDK 1's slot and lidar id, the data type.
+    fn identity(&self) -> ((u8, u8), u8) {
+        match self {
+            Self::Sdk1(p, _) => (p.sender(), p.data_type()),
+            Self::Sdk2(p) => ((0, 0), p.data_type()),
+        }
+    }
+    fn is_imu(&self) -> bool {
+        match self {
+            Self::Sdk1(p, _) => p.imu().is_some(),
+            Self::Sdk2(p) => p.imu().is_some(),
+        }
+    }
+    fn time_ns(&self) -> u64 {
+        match self {
+            // Checked by `new_checked`.
+            Self::Sdk1(p, _) => p.time_ns().unwrap_or(0),
+            Self::Sdk2(p) => p.time_ns(),
+        }
+    }
+    fn firings(&self) -> usize {
+        match self {
+            Self::Sdk1(p, _) => p.firings(),
+            Self::Sdk2(p) => p.firings(),
+        }
+    }
+    fn returns(&self) -> usize {
+        match self {
+            Self::Sdk1(p, _) => p.returns(),
+            Self::Sdk2(p) => p.returns(),
+        }
+    }
+    fn firing_ns(&self) -> f64 {
+        match self {
+            Self::Sdk1(_, firing_ns) => *firing_ns,
+            Self::Sdk2(p) => p.firing_ns(),
+        }
+    }
+    /// Time a packet's firings span, ns.
+    fn span_ns(&self) -> f64 {
+        match self {
+            Self::Sdk1(p, firing_ns) => p.firings() as f64 * firing_ns,
+            Self::Sdk2(p) => p.span_ns(),
+        }
+    }
+    fn point(&self, k: usize, r: usize) -> sdk1::Return {
+        match self {
+            Self::Sdk1(p, _) => p.point(k, r),
+            Self::Sdk2(p) => p.point(k, r),
         }
     }
 }

@@ -23,6 +23,7 @@
 //! | 5 | zenith, azimuth, two returns of depth, reflectivity, tag | 16 | 48 |
 //! | 6 | IMU: gyroscope x, y, z (f32 rad/s), accelerometer x, y, z (f32 g) | 24 | 1 |
 
+use super::{at, byte, spherical, ImuSample};
 use crate::error::PacketError;
 
 /// Byte ranges of the header.
@@ -77,16 +78,6 @@ pub const fn packet_len(data_type: u8) -> Option<usize> {
 /// `None` where the sensor saw nothing (all zero).
 pub type Return = Option<([f64; 3], u8, u8)>;
 
-/// One IMU sample.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct ImuSample {
-    /// Angular rate, rad/s.
-    pub gyro: [f32; 3],
-    /// Specific force, in g (standard gravities) as the sensor sends it.
-    pub accel_g: [f32; 3],
-}
-
 /// A checked view of a data packet: the version, data type and length agree, and the
 /// timestamp is one this crate reads.
 #[derive(Clone, Copy, Debug)]
@@ -94,18 +85,6 @@ pub struct Packet<'a> {
     buf: &'a [u8],
     size: usize,
     count: usize,
-}
-
-fn at<const N: usize>(b: &[u8], from: usize) -> [u8; N] {
-    let mut out = [0u8; N];
-    if let Some(s) = b.get(from..from + N) {
-        out.copy_from_slice(s);
-    }
-    out
-}
-
-fn byte(b: &[u8], i: usize) -> u8 {
-    b.get(i).copied().unwrap_or(0)
 }
 
 impl<'a> Packet<'a> {
@@ -200,30 +179,21 @@ impl<'a> Packet<'a> {
             (xyz != [0.0; 3]).then_some((xyz, byte(b, base + o + 12), tag))
         };
         // Offsets of the zenith (the azimuth follows it), depth, reflectivity and tag.
-        let spherical = |angles: usize, o: usize, refl: usize, tag: Option<usize>| {
+        let polar = |angles: usize, o: usize, refl: usize, tag: Option<usize>| {
             let depth = f64::from(u32::from_le_bytes(at(b, base + o))) * 1e-3;
             let zenith = f64::from(u16::from_le_bytes(at(b, base + angles))) * 0.01;
             let azimuth = f64::from(u16::from_le_bytes(at(b, base + angles + 2))) * 0.01;
-            let (st, ct) = (
-                libm::sin(zenith.to_radians()),
-                libm::cos(zenith.to_radians()),
-            );
-            let (sp, cp) = (
-                libm::sin(azimuth.to_radians()),
-                libm::cos(azimuth.to_radians()),
-            );
-            let xyz = [depth * st * cp, depth * st * sp, depth * ct];
             let tag = tag.map_or(0, |t| byte(b, base + t));
-            (depth > 0.0).then_some((xyz, byte(b, base + refl), tag))
+            (depth > 0.0).then_some((spherical(depth, zenith, azimuth), byte(b, base + refl), tag))
         };
         match (self.data_type(), r) {
             (0 | 2, 0) => cartesian(0),
             (4, 0) => cartesian(0),
             (4, 1) => cartesian(14),
-            (1, 0) => spherical(4, 0, 8, None),
-            (3, 0) => spherical(4, 0, 8, Some(9)),
-            (5, 0) => spherical(0, 4, 8, Some(9)),
-            (5, 1) => spherical(0, 10, 14, Some(15)),
+            (1, 0) => polar(4, 0, 8, None),
+            (3, 0) => polar(4, 0, 8, Some(9)),
+            (5, 0) => polar(0, 4, 8, Some(9)),
+            (5, 1) => polar(0, 10, 14, Some(15)),
             _ => None,
         }
     }
@@ -232,10 +202,6 @@ impl<'a> Packet<'a> {
         if self.data_type() != IMU {
             return None;
         }
-        let f = |i: usize| f32::from_le_bytes(at(self.buf, field::DATA + 4 * i));
-        Some(ImuSample {
-            gyro: [f(0), f(1), f(2)],
-            accel_g: [f(3), f(4), f(5)],
-        })
+        Some(ImuSample::read(self.buf, field::DATA))
     }
 }
