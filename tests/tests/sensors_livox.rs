@@ -13,7 +13,7 @@ const FILE: &str = "livox/livox_tele15_small.pcap";
 
 /// Our decoder on every point packet (IMU packets are counted, as the readers do).
 fn decode_all(payloads: &[Vec<u8>]) -> (Points, usize) {
-    let is_imu = |p: &[u8]| livox::Packet::new_checked(p).is_ok_and(|p| p.imu().is_some());
+    let is_imu = |p: &[u8]| livox::sdk1::Packet::new_checked(p).is_ok_and(|p| p.imu().is_some());
     let points: Vec<&[u8]> = payloads
         .iter()
         .map(Vec::as_slice)
@@ -24,7 +24,15 @@ fn decode_all(payloads: &[Vec<u8>]) -> (Points, usize) {
         .iter()
         .enumerate()
         .filter(|(_, p)| !is_imu(p))
-        .map(|(n, p)| (livox::Packet::new_checked(p).unwrap().time_ns().unwrap(), n))
+        .map(|(n, p)| {
+            (
+                livox::sdk1::Packet::new_checked(p)
+                    .unwrap()
+                    .time_ns()
+                    .unwrap(),
+                n,
+            )
+        })
         .collect();
     let mut log = decode(
         livox::Decoder::new(livox::Config::default()).unwrap(),
@@ -32,7 +40,7 @@ fn decode_all(payloads: &[Vec<u8>]) -> (Points, usize) {
     );
     // Points reach the sink in chunks, not packet by packet: each point's packet is the one
     // stamped at its time less its firing's offset (every stamp is distinct).
-    let firing = livox::Model::Horizon.firing_ns();
+    let firing = livox::Model::Horizon.firing_ns().unwrap_or(0.0);
     for (n, _, (start, t), m) in &mut log.points {
         let offset = (f64::from(m.column) * firing).round() as i64;
         let stamp = (*start as i64 + (*t * 1e9).round() as i64 - offset) as u64;
@@ -145,7 +153,7 @@ fn points_equal_cu_livox_parsers() {
         worst = worst.max(e);
         worst_rel = worst_rel.max(e / d);
         assert_eq!((m.intensity, m.ring), (refl, tag));
-        let packet = livox::Packet::new_checked(&payloads[n])
+        let packet = livox::sdk1::Packet::new_checked(&payloads[n])
             .unwrap()
             .time_ns()
             .unwrap();

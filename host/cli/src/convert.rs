@@ -6,7 +6,8 @@
 //! `velodyne/NNNNNN.bin` (float32 x, y, z, intensity; intensity 0 where the reader keeps none)
 //! and, when it has per-point times, `timestamps/NNNNNN.bin` (float64, as the reader gives
 //! them: seconds since the sweep began for a sensor recording); `times.txt` has the frame
-//! times when every frame from 0 on has one. A frame that cannot be read is left out with a warning
+//! times when every frame from 0 on has one; `imu.csv` ([`kiss_odom_io::imu`]) the IMU
+//! samples that came with the frames written, where the sensor sends them. A frame that cannot be read is left out with a warning
 //! (the generic reader sees the gap); a damaged container ends the conversion with its error
 //! after the frames before it. Every file is written under a temporary name and renamed when
 //! complete ([`kiss_odom_io::write`]), so a full disk or a signal leaves whole frames only.
@@ -56,6 +57,7 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
     create(&frames_dir)?;
     let range = args.input.range();
     let (mut written, mut times) = (0usize, Some(String::new()));
+    let mut imu = String::new();
     let stamps_dir = args.out.join("timestamps");
     let end = loop {
         if let Some(sig) = crate::interrupt::requested() {
@@ -90,6 +92,9 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
             create(&stamps_dir)?;
             generic::write_timestamps(&stamps_dir.join(&name), stamps)?;
         }
+        for sample in &frame.imu {
+            sample.push_csv_row(&mut imu);
+        }
         // Row k of times.txt is frame k's: only a run of frames from 0 without gaps has one.
         times = match (times, frame.time) {
             (Some(mut text), Some(t)) if frame.index == written => {
@@ -105,6 +110,10 @@ pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
     }
     if let Some(text) = times.filter(|_| written > 0) {
         kiss_odom_io::write::write(&args.out.join("times.txt"), text.as_bytes())?;
+    }
+    if !imu.is_empty() {
+        let text = format!("{}\n{imu}", kiss_odom_io::imu::CSV_HEADER);
+        kiss_odom_io::write::write(&args.out.join(kiss_odom_io::imu::CSV_NAME), text.as_bytes())?;
     }
     if !args.quiet {
         println!("{written} frames written to {}", args.out.display());

@@ -40,6 +40,9 @@ pub struct Frame {
     pub intensity: Option<Vec<f32>>,
     /// For a sweep decoded from sensor packets: its packet statistics and time span.
     pub sweep: Option<SweepInfo>,
+    /// IMU samples that arrived with the frame (sensor captures whose sensor sends them),
+    /// in arrival order; every sample of a recording is in exactly one frame.
+    pub imu: Vec<crate::imu::ImuSample>,
 }
 
 /// What a source yields.
@@ -234,6 +237,9 @@ pub enum SensorKind {
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).
     Mid40,
+    /// Livox Mid-360 or HAP (SDK 2; each packet states its points' interval).
+    #[cfg_attr(feature = "clap", value(alias = "hap"))]
+    Mid360,
 }
 
 /// How to read a recording.

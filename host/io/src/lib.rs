@@ -12,12 +12,14 @@
 //! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`.
 //!
 //! [`poses`] reads and writes trajectories (KITTI, TUM), [`metrics`] scores them against ground
-//! truth as kiss-icp does, [`pose`] holds the pose helpers they share, and [`mod@write`] is how
+//! truth as kiss-icp does, [`imu`] holds the IMU samples sensor captures carry beside their
+//! frames and their `imu.csv`, [`pose`] holds the pose helpers they share, and [`mod@write`] is how
 //! every file is written: whole or not at all. Nothing here depends on the command line.
 
 pub mod capture;
 pub mod dataset;
 pub mod folders;
+pub mod imu;
 pub mod metrics;
 pub mod open;
 pub mod pose;

@@ -29,6 +29,8 @@ pub struct OusterMeta {
     pub firmware: String,
     /// UDP port of the lidar packets, if the metadata says.
     pub udp_port_lidar: Option<u16>,
+    /// UDP port of the IMU packets, if the metadata says (0 is "not set").
+    pub udp_port_imu: Option<u16>,
     /// `lidar_mode`, e.g. `1024x10`.
     pub lidar_mode: String,
     /// What is odd but decodes correctly, one line each.
@@ -65,6 +67,7 @@ struct Ident {
 struct Config {
     udp_profile_lidar: Option<String>,
     udp_port_lidar: Option<u16>,
+    udp_port_imu: Option<u16>,
     lidar_mode: Option<String>,
 }
 
@@ -201,6 +204,7 @@ pub fn parse(text: &str) -> Result<OusterMeta> {
         serial,
         firmware: ident.build_rev.unwrap_or_default(),
         udp_port_lidar: config.udp_port_lidar,
+        udp_port_imu: config.udp_port_imu.filter(|&p| p != 0),
         lidar_mode,
         warnings,
     })
@@ -225,7 +229,7 @@ mod tests {
         "pixel_shift_by_row": [12, 4], "column_window": [0, 511],
         "udp_profile_lidar": "RNG19_RFL8_SIG16_NIR16"},
       "sensor_info": {"prod_line": "OS-1-2", "prod_sn": "122201000998", "initialization_id": 7},
-      "config_params": {"udp_port_lidar": 7502, "lidar_mode": "512x10"}
+      "config_params": {"udp_port_lidar": 7502, "udp_port_imu": 0, "lidar_mode": "512x10"}
     }"#;
 
     #[test]
@@ -239,8 +243,8 @@ mod tests {
             (Some(122201000998), Some(7))
         );
         assert_eq!(
-            (m.udp_port_lidar, m.info.columns_per_frame),
-            (Some(7502), 512)
+            (m.udp_port_lidar, m.udp_port_imu, m.info.columns_per_frame),
+            (Some(7502), None, 512)
         );
     }
 

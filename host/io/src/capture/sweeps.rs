@@ -7,8 +7,9 @@
 //! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
 //! need the sensor's metadata JSON (`--meta`), Hesai PandarXT-32 packets are 1076 or 1080 bytes
 //! on port 2368 (found there without `--sensor xt32` when no Velodyne packets are), Livox SDK 1
-//! packets come to port 56001 (found there without `--sensor livox`; their IMU packets are
-//! counted, not decoded into points). Only one sender is decoded: the first whose
+//! packets come to port 56001 (found there without `--sensor livox`), Livox SDK 2 (Mid-360)
+//! packets to port 56301 (found there without `--sensor mid360`); Livox IMU packets (SDK 1 on
+//! the data port, SDK 2 on a port of their own) are counted, not decoded into points. Only one sender is decoded: the first whose
 //! packets decode on the port; other senders on that port (a second sensor) are skipped,
 //! counted as another sensor's in the sweep they arrive in and named in the [`PcapReport`].
 //! Damage confined to a packet is a counted skip in the sweep's statistics; a capture with no
@@ -20,6 +21,7 @@
 use super::pcap::{self, Capture, Datagram, Record};
 use super::{hesai_calib, ouster_meta, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
+use crate::imu::ImuSample;
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
@@ -34,8 +36,12 @@ use std::path::{Path, PathBuf};
 pub const VELODYNE_PORT: u16 = 2368;
 /// Livox SDK 1 data port on the host.
 pub const LIVOX_PORT: u16 = 56001;
+/// Livox SDK 2 point data port on the host (the Mid-360's default).
+pub const LIVOX2_PORT: u16 = 56301;
 /// Ouster lidar port (when the metadata does not say).
 pub const OUSTER_PORT: u16 = 7502;
+/// Ouster IMU port (when the metadata does not say).
+pub const OUSTER_IMU_PORT: u16 = 7503;
 
 /// One decoded sweep.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -54,6 +60,8 @@ pub struct Sweep {
     pub last_capture_ns: u64,
     /// Points the sweep had beyond the most it keeps ([`PcapSweeps::limit_points`]): dropped.
     pub beyond_capacity: u64,
+    /// IMU samples that arrived since the previous sweep ended, in arrival order.
+    pub imu: Vec<ImuSample>,
 }
 
 impl Sweep {
@@ -81,6 +89,7 @@ impl Sweep {
             warnings: Vec::new(),
             intensity: Some(self.meta.iter().map(|m| f32::from(m.intensity)).collect()),
             sweep: Some(sweep),
+            imu: self.imu,
         }
     }
 }
@@ -102,7 +111,8 @@ pub struct PcapReport {
     pub refused: BTreeMap<String, u64>,
     /// Datagrams on the port from other senders (skipped).
     pub other_sources: BTreeMap<SocketAddr, u64>,
-    /// Livox IMU packets on the port (not decoded into points).
+    /// IMU packets (Livox: on the data port or, SDK 2, their own; Ouster: on the metadata's
+    /// `udp_port_imu`, 7503 if unset), decoded into each sweep's [`Sweep::imu`].
     pub imu_packets: u64,
     /// Datagrams on other ports (skipped), by port.
     pub other_ports: BTreeMap<u16, u64>,
@@ -212,6 +222,8 @@ struct Collect {
     capture_ns: u64,
     capacity: usize,
     refused: Refused,
+    /// IMU samples since the last sweep ended: the next sweep's.
+    imu: Vec<ImuSample>,
     /// Sweeps ended so far.
     ended: u64,
 }
@@ -224,6 +236,7 @@ impl Default for Collect {
             capture_ns: 0,
             capacity: usize::MAX,
             refused: Refused::default(),
+            imu: Vec::new(),
             ended: 0,
         }
     }
@@ -253,6 +266,7 @@ impl SweepSink for Collect {
         if let Some(mut s) = self.current.take() {
             s.stats = *stats;
             std::mem::take(&mut self.refused).add_to(&mut s.stats);
+            s.imu = std::mem::take(&mut self.imu);
             self.done.push_back(s);
             self.ended += 1;
         }
@@ -296,6 +310,8 @@ pub struct PcapSweeps {
     meta_path: Option<PathBuf>,
     /// Whether `--sensor` named the Velodyne model.
     model_given: bool,
+    /// The Ouster IMU port.
+    imu_port: Option<u16>,
     report: PcapReport,
     /// Ouster packets contradicting the metadata before the first sweep: the stream's end.
     fatal: Option<anyhow::Error>,
@@ -374,8 +390,7 @@ pub fn decode(
     opts: &SensorOptions,
 ) -> Result<PcapSweeps> {
     let ouster = opts.meta.is_some() || opts.sensor == SensorKind::Ouster;
-    let mut notes = Vec::new();
-    let (decoder, port, sensor) = if ouster {
+    if ouster {
         let Some(meta_path) = &opts.meta else {
             bail!(
                 "{}: an Ouster recording needs the sensor's metadata JSON (--meta)",
@@ -390,13 +405,22 @@ pub fn decode(
             "Ouster {} {} ({})",
             meta.prod_line, meta.serial, meta.firmware
         );
-        notes.extend(
-            meta.warnings
-                .iter()
-                .map(|w| format!("{}: {w}", meta_path.display())),
+        let notes = meta
+            .warnings
+            .iter()
+            .map(|w| format!("{}: {w}", meta_path.display()))
+            .collect();
+        let mut s = sweeps(
+            path,
+            capture,
+            Decoder::Ouster(Box::new(dec)),
+            opts,
+            (port, name, notes),
         );
-        (Decoder::Ouster(Box::new(dec)), port, name)
-    } else {
+        s.imu_port = Some(meta.udp_port_imu.unwrap_or(OUSTER_IMU_PORT));
+        return Ok(s);
+    }
+    let (decoder, port, sensor) = {
         let model = match opts.sensor {
             SensorKind::Vlp16 => Some(Model::Vlp16),
             SensorKind::PuckHiRes => Some(Model::PuckHiRes),
@@ -404,8 +428,8 @@ pub fn decode(
             SensorKind::Hdl32e => Some(Model::Hdl32e),
             _ => None,
         };
-        if matches!(opts.sensor, SensorKind::Livox | SensorKind::Mid40) {
-            return livox_decoder(path, capture, opts, opts.port.unwrap_or(LIVOX_PORT));
+        if let Some(model) = livox_model(opts.sensor) {
+            return livox_decoder(path, capture, opts, model, opts.port);
         }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = opts.sensor == SensorKind::Xt32;
@@ -419,7 +443,10 @@ pub fn decode(
             let auto = !data && opts.sensor == SensorKind::Auto;
             hesai = auto && s.seen.keys().any(is_hesai);
             if auto && !hesai && s.seen.keys().any(is_livox) {
-                return livox_decoder(path, capture, opts, LIVOX_PORT);
+                return livox_decoder(path, capture, opts, livox::Model::Horizon, None);
+            }
+            if auto && !hesai && s.seen.keys().any(is_livox2) {
+                return livox_decoder(path, capture, opts, livox::Model::Mid360, None);
             }
             if !data && !hesai {
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
@@ -430,7 +457,7 @@ pub fn decode(
                     );
                 }
                 bail!(
-                    "{}: no Velodyne (1206 bytes) or Hesai (1080 bytes on port 2368) data packets; {}",
+                    "{}: no Velodyne (1206 bytes), Hesai (1080 bytes on port 2368) or Livox (ports 56001, 56301) data packets; {}",
                     path.display(),
                     describe(&s)
                 );
@@ -456,7 +483,13 @@ pub fn decode(
             "Velodyne".to_string(),
         )
     };
-    Ok(sweeps(path, capture, decoder, opts, (port, sensor, notes)))
+    Ok(sweeps(
+        path,
+        capture,
+        decoder,
+        opts,
+        (port, sensor, Vec::new()),
+    ))
 }
 
 /// Whether packets of this port and length look like a PandarXT-32's on its default port.
@@ -467,20 +500,39 @@ fn is_hesai(&(port, len): &(u16, usize)) -> bool {
 
 /// Whether packets of this port and length look like Livox SDK 1 point packets.
 fn is_livox(&(port, len): &(u16, usize)) -> bool {
-    port == LIVOX_PORT && (0..6).any(|t| livox::wire::packet_len(t) == Some(len))
+    port == LIVOX_PORT && (0..6).any(|t| livox::sdk1::packet_len(t) == Some(len))
 }
 
-/// The Livox SDK 1 decoder.
+/// Whether packets of this port and length look like Mid-360 (SDK 2) point packets.
+fn is_livox2(&(port, len): &(u16, usize)) -> bool {
+    port == LIVOX2_PORT
+        && (1..4).any(|t| livox::sdk2::packet_len(t, livox::sdk2::MID360_POINTS) == Some(len))
+}
+
+/// The Livox model `--sensor` names, if it names one.
+fn livox_model(sensor: SensorKind) -> Option<livox::Model> {
+    match sensor {
+        SensorKind::Livox => Some(livox::Model::Horizon),
+        SensorKind::Mid40 => Some(livox::Model::Mid40),
+        SensorKind::Mid360 => Some(livox::Model::Mid360),
+        _ => None,
+    }
+}
+
+/// The Livox decoder for `model`, on `port` or the model's default.
 fn livox_decoder(
     path: &Path,
     capture: Box<dyn DatagramSource>,
     opts: &SensorOptions,
-    port: u16,
+    model: livox::Model,
+    port: Option<u16>,
 ) -> Result<PcapSweeps> {
-    let (model, name) = match opts.sensor {
-        SensorKind::Mid40 => (livox::Model::Mid40, "Livox Mid-40/70"),
-        _ => (livox::Model::Horizon, "Livox Horizon/Tele-15/Avia"),
+    let (name, default_port) = match model {
+        livox::Model::Mid40 => ("Livox Mid-40/70", LIVOX_PORT),
+        livox::Model::Horizon => ("Livox Horizon/Tele-15/Avia", LIVOX_PORT),
+        livox::Model::Mid360 => ("Livox Mid-360/HAP", LIVOX2_PORT),
     };
+    let port = port.unwrap_or(default_port);
     let mut config = livox::Config {
         model,
         ..livox::Config::default()
@@ -547,6 +599,7 @@ fn sweeps(
             opts.sensor,
             SensorKind::Vlp16 | SensorKind::PuckHiRes | SensorKind::Vlp32c | SensorKind::Hdl32e
         ),
+        imu_port: None,
         report: PcapReport {
             sensor,
             port,
@@ -583,14 +636,43 @@ impl PcapSweeps {
         s
     }
 
+    /// The sample of an IMU packet of the decoded sensor: Livox ones by their data type (SDK
+    /// 1 sends them to the data port from another source port, SDK 2 to a port of their own),
+    /// Ouster ones by their port (timed at the gyroscope's read).
+    fn imu_sample(&self, port: u16, payload: &[u8]) -> Option<ImuSample> {
+        let (time_ns, s) = match &self.decoder {
+            Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
+                let p = livox::sdk2::Packet::new_checked(payload).ok()?;
+                (p.time_ns(), p.imu()?)
+            }
+            Decoder::Livox(_) => {
+                let p = livox::sdk1::Packet::new_checked(payload).ok()?;
+                (p.time_ns()?, p.imu()?)
+            }
+            Decoder::Ouster(_) if Some(port) == self.imu_port => {
+                let p = ouster::ImuPacket::new_checked(payload).ok()?;
+                let accel = ImuSample::from_g(p.gyro_ts(), [0.0; 3], p.accel_g());
+                return Some(ImuSample {
+                    gyro: p.gyro_deg_s().map(|w| f64::from(w).to_radians()),
+                    ..accel
+                });
+            }
+            _ => return None,
+        };
+        Some(ImuSample::from_g(time_ns, s.gyro, s.accel_g))
+    }
+
     /// The length of the sensor's data packets.
     fn data_len(&self) -> usize {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
             Decoder::Ouster(d) => d.layout().packet_len(),
             Decoder::Hesai(_) => hesai::wire::field::LEN_WITH_SEQUENCE,
-            // Data type 2, the SDK's default.
-            Decoder::Livox(_) => livox::wire::packet_len(2).unwrap_or(0),
+            // The SDKs' default data types: SDK 1's 2, SDK 2's 1 (96 points, the Mid-360's).
+            Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
+                livox::sdk2::packet_len(1, livox::sdk2::MID360_POINTS).unwrap_or(0)
+            }
+            Decoder::Livox(_) => livox::sdk1::packet_len(2).unwrap_or(0),
         }
     }
 
@@ -605,6 +687,13 @@ impl PcapSweeps {
             } => (*time_ns, *source, *port),
         };
         let data_len = self.data_len();
+        if let Record::Datagram(g) = &record {
+            if let Some(sample) = self.imu_sample(port, &g.payload) {
+                self.report.imu_packets += 1;
+                self.sink.imu.push(sample);
+                return;
+            }
+        }
         let r = &mut self.report;
         if port != r.port {
             *r.other_ports.entry(port).or_insert(0) += 1;
@@ -612,13 +701,6 @@ impl PcapSweeps {
                 *r.data_elsewhere.entry(port).or_insert(0) += 1;
             }
             return;
-        }
-        // Livox IMU packets come to the data port from another source port.
-        if let (Decoder::Livox(_), Record::Datagram(d)) = (&self.decoder, &record) {
-            if livox::Packet::new_checked(&d.payload).is_ok_and(|p| p.imu().is_some()) {
-                r.imu_packets += 1;
-                return;
-            }
         }
         if r.source.is_some_and(|s| s != source) {
             *r.other_sources.entry(source).or_insert(0) += 1;

@@ -209,6 +209,7 @@ impl FrameSource for FileSource {
             warnings: Vec::new(),
             intensity: None,
             sweep: None,
+            imu: Vec::new(),
         };
         if cloud.declared > frame.points.len() {
             let w = truncation_warning(frame.points.len(), cloud.declared);

@@ -425,6 +425,7 @@ pub(crate) fn message_item(
                 warnings,
                 intensity: None,
                 sweep: None,
+                imu: Vec::new(),
             })
         }
         Err(e) => skipped(format!("stamp {}: {e}", cloud.stamp)),
