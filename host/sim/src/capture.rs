@@ -23,7 +23,8 @@ pub const META_NAME: &str = "packets.json";
 pub struct CaptureWriter {
     path: PathBuf,
     writer: PcapWriter<BufWriter<File>>,
-    port: u16,
+    /// Source and destination UDP ports.
+    ports: (u16, u16),
     source: [u8; 4],
     /// Sequence time of trajectory time 0 (s).
     start_time: f64,
@@ -41,14 +42,16 @@ impl CaptureWriter {
         };
         let writer = PcapWriter::with_header(BufWriter::new(file), header)
             .with_context(|| format!("writing {}", path.display()))?;
-        let (port, source) = match sensor {
-            PacketSensor::Os1 => (7502, [192, 168, 1, 100]),
-            _ => (2368, [192, 168, 1, 201]),
+        let (ports, source) = match sensor {
+            PacketSensor::Os1 => ((7502, 7502), [192, 168, 1, 100]),
+            // The Mid-360 sends from port 56300 to the host's 56301 (Livox's defaults).
+            PacketSensor::Mid360 => ((56300, 56301), [192, 168, 1, 160]),
+            _ => ((2368, 2368), [192, 168, 1, 201]),
         };
         Ok(Self {
             path: path.to_path_buf(),
             writer,
-            port,
+            ports,
             source,
             start_time,
         })
@@ -58,7 +61,7 @@ impl CaptureWriter {
     pub fn write(&mut self, packet: &Packet) -> Result<()> {
         let builder = PacketBuilder::ethernet2([0x60, 0x76, 0x88, 0, 0, 1], [0xFF; 6])
             .ipv4(self.source, [192, 168, 1, 2], 64)
-            .udp(self.port, self.port);
+            .udp(self.ports.0, self.ports.1);
         let mut frame = Vec::with_capacity(builder.size(packet.payload.len()));
         builder
             .write(&mut frame, &packet.payload)

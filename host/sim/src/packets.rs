@@ -11,7 +11,10 @@
 //! the turn starts 1.5 blocks after azimuth 0, so the packet whose last block passes azimuth 0
 //! is the last of each sweep: decoders cutting at 0 degrees see the simulator's sweeps (without
 //! a cut angle, `run` takes a full turn from the first packet: the same sweeps one packet
-//! later). An Ouster's sweep is one frame id.
+//! later). An Ouster's sweep is one frame id. A Livox Mid-360 ([`mid360`]) has no sweep: its
+//! frames are cut by time, as its decoder cuts them.
+
+mod mid360;
 
 use crate::rng::{key, Purpose, Stream};
 use crate::sensor::Frame;
@@ -38,6 +41,10 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "os1-64"))]
     #[serde(rename = "os1-64")]
     Os1,
+    /// Livox Mid-360, Livox SDK 2 packets of 96 points (x, y, z in mm), frames by time.
+    #[cfg_attr(feature = "clap", value(name = "mid360"))]
+    #[serde(rename = "mid360")]
+    Mid360,
 }
 
 /// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
@@ -107,7 +114,7 @@ pub struct PacketSim<'a> {
     sensor: PacketSensor,
     model: Model,
     calib: Calibration,
-    /// Velodyne: packets per turn; Ouster: packets per frame.
+    /// Velodyne: packets per turn; Ouster: packets per frame; Mid-360: per period, rounded.
     per_sweep: u64,
 }
 
@@ -130,6 +137,8 @@ impl PacketSensor {
         match self {
             Self::Os1 if rate_hz == 10.0 || rate_hz == 20.0 => Ok(rate_hz),
             Self::Os1 => Err("an OS1 runs at 10 or 20 Hz (--rate-hz)".into()),
+            // Frames by time: any rate, read back with `--frame-period` 1 / rate.
+            Self::Mid360 => Ok(rate_hz),
             _ => {
                 let packet = Self::velodyne_packet_s(self.model());
                 let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
@@ -146,6 +155,7 @@ impl<'a> PacketSim<'a> {
         let period = sim.params().sensor.period();
         let per_sweep = match sensor {
             PacketSensor::Os1 => u64::from(os1::WIDTH / os1::COLUMNS_PER_PACKET),
+            PacketSensor::Mid360 => libm::round(period * 1e9 / mid360::PACKET_NS as f64) as u64,
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
         };
         Self {
@@ -157,7 +167,7 @@ impl<'a> PacketSim<'a> {
         }
     }
 
-    /// Packets in one sweep.
+    /// Packets in one sweep (Mid-360: on average, rounded).
     pub fn packets_per_sweep(&self) -> u64 {
         self.per_sweep
     }
@@ -166,6 +176,10 @@ impl<'a> PacketSim<'a> {
     pub fn end_offset(&self, k: u64) -> f64 {
         match self.sensor {
             PacketSensor::Os1 => self.column_offset(k, os1::WIDTH - 1),
+            PacketSensor::Mid360 => {
+                let last = self.mid360_first_packet(k + 1) - 1;
+                Self::mid360_offset(last, mid360::POINTS - 1)
+            }
             _ => {
                 let last = (k + 1) * self.per_sweep - 1;
                 let n = velodyne::wire::field::BLOCKS - 1;
@@ -185,11 +199,15 @@ impl<'a> PacketSim<'a> {
 
     /// Casts and encodes sweep `k`.
     pub fn sweep(&self, k: u64) -> Sweep {
-        let (first, n) = (k * self.per_sweep, self.per_sweep);
-        let parts: Vec<(Packet, Vec<Truth>)> = (first..first + n)
+        let (first, end) = match self.sensor {
+            PacketSensor::Mid360 => (self.mid360_first_packet(k), self.mid360_first_packet(k + 1)),
+            _ => (k * self.per_sweep, (k + 1) * self.per_sweep),
+        };
+        let parts: Vec<(Packet, Vec<Truth>)> = (first..end)
             .into_par_iter()
             .map(|p| match self.sensor {
                 PacketSensor::Os1 => self.ouster_packet(k, p - first),
+                PacketSensor::Mid360 => self.mid360_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();
@@ -408,7 +426,12 @@ mod tests {
 
     #[test]
     fn noiseless_points_lie_on_their_surface_from_the_pose_at_their_firing() {
-        for sensor in [PacketSensor::Vlp16, PacketSensor::Vlp32c, PacketSensor::Os1] {
+        for sensor in [
+            PacketSensor::Vlp16,
+            PacketSensor::Vlp32c,
+            PacketSensor::Os1,
+            PacketSensor::Mid360,
+        ] {
             let sim = sim(sensor, 40);
             let ps = PacketSim::new(&sim, sensor);
             let k = 38; // past the fast profile's launch: > 15 m/s
