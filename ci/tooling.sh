@@ -51,8 +51,9 @@ fuzz() {
     skip "no nightly toolchain (rustup toolchain install nightly failed); fuzzing skipped"
     return
   fi
+  # Unoptimised: it only drives cargo and rustc, and an unoptimised build is quicker.
   if ! cargo fuzz --version >/dev/null 2>&1 &&
-    ! cargo install cargo-fuzz --version "$CARGO_FUZZ_VERSION" --locked; then
+    ! cargo install cargo-fuzz --version "$CARGO_FUZZ_VERSION" --locked --debug; then
     skip "cargo install cargo-fuzz failed; fuzzing skipped"
     return
   fi
