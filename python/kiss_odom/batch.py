@@ -245,6 +245,7 @@ def run_batch(
     by_name: Dict[str, Result] = {}
     interrupted = False
     began = time.time()
+    pending: Dict = {}
     started = not ray.is_initialized()
     try:
         if started:
@@ -278,10 +279,8 @@ def run_batch(
         except KeyboardInterrupt:
             interrupted = True
             _second_interrupt_ends_the_process()
-            for ref in pending:
-                ray.cancel(ref, force=True)
             # A run that completed before the signal finished, whether or not its task got
-            # to return.
+            # to return; the others are cancelled on the way out.
             for ref, name in pending.items():
                 i = names.index(name)
                 if _completed_since(out_dir / name, began):
@@ -296,13 +295,40 @@ def run_batch(
         _second_interrupt_ends_the_process()
     finally:
         if started and ray.is_initialized():
-            ray.shutdown()
+            _stop_ray(ray, list(pending) if interrupted else [], bounded=interrupted)
     results = [by_name.get(n) or Result(sequence=n, status="interrupted",
                                         reason="interrupted before it finished")
                for n in names]
     batch = Batch(results=results, totals=totals(results), interrupted=interrupted)
     write_tables(out_dir, batch)
     return batch
+
+
+# Seconds an interrupted batch gives Ray's cancel and shutdown before it writes its tables
+# and exits without them: once, under heavy load, they never returned.
+STOP_S = 20.0
+
+
+def _stop_ray(ray, cancel, bounded: bool, seconds: float = STOP_S) -> None:
+    """Cancels the tasks in ``cancel`` (their runs get SIGTERM and write what they have) and
+    shuts Ray down; when ``bounded``, gives up waiting after ``seconds`` (the processes
+    ``ray.init`` started die with this one on Linux: Ray makes them share its fate)."""
+    def stop():
+        try:
+            for ref in cancel:
+                ray.cancel(ref, force=True)
+        except Exception:  # noqa: BLE001 - a task that ended meanwhile: nothing to cancel
+            pass
+        ray.shutdown()
+
+    if not bounded:
+        stop()
+        return
+    import threading
+
+    worker = threading.Thread(target=stop, daemon=True)
+    worker.start()
+    worker.join(seconds)
 
 
 def _completed_since(out: Path, began: float) -> bool:
@@ -361,7 +387,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         done = sum(r.status != "interrupted" for r in batch.results)
         print(f"interrupted: the tables hold the {done} of {len(batch.results)} sequences "
               "that finished", file=sys.stderr)
-        return 130
+        # Not through the interpreter's exit: Ray's own exit hook would wait for the shutdown
+        # that `_stop_ray` may have given up on.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
     return 1 if batch.failed else 0
 
 

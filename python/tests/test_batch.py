@@ -179,9 +179,9 @@ def test_sigint_writes_the_tables_of_what_finished_and_exits_130_without_a_trace
     assert not (out / "long" / "summary.json").exists(), "the long one finished first"
     child.send_signal(signal.SIGINT)
     try:
-        # A guard against a hang, not a speed test: idle, the exit takes a few seconds, but
-        # Ray's shutdown took over 120 s once on a machine busy with CI's builds.
-        stdout, stderr = child.communicate(timeout=300)
+        # A guard against a hang, not a speed test: idle, the exit takes a few seconds, and
+        # the batch gives Ray's cancel and shutdown at most 20 s.
+        stdout, stderr = child.communicate(timeout=120)
     except subprocess.TimeoutExpired:
         child.kill()
         raise
@@ -192,3 +192,43 @@ def test_sigint_writes_the_tables_of_what_finished_and_exits_130_without_a_trace
     assert rows["05"]["status"] == "ok" and float(rows["05"]["frames"]) == 10
     assert rows["long"]["status"] == "interrupted"
     assert "| 05 | ok |" in (out / "aggregate.md").read_text()
+
+
+def test_an_interrupted_batch_stops_waiting_for_a_ray_that_never_stops():
+    import threading
+    import time
+
+    from kiss_odom import batch
+
+    release = threading.Event()
+    calls = []
+
+    class Stuck:
+        def cancel(self, ref, force):
+            calls.append(("cancel", ref, force))
+            release.wait(10)
+
+        def shutdown(self):
+            calls.append(("shutdown",))
+            release.wait(10)
+
+    start = time.monotonic()
+    batch._stop_ray(Stuck(), ["task"], bounded=True, seconds=0.3)
+    took = time.monotonic() - start
+    release.set()
+    assert 0.3 <= took < 5, took
+    assert calls[0] == ("cancel", "task", True)
+
+    # Not interrupted: the shutdown is waited for, however long it takes.
+    slow_calls = []
+
+    class Slow:
+        def cancel(self, ref, force):
+            slow_calls.append(("cancel", ref, force))
+
+        def shutdown(self):
+            time.sleep(0.5)
+            slow_calls.append(("shutdown",))
+
+    batch._stop_ray(Slow(), [], bounded=False)
+    assert slow_calls == [("shutdown",)]
