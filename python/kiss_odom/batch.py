@@ -356,6 +356,12 @@ def _bar(total: int, enabled: bool):
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
+    import faulthandler
+    import signal
+
+    # SIGUSR1 prints every thread's Python stack: what a run that does not stop is doing.
+    if hasattr(signal, "SIGUSR1"):
+        faulthandler.register(signal.SIGUSR1, all_threads=True)
     argv = list(sys.argv[1:] if argv is None else argv)
     run_args: List[str] = []
     if "--" in argv:

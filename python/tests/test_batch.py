@@ -183,8 +183,11 @@ def test_sigint_writes_the_tables_of_what_finished_and_exits_130_without_a_trace
         # the batch gives Ray's cancel and shutdown at most 20 s.
         stdout, stderr = child.communicate(timeout=120)
     except subprocess.TimeoutExpired:
+        child.send_signal(signal.SIGUSR1)  # its threads' Python stacks, to stderr
+        time.sleep(2)
         child.kill()
-        raise
+        _, stderr = child.communicate()
+        raise AssertionError(f"no exit 120 s after SIGINT; its stacks:\n{stderr[-6000:]}")
     print(stderr[-2000:])
     assert child.returncode == 130, stderr[-2000:]
     assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr

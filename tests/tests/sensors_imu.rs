@@ -122,7 +122,10 @@ fn ouster_imu_samples_equal_ouster_sdks() {
                 }
             }
         }
-        println!("{pcap}: {count} samples, worst relative difference to ouster-sdk {worst:.1e} (tolerance {tol:.0e})");
+        println!(
+            "{pcap}: {count} samples, worst relative difference to ouster-sdk {worst:.1e} \
+             (tolerance {tol:.0e})"
+        );
         assert!(worst <= tol);
     }
 }

@@ -11,8 +11,8 @@
 //! the turn starts 1.5 blocks after azimuth 0, so the packet whose last block passes azimuth 0
 //! is the last of each sweep: decoders cutting at 0 degrees see the simulator's sweeps (without
 //! a cut angle, `run` takes a full turn from the first packet: the same sweeps one packet
-//! later). An Ouster's sweep is one frame id. A Livox Mid-360 (`packets/mid360.rs`) has no sweep: its
-//! frames are cut by time, as its decoder cuts them.
+//! later). An Ouster's sweep is one frame id. A Livox Mid-360 (`packets/mid360.rs`) has no
+//! sweep: its frames are cut by time, as its decoder cuts them.
 
 mod mid360;
 

@@ -8,8 +8,9 @@
 //! need the sensor's metadata JSON (`--meta`), Hesai PandarXT-32 packets are 1076 or 1080 bytes
 //! on port 2368 (found there without `--sensor xt32` when no Velodyne packets are), Livox SDK 1
 //! packets come to port 56001 (found there without `--sensor livox`), Livox SDK 2 (Mid-360)
-//! packets to port 56301 (found there without `--sensor mid360`); Livox IMU packets (SDK 1 on
-//! the data port, SDK 2 on a port of their own) are counted, not decoded into points. Only one sender is decoded: the first whose
+//! packets to port 56301 (found there without `--sensor mid360`). IMU packets (Ouster's on
+//! their own port, Livox SDK 1's on the data port, SDK 2's on their own) become the sweeps' IMU
+//! samples, not points. Only one sender is decoded: the first whose
 //! packets decode on the port; other senders on that port (a second sensor) are skipped,
 //! counted as another sensor's in the sweep they arrive in and named in the [`PcapReport`].
 //! Damage confined to a packet is a counted skip in the sweep's statistics; a capture with no
@@ -457,7 +458,8 @@ pub fn decode(
                     );
                 }
                 bail!(
-                    "{}: no Velodyne (1206 bytes), Hesai (1080 bytes on port 2368) or Livox (ports 56001, 56301) data packets; {}",
+                    "{}: no Velodyne (1206 bytes), Hesai (1080 bytes on port 2368) or Livox \
+                     (ports 56001, 56301) data packets; {}",
                     path.display(),
                     describe(&s)
                 );
