@@ -260,8 +260,14 @@ def run_batch(
             for p, n in zip(paths, names)
         }
         bar = _bar(len(pending), progress)
+        # Ctrl-C sets a flag that the loop reads between waits: a KeyboardInterrupt raised
+        # inside ray.wait can be lost there (seen under load: the batch waited on, the signal
+        # gone), a flag cannot.
+        stop = _sigint_flag()
         try:
             while pending:
+                if stop.is_set():
+                    raise KeyboardInterrupt
                 # A timeout, so that Ctrl-C is seen while every task is still running.
                 done, _ = ray.wait(list(pending), num_returns=1, timeout=0.2)
                 if not done:
@@ -294,6 +300,8 @@ def run_batch(
         interrupted = True
         _second_interrupt_ends_the_process()
     finally:
+        if not interrupted:
+            _default_sigint()
         if started and ray.is_initialized():
             _stop_ray(ray, list(pending) if interrupted else [], bounded=interrupted)
     results = [by_name.get(n) or Result(sequence=n, status="interrupted",
@@ -302,6 +310,26 @@ def run_batch(
     batch = Batch(results=results, totals=totals(results), interrupted=interrupted)
     write_tables(out_dir, batch)
     return batch
+
+
+def _sigint_flag():
+    """An event that SIGINT sets from now on (in the main thread; elsewhere one never set)."""
+    import signal
+    import threading
+
+    flag = threading.Event()
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, lambda *_: flag.set())
+    return flag
+
+
+def _default_sigint() -> None:
+    """Ctrl-C raises KeyboardInterrupt again (in the main thread)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 # Seconds an interrupted batch gives Ray's cancel and shutdown before it writes its tables
