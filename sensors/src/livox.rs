@@ -63,6 +63,10 @@ impl Default for Config {
     }
 }
 
+/// One return of either protocol: metres in the sensor frame (x forward, y left, z up),
+/// reflectivity and tag; `None` where the sensor saw nothing (all zero).
+pub type Return = Option<([f64; 3], u8, u8)>;
+
 /// One IMU sample, as both protocols send it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -221,7 +221,7 @@ impl<'a> Packet<'a> {
             Self::Sdk2(p) => p.span_ns(),
         }
     }
-    fn point(&self, k: usize, r: usize) -> sdk1::Return {
+    fn point(&self, k: usize, r: usize) -> super::Return {
         match self {
             Self::Sdk1(p, _) => p.point(k, r),
             Self::Sdk2(p) => p.point(k, r),

@@ -23,7 +23,7 @@
 //! | 5 | zenith, azimuth, two returns of depth, reflectivity, tag | 16 | 48 |
 //! | 6 | IMU: gyroscope x, y, z (f32 rad/s), accelerometer x, y, z (f32 g) | 24 | 1 |
 
-use super::{at, byte, spherical, ImuSample};
+use super::{at, byte, spherical, u16_at, ImuSample, Return};
 use crate::error::PacketError;
 
 /// Byte ranges of the header.
@@ -73,10 +73,6 @@ pub const fn packet_len(data_type: u8) -> Option<usize> {
         None => None,
     }
 }
-
-/// One return: metres in the sensor frame (x forward, y left, z up), reflectivity and tag;
-/// `None` where the sensor saw nothing (all zero).
-pub type Return = Option<([f64; 3], u8, u8)>;
 
 /// A checked view of a data packet: the version, data type and length agree, and the
 /// timestamp is one this crate reads.
@@ -181,8 +177,8 @@ impl<'a> Packet<'a> {
         // Offsets of the zenith (the azimuth follows it), depth, reflectivity and tag.
         let polar = |angles: usize, o: usize, refl: usize, tag: Option<usize>| {
             let depth = f64::from(u32::from_le_bytes(at(b, base + o))) * 1e-3;
-            let zenith = f64::from(u16::from_le_bytes(at(b, base + angles))) * 0.01;
-            let azimuth = f64::from(u16::from_le_bytes(at(b, base + angles + 2))) * 0.01;
+            let zenith = f64::from(u16_at(b, base + angles)) * 0.01;
+            let azimuth = f64::from(u16_at(b, base + angles + 2)) * 0.01;
             let tag = tag.map_or(0, |t| byte(b, base + t));
             (depth > 0.0).then_some((spherical(depth, zenith, azimuth), byte(b, base + refl), tag))
         };

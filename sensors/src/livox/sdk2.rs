@@ -28,7 +28,7 @@
 //! The CRC is the common CRC-32 (polynomial 0x04C11DB7 reflected, initial value and final
 //! XOR 0xFFFFFFFF), as the protocol's "CRC Algorithm" section gives it.
 
-use super::{at, byte, spherical, u16_at, ImuSample};
+use super::{at, byte, spherical, u16_at, ImuSample, Return};
 use crate::error::PacketError;
 
 /// Byte ranges of the header.
@@ -113,10 +113,6 @@ pub fn crc32(bytes: &[u8]) -> u32 {
         CRC_TABLE[usize::from((c as u8) ^ b)] ^ (c >> 8)
     })
 }
-
-/// One return: metres in the sensor frame (x forward, y left, z up), reflectivity and tag;
-/// `None` where the sensor saw nothing (all zero).
-pub type Return = super::sdk1::Return;
 
 /// A checked view of a data packet: version, data type, length field and datagram length
 /// agree, the CRC holds and the time type is one this crate reads.

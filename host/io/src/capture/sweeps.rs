@@ -642,12 +642,21 @@ impl PcapSweeps {
     /// 1 sends them to the data port from another source port, SDK 2 to a port of their own),
     /// Ouster ones by their port (timed at the gyroscope's read).
     fn imu_sample(&self, port: u16, payload: &[u8]) -> Option<ImuSample> {
+        // A Livox packet's data type byte first: the point packets, nearly all of them, are
+        // checked once, by the decoder, not also here (a CRC over each SDK 2 packet).
+        let data_type = |at: usize| payload.get(at).copied();
         let (time_ns, s) = match &self.decoder {
             Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
+                if data_type(livox::sdk2::field::DATA_TYPE) != Some(livox::sdk2::IMU) {
+                    return None;
+                }
                 let p = livox::sdk2::Packet::new_checked(payload).ok()?;
                 (p.time_ns(), p.imu()?)
             }
             Decoder::Livox(_) => {
+                if data_type(livox::sdk1::field::DATA_TYPE) != Some(livox::sdk1::IMU) {
+                    return None;
+                }
                 let p = livox::sdk1::Packet::new_checked(payload).ok()?;
                 (p.time_ns()?, p.imu()?)
             }
