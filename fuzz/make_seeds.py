@@ -242,6 +242,10 @@ def sensor_seeds():
         put("ouster_packets", name, head + body)
     hesai = udp_payloads(data.parent / "hesai" / "hesai-xt32-small.pcap", 2368)[:3]
     put("hesai_packets", "xt32-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in hesai))
+    qt128 = udp_payloads(ROOT / "fixtures" / "hesai-qt128" / "qt128-sector.pcap", 2368)[:3]
+    put("hesai_packets", "qt128-3-packets", bytes([1 << 1]) + b"".join(b"\0\0" + p for p in qt128))
+    put("hesai_packets", "ot128-4-packets", bytes([3 << 1]) + b"".join(
+        b"\0\0" + hesai_1_4_packet(k) for k in range(4)))
     livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]
     put("livox_packets", "tele15-6-packets",
         bytes([0]) + b"".join(struct.pack("<H", 0x8000 | len(p)) + p for p in livox))
@@ -249,6 +253,17 @@ def sensor_seeds():
         struct.pack("<H", 0x8000 | len(p)) + p for p in livox_sdk2_packets()))
     put("sensor_pcap", "vli16-one-packet", (data / "VLI-16-one-packet.pcap").read_bytes())
     put("sensor_pcap", "vlp16-5-records", pcap_records(data / "velodyne_vlp16.pcap", 5))
+
+
+def hesai_1_4_packet(k):
+    """A protocol 1.4 (Pandar128, OT128) packet of 861 bytes: sequence, IMU and safety
+    flagged, standard mode, dual return 0x39, the k-th of a 10 Hz turn's 0.2 degree steps."""
+    head = bytes([0xEE, 0xFF, 1, 4, 0, 0, 128, 2, 1, 4, 2, 0x07])
+    blocks = b"".join(struct.pack("<H", 20 * k) + b"".join(
+        struct.pack("<HB", 500 + c + 7 * b, c) for c in range(128)) for b in range(2))
+    tail = bytes(9) + struct.pack("<HBBH", 0b0110 << 12, 2, 0x39, 600)
+    tail += bytes([124, 10, 30, 7, 36, 29]) + struct.pack("<IB", 55 * k, 0x42)
+    return head + blocks + bytes(4 + 17) + tail + struct.pack("<I", k) + bytes(22 + 4)
 
 
 def livox_sdk2_packets():

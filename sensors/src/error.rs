@@ -16,10 +16,10 @@ pub enum PacketError {
     /// The packet does not start with the format's start bytes (Hesai `EE FF`): another kind
     /// of packet on the port, or corrupted. Skip it.
     StartBytes,
-    /// A Hesai packet of a protocol version this crate does not decode (another Hesai model
-    /// on the port; skip it; if every packet says so, the sensor is not a PandarXT-32), or a
-    /// Livox packet whose version byte is not its protocol's (SDK 1: 5, SDK 2: 0; if every
-    /// packet says so, give the other model).
+    /// A Hesai packet of another protocol version than the model's (XT32 6.1, QT128 3.2,
+    /// Pandar128 and OT128 1.4: another Hesai model on the port; skip it; if every packet says
+    /// so, give the right model), or a Livox packet whose version byte is not its protocol's
+    /// (SDK 1: 5, SDK 2: 0; if every packet says so, give the other model).
     Version,
     /// A Livox SDK 2 packet whose CRC-32 does not match its bytes: corrupted on the way. Skip
     /// it.
@@ -33,7 +33,7 @@ pub enum PacketError {
     Timestamp,
     /// The Velodyne factory byte names a model this crate does not decode (or none, as old
     /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`]. Hesai: the
-    /// header's laser or block count or distance unit is not the PandarXT-32's.
+    /// header's laser or block count or distance unit is not the protocol's model's.
     UnknownModel,
     /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
     /// Hesai one is none of the six modes, or disagrees with the header's return count.
@@ -69,9 +69,7 @@ impl core::fmt::Display for PacketError {
                 "packet longer than the format's length (another packet kind or profile)"
             }
             Self::StartBytes => "not the format's start bytes (Hesai: EE FF)",
-            Self::Version => {
-                "a protocol version not decoded (Hesai: 6.1 only; Livox: not the model's SDK)"
-            }
+            Self::Version => "a protocol version not the model's (another Hesai or Livox model?)",
             Self::Checksum => "CRC does not match the packet's bytes (corrupted)",
             Self::BlockFlag => "a data block without its 0xFFEE flag",
             Self::Azimuth => "an azimuth of 360 degrees or more",

@@ -1,21 +1,25 @@
-//! Hesai PandarXT-32 (UDP protocol 6.1): packets to timed points, sweeps cut by azimuth.
+//! Hesai PandarXT-32 (UDP protocol 6.1), PandarQT128 (3.2), Pandar128 and OT128 (1.4):
+//! packets to timed points, sweeps cut by azimuth.
 //!
-//! The facts come from the XT32 user manual's protocol and timing appendices: the packet
-//! layout ([`wire`]), the return modes and how dual returns pair their blocks, the firing
-//! times (the packet time stamps the last firing; firings 50 us apart; channel `c` fires
-//! 0.368 + 1.512 c us into its firing), and the nominal channel elevations (15 to -16
-//! degrees, one apart, no azimuth offsets), which Hesai's angle correction file replaces per
-//! unit ([`Calibration`]; the host reads the CSV). Each point takes its block's azimuth plus
-//! its channel's offset, as Hesai's own SDK does. The packet time is UTC with the sensor's
-//! clock; point times are exact to the nanosecond from it.
+//! The facts come from the sensors' user manuals and Hesai's SDK: the packet layouts
+//! ([`wire`], [`wire128`]), the return modes and how dual returns pair their blocks, the
+//! firing times ([`Model::point_offset_ns`]; the QT128's and OT128's channel times from
+//! Hesai's firing-time files), and the XT32's nominal channel elevations (15 to -16 degrees,
+//! one apart, no azimuth offsets). Hesai's angle correction file replaces those per unit and
+//! is needed for the 128-channel models ([`Calibration`]; the host reads the CSV). Each point
+//! takes its block's azimuth plus its channel's offset, as Hesai's SDK and TIER IV's nebula
+//! do. The packet time is UTC with the sensor's clock; point times are exact to the
+//! nanosecond from it.
 
 mod decoder;
+mod firetimes;
 mod model;
 pub mod wire;
+pub mod wire128;
 
 pub use decoder::{Decoder, GAP_NS};
 pub use model::{
-    point_offset_ns, Calibration, Config, ReturnMode, CHANNELS, CHANNEL_NS, DISTANCE_UNIT_M,
-    FIRING_NS,
+    point_offset_ns, Calibration, Config, Firing, Model, ReturnMode, CHANNELS, CHANNEL_NS,
+    DISTANCE_UNIT_M, FIRING_NS, MAX_CHANNELS,
 };
 pub use wire::Packet;

@@ -1,8 +1,9 @@
 //! Hesai packets to sweeps: checks, order and loss detection (by the UDP sequence number when
 //! the packets carry one, else by their times), the cut, then each return to a point.
 
-use super::model::{point_offset_ns, Config, ReturnMode, CHANNELS, DISTANCE_UNIT_M};
-use super::wire::{field, Packet};
+use super::model::{Calibration, Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS};
+use super::wire::Packet;
+use super::wire128;
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     lost_in_step, Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd,
@@ -25,7 +26,81 @@ struct Beam {
     azimuth_deg: f64,
 }
 
-/// Hesai PandarXT-32 packets in, sweeps out (see the module doc of [`crate::hesai`]).
+/// A checked packet of either layout.
+#[derive(Clone, Copy)]
+enum View<'a> {
+    Xt32(Packet<'a>),
+    Wide(wire128::Packet<'a>),
+}
+
+impl<'a> View<'a> {
+    /// Checks `bytes` as a packet of `model`'s protocol.
+    fn new_checked(model: Model, bytes: &'a [u8]) -> Result<Self, PacketError> {
+        let version = match model {
+            Model::Xt32 => return Packet::new_checked(bytes).map(Self::Xt32),
+            Model::Qt128 => wire128::VERSION_QT,
+            Model::Pandar128 | Model::Ot128 => wire128::VERSION_128,
+        };
+        let p = wire128::Packet::new_checked(bytes)?;
+        if p.version() != version {
+            return Err(PacketError::Version);
+        }
+        Ok(Self::Wide(p))
+    }
+    fn returns(&self) -> u8 {
+        match self {
+            Self::Xt32(p) => p.returns(),
+            Self::Wide(p) => p.returns(),
+        }
+    }
+    fn return_mode(&self) -> u8 {
+        match self {
+            Self::Xt32(p) => p.return_mode(),
+            Self::Wide(p) => p.return_mode(),
+        }
+    }
+    fn azimuth(&self, k: usize) -> u16 {
+        match self {
+            Self::Xt32(p) => p.azimuth(k),
+            Self::Wide(p) => p.azimuth(k),
+        }
+    }
+    fn channel(&self, k: usize, c: usize) -> (u16, u8) {
+        match self {
+            Self::Xt32(p) => p.channel(k, c),
+            Self::Wide(p) => p.channel(k, c),
+        }
+    }
+    fn unix_ns(&self) -> Option<u64> {
+        match self {
+            Self::Xt32(p) => p.unix_ns(),
+            Self::Wide(p) => p.unix_ns(),
+        }
+    }
+    fn udp_sequence(&self) -> Option<u32> {
+        match self {
+            Self::Xt32(p) => p.udp_sequence(),
+            Self::Wide(p) => p.udp_sequence(),
+        }
+    }
+    /// Block `k`'s firing state, for a mode of `returns` returns.
+    fn firing(&self, k: usize, returns: usize) -> Firing {
+        match self {
+            Self::Xt32(_) => Firing {
+                returns,
+                ..Firing::default()
+            },
+            Self::Wide(p) => Firing {
+                returns,
+                mode_flag: p.mode_flag(),
+                operational_state: p.operational_state(),
+                azimuth_state: p.azimuth_state(k),
+            },
+        }
+    }
+}
+
+/// Hesai packets in, sweeps out (see the module doc of [`crate::hesai`]).
 ///
 /// ```
 /// use kiss_odom_sensors::{hesai, Chunk, Decode, SweepSink, SweepStart, SweepStats};
@@ -37,12 +112,14 @@ struct Beam {
 /// }
 /// let mut dec = hesai::Decoder::new(hesai::Config::default()).unwrap();
 /// let mut sink = Count(0);
-/// // A 1076- or 1080-byte payload from UDP port 2368; anything else is refused with a reason.
+/// // A payload from UDP port 2368 (XT32: 1076 or 1080 bytes); anything else is refused with
+/// // a reason.
 /// assert!(dec.push(&[0u8; 100], &mut sink).is_err());
 /// dec.finish(&mut sink);
 /// ```
 pub struct Decoder {
-    beams: [Beam; CHANNELS],
+    model: Model,
+    beams: [Beam; MAX_CHANNELS],
     /// The return mode and its byte, fixed by the first packet decoded.
     mode: Option<(ReturnMode, u8)>,
     /// Time of the last packet accepted, ns since the Unix epoch.
@@ -59,12 +136,21 @@ pub struct Decoder {
 }
 
 impl Decoder {
-    /// A decoder for `config`; nothing is decoded until the first packet.
+    /// A decoder for `config`; nothing is decoded until the first packet. The calibration
+    /// must have one entry per channel of the model, and only the XT32 may go without.
     pub fn new(config: Config) -> Result<Self, ConfigError> {
-        let calibration = config.calibration.unwrap_or_default();
+        let model = config.model;
+        let calibration = match config.calibration {
+            Some(c) => c,
+            None if model == Model::Xt32 => Calibration::nominal(),
+            None => return Err(ConfigError::Calibration),
+        };
         calibration.validate()?;
-        let mut beams = [Beam::default(); CHANNELS];
-        for (c, b) in beams.iter_mut().enumerate() {
+        if calibration.channels != model.channels() {
+            return Err(ConfigError::Calibration);
+        }
+        let mut beams = [Beam::default(); MAX_CHANNELS];
+        for (c, b) in beams.iter_mut().enumerate().take(model.channels()) {
             let e = calibration.elevation_deg[c].to_radians();
             *b = Beam {
                 cos_e: libm::cos(e),
@@ -73,6 +159,7 @@ impl Decoder {
             };
         }
         Ok(Self {
+            model,
             beams,
             mode: None,
             last_ns: None,
@@ -86,12 +173,17 @@ impl Decoder {
         })
     }
 
+    /// The sensor decoded.
+    pub fn model(&self) -> Model {
+        self.model
+    }
+
     /// The return mode, once a packet told it.
     pub fn return_mode(&self) -> Option<ReturnMode> {
         self.mode.map(|(m, _)| m)
     }
 
-    fn identify(&mut self, p: &Packet<'_>) -> Result<ReturnMode, PacketError> {
+    fn identify(&mut self, p: &View<'_>) -> Result<ReturnMode, PacketError> {
         let byte = p.return_mode();
         if let Some((mode, b)) = self.mode {
             return if b == byte {
@@ -100,7 +192,7 @@ impl Decoder {
                 Err(PacketError::OtherSensor)
             };
         }
-        let mode = ReturnMode::from_byte(byte).ok_or(PacketError::UnknownReturnMode)?;
+        let mode = ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?;
         if mode.returns() != usize::from(p.returns()) {
             return Err(PacketError::UnknownReturnMode);
         }
@@ -121,7 +213,7 @@ impl Decoder {
     }
 
     fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
-        let p = Packet::new_checked(bytes)?;
+        let p = View::new_checked(self.model, bytes)?;
         let mode = self.identify(&p)?;
         let t = p.unix_ns().ok_or(PacketError::Timestamp)?;
         let mut step = None;
@@ -145,7 +237,7 @@ impl Decoder {
             return Ok(Pushed::Again);
         }
         if self.asm.open.is_none() {
-            let start = t.saturating_add_signed(point_offset_ns(0, 0, returns));
+            let start = t.saturating_add_signed(self.earliest_offset_ns(&p, returns));
             self.asm.begin(sink, start, None);
             self.sweep_start_ns = start;
             self.column = 0;
@@ -155,7 +247,7 @@ impl Decoder {
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
-        let last_az = p.azimuth(field::BLOCKS - 1);
+        let last_az = p.azimuth(self.model.blocks() - 1);
         self.last_ns = Some(t);
         self.last_sequence = p.udp_sequence();
         self.last_azimuth = last_az;
@@ -167,9 +259,19 @@ impl Decoder {
         Ok(Pushed::Decoded)
     }
 
+    /// The start of the packet's first firing, ns after the packet time: no channel of it
+    /// fires earlier.
+    fn earliest_offset_ns(&self, p: &View<'_>, returns: usize) -> i64 {
+        let firing = p.firing(0, returns);
+        (0..self.model.channels())
+            .map(|c| self.model.point_offset_ns(0, c, &firing))
+            .min()
+            .unwrap_or(0)
+    }
+
     /// Packets missing between the last one and `p`: the sequence numbers' step, or the
     /// time step in packet periods when there are none.
-    fn lost_before(&self, p: &Packet<'_>, step_ns: Option<u64>, returns: usize) -> u32 {
+    fn lost_before(&self, p: &View<'_>, step_ns: Option<u64>, returns: usize) -> u32 {
         let Some(step_ns) = step_ns else { return 0 };
         if let (Some(now), Some(last)) = (p.udp_sequence(), self.last_sequence) {
             let d = now.wrapping_sub(last);
@@ -177,19 +279,23 @@ impl Decoder {
                 return d - 1;
             }
         }
-        let period = (field::BLOCKS / returns) as f64 * super::model::FIRING_NS as f64;
+        let state = p.firing(0, returns).operational_state;
+        let period = (self.model.blocks() / returns) as f64 * self.model.firing_ns(state) as f64;
         lost_in_step(step_ns as f64, period)
     }
 
     /// Every return of a checked packet of time `t` (ns).
-    fn decode<S: SweepSink>(&mut self, p: &Packet<'_>, t: u64, mode: ReturnMode, sink: &mut S) {
+    fn decode<S: SweepSink>(&mut self, p: &View<'_>, t: u64, mode: ReturnMode, sink: &mut S) {
         let returns = mode.returns();
         let base = t as i64 - self.sweep_start_ns as i64;
-        for firing in 0..field::BLOCKS / returns {
+        let channels = self.model.channels();
+        for firing in 0..self.model.blocks() / returns {
             let block = firing * returns;
             let azimuth = f64::from(p.azimuth(block)) * 0.01;
-            for (c, beam) in self.beams.iter().enumerate() {
-                let time = (base + point_offset_ns(block, c, returns)) as f64 * 1e-9;
+            let state = p.firing(block, returns);
+            for (c, beam) in self.beams.iter().enumerate().take(channels) {
+                let offset = self.model.point_offset_ns(block, c, &state);
+                let time = (base + offset) as f64 * 1e-9;
                 let mut emit = |raw: (u16, u8), ret| {
                     let meta = PointMeta {
                         ring: c as u16,

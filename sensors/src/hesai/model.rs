@@ -1,16 +1,122 @@
-//! The PandarXT-32's published geometry and timing, the per-channel [`Calibration`] (Hesai's
-//! angle correction file) and the decoder's [`Config`].
+//! The models decoded, their published timing, the per-channel [`Calibration`] (Hesai's angle
+//! correction file) and the decoder's [`Config`].
 
+use super::firetimes::{OT128_NS, QT128_NS};
 use super::wire::field;
 use crate::error::ConfigError;
 use crate::sweep::Return;
 
 /// Channels of the PandarXT-32.
 pub const CHANNELS: usize = field::CHANNELS;
+/// Channels of the largest model decoded (QT128, Pandar128, OT128).
+pub const MAX_CHANNELS: usize = 128;
 /// Metres per distance unit (the header's 4 mm).
 pub const DISTANCE_UNIT_M: f64 = 0.004;
-/// Time from one firing to the next, ns.
+/// Time from one firing to the next, ns (PandarXT-32).
 pub const FIRING_NS: i64 = 50_000;
+
+/// The Hesai sensors decoded, by their UDP protocol.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Model {
+    /// PandarXT-32 (also XT32M; protocol 6.1): nominal angles built in.
+    #[default]
+    Xt32,
+    /// PandarQT128 (protocol 3.2): needs its angle correction file.
+    Qt128,
+    /// Pandar128 (protocol 1.4): needs its angle correction file.
+    Pandar128,
+    /// OT128 (protocol 1.4): needs its angle correction file.
+    Ot128,
+}
+
+/// What a packet says about its firings, for [`Model::point_offset_ns`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Firing {
+    /// Returns a firing reports (blocks per firing).
+    pub returns: usize,
+    /// Protocol 3.2's mode flag: which firing loop comes first.
+    pub mode_flag: u8,
+    /// Protocol 1.4's operational state (0 high resolution, 2 standard).
+    pub operational_state: u8,
+    /// Protocol 1.4: the block's azimuth state.
+    pub azimuth_state: u8,
+}
+
+impl Model {
+    /// Channels a block holds.
+    pub const fn channels(self) -> usize {
+        match self {
+            Self::Xt32 => CHANNELS,
+            _ => MAX_CHANNELS,
+        }
+    }
+    /// Blocks a packet holds.
+    pub const fn blocks(self) -> usize {
+        match self {
+            Self::Xt32 => field::BLOCKS,
+            _ => super::wire128::BLOCKS,
+        }
+    }
+    /// The model's name, as its manual spells it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Xt32 => "Hesai PandarXT-32",
+            Self::Qt128 => "Hesai PandarQT128",
+            Self::Pandar128 => "Hesai Pandar128",
+            Self::Ot128 => "Hesai OT128",
+        }
+    }
+    /// Time from one firing to the next, ns (1.4: in the packet's operational state).
+    pub fn firing_ns(self, operational_state: u8) -> i64 {
+        match self {
+            Self::Xt32 => FIRING_NS,
+            Self::Qt128 => 111_110,
+            Self::Pandar128 | Self::Ot128 if operational_state == 0 => 27_778,
+            Self::Pandar128 | Self::Ot128 => 55_556,
+        }
+    }
+
+    /// Time of block `block`, channel `channel` (from 0) after the packet time, ns.
+    ///
+    /// - XT32: [`point_offset_ns`] (the packet time stamps the last firing).
+    /// - QT128: the packet time stamps its start; firing `f` begins 9 + 111.11 f us later,
+    ///   and its channels fire in one of two loops (the mode flag and `f` pick which), at the
+    ///   times of Hesai's firing-time file for the QT128C2X.
+    /// - Pandar128 and OT128: the packet time stamps its last firing; firings are 27.778 us
+    ///   apart in high resolution and 55.556 us otherwise; the Pandar128's firing starts
+    ///   3.148 us after it. The OT128's channels fire at the times of Hesai's firing-time file
+    ///   for its operational and azimuth state; the Pandar128's channel times depend on the
+    ///   distance as well and are not applied (its points are up to 55.6 us early).
+    pub fn point_offset_ns(self, block: usize, channel: usize, f: &Firing) -> i64 {
+        let returns = if f.returns == 0 { 1 } else { f.returns };
+        let table = |t: &[[u32; MAX_CHANNELS]], column: usize| {
+            t.get(column)
+                .and_then(|c| c.get(channel))
+                .map_or(0, |&ns| i64::from(ns))
+        };
+        match self {
+            Self::Xt32 => point_offset_ns(block, channel, returns),
+            Self::Qt128 => {
+                let firing = block / returns;
+                let lp = (usize::from(f.mode_flag) + firing + 1) % 2;
+                9_000 + 111_110 * firing as i64 + table(&QT128_NS, lp)
+            }
+            Self::Pandar128 | Self::Ot128 => {
+                let later = (self.blocks().saturating_sub(block + 1) / returns) as i64;
+                let step = self.firing_ns(f.operational_state);
+                let state = usize::from(f.azimuth_state);
+                let (start, channel_ns) = match (self, f.operational_state) {
+                    (Self::Pandar128, _) => (3_148, 0),
+                    (_, 0) => (0, table(&OT128_NS, state)),
+                    (_, 2) if state < 2 => (0, table(&OT128_NS, 4 + state)),
+                    _ => (0, 0),
+                };
+                start - step * later + channel_ns
+            }
+        }
+    }
+}
 /// Time from a channel's firing to the next channel's within a firing, ns.
 pub const CHANNEL_NS: i64 = 1_512;
 
@@ -35,16 +141,17 @@ pub enum ReturnMode {
 }
 
 impl ReturnMode {
-    /// The mode a return-mode byte names (XT32 manual, protocol 6.1).
-    pub const fn from_byte(b: u8) -> Option<Self> {
-        Some(match b {
-            0x33 => Self::Single(Return::First),
-            0x37 => Self::Single(Return::Strongest),
-            0x38 => Self::Single(Return::Last),
-            0x39 => Self::Dual(Return::Last, Return::Strongest),
-            // The XT32 sends the first return before the last (unlike Hesai's other sensors).
-            0x3B => Self::Dual(Return::First, Return::Last),
-            0x3C => Self::Dual(Return::First, Return::Strongest),
+    /// The mode a return-mode byte names for `model` (its manual).
+    pub const fn from_byte(model: Model, b: u8) -> Option<Self> {
+        Some(match (b, model) {
+            (0x33, _) => Self::Single(Return::First),
+            (0x37, _) => Self::Single(Return::Strongest),
+            (0x38, _) => Self::Single(Return::Last),
+            (0x39, _) => Self::Dual(Return::Last, Return::Strongest),
+            // The XT32 sends the first return before the last, Hesai's other sensors after.
+            (0x3B, Model::Xt32) => Self::Dual(Return::First, Return::Last),
+            (0x3B, _) => Self::Dual(Return::Last, Return::First),
+            (0x3C, _) => Self::Dual(Return::First, Return::Strongest),
             _ => return None,
         })
     }
@@ -60,37 +167,40 @@ impl ReturnMode {
 /// Each channel's angles, from Hesai's angle correction file.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Calibration {
+    /// Channels the file gives: the first this many entries below are used.
+    pub channels: usize,
     /// Elevation of each channel, degrees (positive up), channel 1 first.
-    pub elevation_deg: [f64; CHANNELS],
+    pub elevation_deg: [f64; MAX_CHANNELS],
     /// Added to the block azimuth for each channel, degrees.
-    pub azimuth_deg: [f64; CHANNELS],
+    pub azimuth_deg: [f64; MAX_CHANNELS],
 }
 
 impl Calibration {
     /// The nominal angles: channel `c` (from 0) at `15 - c` degrees, no azimuth offset (the
     /// XT32 manual's channel table; its lasers fire in one vertical line).
     pub const fn nominal() -> Self {
-        let mut elevation_deg = [0.0; CHANNELS];
+        let mut elevation_deg = [0.0; MAX_CHANNELS];
         let mut c = 0;
         while c < CHANNELS {
             elevation_deg[c] = 15.0 - c as f64;
             c += 1;
         }
         Self {
+            channels: CHANNELS,
             elevation_deg,
-            azimuth_deg: [0.0; CHANNELS],
+            azimuth_deg: [0.0; MAX_CHANNELS],
         }
     }
 
-    /// Whether every angle is finite, elevations within +-90 degrees and azimuth offsets
-    /// within +-45.
+    /// Whether it has 1 to [`MAX_CHANNELS`] channels, every angle finite, elevations within
+    /// +-90 degrees and azimuth offsets within +-45.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let ok = self
-            .elevation_deg
-            .iter()
-            .all(|e| e.is_finite() && libm::fabs(*e) <= 90.0)
-            && self
-                .azimuth_deg
+        let n = self.channels;
+        let ok = (1..=MAX_CHANNELS).contains(&n)
+            && self.elevation_deg[..n]
+                .iter()
+                .all(|e| e.is_finite() && libm::fabs(*e) <= 90.0)
+            && self.azimuth_deg[..n]
                 .iter()
                 .all(|a| a.is_finite() && libm::fabs(*a) <= 45.0);
         if ok {
@@ -110,7 +220,10 @@ impl Default for Calibration {
 /// Decoder settings.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Config {
-    /// Channel angles; `None` uses the nominal ones.
+    /// The sensor: its packets' protocol and timing.
+    pub model: Model,
+    /// Channel angles, one per channel of the model; `None` uses the nominal ones, which only
+    /// the PandarXT-32 has.
     pub calibration: Option<Calibration>,
     /// Azimuth (degrees, `[0, 360)`) at which sweeps end; `None` ends a sweep once it covers
     /// a full turn from wherever the previous one ended. Sweeps are whole packets.
@@ -136,14 +249,22 @@ mod tests {
     #[test]
     fn mode_bytes_and_calibration_checks() {
         assert_eq!(
-            ReturnMode::from_byte(0x37),
+            ReturnMode::from_byte(Model::Xt32, 0x37),
             Some(ReturnMode::Single(Return::Strongest))
         );
         assert_eq!(
-            ReturnMode::from_byte(0x3C).map(ReturnMode::returns),
+            ReturnMode::from_byte(Model::Xt32, 0x3C).map(ReturnMode::returns),
             Some(2)
         );
-        assert_eq!(ReturnMode::from_byte(0x3A), None);
+        assert_eq!(ReturnMode::from_byte(Model::Xt32, 0x3A), None);
+        assert_eq!(
+            ReturnMode::from_byte(Model::Xt32, 0x3B),
+            Some(ReturnMode::Dual(Return::First, Return::Last))
+        );
+        assert_eq!(
+            ReturnMode::from_byte(Model::Qt128, 0x3B),
+            Some(ReturnMode::Dual(Return::Last, Return::First))
+        );
         let nominal = Calibration::nominal();
         assert_eq!(nominal.elevation_deg[0], 15.0);
         assert_eq!(nominal.elevation_deg[31], -16.0);
@@ -154,5 +275,60 @@ mod tests {
         let mut bad = nominal;
         bad.azimuth_deg[3] = 50.0;
         assert_eq!(bad.validate(), Err(ConfigError::Calibration));
+        // Entries beyond the file's channels are not looked at; no channels is an error.
+        let mut beyond = nominal;
+        beyond.azimuth_deg[40] = f64::NAN;
+        assert!(beyond.validate().is_ok());
+        beyond.channels = 0;
+        assert_eq!(beyond.validate(), Err(ConfigError::Calibration));
+        beyond.channels = MAX_CHANNELS + 1;
+        assert_eq!(beyond.validate(), Err(ConfigError::Calibration));
+    }
+
+    #[test]
+    fn qt128_firings_follow_the_loops_of_the_firing_time_file() {
+        let single = |mode_flag| Firing {
+            returns: 1,
+            mode_flag,
+            ..Firing::default()
+        };
+        // Channel 99 fires first in loop 1 (0.6 us), channel 65 first in loop 2.
+        let m = Model::Qt128;
+        assert_eq!(m.point_offset_ns(0, 98, &single(1)), 9_000 + 600);
+        assert_eq!(m.point_offset_ns(0, 64, &single(0)), 9_000 + 600);
+        // The second firing uses the other loop, 111.11 us later.
+        assert_eq!(m.point_offset_ns(1, 64, &single(1)), 9_000 + 111_110 + 600);
+        // Channels 1 to 32 do not fire in loop 1.
+        assert_eq!(m.point_offset_ns(0, 5, &single(1)), 9_000);
+        // Dual: both blocks are one firing.
+        let dual = Firing {
+            returns: 2,
+            ..single(1)
+        };
+        assert_eq!(m.point_offset_ns(1, 98, &dual), 9_000 + 600);
+    }
+
+    #[test]
+    fn firings_of_protocol_1_4_end_at_the_packet_time() {
+        let f = |operational_state, azimuth_state, returns| Firing {
+            returns,
+            operational_state,
+            azimuth_state,
+            ..Firing::default()
+        };
+        // Pandar128: block 1 is the stamped firing, block 0 one firing earlier.
+        let p = Model::Pandar128;
+        assert_eq!(p.point_offset_ns(1, 7, &f(2, 0, 1)), 3_148);
+        assert_eq!(p.point_offset_ns(0, 7, &f(2, 0, 1)), 3_148 - 55_556);
+        assert_eq!(p.point_offset_ns(0, 7, &f(0, 0, 1)), 3_148 - 27_778);
+        assert_eq!(p.point_offset_ns(0, 7, &f(2, 0, 2)), 3_148);
+        // OT128, standard mode, azimuth state 0: channel 1 at 46.645 us, state 1 the same;
+        // high resolution state 1: 18.867 us; channel 3 does not fire in high-res state 1.
+        let o = Model::Ot128;
+        assert_eq!(o.point_offset_ns(1, 0, &f(2, 0, 1)), 46_645);
+        assert_eq!(o.point_offset_ns(1, 0, &f(2, 1, 1)), 46_645);
+        assert_eq!(o.point_offset_ns(1, 0, &f(0, 1, 1)), 18_867);
+        assert_eq!(o.point_offset_ns(1, 2, &f(0, 1, 1)), 0);
+        assert_eq!(o.point_offset_ns(0, 0, &f(2, 3, 1)), -55_556);
     }
 }

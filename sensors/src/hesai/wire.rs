@@ -90,21 +90,21 @@ pub struct Packet<'a> {
     buf: &'a [u8],
 }
 
-fn u16_at(b: &[u8], at: usize) -> u16 {
+pub(super) fn u16_at(b: &[u8], at: usize) -> u16 {
     match (b.get(at), b.get(at + 1)) {
         (Some(&lo), Some(&hi)) => u16::from_le_bytes([lo, hi]),
         _ => 0,
     }
 }
 
-fn u32_at(b: &[u8], at: usize) -> u32 {
+pub(super) fn u32_at(b: &[u8], at: usize) -> u32 {
     match b.get(at..at + 4) {
         Some(&[a, b, c, d]) => u32::from_le_bytes([a, b, c, d]),
         _ => 0,
     }
 }
 
-fn byte(b: &[u8], at: usize) -> u8 {
+pub(super) fn byte(b: &[u8], at: usize) -> u8 {
     b.get(at).copied().unwrap_or(0)
 }
 
@@ -198,17 +198,24 @@ impl<'a> Packet<'a> {
     /// or microseconds beyond the second.
     pub fn unix_ns(&self) -> Option<u64> {
         let d = self.buf.get(field::DATE_TIME)?;
-        let us = u32_at(self.buf, field::MICROSECONDS.start);
-        let (year, month, day) = (1900 + i64::from(d[0]), d[1], d[2]);
-        let (hour, minute, second) = (d[3], d[4], d[5]);
-        let days = crate::time::days_from_civil_checked(year, month, day)?;
-        if hour > 23 || minute > 59 || second > 60 || us >= 1_000_000 {
-            return None;
-        }
-        let s = days * 86_400 + i64::from(hour) * 3600 + i64::from(minute) * 60 + i64::from(second);
-        u64::try_from(s)
-            .ok()?
-            .checked_mul(1_000_000_000)?
-            .checked_add(u64::from(us) * 1000)
+        utc_ns(d, u32_at(self.buf, field::MICROSECONDS.start))
     }
+}
+
+/// A Hesai tail's time, ns since the Unix epoch: `date` is year - 1900, month, day, hour,
+/// minute and second, `us` the microseconds within that second. `None` for a date that does
+/// not exist or microseconds beyond the second.
+pub(super) fn utc_ns(date: &[u8], us: u32) -> Option<u64> {
+    let &[year, month, day, hour, minute, second] = date else {
+        return None;
+    };
+    let days = crate::time::days_from_civil_checked(1900 + i64::from(year), month, day)?;
+    if hour > 23 || minute > 59 || second > 60 || us >= 1_000_000 {
+        return None;
+    }
+    let s = days * 86_400 + i64::from(hour) * 3600 + i64::from(minute) * 60 + i64::from(second);
+    u64::try_from(s)
+        .ok()?
+        .checked_mul(1_000_000_000)?
+        .checked_add(u64::from(us) * 1000)
 }

@@ -1,0 +1,310 @@
+//! The PandarQT128 (protocol 3.2) and Pandar128/OT128 (protocol 1.4) decoding on synthetic
+//! packets: layouts from the header flags, geometry from the calibration, per-point times,
+//! dual returns, sweeps, and the bad packets each refuses.
+
+use kiss_odom_sensors::hesai::{self, wire128, Calibration, Firing, Model};
+mod common;
+
+use common::{feed, with, Log};
+use kiss_odom_sensors::{ConfigError, Decode, PacketError, Pushed, Return};
+
+/// 2024-10-30 07:36:29 UTC in ns since the epoch.
+const DATE_NS: u64 = (20_026 * 86_400 + 7 * 3600 + 36 * 60 + 29) * 1_000_000_000;
+
+struct Spec {
+    version: (u8, u8),
+    flags: u8,
+    azimuth: u16,
+    us: u32,
+    mode: u8,
+    mode_flag: u8,
+    operational_state: u8,
+    azimuth_states: u16,
+    sequence: u32,
+}
+
+impl Spec {
+    fn qt(azimuth: u16, us: u32) -> Self {
+        Self {
+            version: wire128::VERSION_QT,
+            // Sequence, safety, signature, confidence: the QT128C2X's 1127 bytes.
+            flags: 0x1D,
+            azimuth,
+            us,
+            mode: 0x37,
+            mode_flag: 1,
+            operational_state: 0,
+            azimuth_states: 0,
+            sequence: 0,
+        }
+    }
+    fn p128(azimuth: u16, us: u32) -> Self {
+        Self {
+            version: wire128::VERSION_128,
+            // Sequence, IMU, safety: 861 bytes.
+            flags: 0x07,
+            operational_state: 2,
+            azimuth_states: 0b01 << 12,
+            ..Self::qt(azimuth, us)
+        }
+    }
+}
+
+/// Where the tail begins for the flags of `s` (the layout the module doc gives).
+fn tail_at(s: &Spec) -> usize {
+    let unit = unit_len(s);
+    let safety = if s.flags & 4 != 0 { 17 } else { 0 };
+    12 + 2 * (2 + 128 * unit) + 4 + safety
+}
+
+fn unit_len(s: &Spec) -> usize {
+    let extra = if s.version == wire128::VERSION_128 {
+        (s.flags >> 4 & 7).count_ones() as usize
+    } else {
+        usize::from(s.flags & 0x10 != 0)
+    };
+    3 + extra
+}
+
+/// A packet whose channel `c` of block `k` returns `(200 + c + 1000 k) * 4 mm` on even
+/// channels and `(200 + c) * 4 mm` on odd ones (a dual pair's blocks agree on odd channels),
+/// except that channel 9 returns nothing.
+fn packet(s: &Spec) -> Vec<u8> {
+    let returns: u8 = if matches!(s.mode, 0x39 | 0x3B | 0x3C) {
+        2
+    } else {
+        1
+    };
+    let mut b = vec![0u8; wire128::packet_len(s.version, s.flags)];
+    b[0..4].copy_from_slice(&[0xEE, 0xFF, s.version.0, s.version.1]);
+    b[6..12].copy_from_slice(&[128, 2, 1, 4, returns, s.flags]);
+    let unit = unit_len(s);
+    for k in 0..2 {
+        let firing = k / usize::from(returns);
+        let at = 12 + (2 + 128 * unit) * k;
+        let az = (u32::from(s.azimuth) + 40 * firing as u32) % 36000;
+        b[at..at + 2].copy_from_slice(&(az as u16).to_le_bytes());
+        for c in 0..128 {
+            let ch = at + 2 + unit * c;
+            let d = match c {
+                9 => 0,
+                c if c % 2 == 0 => 200 + c as u16 + 1000 * k as u16,
+                c => 200 + c as u16,
+            };
+            b[ch..ch + 2].copy_from_slice(&d.to_le_bytes());
+            b[ch + 2] = c as u8;
+        }
+    }
+    let t = tail_at(s);
+    b[t + 5] = s.mode_flag;
+    b[t + 9..t + 11].copy_from_slice(&s.azimuth_states.to_le_bytes());
+    b[t + 11] = s.operational_state;
+    b[t + 12] = s.mode;
+    b[t + 13..t + 15].copy_from_slice(&600u16.to_le_bytes());
+    b[t + 15..t + 21].copy_from_slice(&[124, 10, 30, 7, 36, 29]);
+    b[t + 21..t + 25].copy_from_slice(&s.us.to_le_bytes());
+    if s.flags & 1 != 0 {
+        b[t + 26..t + 30].copy_from_slice(&s.sequence.to_le_bytes());
+    }
+    b
+}
+
+/// A calibration of channel `c` at elevation `40 - 0.625 c` and azimuth offset `0.01 c - 0.5`.
+fn calibration() -> Calibration {
+    let mut c = Calibration::nominal();
+    c.channels = 128;
+    for i in 0..128 {
+        c.elevation_deg[i] = 40.0 - 0.625 * i as f64;
+        c.azimuth_deg[i] = 0.01 * i as f64 - 0.5;
+    }
+    c
+}
+
+fn decoder(model: Model) -> hesai::Decoder {
+    hesai::Decoder::new(hesai::Config {
+        model,
+        calibration: Some(calibration()),
+        ..hesai::Config::default()
+    })
+    .unwrap()
+}
+
+#[test]
+fn every_return_takes_its_channels_angles_and_firing_time() {
+    for (model, spec) in [
+        (Model::Qt128, Spec::qt(9000, 250_000)),
+        (Model::Pandar128, Spec::p128(9000, 250_000)),
+        (Model::Ot128, Spec::p128(9000, 250_000)),
+    ] {
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        let bytes = packet(&spec);
+        assert_eq!(feed(&mut dec, &bytes, &mut log), Ok(Pushed::Decoded));
+        dec.finish(&mut log);
+        // Two firings of 127 returns (channel 9 has none).
+        assert_eq!(log.points.len(), 2 * 127, "{model:?}");
+        let cal = calibration();
+        let t0 = (DATE_NS + 250_000_000) as i64;
+        let start = log.starts[0].start_ns as i64;
+        let mut times = Vec::new();
+        for &(_, p, t, m) in &log.points {
+            let (k, c) = (usize::from(m.column), usize::from(m.ring));
+            let raw = if c % 2 == 0 {
+                200 + c + 1000 * k
+            } else {
+                200 + c
+            };
+            let d = raw as f64 * 0.004;
+            let e = cal.elevation_deg[c].to_radians();
+            let az = (90.0 + 0.4 * k as f64 + cal.azimuth_deg[c]).to_radians();
+            let want = [d * e.cos() * az.cos(), -d * e.cos() * az.sin(), d * e.sin()];
+            for i in 0..3 {
+                assert!(
+                    (p[i] - want[i]).abs() < 1e-12,
+                    "{model:?} {p:?} vs {want:?}"
+                );
+            }
+            assert_eq!(m.ret, Return::Strongest);
+            assert_eq!(m.intensity, c as u16);
+            let state = Firing {
+                returns: 1,
+                mode_flag: spec.mode_flag,
+                operational_state: spec.operational_state,
+                azimuth_state: (spec.azimuth_states >> (14 - 2 * k) & 3) as u8,
+            };
+            let want_ns = t0 + model.point_offset_ns(k, c, &state) - start;
+            assert_eq!(t, want_ns as f64 * 1e-9, "{model:?} block {k} channel {c}");
+            times.push(want_ns);
+        }
+        // The sweep begins at the first firing's start: no point before it, the first soon
+        // after.
+        let first = times.iter().min().copied().unwrap_or(-1);
+        assert!((0..3_000).contains(&first), "{model:?}: {first} ns");
+    }
+}
+
+#[test]
+fn dual_returns_pair_the_two_blocks_in_the_models_order() {
+    for (model, spec, first, second) in [
+        (Model::Qt128, Spec::qt(100, 0), Return::Last, Return::First),
+        (
+            Model::Ot128,
+            Spec::p128(100, 0),
+            Return::Last,
+            Return::First,
+        ),
+    ] {
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        let dual = Spec { mode: 0x3B, ..spec };
+        feed(&mut dec, &packet(&dual), &mut log).unwrap();
+        dec.finish(&mut log);
+        // One firing: the 64 even channels twice, the 63 odd ones but channel 9 once.
+        assert_eq!(log.points.len(), 2 * 64 + 63, "{model:?}");
+        for &(_, p, _, m) in &log.points {
+            let c = usize::from(m.ring);
+            let d = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            let raw = match m.ret {
+                Return::Both => 200 + c,
+                r if r == first => 200 + c,
+                r if r == second => 1200 + c,
+                r => panic!("{r:?}"),
+            };
+            assert!((d - raw as f64 * 0.004).abs() < 1e-12);
+            assert_eq!(m.ret == Return::Both, c % 2 == 1);
+            assert_eq!(m.column, 0);
+        }
+    }
+}
+
+#[test]
+fn sweeps_end_where_the_azimuth_wraps_and_sequence_gaps_are_losses() {
+    // QT128 at 10 Hz: 900 packets a turn, 0.4 degrees and 222.22 us apart.
+    let mut dec = decoder(Model::Qt128);
+    let mut log = Log::default();
+    let mut ended = Vec::new();
+    for i in 0..1000u32 {
+        if (40..43).contains(&i) {
+            continue;
+        }
+        let spec = Spec {
+            sequence: 100 + i,
+            ..Spec::qt(((200 + 80 * i) % 36000) as u16, 222 * i)
+        };
+        if feed(&mut dec, &packet(&spec), &mut log) == Ok(Pushed::Ended) {
+            ended.push(i);
+        }
+    }
+    dec.finish(&mut log);
+    // The packet whose last block is a full turn from the first's (80 i >= 36000) ends it.
+    assert_eq!(ended, [450, 900]);
+    assert_eq!(log.ends[0].lost_packets, 3);
+    assert_eq!(log.ends[0].packets, 448);
+    assert_eq!((log.ends[1].packets, log.ends[1].lost_packets), (450, 0));
+}
+
+#[test]
+fn bad_packets_are_refused_with_their_reason() {
+    let qt = packet(&Spec::qt(100, 0));
+    let p128 = packet(&Spec::p128(100, 0));
+    let mut dec = decoder(Model::Qt128);
+    let mut log = Log::default();
+    let mut refused = |bytes: &[u8]| feed(&mut dec, bytes, &mut log).unwrap_err();
+    assert_eq!(refused(&qt[..qt.len() - 1]), PacketError::Truncated);
+    assert_eq!(refused(&qt[..8]), PacketError::Truncated);
+    assert_eq!(
+        refused(&[qt.clone(), vec![0]].concat()),
+        PacketError::Length
+    );
+    assert_eq!(refused(&with(&qt, 0, 0xEF)), PacketError::StartBytes);
+    assert_eq!(refused(&with(&qt, 3, 3)), PacketError::Version);
+    // A 1.4 packet to the QT128: the other protocol.
+    assert_eq!(refused(&p128), PacketError::Version);
+    // 64 lasers, or a distance unit not 4 mm.
+    assert_eq!(refused(&with(&qt, 6, 64)), PacketError::UnknownModel);
+    assert_eq!(refused(&with(&qt, 9, 2)), PacketError::UnknownModel);
+    // A flag that changes the layout (no signature): the length no longer agrees.
+    assert_eq!(refused(&with(&qt, 11, 0x15)), PacketError::Length);
+    assert_eq!(refused(&with(&qt, 10, 3)), PacketError::UnknownReturnMode);
+    assert_eq!(refused(&with(&qt, 13, 0x8D)), PacketError::Azimuth);
+    let t = tail_at(&Spec::qt(0, 0));
+    assert_eq!(refused(&with(&qt, t + 16, 13)), PacketError::Timestamp);
+    assert_eq!(
+        refused(&with(&qt, t + 12, 0x3A)),
+        PacketError::UnknownReturnMode
+    );
+    // Nothing refused was decoded; the good packet still is.
+    assert!(log.points.is_empty());
+    assert_eq!(feed(&mut dec, &qt, &mut log), Ok(Pushed::Decoded));
+    // Another return mode from now on: another sensor on the port.
+    let t = tail_at(&Spec::qt(0, 0));
+    let other = with(&packet(&Spec::qt(140, 300)), t + 12, 0x38);
+    assert_eq!(
+        feed(&mut dec, &other, &mut log),
+        Err(PacketError::OtherSensor)
+    );
+}
+
+#[test]
+fn the_wide_models_need_a_calibration_of_their_channels() {
+    let config = |model, calibration| hesai::Config {
+        model,
+        calibration,
+        ..hesai::Config::default()
+    };
+    for model in [Model::Qt128, Model::Pandar128, Model::Ot128] {
+        assert!(matches!(
+            hesai::Decoder::new(config(model, None)),
+            Err(ConfigError::Calibration)
+        ));
+        assert!(matches!(
+            hesai::Decoder::new(config(model, Some(Calibration::nominal()))),
+            Err(ConfigError::Calibration)
+        ));
+    }
+    assert!(matches!(
+        hesai::Decoder::new(config(Model::Xt32, Some(calibration()))),
+        Err(ConfigError::Calibration)
+    ));
+    assert!(hesai::Decoder::new(config(Model::Xt32, None)).is_ok());
+}
