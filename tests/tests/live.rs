@@ -165,18 +165,33 @@ fn live_fed_by_replay_at_the_recorded_pace_gives_runs_poses_byte_for_byte() {
 #[test]
 fn live_fed_by_replay_gives_runs_poses_for_a_hesai_and_a_livox_recording() {
     let sensors = data().join("..");
-    for (file, sensor, poses) in [
-        ("hesai/hesai-xt32-small.pcap", "xt32", 2),
-        ("livox/livox_tele15_small.pcap", "livox", 4),
+    let qt128 = kiss_odom_tests::repo().join("fixtures/hesai-qt128");
+    let qt128_csv = qt128.join("PandarQT128.csv");
+    for (pcap, args, poses) in [
+        (
+            sensors.join("hesai/hesai-xt32-small.pcap"),
+            vec!["--sensor", "xt32"],
+            2,
+        ),
+        (
+            qt128.join("qt128-sector.pcap"),
+            vec!["--sensor", "qt128", "--calibration", s(&qt128_csv)],
+            1,
+        ),
+        (
+            sensors.join("livox/livox_tele15_small.pcap"),
+            vec!["--sensor", "livox"],
+            4,
+        ),
     ] {
-        let pcap = sensors.join(file);
+        let file = pcap.display().to_string();
         if !pcap.is_file() {
-            eprintln!("SKIP: {} not found", pcap.display());
+            eprintln!("SKIP: {file} not found");
             continue;
         }
         let _serial = serial();
         let dir = tempfile::tempdir().unwrap();
-        let (ran, lived, o) = run_and_live(&pcap, &["--sensor", sensor], dir.path(), "1");
+        let (ran, lived, o) = run_and_live(&pcap, &args, dir.path(), "1");
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         // The Hesai recording lost a packet before it was captured: both count it.
         let lost = &summary(&lived)["packets"]["lost"];

@@ -29,6 +29,7 @@ mod sensors;
 mod sensors_bad_input;
 mod sensors_capture;
 mod sensors_hesai;
+mod sensors_hesai128;
 mod sensors_imu;
 mod sensors_livox;
 mod sensors_memory;

@@ -231,8 +231,14 @@ pub enum SensorKind {
     Hdl32e,
     /// Ouster (needs the metadata JSON).
     Ouster,
-    /// Hesai PandarXT-32.
+    /// Hesai PandarXT-32 (also XT16, XT32M).
     Xt32,
+    /// Hesai PandarQT128 (needs its angle correction file, --calibration).
+    Qt128,
+    /// Hesai Pandar128 (needs its angle correction file, --calibration).
+    Pandar128,
+    /// Hesai OT128 (needs its angle correction file, --calibration).
+    Ot128,
     /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).

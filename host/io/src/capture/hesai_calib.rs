@@ -1,26 +1,30 @@
-//! Hesai's angle correction file into the PandarXT-32 decoder's [`Calibration`]: the CSV the
-//! sensor hands out and Hesai's SDK reads, a header line (`Laser id,Elevation,Azimuth` or
+//! Hesai's angle correction file into the Hesai decoder's [`Calibration`]: the CSV the sensor
+//! hands out and Hesai's SDK reads, a header line (`Laser id,Elevation,Azimuth` or
 //! `Channel,Elevation,Azimuth`) and one row per channel, numbered from 1, angles in degrees.
 
 use anyhow::{bail, Context, Result};
-use kiss_odom_sensors::hesai::{Calibration, CHANNELS};
+use kiss_odom_sensors::hesai::{Calibration, MAX_CHANNELS};
 use std::path::Path;
 
-/// Reads an angle correction file.
-pub fn read(path: &Path) -> Result<Calibration> {
+/// Reads the angle correction file of a sensor of `channels` channels.
+pub fn read(path: &Path, channels: usize) -> Result<Calibration> {
     let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
-    parse(&text).with_context(|| {
+    parse(&text, channels).with_context(|| {
         format!(
-            "{}: not a PandarXT-32 angle correction file",
+            "{}: not the angle correction file of a {channels}-channel Hesai",
             path.display()
         )
     })
 }
 
-/// Parses the CSV text (see the module doc).
-pub fn parse(text: &str) -> Result<Calibration> {
-    let mut seen = [false; CHANNELS];
+/// Parses the CSV text (see the module doc) of a sensor of `channels` channels.
+pub fn parse(text: &str, channels: usize) -> Result<Calibration> {
+    if !(1..=MAX_CHANNELS).contains(&channels) {
+        bail!("{channels} channels: a Hesai has 1 to {MAX_CHANNELS}");
+    }
+    let mut seen = vec![false; channels];
     let mut c = Calibration::nominal();
+    c.channels = channels;
     for (n, line) in text.lines().enumerate() {
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();
         let Some(id) = fields.first().and_then(|f| f.parse::<usize>().ok()) else {
@@ -35,9 +39,9 @@ pub fn parse(text: &str) -> Result<Calibration> {
                 .with_context(|| format!("line {}: column {} is not a number", n + 1, i + 1))?;
             Ok(v)
         };
-        if !(1..=CHANNELS).contains(&id) || seen[id - 1] {
+        if !(1..=channels).contains(&id) || seen[id - 1] {
             bail!(
-                "line {}: channel {id} is not one of 1..={CHANNELS} once",
+                "line {}: channel {id} is not one of 1..={channels} once",
                 n + 1
             );
         }
@@ -47,7 +51,7 @@ pub fn parse(text: &str) -> Result<Calibration> {
     }
     let missing = seen.iter().filter(|s| !**s).count();
     if missing > 0 {
-        bail!("{missing} of the {CHANNELS} channels have no row");
+        bail!("{missing} of the {channels} channels have no row");
     }
     if c.validate().is_err() {
         bail!("an angle is not finite, an elevation beyond 90 or an azimuth beyond 45 degrees");
@@ -72,7 +76,7 @@ mod tests {
         let text = csv((1..=32)
             .rev()
             .map(|i| (i, 16.0 - i as f64 + 0.125, i as f64 * 0.01)));
-        let c = parse(&text).unwrap();
+        let c = parse(&text, 32).unwrap();
         assert_eq!(c.elevation_deg[0], 15.125);
         assert_eq!(c.elevation_deg[31], -15.875);
         assert_eq!(c.azimuth_deg[9], 0.1);
@@ -81,17 +85,23 @@ mod tests {
     #[test]
     fn missing_repeated_and_bad_rows_are_errors() {
         let short = csv((1..=31).map(|i| (i, 0.0, 0.0)));
-        assert!(parse(&short)
+        assert!(parse(&short, 32)
             .unwrap_err()
             .to_string()
             .contains("1 of the 32"));
         let twice = csv((1..=32).chain([5]).map(|i| (i, 0.0, 0.0)));
-        assert!(parse(&twice).is_err());
+        assert!(parse(&twice, 32).is_err());
         let beyond = csv((1..=33).map(|i| (i, 0.0, 0.0)));
-        assert!(parse(&beyond).is_err());
+        assert!(parse(&beyond, 32).is_err());
         let steep = csv((1..=32).map(|i| (i, if i == 3 { 95.0 } else { 0.0 }, 0.0)));
-        assert!(parse(&steep).is_err());
+        assert!(parse(&steep, 32).is_err());
         let text = csv((1..=32).map(|i| (i, 0.0, 0.0))).replace("\n7,0,0", "\n7,x,0");
-        assert!(parse(&text).unwrap_err().to_string().contains("line 8"));
+        assert!(parse(&text, 32).unwrap_err().to_string().contains("line 8"));
+        // A 128-channel file: every row read, none left nominal.
+        let wide = csv((1..=128).map(|i| (i, 52.5 - i as f64 * 0.8, 10.0 - i as f64 * 0.1)));
+        let c = parse(&wide, 128).unwrap();
+        assert_eq!((c.channels, c.elevation_deg[127]), (128, 52.5 - 102.4));
+        assert!(parse(&wide, 32).is_err());
+        assert!(parse(&short, 129).is_err());
     }
 }

@@ -324,6 +324,8 @@ pub struct PcapSweeps {
 /// hand on.
 struct Survey {
     seen: BTreeMap<(u16, usize), u64>,
+    /// Hesai protocol versions (major, minor) of the `EE FF` packets on port 2368.
+    hesai: BTreeMap<(u8, u8), u64>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
 }
@@ -332,6 +334,7 @@ fn survey(path: &Path) -> Result<Survey> {
     let mut capture = pcap::open(path)?;
     let mut s = Survey {
         seen: BTreeMap::new(),
+        hesai: BTreeMap::new(),
         damaged: BTreeSet::new(),
         notes: Vec::new(),
     };
@@ -339,6 +342,11 @@ fn survey(path: &Path) -> Result<Survey> {
         match capture.next_record() {
             Ok(Some(Record::Datagram(d))) => {
                 *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
+                if let (VELODYNE_PORT, [0xEE, 0xFF, major, minor, ..]) =
+                    (d.port, d.payload.as_slice())
+                {
+                    *s.hesai.entry((*major, *minor)).or_insert(0) += 1;
+                }
             }
             Ok(Some(Record::Damaged { port, .. })) => {
                 s.damaged.insert(port);
@@ -433,8 +441,8 @@ pub fn decode(
             return livox_decoder(path, capture, opts, model, opts.port);
         }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
-        let mut hesai = opts.sensor == SensorKind::Xt32;
-        if opts.port.is_none() && !hesai {
+        let mut hesai = hesai_model(opts.sensor);
+        if opts.port.is_none() && hesai.is_none() {
             let s = survey(path)?;
             let data = s
                 .seen
@@ -442,14 +450,14 @@ pub fn decode(
                 .any(|(_, len)| *len == velodyne::wire::field::LEN)
                 || s.damaged.contains(&port);
             let auto = !data && opts.sensor == SensorKind::Auto;
-            hesai = auto && s.seen.keys().any(is_hesai);
-            if auto && !hesai && s.seen.keys().any(is_livox) {
+            hesai = if auto { hesai_in(&s) } else { None };
+            if auto && hesai.is_none() && s.seen.keys().any(is_livox) {
                 return livox_decoder(path, capture, opts, livox::Model::Horizon, None);
             }
-            if auto && !hesai && s.seen.keys().any(is_livox2) {
+            if auto && hesai.is_none() && s.seen.keys().any(is_livox2) {
                 return livox_decoder(path, capture, opts, livox::Model::Mid360, None);
             }
-            if !data && !hesai {
+            if !data && hesai.is_none() {
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
                     bail!(
                         "{}: packets on port {OUSTER_PORT} look like an Ouster's: give its \
@@ -458,15 +466,15 @@ pub fn decode(
                     );
                 }
                 bail!(
-                    "{}: no Velodyne (1206 bytes), Hesai (1080 bytes on port 2368) or Livox \
+                    "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368) or Livox \
                      (ports 56001, 56301) data packets; {}",
                     path.display(),
                     describe(&s)
                 );
             }
         }
-        if hesai {
-            return hesai_decoder(path, capture, opts, port);
+        if let Some(model) = hesai {
+            return hesai_decoder(path, capture, opts, model, port);
         }
         let calibration = opts
             .calibration
@@ -494,10 +502,28 @@ pub fn decode(
     ))
 }
 
-/// Whether packets of this port and length look like a PandarXT-32's on its default port.
-fn is_hesai(&(port, len): &(u16, usize)) -> bool {
-    port == VELODYNE_PORT
-        && (len == hesai::wire::field::LEN || len == hesai::wire::field::LEN_WITH_SEQUENCE)
+/// The Hesai model whose protocol most `EE FF` packets on port 2368 announce. Protocol 1.4
+/// is taken for an OT128: the Pandar128 sends the same packets and differs in firing times
+/// only (`--sensor pandar128`).
+fn hesai_in(s: &Survey) -> Option<hesai::Model> {
+    let (&version, _) = s.hesai.iter().max_by_key(|(_, n)| **n)?;
+    match version {
+        hesai::wire::VERSION => Some(hesai::Model::Xt32),
+        hesai::wire128::VERSION_QT => Some(hesai::Model::Qt128),
+        hesai::wire128::VERSION_128 => Some(hesai::Model::Ot128),
+        _ => None,
+    }
+}
+
+/// The Hesai model `--sensor` names, if it names one.
+fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
+    match sensor {
+        SensorKind::Xt32 => Some(hesai::Model::Xt32),
+        SensorKind::Qt128 => Some(hesai::Model::Qt128),
+        SensorKind::Pandar128 => Some(hesai::Model::Pandar128),
+        SensorKind::Ot128 => Some(hesai::Model::Ot128),
+        _ => None,
+    }
 }
 
 /// Whether packets of this port and length look like Livox SDK 1 point packets.
@@ -556,24 +582,32 @@ fn livox_decoder(
     ))
 }
 
-/// The PandarXT-32 decoder, with the angle correction file if one is given.
+/// The Hesai decoder for `model`, with the angle correction file if one is given (the
+/// 128-channel models need one).
 fn hesai_decoder(
     path: &Path,
     capture: Box<dyn DatagramSource>,
     opts: &SensorOptions,
+    model: hesai::Model,
     port: u16,
 ) -> Result<PcapSweeps> {
-    let calibration = opts
-        .calibration
-        .as_deref()
-        .map(hesai_calib::read)
-        .transpose()?;
+    let calibration = match opts.calibration.as_deref() {
+        Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
+        None if model.channels() != hesai::CHANNELS => bail!(
+            "{}: packets of a {}: give its angle correction file (the CSV Hesai ships with \
+             the sensor) with --calibration",
+            path.display(),
+            model.name()
+        ),
+        None => None,
+    };
     let config = hesai::Config {
+        model,
         calibration,
         cut_angle_deg: opts.cut_angle_deg,
     };
     let dec = hesai::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    let sensor = "Hesai PandarXT-32".to_string();
+    let sensor = model.name().to_string();
     let decoder = Decoder::Hesai(Box::new(dec));
     Ok(sweeps(
         path,
@@ -678,7 +712,14 @@ impl PcapSweeps {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
             Decoder::Ouster(d) => d.layout().packet_len(),
-            Decoder::Hesai(_) => hesai::wire::field::LEN_WITH_SEQUENCE,
+            Decoder::Hesai(d) if d.model() == hesai::Model::Xt32 => {
+                hesai::wire::field::LEN_WITH_SEQUENCE
+            }
+            // The lengths the sensors send by default: QT128C2X 1127 bytes, 1.4 861 bytes.
+            Decoder::Hesai(d) if d.model() == hesai::Model::Qt128 => {
+                hesai::wire128::packet_len(hesai::wire128::VERSION_QT, 0x1D)
+            }
+            Decoder::Hesai(_) => hesai::wire128::packet_len(hesai::wire128::VERSION_128, 0x07),
             // The SDKs' default data types: SDK 1's 2, SDK 2's 1 (96 points, the Mid-360's).
             Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
                 livox::sdk2::packet_len(1, livox::sdk2::MID360_POINTS).unwrap_or(0)
