@@ -4,9 +4,11 @@
 #   embedded/measure.sh [case...]
 #
 # Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny
-# m7-packets m7-packets-decode a53-full a53-small rv-small rv-small-f64 rv-full (default: all).
+# m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64
+# rv-full (default: all).
 # m7-packets streams a generated VLP-16 recording packet by packet through the decoder and the
-# core; m7-packets-decode runs its decoder alone; both add a per-packet line below the table. Outputs go to embedded/target/measure/.
+# core, m7-mid360 a Livox Mid-360 one; the -decode cases run the decoder alone; all four add a
+# per-packet line below the table. Outputs go to embedded/target/measure/.
 # Frame times are ESTIMATES: instructions / (IPC x clock) with IPC = 1 on a 600 MHz Cortex-M7
 # (from the Cortex-M4F counts for an M7 whose FPU is single precision, from the m7 build for
 # one with the double-precision FPU) and a 1.2 GHz Cortex-A53 (from the AArch64 counts); see
@@ -16,7 +18,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 out="$here/target/measure"
 mkdir -p "$out"
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny m7-packets m7-packets-decode a53-full a53-small rv-small rv-small-f64 rv-full)
+[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64 rv-full)
 
 spec() {
   case "$1" in
@@ -29,6 +31,8 @@ spec() {
     m7-tiny) echo "m7:tiny" ;;
     m7-packets) echo "m7:packets" ;;
     m7-packets-decode) echo "m7:packets,baseline" ;;
+    m7-mid360) echo "m7:packets,mid360" ;;
+    m7-mid360-decode) echo "m7:packets,mid360,baseline" ;;
     a53-full) echo "aarch64:f64,exact,full" ;;
     a53-small) echo "aarch64:" ;;
     rv-small) echo "riscv32:" ;;
@@ -48,7 +52,7 @@ done
 echo "| case | target | scalar, codec, capacities | points/frame | .text | .rodata (frames) | .bss + .psram | state bytes | stack high-water | insns frame 0 | insns/frame 1-4 (mean, max) | est. ms/frame M7 600 MHz | est. ms/frame A53 1.2 GHz |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for c in "${cases[@]}"; do
-  [ "$c" = m4-baseline ] || [ "$c" = m7-packets-decode ] && continue
+  case "$c" in m4-baseline | *-decode) continue ;; esac
   s="$(spec "$c")"
   awk -v c="$c" -v t="${s%%:*}" '
     /^size /{ for (i=2;i<=NF;i++) { split($i,kv,"="); sz[kv[1]]=kv[2] } }
@@ -74,7 +78,7 @@ if [ -f "$out/m4-baseline.txt" ] && [ -f "$out/m4-small.txt" ]; then
   echo "Cortex-M4F m4-small: program $f - baseline $b = $((f - b)) instructions for all frames;" \
        "the per-frame marks add up to $m (the rest is printing the frame lines)."
 fi
-for c in m7-packets m7-packets-decode; do
+for c in m7-packets m7-packets-decode m7-mid360 m7-mid360-decode; do
   [ -f "$out/$c.txt" ] || continue
   echo
   # Sweeps 1-4 (sweep 0 has no map to register against).

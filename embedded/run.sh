@@ -105,17 +105,21 @@ if [[ ",$features," == *",tiny,"* ]]; then
 fi
 # The packets profile embeds the UDP payloads of a generated VLP-16 recording (the same drive).
 # `far`: a suburban drive, 36 sweeps from the fifth, over which TINY's map fills at 100 m.
+# `mid360`: the same drive seen by a Livox Mid-360.
 if [[ ",$features," == *",packets,"* ]]; then
+  sensor=vlp16
   if [[ ",$features," == *",far,"* ]]; then
     pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-suburban-pcap}"; sim=(--frames 40 --profile suburban)
     export KISS_EMBED_FIRST="${KISS_EMBED_FIRST:-4}" KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-36}"
+  elif [[ ",$features," == *",mid360,"* ]]; then
+    sensor=mid360; pcapdir="${KISS_EMBED_PCAP:-$here/target/mid360-pcap}"; sim=(--frames 36)
   else
     pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"; sim=(--frames 36)
   fi
   if [ ! -f "$pcapdir/sim.toml" ]; then
     kiss_odom simulate --out "$pcapdir" "${sim[@]}" \
-      --seed 11 --sensor vlp16 --format pcap --max-range 100 --overwrite >&2 \
-      || { echo "error: cannot generate the VLP-16 pcap" >&2; exit 96; }
+      --seed 11 --sensor "$sensor" --format pcap --max-range 100 --overwrite >&2 \
+      || { echo "error: cannot generate the $sensor pcap" >&2; exit 96; }
   fi
   export KISS_EMBED_PCAP="$pcapdir"
 fi

@@ -1,7 +1,7 @@
-//! The `packets` profile: a Velodyne VLP-16 recording's UDP payloads, embedded in the image,
-//! streamed packet by packet through `kiss-odom-sensors` into the core, as a sensor on the
-//! network would deliver them. A sweep is never held whole: each chunk the decoder emits goes
-//! straight into the odometry's `FrameInput`.
+//! The `packets` profile: a Velodyne VLP-16 recording's UDP payloads (with `mid360`, a Livox
+//! Mid-360's), embedded in the image, streamed packet by packet through `kiss-odom-sensors`
+//! into the core, as a sensor on the network would deliver them. A sweep is never held whole:
+//! each chunk the decoder emits goes straight into the odometry's `FrameInput`.
 //!
 //! The span rule: the core needs a sweep's (first, last) capture time when the sweep begins,
 //! before its last packet. We take the previous sweep's span (times are relative to each
@@ -12,8 +12,8 @@
 //! so `run.sh` reports it as that frame's `cost`; `input` lines give the packets of each sweep.
 
 use crate::profile::{kiss_frame_mark, Codec, Scalar, EXIT_CONFIG_ERROR, EXIT_FRAME_ERROR};
+use crate::workload::frames::PACKET_LEN as LEN;
 use kiss_odom_core::{Odometry, Storage};
-use kiss_odom_sensors::velodyne::{self, wire::field::LEN};
 use kiss_odom_sensors::{Chunk, Decode, Pushed, SweepSink, SweepStart, SweepStats, CHUNK};
 
 #[repr(C, align(8))]
@@ -65,6 +65,29 @@ impl<F: FnMut(&[[Scalar; 3]], &[f64])> SweepSink for Feed<F> {
     }
 }
 
+/// The VLP-16 decoder: the simulator's sweeps start at azimuth 0.
+#[cfg(not(feature = "mid360"))]
+fn decoder() -> Option<kiss_odom_sensors::velodyne::Decoder> {
+    use kiss_odom_sensors::velodyne;
+    let config = velodyne::Config {
+        model: Some(velodyne::Model::Vlp16),
+        calibration: None,
+        cut_angle_deg: Some(0.0),
+    };
+    velodyne::Decoder::new(config).ok()
+}
+
+/// The Mid-360 decoder: frames of the Livox ROS driver's 0.1 s.
+#[cfg(feature = "mid360")]
+fn decoder() -> Option<kiss_odom_sensors::livox::Decoder> {
+    use kiss_odom_sensors::livox;
+    let config = livox::Config {
+        model: livox::Model::Mid360,
+        ..livox::Config::default()
+    };
+    livox::Decoder::new(config).ok()
+}
+
 /// Streams every embedded packet; the total instruction count where measured, or the exit
 /// status of the first failing sweep.
 pub fn run<S: Storage>(
@@ -72,13 +95,7 @@ pub fn run<S: Storage>(
     insns: fn() -> Option<u64>,
     counter: &str,
 ) -> Result<Option<u64>, i32> {
-    let config = velodyne::Config {
-        model: Some(velodyne::Model::Vlp16),
-        calibration: None,
-        // The simulator's sweeps start at azimuth 0.
-        cut_angle_deg: Some(0.0),
-    };
-    let Ok(mut dec) = velodyne::Decoder::new(config) else {
+    let Some(mut dec) = decoder() else {
         return Err(EXIT_CONFIG_ERROR);
     };
     let packets: &[u8] = &PACKETS.0;
@@ -139,8 +156,8 @@ pub fn run<S: Storage>(
 
 /// Pushes packets from `next` on until the decoder ends a sweep (or the packets run out);
 /// `next` moves past the packets consumed. Returns the sweep's statistics.
-fn decode_sweep<F: FnMut(&[[Scalar; 3]], &[f64])>(
-    dec: &mut velodyne::Decoder,
+fn decode_sweep<D: Decode, F: FnMut(&[[Scalar; 3]], &[f64])>(
+    dec: &mut D,
     packets: &[u8],
     next: &mut usize,
     feed: &mut Feed<F>,
