@@ -31,31 +31,16 @@
 use super::wire::{byte, u16_at, u32_at, utc_ns, AZIMUTH_UNITS, START};
 use crate::error::PacketError;
 
-/// Byte ranges and sizes shared by both protocols.
+/// Byte ranges and sizes shared by both protocols. The 12-byte header and a block's and a
+/// channel unit's leading fields are the XT32's ([`super::wire::field`]).
 pub mod field {
+    pub use super::super::wire::field::{
+        AZIMUTH, BLOCK_COUNT, BODY, DISTANCE, DISTANCE_UNIT, FLAGS, LASERS, REFLECTIVITY, RETURNS,
+        START,
+    };
     use core::ops::Range;
-    /// Start of packet, `EE FF`.
-    pub const START: Range<usize> = 0..2;
     /// Protocol version, major then minor.
     pub const VERSION: Range<usize> = 2..4;
-    /// Lasers a block holds.
-    pub const LASERS: usize = 6;
-    /// Blocks in the packet.
-    pub const BLOCK_COUNT: usize = 7;
-    /// Millimetres per distance unit.
-    pub const DISTANCE_UNIT: usize = 9;
-    /// Returns a firing reports.
-    pub const RETURNS: usize = 10;
-    /// Which optional parts the packet has (see the module doc).
-    pub const FLAGS: usize = 11;
-    /// Where the blocks begin.
-    pub const BODY: usize = 12;
-    /// Within a block: azimuth, hundredths of a degree.
-    pub const AZIMUTH: Range<usize> = 0..2;
-    /// Within a channel unit: distance in distance units; 0 means no return.
-    pub const DISTANCE: Range<usize> = 0..2;
-    /// Within a channel unit: reflectivity.
-    pub const REFLECTIVITY: usize = 2;
     /// The body CRC after the blocks.
     pub const BODY_CRC_LEN: usize = 4;
     /// The functional safety part.
@@ -163,6 +148,14 @@ impl Layout {
     }
 }
 
+/// The header's protocol version (major, minor).
+fn version_of(b: &[u8]) -> (u8, u8) {
+    (
+        byte(b, field::VERSION.start),
+        byte(b, field::VERSION.start + 1),
+    )
+}
+
 /// The length of a packet of `version` with header `flags`.
 pub fn packet_len(version: (u8, u8), flags: u8) -> usize {
     Layout::of(version, flags).len
@@ -185,7 +178,7 @@ impl<'a> Packet<'a> {
         if bytes.get(field::START) != Some(&START[..]) {
             return Err(PacketError::StartBytes);
         }
-        let version = (byte(bytes, field::VERSION.start), byte(bytes, 3));
+        let version = version_of(bytes);
         if version != VERSION_QT && version != VERSION_128 {
             return Err(PacketError::Version);
         }
@@ -221,7 +214,7 @@ impl<'a> Packet<'a> {
 
     /// Protocol version (major, minor): [`VERSION_QT`] or [`VERSION_128`].
     pub fn version(&self) -> (u8, u8) {
-        (byte(self.buf, 2), byte(self.buf, 3))
+        version_of(self.buf)
     }
     /// Returns a firing reports: 1 or 2 after `new_checked`.
     pub fn returns(&self) -> u8 {
