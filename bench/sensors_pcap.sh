@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # `kiss-odom run` on generated sensor recordings (packets) against the same run on the
 # simulator's direct point output (the exact points the packets were made from), deskew on and
-# off. VLP-16 and OS1-64 (and, with SPECS, the Mid-360), urban and fast, 500 sweeps each,
-# seeds 1-3. Prints a markdown table of
+# off. VLP-16 and OS1-64 (and, with SPECS, the Mid-360, XT32 and Avia), urban and fast, 500
+# sweeps each, seeds 1-3. Prints a markdown table of
 # KITTI relative translation error and ATE against the simulator's ground truth, per drive and
 # the mean over the seeds (a single drive's error is a random walk that the packets' range
 # quantisation, 1-2 mm, already perturbs: compare means).
@@ -10,11 +10,12 @@
 #   bench/sensors_pcap.sh        (DATA=target/sensors-pcap, FRAMES=500, SEEDS="1 2 3",
 #                                 SPECS="vlp16 urban,vlp16 fast,os1-64 urban,os1-64 fast"; each
 #                                 drive, up to 1.2 GB, is removed after its runs unless KEEP=1;
-#                                 ROWS=... appends to an earlier run's rows.tsv instead)
+#                                 ROWS=... appends to an earlier run's rows.tsv instead;
+#                                 KISS_ODOM_BIN=... runs that binary instead of building one)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p kiss-odom
-B=target/release/kiss-odom
+if [ -z "${KISS_ODOM_BIN:-}" ]; then cargo build --release -q -p kiss-odom; fi
+B=${KISS_ODOM_BIN:-target/release/kiss-odom}
 DATA=${DATA:-target/sensors-pcap}; mkdir -p "$DATA"
 FRAMES=${FRAMES:-500}
 rows=${ROWS:-$DATA/rows.tsv}; [ -n "${ROWS:-}" ] || : > "$rows"
@@ -26,7 +27,9 @@ for spec in "${specs[@]}"; do
       --profile "$2" --sensor "$1" --format pcap --overwrite >/dev/null
     case $1 in
       os1-64) src=(--meta "$d/packets.json") ;;
-      mid360) src=() ;;  # frames by time, found by port: nothing to give
+      # Livox frames by time, found by port; the XT32 by its packets, sweeps by azimuth
+      # coverage: nothing to give.
+      mid360|avia|xt32) src=() ;;
       *) src=(--cut-angle 0) ;;
     esac
     for deskew in deskew no-deskew; do

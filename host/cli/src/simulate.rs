@@ -57,8 +57,9 @@ pub struct SimulateArgs {
     pub start_time: f64,
     /// A real sensor's beams, firing timing and packets instead of the generic sensor (whose
     /// --beams, --columns and --fov-* flags are then ignored); --rate-hz is rounded to the
-    /// sensor's (a whole number of packets per turn; 10 or 20 Hz for the OS1; the Mid-360 cuts
-    /// frames by time: read back a rate other than 10 Hz with --frame-period 1/rate).
+    /// sensor's (a whole number of packets per turn; 10 or 20 Hz for the OS1, 5, 10 or 20 Hz
+    /// for the XT32; the Livox sensors, mid360 and avia, cut frames by time: read back a rate
+    /// other than 10 Hz with --frame-period 1/rate).
     #[arg(long, value_enum)]
     pub sensor: Option<PacketSensor>,
     /// What to write.

@@ -26,7 +26,7 @@ pub struct CaptureWriter {
     /// Source and destination UDP ports.
     ports: (u16, u16),
     source: [u8; 4],
-    /// Sequence time of trajectory time 0 (s).
+    /// The capture clock at trajectory time 0 (s).
     start_time: f64,
 }
 
@@ -46,6 +46,9 @@ impl CaptureWriter {
             PacketSensor::Os1 => ((7502, 7502), [192, 168, 1, 100]),
             // The Mid-360 sends from port 56300 to the host's 56301 (Livox's defaults).
             PacketSensor::Mid360 => ((56300, 56301), [192, 168, 1, 160]),
+            // A Livox SDK 1 sensor sends its points to the host's port 56001.
+            PacketSensor::Avia => ((65000, 56001), [192, 168, 1, 150]),
+            // Velodyne and Hesai.
             _ => ((2368, 2368), [192, 168, 1, 201]),
         };
         Ok(Self {
@@ -53,7 +56,8 @@ impl CaptureWriter {
             writer,
             ports,
             source,
-            start_time,
+            // Captured on a host whose clock agrees with the sensor's.
+            start_time: start_time + sensor.clock_origin_s() as f64,
         })
     }
 

@@ -105,7 +105,7 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
             .map_err(anyhow::Error::msg)?;
     }
     if request.format == Format::Pcap && request.sensor.is_none() {
-        bail!("--format pcap needs --sensor (vlp16, vlp32c, os1-64 or mid360)");
+        bail!("--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32 or avia)");
     }
     Ok(params)
 }
