@@ -7,4 +7,5 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --quiet --manifest-path tests/copper/Cargo.toml
 export KISS_ODOM_COPPER_DUMP="$PWD/tests/copper/target/release/copper-dump"
-cargo test --release -p kiss-odom-tests --test workspace -- --nocapture sensors_hesai:: sensors_livox::
+cargo test --release -p kiss-odom-tests --test workspace -- --nocapture sensors_hesai:: sensors_livox:: \
+  sensors_simulated::copper
