@@ -1,7 +1,7 @@
 //! The models decoded, their published timing, the per-channel [`Calibration`] (Hesai's angle
 //! correction file) and the decoder's [`Config`].
 
-use super::firetimes::{OT128_NS, QT128_NS};
+use super::firetimes::{NONE, OT128_NS, QT128_NS};
 use super::wire::field;
 use crate::error::ConfigError;
 use crate::sweep::Return;
@@ -90,33 +90,45 @@ impl Model {
     ///   distance as well and are not applied (its points are up to 55.6 us early).
     pub fn point_offset_ns(self, block: usize, channel: usize, f: &Firing) -> i64 {
         let returns = if f.returns == 0 { 1 } else { f.returns };
-        let table = |t: &[[u32; MAX_CHANNELS]], column: usize| {
-            t.get(column)
-                .and_then(|c| c.get(channel))
-                .map_or(0, |&ns| i64::from(ns))
+        let channel_ns = match self.table_entry(block, channel, f) {
+            Some(ns) if ns != NONE => i64::from(ns),
+            _ => 0,
         };
         match self {
             Self::Xt32 => point_offset_ns(block, channel, returns),
-            Self::Qt128 => {
-                let firing = block / returns;
-                let lp = (usize::from(f.mode_flag) + firing + 1) % 2;
-                9_000 + 111_110 * firing as i64 + table(&QT128_NS, lp)
-            }
+            Self::Qt128 => 9_000 + 111_110 * (block / returns) as i64 + channel_ns,
             Self::Pandar128 | Self::Ot128 => {
                 let later = (self.blocks().saturating_sub(block + 1) / returns) as i64;
-                let step = self.firing_ns(f.operational_state);
-                let state = usize::from(f.azimuth_state);
-                let (start, channel_ns) = match (self, f.operational_state) {
-                    (Self::Pandar128, _) => (3_148, 0),
-                    (_, 0) => (0, table(&OT128_NS, state)),
-                    (_, 2) if state < 2 => (0, table(&OT128_NS, 4 + state)),
-                    _ => (0, 0),
-                };
-                start - step * later + channel_ns
+                let start = if self == Self::Pandar128 { 3_148 } else { 0 };
+                start - self.firing_ns(f.operational_state) * later + channel_ns
             }
         }
     }
+
+    /// Whether channel `channel` fires in block `block`: the QT128's channels 1-32 do not in
+    /// loop 1 nor 33-64 in loop 2, and a quarter of the OT128's do not in each azimuth state
+    /// of high resolution (their firing-time files list no time for them). A channel that does
+    /// not fire has no return.
+    pub fn fires(self, block: usize, channel: usize, f: &Firing) -> bool {
+        self.table_entry(block, channel, f) != Some(NONE)
+    }
+
+    /// The firing-time file's entry for the channel in this block, if the model has one.
+    fn table_entry(self, block: usize, channel: usize, f: &Firing) -> Option<u32> {
+        let returns = if f.returns == 0 { 1 } else { f.returns };
+        let column = match (self, f.operational_state) {
+            (Self::Qt128, _) => {
+                let lp = (usize::from(f.mode_flag) + block / returns + 1) % 2;
+                return QT128_NS[lp].get(channel).copied();
+            }
+            (Self::Ot128, 0) => usize::from(f.azimuth_state),
+            (Self::Ot128, 2) if f.azimuth_state < 2 => 4 + usize::from(f.azimuth_state),
+            _ => return None,
+        };
+        OT128_NS.get(column).and_then(|c| c.get(channel)).copied()
+    }
 }
+
 /// Time from a channel's firing to the next channel's within a firing, ns.
 pub const CHANNEL_NS: i64 = 1_512;
 
@@ -298,8 +310,10 @@ mod tests {
         assert_eq!(m.point_offset_ns(0, 64, &single(0)), 9_000 + 600);
         // The second firing uses the other loop, 111.11 us later.
         assert_eq!(m.point_offset_ns(1, 64, &single(1)), 9_000 + 111_110 + 600);
-        // Channels 1 to 32 do not fire in loop 1.
+        // Channels 1 to 32 do not fire in loop 1, 33 to 64 not in loop 2.
         assert_eq!(m.point_offset_ns(0, 5, &single(1)), 9_000);
+        assert!(!m.fires(0, 5, &single(1)) && m.fires(0, 98, &single(1)));
+        assert!(!m.fires(0, 40, &single(0)) && m.fires(0, 5, &single(0)));
         // Dual: both blocks are one firing.
         let dual = Firing {
             returns: 2,
@@ -329,6 +343,11 @@ mod tests {
         assert_eq!(o.point_offset_ns(1, 0, &f(2, 1, 1)), 46_645);
         assert_eq!(o.point_offset_ns(1, 0, &f(0, 1, 1)), 18_867);
         assert_eq!(o.point_offset_ns(1, 2, &f(0, 1, 1)), 0);
+        assert!(!o.fires(1, 2, &f(0, 1, 1)) && o.fires(1, 2, &f(0, 0, 1)));
+        // Standard mode: every channel fires, channel 128 at the firing's start.
+        assert!((0..128).all(|c| o.fires(0, c, &f(2, 1, 1))));
+        assert_eq!(o.point_offset_ns(1, 127, &f(2, 0, 1)), 0);
+        assert!(p.fires(0, 5, &f(2, 0, 1)) && Model::Xt32.fires(0, 5, &f(0, 0, 1)));
         assert_eq!(o.point_offset_ns(0, 0, &f(2, 3, 1)), -55_556);
     }
 }
