@@ -4,12 +4,13 @@
 //! Each generated sweep comes with its ground truth (the generic layout beside the pcap: every
 //! point before range quantisation, at its firing time, in decoder order). Decoded points must
 //! lie within what the format can express: half the range unit (2 mm VLP-16, 4 mm VLP-32C and
-//! XT32, 1 mm Ouster RNG19, sqrt(3) / 2 mm for the Livox sensors' millimetre x, y and z) plus,
-//! for Velodyne, the 0.01 degree azimuth the packets carry (a block's azimuth and its
-//! interpolation each round to it; an XT32 point is cast along its block's reported azimuth);
-//! times within 1 us; the same point count per sweep (a Livox frame: its 0.1 s of packets).
-//! The XT32 and the Livox sensors are decoded with no options, as `run` finds them. The
-//! reference test runs `tests/sensors/dump_generated.py` with the Python in
+//! the Hesai sensors, 1 mm Ouster RNG19, sqrt(3) / 2 mm for the Livox sensors' millimetre x, y
+//! and z) plus, for Velodyne, the 0.01 degree azimuth the packets carry (a block's azimuth and
+//! its interpolation each round to it; a Hesai point is cast along its block's reported
+//! azimuth plus its channel's offset); times within 1 us; the same point count per sweep (a
+//! Livox frame: its 0.1 s of packets). The XT32 and the Livox sensors are decoded with no
+//! options, as `run` finds them, the QT128 and OT128 with the angle correction file written
+//! beside. The reference test runs `tests/sensors/dump_generated.py` with the Python in
 //! `KISS_ODOM_SENSOR_PYTHON` (velodyne-decoder 3.1.0, ouster-sdk 1.0.1) and prints SKIP
 //! without it; the copper-rs parsers (cu-hesai, cu-livox) decode the generated XT32 and Avia
 //! packets with `KISS_ODOM_COPPER_DUMP` (`tests/copper/compare.sh`).
@@ -42,7 +43,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 6] = [
+const CASES: [Case; 8] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -82,6 +83,19 @@ const CASES: [Case; 6] = [
         azimuth_rad: 0.0,
         clock_origin_s: 0,
     },
+    // As the XT32, each channel along its block's azimuth plus its offset.
+    Case {
+        sensor: "qt128",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Qt128.clock_origin_s(),
+    },
+    Case {
+        sensor: "ot128",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Ot128.clock_origin_s(),
+    },
 ];
 
 impl Case {
@@ -98,13 +112,23 @@ impl Case {
     fn found_as_is(&self) -> bool {
         matches!(self.sensor, "mid360" | "xt32" | "avia")
     }
+    /// Whether `run` finds the recording by its packets and needs the angle correction file
+    /// `simulate` wrote beside it (the 128-channel Hesai sensors).
+    fn needs_angles(&self) -> bool {
+        matches!(self.sensor, "qt128" | "ot128")
+    }
     /// Whether `dump_generated.py`'s references decode the format (velodyne-decoder and
     /// ouster-sdk; the copper-rs parsers of the XT32 and the Avia have their own test).
     fn has_reference(&self) -> bool {
-        !self.found_as_is()
+        !self.found_as_is() && !self.needs_angles()
     }
     fn options(&self, dir: &Path) -> SensorOptions {
-        if self.found_as_is() {
+        if self.needs_angles() {
+            SensorOptions {
+                calibration: Some(dir.join("packets.csv")),
+                ..SensorOptions::default()
+            }
+        } else if self.found_as_is() {
             SensorOptions::default()
         } else if self.ouster() {
             SensorOptions {

@@ -58,8 +58,9 @@ pub struct SimulateArgs {
     /// A real sensor's beams, firing timing and packets instead of the generic sensor (whose
     /// --beams, --columns and --fov-* flags are then ignored); --rate-hz is rounded to the
     /// sensor's (a whole number of packets per turn; 10 or 20 Hz for the OS1, 5, 10 or 20 Hz
-    /// for the XT32; the Livox sensors, mid360 and avia, cut frames by time: read back a rate
-    /// other than 10 Hz with --frame-period 1/rate).
+    /// for the XT32, 10 Hz for the QT128 and OT128, whose angle file goes beside the pcap as
+    /// packets.csv for --calibration; the Livox sensors, mid360 and avia, cut frames by time:
+    /// read back a rate other than 10 Hz with --frame-period 1/rate).
     #[arg(long, value_enum)]
     pub sensor: Option<PacketSensor>,
     /// What to write.

@@ -1,5 +1,6 @@
 //! Writes simulated packets as a pcap capture (Ethernet, IPv4, UDP, as Wireshark or VeloView
-//! record a sensor) and, for an Ouster, the metadata JSON that describes it.
+//! record a sensor) and, for an Ouster, the metadata JSON that describes it, for a Hesai
+//! QT128 or OT128 its angle correction file.
 //!
 //! The last step of `simulate --format pcap`, after [`crate::packets`]. Datagrams are not
 //! fragmented: an OS1-64 packet (12 544 bytes) travels in one jumbo frame.
@@ -18,6 +19,8 @@ use std::time::Duration;
 pub const PCAP_NAME: &str = "packets.pcap";
 /// The Ouster metadata's file name in the output folder.
 pub const META_NAME: &str = "packets.json";
+/// The Hesai angle correction file's name in the output folder.
+pub const ANGLES_NAME: &str = "packets.csv";
 
 /// A pcap file being written.
 pub struct CaptureWriter {

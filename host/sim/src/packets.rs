@@ -11,11 +11,13 @@
 //! the turn starts 1.5 blocks after azimuth 0, so the packet whose last block passes azimuth 0
 //! is the last of each sweep: decoders cutting at 0 degrees see the simulator's sweeps (without
 //! a cut angle, `run` takes a full turn from the first packet: the same sweeps one packet
-//! later). A Hesai XT32 (`packets/xt32.rs`) is placed so that `run` without a cut angle sees
-//! its sweeps. An Ouster's sweep is one frame id. The Livox sensors (`packets/mid360.rs`,
-//! `packets/avia.rs`) have no sweep: their frames are cut by time, as their decoder cuts them.
+//! later). The Hesai sensors (`packets/xt32.rs`, `packets/hesai128.rs`) are placed so that
+//! `run` without a cut angle sees their sweeps. An Ouster's sweep is one frame id. The Livox
+//! sensors (`packets/mid360.rs`, `packets/avia.rs`) have no sweep: their frames are cut by
+//! time, as their decoder cuts them.
 
 mod avia;
+mod hesai128;
 mod mid360;
 mod xt32;
 
@@ -58,6 +60,16 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "avia"))]
     #[serde(rename = "avia")]
     Avia,
+    /// Hesai PandarQT128, UDP protocol 3.2 with sequence numbers, functional safety, signature
+    /// and confidence bytes, strongest return, 4 mm ranges, 10 Hz (angle file beside).
+    #[cfg_attr(feature = "clap", value(name = "qt128"))]
+    #[serde(rename = "qt128")]
+    Qt128,
+    /// Hesai OT128, UDP protocol 1.4 with sequence numbers, IMU and functional safety,
+    /// standard operational state, strongest return, 4 mm ranges, 10 Hz (angle file beside).
+    #[cfg_attr(feature = "clap", value(name = "ot128"))]
+    #[serde(rename = "ot128")]
+    Ot128,
 }
 
 /// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
@@ -127,7 +139,7 @@ pub struct PacketSim<'a> {
     sensor: PacketSensor,
     model: Model,
     calib: Calibration,
-    /// Velodyne and XT32: packets per turn; Ouster: packets per frame; Livox: per period,
+    /// Velodyne and Hesai: packets per turn; Ouster: packets per frame; Livox: per period,
     /// rounded.
     per_sweep: u64,
 }
@@ -162,6 +174,8 @@ impl PacketSensor {
             Self::Os1 => Err("an OS1 runs at 10 or 20 Hz (--rate-hz)".into()),
             Self::Xt32 if xt32::RATES_HZ.contains(&rate_hz) => Ok(rate_hz),
             Self::Xt32 => Err("an XT32 runs at 5, 10 or 20 Hz (--rate-hz)".into()),
+            Self::Qt128 | Self::Ot128 if rate_hz == hesai128::RATE_HZ => Ok(rate_hz),
+            Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
             // Frames by time: any rate, read back with `--frame-period` 1 / rate.
             Self::Mid360 | Self::Avia => Ok(rate_hz),
             _ => {
@@ -172,11 +186,17 @@ impl PacketSensor {
         }
     }
 
-    /// The sensor clock's reading at sequence time 0, s: the XT32 stamps its packets with a
-    /// UTC date ([`xt32::CLOCK_ORIGIN_S`]); the other sensors' clocks read sequence time.
+    /// Hesai's angle correction file of a QT128 or OT128, which its decoder needs
+    /// (`Laser id,Elevation,Azimuth`); `None` for the other sensors.
+    pub fn angle_file(self) -> Option<String> {
+        matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
+    }
+
+    /// The sensor clock's reading at sequence time 0, s: the Hesai sensors stamp their packets
+    /// with a UTC date (from 2024-01-01 00:00:00); the other sensors' clocks read sequence time.
     pub const fn clock_origin_s(self) -> i64 {
         match self {
-            Self::Xt32 => xt32::CLOCK_ORIGIN_S,
+            Self::Xt32 | Self::Qt128 | Self::Ot128 => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
     }
@@ -191,6 +211,7 @@ impl<'a> PacketSim<'a> {
         let per_sweep = match sensor {
             PacketSensor::Os1 => u64::from(os1::WIDTH / os1::COLUMNS_PER_PACKET),
             PacketSensor::Xt32 => per_period(xt32::PACKET_NS),
+            PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
         };
@@ -203,7 +224,7 @@ impl<'a> PacketSim<'a> {
         }
     }
 
-    /// Packets in one sweep (Livox: on average, rounded; XT32: the first sweep has one more).
+    /// Packets in one sweep (Livox: on average, rounded; Hesai: the first sweep has one more).
     pub fn packets_per_sweep(&self) -> u64 {
         self.per_sweep
     }
@@ -213,7 +234,9 @@ impl<'a> PacketSim<'a> {
         match self.sensor {
             PacketSensor::Mid360 | PacketSensor::Avia => self.timed_first_packet(k),
             // The first sweep also holds the packet before its turn (`packets/xt32.rs`).
-            PacketSensor::Xt32 if k > 0 => k * self.per_sweep + 1,
+            PacketSensor::Xt32 | PacketSensor::Qt128 | PacketSensor::Ot128 if k > 0 => {
+                k * self.per_sweep + 1
+            }
             _ => k * self.per_sweep,
         }
     }
@@ -227,6 +250,7 @@ impl<'a> PacketSim<'a> {
                 self.timed_offset(last, self.sensor.timing().points - 1)
             }
             PacketSensor::Xt32 => xt32::last_offset(last),
+            PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
                 self.packet_offset(last) + self.model.firing_time_s(n, 31)
@@ -253,6 +277,7 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Mid360 => self.mid360_packet(p),
                 PacketSensor::Avia => self.avia_packet(p),
                 PacketSensor::Xt32 => self.xt32_packet(p),
+                PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();
@@ -593,6 +618,8 @@ mod tests {
             PacketSensor::Mid360,
             PacketSensor::Xt32,
             PacketSensor::Avia,
+            PacketSensor::Qt128,
+            PacketSensor::Ot128,
         ] {
             let sim = sim(sensor, 40);
             let ps = PacketSim::new(&sim, sensor);
@@ -608,9 +635,11 @@ mod tests {
             }
             println!("{sensor:?}: worst distance {worst:.2e} m (tol 1e-4, f32 rounding)");
             assert!(!f.points.is_empty() && worst < 1e-4);
-            // Every firing slot's time is inside the sweep and the sweep ends at its last.
-            let t0 = f.stamps[0];
-            assert!(f.stamps.iter().all(|&t| t >= t0 && t <= f.end_time));
+            // Every firing slot's time is after the last sweep's end and at most this one's
+            // (a 128-channel Hesai's channels do not fire in their order).
+            let t0 = f.stamps.iter().copied().fold(f64::INFINITY, f64::min);
+            let before = sim.params().start_time + ps.end_offset(k - 1);
+            assert!(t0 > before && f.stamps.iter().all(|&t| t <= f.end_time));
             assert!(f.end_time - t0 > 0.09, "a sweep spans most of its period");
         }
     }

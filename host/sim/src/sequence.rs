@@ -22,7 +22,8 @@ pub enum Format {
     #[default]
     Generic,
     /// The generic layout (exact points) and the same sweeps as the sensor's packets in
-    /// `packets.pcap` (needs a packet sensor; an Ouster's metadata goes to `packets.json`).
+    /// `packets.pcap` (needs a packet sensor; an Ouster's metadata goes to `packets.json`, a
+    /// QT128's or OT128's angle correction file to `packets.csv`).
     Pcap,
 }
 
@@ -105,7 +106,10 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
             .map_err(anyhow::Error::msg)?;
     }
     if request.format == Format::Pcap && request.sensor.is_none() {
-        bail!("--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32 or avia)");
+        bail!(
+            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128 \
+             or ot128)"
+        );
     }
     Ok(params)
 }
@@ -158,6 +162,11 @@ pub fn write(
                 let meta =
                     serde_json::to_string_pretty(&capture::ouster_metadata(params.sensor.rate_hz))?;
                 std::fs::write(&path, meta)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            if let Some(angles) = sensor.angle_file() {
+                let path = writer.staging().join(capture::ANGLES_NAME);
+                std::fs::write(&path, angles)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
             let path = writer.staging().join(capture::PCAP_NAME);

@@ -8,6 +8,7 @@
 //! DIR/sim.toml               the parameters used, for provenance
 //! DIR/packets.pcap           with --format pcap: the same sweeps as sensor packets
 //! DIR/packets.json           with --format pcap and an Ouster: its metadata
+//! DIR/packets.csv            with --format pcap and a QT128 or OT128: its angle correction file
 //! ```
 //!
 //! Numbers in text files are written with Rust's shortest round-trip formatting, so parsing
@@ -23,12 +24,13 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 5] = [
+const OWNED_FILES: [&str; 6] = [
     "poses.txt",
     "times.txt",
     "sim.toml",
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
+    crate::capture::ANGLES_NAME,
 ];
 const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
 

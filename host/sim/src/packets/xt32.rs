@@ -17,9 +17,12 @@
 //! packet whose last azimuth wraps past the one where the sweep before ended (the first sweep:
 //! past its first packet's), so its first sweep is a turn and the packet before it, and every
 //! later one a turn, (0, 360] degrees; a cut at 0 degrees gives the same sweeps.
+//!
+//! The header, the block azimuths, the channel cast and the tail's time fields are written
+//! here for the 128-channel sensors too (`packets/hesai128.rs`): their protocols share them.
 
 use super::{in_units, unit, Firing, Packet, PacketSim, Truth};
-use kiss_odom_sensors::hesai::{self, wire, wire::field};
+use kiss_odom_sensors::hesai::{self, wire, wire::field, wire128};
 use nalgebra::Vector3;
 
 /// The rates the motor runs at, Hz.
@@ -32,6 +35,14 @@ pub const CLOCK_ORIGIN_S: i64 = 1_704_067_200;
 const FIRST_STAMP_NS: i64 = -hesai::point_offset_ns(0, 0, 1);
 /// The return-mode byte of strongest return.
 const STRONGEST: u8 = 0x37;
+/// Where the XT32's tail would begin were it protocol 3.2's or 1.4's: the return mode, motor
+/// speed and packet time lie at the same places from there ([`wire128::field`]).
+const TAIL: usize = field::RETURN_MODE - wire128::field::RETURN_MODE;
+const _: () = assert!(
+    TAIL + wire128::field::MOTOR_SPEED.start == field::MOTOR_SPEED.start
+        && TAIL + wire128::field::DATE_TIME.start == field::DATE_TIME.start
+        && TAIL + wire128::field::MICROSECONDS.start == field::MICROSECONDS.start
+);
 
 /// Trajectory time of packet `p`'s time stamp, ns.
 fn stamp_ns(p: u64) -> i64 {
@@ -82,58 +93,97 @@ fn utc_fields(unix_us: i64) -> ([u8; 6], u32) {
     (date, us as u32)
 }
 
+/// Writes the header all three Hesai protocols share: `lasers` channels a block, `blocks`
+/// blocks a packet, 4 mm units, single return, the header `flags`.
+pub(super) fn write_header(
+    buf: &mut [u8],
+    version: (u8, u8),
+    (lasers, blocks): (usize, usize),
+    flags: u8,
+) {
+    buf[field::START].copy_from_slice(&wire::START);
+    (buf[field::VERSION_MAJOR], buf[field::VERSION_MINOR]) = version;
+    buf[field::LASERS] = lasers as u8;
+    buf[field::BLOCK_COUNT] = blocks as u8;
+    buf[field::DISTANCE_UNIT] = libm::round(hesai::DISTANCE_UNIT_M * 1000.0) as u8;
+    buf[field::RETURNS] = 1;
+    buf[field::FLAGS] = flags;
+}
+
 impl PacketSim<'_> {
-    /// Azimuth of block `g` (counted from packet 0's first), 0.01 degree: a turn's last block
-    /// at 0.
-    fn xt32_azimuth(&self, g: u64) -> u16 {
-        let turn = self.per_sweep * field::BLOCKS as u64;
-        let from_last = (g + turn - (field::BLOCKS as u64 - 1)) % turn;
+    /// Azimuth of block `g` (counted from packet 0's first) of a Hesai sending `blocks` blocks
+    /// a packet, 0.01 degree: a turn's last block at 0.
+    pub(super) fn hesai_azimuth(&self, g: u64, blocks: usize) -> u16 {
+        let turn = self.per_sweep * blocks as u64;
+        let from_last = (g + turn - (blocks as u64 - 1)) % turn;
         (from_last * u64::from(wire::AZIMUTH_UNITS) / turn) as u16
+    }
+
+    /// Casts a channel of `[elevation, azimuth offset]` (degrees) of a block at `azimuth`
+    /// (0.01 degree), fired at trajectory time `offset`, along the ray the decoders compute
+    /// from them; writes its distance and reflectivity into `unit_bytes` (none: left 0) and
+    /// gives the exact point of a return.
+    pub(super) fn hesai_channel(
+        &self,
+        unit_bytes: &mut [u8],
+        azimuth: u16,
+        [elevation_deg, azimuth_deg]: [f64; 2],
+        offset: f64,
+        ray: [u64; 2],
+    ) -> Option<Truth> {
+        // Clockwise seen from above.
+        let theta = -(f64::from(azimuth) * 0.01 + azimuth_deg).to_radians();
+        let firing = Firing {
+            offset,
+            origin: Vector3::zeros(),
+            dir: unit(theta, elevation_deg.to_radians()),
+        };
+        let (echo, point) = self.cast(&firing, ray);
+        let (raw, reflectivity) = in_units(echo, hesai::DISTANCE_UNIT_M)?;
+        unit_bytes[field::DISTANCE].copy_from_slice(&raw.to_le_bytes());
+        unit_bytes[field::REFLECTIVITY] = reflectivity;
+        point
+    }
+
+    /// Writes the tail fields the three protocols share into the tail at `tail`: strongest
+    /// return, the motor speed, and the packet time of trajectory time `stamp_ns` (whole
+    /// microseconds) on the sensor's UTC clock.
+    pub(super) fn hesai_tail(&self, buf: &mut [u8], tail: usize, stamp_ns: i64) {
+        use wire128::field::{DATE_TIME, MICROSECONDS, MOTOR_SPEED, RETURN_MODE};
+        let at = |r: core::ops::Range<usize>| tail + r.start..tail + r.end;
+        buf[tail + RETURN_MODE] = STRONGEST;
+        let rpm = libm::round(self.sim.params().sensor.rate_hz * 60.0) as u16;
+        buf[at(MOTOR_SPEED)].copy_from_slice(&rpm.to_le_bytes());
+        let start_us = libm::round(self.sim.params().start_time * 1e6) as i64;
+        let unix_us = CLOCK_ORIGIN_S * 1_000_000 + start_us + stamp_ns / 1000;
+        let (date, us) = utc_fields(unix_us);
+        buf[at(DATE_TIME)].copy_from_slice(&date);
+        buf[at(MICROSECONDS)].copy_from_slice(&us.to_le_bytes());
     }
 
     pub(super) fn xt32_packet(&self, p: u64) -> (Packet, Vec<Truth>) {
         let mut buf = vec![0u8; field::LEN_WITH_SEQUENCE];
-        buf[field::START].copy_from_slice(&wire::START);
-        (buf[field::VERSION_MAJOR], buf[field::VERSION_MINOR]) = wire::VERSION;
-        buf[field::LASERS] = field::CHANNELS as u8;
-        buf[field::BLOCK_COUNT] = field::BLOCKS as u8;
-        buf[field::DISTANCE_UNIT] = libm::round(hesai::DISTANCE_UNIT_M * 1000.0) as u8;
-        buf[field::RETURNS] = 1;
-        buf[field::FLAGS] = wire::FLAG_UDP_SEQUENCE;
+        let shape = (field::CHANNELS, field::BLOCKS);
+        write_header(&mut buf, wire::VERSION, shape, wire::FLAG_UDP_SEQUENCE);
         let elevation_deg = hesai::Calibration::nominal().elevation_deg;
         let mut truth = Vec::new();
         for b in 0..field::BLOCKS {
             let at = field::BODY + b * field::BLOCK_LEN;
-            let azimuth = self.xt32_azimuth(p * field::BLOCKS as u64 + b as u64);
+            let azimuth = self.hesai_azimuth(p * field::BLOCKS as u64 + b as u64, field::BLOCKS);
             buf[at + field::AZIMUTH.start..at + field::AZIMUTH.end]
                 .copy_from_slice(&azimuth.to_le_bytes());
-            // Clockwise seen from above.
-            let theta = -(f64::from(azimuth) * 0.01).to_radians();
             for (ch, e) in elevation_deg.iter().enumerate().take(field::CHANNELS) {
-                let firing = Firing {
-                    offset: offset(p, b, ch),
-                    origin: Vector3::zeros(),
-                    dir: unit(theta, e.to_radians()),
-                };
-                let (echo, point) = self.cast(&firing, [p, (b * field::CHANNELS + ch) as u64]);
-                let Some((raw, reflectivity)) = in_units(echo, hesai::DISTANCE_UNIT_M) else {
-                    continue;
-                };
                 let at = at + field::DATA.start + ch * field::CHANNEL_LEN;
-                buf[at + field::DISTANCE.start..at + field::DISTANCE.end]
-                    .copy_from_slice(&raw.to_le_bytes());
-                buf[at + field::REFLECTIVITY] = reflectivity;
-                truth.extend(point);
+                truth.extend(self.hesai_channel(
+                    &mut buf[at..at + field::CHANNEL_LEN],
+                    azimuth,
+                    [*e, 0.0],
+                    offset(p, b, ch),
+                    [p, (b * field::CHANNELS + ch) as u64],
+                ));
             }
         }
-        buf[field::RETURN_MODE] = STRONGEST;
-        let rpm = libm::round(self.sim.params().sensor.rate_hz * 60.0) as u16;
-        buf[field::MOTOR_SPEED].copy_from_slice(&rpm.to_le_bytes());
-        let start_us = libm::round(self.sim.params().start_time * 1e6) as i64;
-        let unix_us = CLOCK_ORIGIN_S * 1_000_000 + start_us + stamp_ns(p) / 1000;
-        let (date, us) = utc_fields(unix_us);
-        buf[field::DATE_TIME].copy_from_slice(&date);
-        buf[field::MICROSECONDS].copy_from_slice(&us.to_le_bytes());
+        self.hesai_tail(&mut buf, TAIL, stamp_ns(p));
         buf[field::UDP_SEQUENCE].copy_from_slice(&(p as u32).to_le_bytes());
         (
             Packet {
@@ -146,7 +196,7 @@ impl PacketSim<'_> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::packets::PacketSensor;
     use crate::profile::Profile;
@@ -173,37 +223,55 @@ mod tests {
         }
     }
 
-    fn sim(rate_hz: f64, start_time: f64) -> Simulation {
+    /// A simulation of `sensor` at `rate_hz`, its sequence time starting at `start_time`.
+    pub(in crate::packets) fn sim(
+        sensor: PacketSensor,
+        rate_hz: f64,
+        start_time: f64,
+    ) -> Simulation {
         let mut p = SimParams::new(Profile::Urban, 2, 4);
-        p.sensor.rate_hz = PacketSensor::Xt32.rate_hz(rate_hz).unwrap();
+        p.sensor.rate_hz = sensor.rate_hz(rate_hz).unwrap();
         p.start_time = start_time;
         Simulation::new(p).unwrap()
+    }
+
+    /// Sweeps 0 to 2 of `ps`, after asserting that the decoder of `config` (with and without
+    /// a cut at 0 degrees) hands on the same sweeps: the same points and packets in each.
+    pub(in crate::packets) fn decoded_as_simulated(
+        ps: &PacketSim<'_>,
+        config: hesai::Config,
+    ) -> Vec<crate::packets::Sweep> {
+        let sweeps: Vec<_> = (0..3).map(|k| ps.sweep(k)).collect();
+        let expected: Vec<_> = sweeps
+            .iter()
+            .map(|s| (s.frame.points.len(), s.packets.len() as u32))
+            .collect();
+        for cut in [None, Some(0.0)] {
+            let config = hesai::Config {
+                cut_angle_deg: cut,
+                ..config
+            };
+            let mut dec = hesai::Decoder::new(config).unwrap();
+            let mut got = Sweeps::default();
+            for packet in sweeps.iter().flat_map(|s| &s.packets) {
+                dec.push(&packet.payload, &mut got).unwrap();
+            }
+            dec.finish(&mut got);
+            println!(
+                "{:?}, cut {cut:?}: (points, packets) {:?}",
+                config.model, got.0
+            );
+            assert_eq!(got.0, expected, "{:?}, cut {cut:?}", config.model);
+        }
+        sweeps
     }
 
     #[test]
     fn the_decoders_sweeps_with_or_without_a_cut_angle_are_the_simulators() {
         for rate in RATES_HZ {
-            let sim = sim(rate, 0.0);
+            let sim = sim(PacketSensor::Xt32, rate, 0.0);
             let ps = PacketSim::new(&sim, PacketSensor::Xt32);
-            let sweeps: Vec<_> = (0..3).map(|k| ps.sweep(k)).collect();
-            let expected: Vec<_> = sweeps
-                .iter()
-                .map(|s| (s.frame.points.len(), s.packets.len() as u32))
-                .collect();
-            for cut in [None, Some(0.0)] {
-                let config = hesai::Config {
-                    cut_angle_deg: cut,
-                    ..hesai::Config::default()
-                };
-                let mut dec = hesai::Decoder::new(config).unwrap();
-                let mut got = Sweeps::default();
-                for packet in sweeps.iter().flat_map(|s| &s.packets) {
-                    dec.push(&packet.payload, &mut got).unwrap();
-                }
-                dec.finish(&mut got);
-                println!("{rate} Hz, cut {cut:?}: (points, packets) {:?}", got.0);
-                assert_eq!(got.0, expected, "{rate} Hz, cut {cut:?}");
-            }
+            let sweeps = decoded_as_simulated(&ps, hesai::Config::default());
             let per_turn = ps.packets_per_sweep();
             assert_eq!(per_turn, (2500.0 / rate) as u64);
             assert_eq!(sweeps[0].packets.len() as u64, per_turn + 1);
@@ -231,7 +299,7 @@ mod tests {
         // Across midnight into a day, a leap day and a year: the second packet is past it.
         for day in [0.0f64, 1.0, 59.0, 366.0] {
             let start_time = (day * 86_400.0 - 0.0004).max(0.0);
-            let sim = sim(10.0, start_time);
+            let sim = sim(PacketSensor::Xt32, 10.0, start_time);
             let ps = PacketSim::new(&sim, PacketSensor::Xt32);
             for packet in ps.sweep(0).packets.iter().take(3) {
                 let p = wire::Packet::new_checked(&packet.payload).unwrap();
