@@ -243,7 +243,7 @@ def sensor_seeds():
     hesai = udp_payloads(data.parent / "hesai" / "hesai-xt32-small.pcap", 2368)[:3]
     put("hesai_packets", "xt32-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in hesai))
     qt128 = udp_payloads(ROOT / "fixtures" / "hesai-qt128" / "qt128-sector.pcap", 2368)[:3]
-    put("hesai_packets", "qt128-3-packets", bytes([1 << 1]) + b"".join(b"\0\0" + p for p in qt128))
+    put("hesai_packets", "qt128-3-packets", bytes([1 << 1 | 8]) + b"".join(b"\0\0" + p for p in qt128))
     put("hesai_packets", "ot128-4-packets", bytes([3 << 1]) + b"".join(
         b"\0\0" + hesai_1_4_packet(k) for k in range(4)))
     livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]

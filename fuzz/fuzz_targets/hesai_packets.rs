@@ -1,8 +1,10 @@
 //! The Hesai decoder (`kiss_odom_sensors::hesai::Decoder::push`) for every model: the first
-//! byte's bits 1-2 pick the model (XT32, QT128, Pandar128, OT128), bit 0 whether to cut at
-//! the angle its bits 3-7 give; the rest is cut into packets, each prefixed by a little-endian
-//! u16 length (below 0x8000: the model's usual length, so that the decoding runs). Asserts
-//! that nothing panics, every point and time is finite and the sink protocol holds.
+//! byte's bits 1-2 pick the model (XT32, QT128, Pandar128, OT128), bit 3 whether to seal each
+//! 128-channel packet's CRCs again (so that mutated packets get past the QT128's CRC check),
+//! bit 0 whether to cut at the angle its bits 4-7 give; the rest is cut into packets, each
+//! prefixed by a little-endian u16 length (below 0x8000: the model's usual length, so that the
+//! decoding runs). Asserts that nothing panics, every point and time is finite and the sink
+//! protocol holds.
 #![no_main]
 
 mod sensor_sink;
@@ -16,7 +18,8 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let model = [Model::Xt32, Model::Qt128, Model::Pandar128, Model::Ot128][usize::from(head >> 1 & 3)];
-    let cut = (head & 1 != 0).then_some(f64::from(head >> 3) * 11.25);
+    let cut = (head & 1 != 0).then_some(f64::from(head >> 4) * 22.5);
+    let reseal = head & 8 != 0 && model != Model::Xt32;
     let calibration = (model != Model::Xt32).then(|| {
         let mut c = Calibration::nominal();
         c.channels = model.channels();
@@ -44,6 +47,20 @@ fuzz_target!(|data: &[u8]| {
             l => usize::from(l & 0x7FF),
         };
         let (packet, tail) = rest[2..].split_at(len.min(rest.len() - 2));
+        let mut sealed = [0u8; 2048];
+        let packet = match sealed.get_mut(..packet.len()) {
+            Some(copy) if reseal && packet.len() >= 12 => {
+                copy.copy_from_slice(packet);
+                for (covered, at) in wire128::crc_ranges((copy[2], copy[3]), copy[11]) {
+                    if let (Some(bytes), true) = (copy.get(covered), at + 4 <= copy.len()) {
+                        let crc = wire128::crc32_mpeg2(bytes);
+                        copy[at..at + 4].copy_from_slice(&crc.to_le_bytes());
+                    }
+                }
+                &*copy
+            }
+            _ => packet,
+        };
         sensor_sink::feed(&mut sink, |s| dec.push(packet, s));
         rest = tail;
     }

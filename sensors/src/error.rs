@@ -21,7 +21,8 @@ pub enum PacketError {
     /// so, give the right model), or a Livox packet whose version byte is not its protocol's
     /// (SDK 1: 5, SDK 2: 0; if every packet says so, give the other model).
     Version,
-    /// A Livox SDK 2 packet whose CRC-32 does not match its bytes: corrupted on the way. Skip
+    /// A Livox SDK 2 or Hesai QT128 packet whose CRC does not match its bytes: corrupted on the
+    /// way. Skip
     /// it.
     Checksum,
     /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.

@@ -106,7 +106,16 @@ fn packet(s: &Spec) -> Vec<u8> {
     if s.flags & 1 != 0 {
         b[t + 26..t + 30].copy_from_slice(&s.sequence.to_le_bytes());
     }
-    b
+    seal(&mut b)
+}
+
+/// `b` with its body and tail CRCs computed.
+fn seal(b: &mut [u8]) -> Vec<u8> {
+    for (covered, at) in wire128::crc_ranges((b[2], b[3]), b[11]) {
+        let crc = wire128::crc32_mpeg2(&b[covered]);
+        b[at..at + 4].copy_from_slice(&crc.to_le_bytes());
+    }
+    b.to_vec()
 }
 
 /// A calibration of channel `c` at elevation `40 - 0.625 c` and azimuth offset `0.01 c - 0.5`.
@@ -266,19 +275,37 @@ fn bad_packets_are_refused_with_their_reason() {
     // A flag that changes the layout (no signature): the length no longer agrees.
     assert_eq!(refused(&with(&qt, 11, 0x15)), PacketError::Length);
     assert_eq!(refused(&with(&qt, 10, 3)), PacketError::UnknownReturnMode);
-    assert_eq!(refused(&with(&qt, 13, 0x8D)), PacketError::Azimuth);
+    // A distance or a tail byte changed on the way: the body's or the tail's CRC fails.
+    assert_eq!(refused(&with(&qt, 14, 0x77)), PacketError::Checksum);
     let t = tail_at(&Spec::qt(0, 0));
-    assert_eq!(refused(&with(&qt, t + 16, 13)), PacketError::Timestamp);
+    assert_eq!(refused(&with(&qt, t + 22, 0x77)), PacketError::Checksum);
+    // With the CRCs sealed again, what the bytes say is checked.
     assert_eq!(
-        refused(&with(&qt, t + 12, 0x3A)),
+        refused(&seal(&mut with(&qt, 13, 0x8D))),
+        PacketError::Azimuth
+    );
+    assert_eq!(
+        refused(&seal(&mut with(&qt, t + 16, 13))),
+        PacketError::Timestamp
+    );
+    assert_eq!(
+        refused(&seal(&mut with(&qt, t + 12, 0x3A))),
         PacketError::UnknownReturnMode
     );
-    // Nothing refused was decoded; the good packet still is.
+    // Nothing refused was decoded; the good packet still is, and one whose signature differs.
     assert!(log.points.is_empty());
     assert_eq!(feed(&mut dec, &qt, &mut log), Ok(Pushed::Decoded));
+    let later = packet(&Spec {
+        sequence: 1,
+        ..Spec::qt(140, 300)
+    });
+    let n = later.len();
+    assert_eq!(
+        feed(&mut dec, &with(&later, n - 1, 0x77), &mut log),
+        Ok(Pushed::Decoded)
+    );
     // Another return mode from now on: another sensor on the port.
-    let t = tail_at(&Spec::qt(0, 0));
-    let other = with(&packet(&Spec::qt(140, 300)), t + 12, 0x38);
+    let other = seal(&mut with(&packet(&Spec::qt(180, 600)), t + 12, 0x38));
     assert_eq!(
         feed(&mut dec, &other, &mut log),
         Err(PacketError::OtherSensor)

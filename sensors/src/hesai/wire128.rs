@@ -103,8 +103,12 @@ pub const BLOCKS: usize = 2;
 struct Layout {
     unit_len: usize,
     block_len: usize,
+    /// Where the body CRC lies: the blocks end there.
+    body_crc: usize,
     tail: usize,
     sequence: Option<usize>,
+    /// Where the tail CRC lies: the tail, sequence number and IMU sample end there.
+    tail_crc: usize,
     len: usize,
 }
 
@@ -121,7 +125,8 @@ impl Layout {
         };
         let unit_len = 3 + extra_unit_bytes;
         let block_len = field::AZIMUTH.end + LASERS * unit_len;
-        let mut at = field::BODY + BLOCKS * block_len + field::BODY_CRC_LEN;
+        let body_crc = field::BODY + BLOCKS * block_len;
+        let mut at = body_crc + field::BODY_CRC_LEN;
         if has(flag::SAFETY) {
             at += field::SAFETY_LEN;
         }
@@ -134,6 +139,7 @@ impl Layout {
         if version == VERSION_128 && has(flag::IMU) {
             at += field::IMU_LEN;
         }
+        let tail_crc = at;
         at += field::TAIL_CRC_LEN;
         if has(flag::SIGNATURE) {
             at += field::SIGNATURE_LEN;
@@ -141,11 +147,51 @@ impl Layout {
         Self {
             unit_len,
             block_len,
+            body_crc,
             tail,
             sequence,
+            tail_crc,
             len: at,
         }
     }
+}
+
+/// CRC-32/MPEG-2 (polynomial 0x04C11DB7, not reflected, initial value all ones, no final XOR):
+/// the body and tail CRCs of these packets.
+pub fn crc32_mpeg2(bytes: &[u8]) -> u32 {
+    bytes.iter().fold(!0u32, |c, &b| {
+        (c << 8) ^ CRC_TABLE[usize::from((c >> 24) as u8 ^ b)]
+    })
+}
+
+const CRC_TABLE: [u32; 256] = {
+    let mut table = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = (i as u32) << 24;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & (1 << 31) != 0 {
+                (c << 1) ^ 0x04C1_1DB7
+            } else {
+                c << 1
+            };
+            k += 1;
+        }
+        table[i] = c;
+        i += 1;
+    }
+    table
+};
+
+/// Where the body and tail CRCs of a packet of `version` with header `flags` lie, and the
+/// ranges they cover: `(covered, at)` for the body, then for the tail.
+pub fn crc_ranges(version: (u8, u8), flags: u8) -> [(core::ops::Range<usize>, usize); 2] {
+    let l = Layout::of(version, flags);
+    [
+        (field::BODY..l.body_crc, l.body_crc),
+        (l.tail..l.tail_crc, l.tail_crc),
+    ]
 }
 
 /// The header's protocol version (major, minor).
@@ -200,6 +246,9 @@ impl<'a> Packet<'a> {
         if bytes.len() > p.layout.len {
             return Err(PacketError::Length);
         }
+        if version == VERSION_QT && !p.crcs_hold() {
+            return Err(PacketError::Checksum);
+        }
         if !matches!(p.returns(), 1 | 2) {
             return Err(PacketError::UnknownReturnMode);
         }
@@ -210,6 +259,15 @@ impl<'a> Packet<'a> {
             return Err(PacketError::Timestamp);
         }
         Ok(p)
+    }
+
+    /// Whether the body CRC (over the blocks) and the tail CRC (over the tail, sequence number
+    /// and IMU sample) match: CRC-32/MPEG-2, as a recorded QT128 computes them.
+    fn crcs_hold(&self) -> bool {
+        let l = &self.layout;
+        let body = self.buf.get(field::BODY..l.body_crc).map(crc32_mpeg2);
+        let tail = self.buf.get(l.tail..l.tail_crc).map(crc32_mpeg2);
+        body == Some(u32_at(self.buf, l.body_crc)) && tail == Some(u32_at(self.buf, l.tail_crc))
     }
 
     /// Protocol version (major, minor): [`VERSION_QT`] or [`VERSION_128`].
@@ -277,6 +335,20 @@ impl<'a> Packet<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_crc_is_crc_32_mpeg_2() {
+        // The catalogue's check value for "123456789".
+        assert_eq!(crc32_mpeg2(b"123456789"), 0x0376_E6E7);
+        assert_eq!(crc32_mpeg2(b""), u32::MAX);
+        // QT128C2X with everything flagged: the body's CRC after the blocks, the tail's after
+        // the sequence number, then the signature.
+        let [(body, at), (tail, tail_at)] = crc_ranges(VERSION_QT, 0x1D);
+        assert_eq!((body, at), (12..12 + 2 * 514, 1040));
+        assert_eq!((tail, tail_at), (1061..1091, 1091));
+        let [_, (tail, tail_at)] = crc_ranges(VERSION_128, 0x07);
+        assert_eq!((tail, tail_at), (805..857, 857));
+    }
 
     #[test]
     fn layouts_of_the_published_packet_sizes() {

@@ -133,25 +133,9 @@ pub(super) fn csv_text(sensor: PacketSensor) -> String {
     s
 }
 
-/// CRC-32/MPEG-2 (polynomial 0x04C11DB7, not reflected, initial value all ones, no final
-/// XOR): the CRC of the body, the functional safety part and the tail.
-fn crc32_mpeg2(bytes: &[u8]) -> u32 {
-    bytes.iter().fold(u32::MAX, |mut c, &b| {
-        c ^= u32::from(b) << 24;
-        for _ in 0..8 {
-            c = if c & 1 << 31 != 0 {
-                c << 1 ^ 0x04C1_1DB7
-            } else {
-                c << 1
-            };
-        }
-        c
-    })
-}
-
 /// Writes the CRC-32/MPEG-2 of `buf[range]` just after it.
 fn put_crc(buf: &mut [u8], range: core::ops::Range<usize>) {
-    let crc = crc32_mpeg2(&buf[range.clone()]);
+    let crc = wire128::crc32_mpeg2(&buf[range.clone()]);
     buf[range.end..range.end + 4].copy_from_slice(&crc.to_le_bytes());
 }
 
@@ -441,9 +425,15 @@ mod tests {
         let tail = QT128.tail();
         let tail_crc = tail + field::TAIL_LEN + field::SEQUENCE_LEN;
         assert_eq!(b.len(), 1127);
-        assert_eq!(crc32_mpeg2(&b[field::BODY..body_end]), crc_at(body_end));
-        assert_eq!(crc32_mpeg2(&b[safety + 1..tail - 4]), crc_at(tail - 4));
+        assert_eq!(
+            wire128::crc32_mpeg2(&b[field::BODY..body_end]),
+            crc_at(body_end)
+        );
+        assert_eq!(
+            wire128::crc32_mpeg2(&b[safety + 1..tail - 4]),
+            crc_at(tail - 4)
+        );
         assert_eq!(b[safety..tail - 4], SAFETY);
-        assert_eq!(crc32_mpeg2(&b[tail..tail_crc]), crc_at(tail_crc));
+        assert_eq!(wire128::crc32_mpeg2(&b[tail..tail_crc]), crc_at(tail_crc));
     }
 }
