@@ -22,8 +22,7 @@ pub enum PacketError {
     /// (SDK 1: 5, SDK 2: 0; if every packet says so, give the other model).
     Version,
     /// A Livox SDK 2 or Hesai QT128 packet whose CRC does not match its bytes: corrupted on the
-    /// way. Skip
-    /// it.
+    /// way. Skip it.
     Checksum,
     /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.
     BlockFlag,
