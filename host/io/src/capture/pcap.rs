@@ -15,7 +15,7 @@
 
 use super::reassembly::{Fragment, FragmentCounts, Key, Reassembly};
 use anyhow::{bail, Context, Result};
-use etherparse::{EtherType, Ipv6ExtensionSlice, LaxNetSlice, LaxSlicedPacket, VlanSlice};
+use etherparse::{EtherType, LaxNetSlice, LaxSlicedPacket, VlanSlice};
 use pcap_file::pcap::PcapReader;
 use pcap_file::pcapng::blocks::interface_description::{
     InterfaceDescriptionBlock, InterfaceDescriptionOption,
@@ -451,14 +451,8 @@ impl Capture {
             }
             Some(LaxNetSlice::Ipv6(v6)) => {
                 let h = v6.header();
-                let fragment = v6.extensions().clone().into_iter().find_map(|e| match e {
-                    Ipv6ExtensionSlice::Fragment(f) if f.is_fragmenting_payload() => Some((
-                        usize::from(f.fragment_offset().byte_offset()),
-                        f.more_fragments(),
-                        f.identification(),
-                    )),
-                    _ => None,
-                });
+                let ext = v6.extensions();
+                let fragment = ipv6_fragment(ext.first_header().map(|n| n.0), ext.slice());
                 let (src, dst): (IpAddr, IpAddr) =
                     (h.source_addr().into(), h.destination_addr().into());
                 (src, dst, v6.payload(), fragment)
@@ -646,6 +640,37 @@ pub fn ethernet(ip: &[u8]) -> Vec<u8> {
     let mut f = eth.to_bytes().to_vec();
     f.extend_from_slice(ip);
     f
+}
+
+/// The fragment header among the IPv6 extension headers `rest`, the first of type `next`:
+/// (byte offset, more fragments, identification), if it fragments the payload. The chain is
+/// walked here with every read checked, and the fragment header read as RFC 8200 lays it out
+/// (offset in the top 13 bits of bytes 2-3, the M flag in the lowest): etherparse 0.16's
+/// iterator reads past the end of a chain its lax parse cut short (an out-of-bounds
+/// `get_unchecked` that fuzzing found), and its fragment header takes the offset's low bits
+/// and the M flag from the wrong end of byte 3 (fixed in etherparse 0.21).
+fn ipv6_fragment(mut next: Option<u8>, mut rest: &[u8]) -> Option<(usize, bool, u32)> {
+    const FRAGMENT: u8 = 44;
+    const AUTHENTICATION: u8 = 51;
+    // Hop-by-hop, routing, destination options, mobility, HIP, shim6: (length + 1) x 8 bytes.
+    const EIGHT_BYTE_UNITS: [u8; 6] = [0, 43, 60, 135, 139, 140];
+    while let Some(header) = next {
+        let len = match header {
+            FRAGMENT => {
+                let b = rest.get(..8)?;
+                let field = u16::from_be_bytes([b[2], b[3]]);
+                let (offset, more) = (usize::from(field >> 3) * 8, field & 1 != 0);
+                let id = u32::from_be_bytes([b[4], b[5], b[6], b[7]]);
+                return (offset != 0 || more).then_some((offset, more, id));
+            }
+            AUTHENTICATION => (usize::from(*rest.get(1)?) + 2) * 4,
+            h if EIGHT_BYTE_UNITS.contains(&h) => (usize::from(*rest.get(1)?) + 1) * 8,
+            _ => return None,
+        };
+        next = rest.first().copied();
+        rest = rest.get(len..)?;
+    }
+    None
 }
 
 #[cfg(test)]

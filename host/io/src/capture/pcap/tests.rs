@@ -108,7 +108,7 @@ fn pcapng_clocks_read_every_resolution_and_offset() {
 
 /// `d` as IPv6 fragments of at most `mtu` bytes of payload (a multiple of 8).
 fn ipv6_fragments(d: &Datagram, mtu: usize) -> Vec<Vec<u8>> {
-    use etherparse::{IpNumber, Ipv6FragmentHeader, Ipv6Header, UdpHeader};
+    use etherparse::{IpNumber, Ipv6Header, UdpHeader};
     let (src, dst) = ([0xfe, 0x80].repeat(8), [0xfe, 0x81].repeat(8));
     let (src, dst): ([u8; 16], [u8; 16]) = (src.try_into().unwrap(), dst.try_into().unwrap());
     let udp = UdpHeader::with_ipv6_checksum(
@@ -127,12 +127,13 @@ fn ipv6_fragments(d: &Datagram, mtu: usize) -> Vec<Vec<u8>> {
     body.chunks(mtu)
         .enumerate()
         .map(|(k, piece)| {
-            let frag = Ipv6FragmentHeader::new(
-                IpNumber::UDP,
-                etherparse::IpFragOffset::try_new((k * mtu / 8) as u16).unwrap(),
-                (k + 1) * mtu < body.len(),
-                77,
-            );
+            // RFC 8200: offset (8-byte units) in the top 13 bits, M the lowest bit (written
+            // here by hand: etherparse 0.16 puts them elsewhere).
+            let units = (k * mtu / 8) as u16;
+            let more = u16::from((k + 1) * mtu < body.len());
+            let mut frag = vec![17, 0];
+            frag.extend_from_slice(&(units << 3 | more).to_be_bytes());
+            frag.extend_from_slice(&77u32.to_be_bytes());
             let ip = Ipv6Header {
                 payload_length: (8 + piece.len()) as u16,
                 next_header: IpNumber::IPV6_FRAGMENTATION_HEADER,
@@ -142,7 +143,7 @@ fn ipv6_fragments(d: &Datagram, mtu: usize) -> Vec<Vec<u8>> {
                 ..Default::default()
             };
             let mut f = ip.to_bytes().to_vec();
-            f.extend_from_slice(&frag.to_bytes());
+            f.extend_from_slice(&frag);
             f.extend_from_slice(piece);
             f
         })
@@ -196,4 +197,32 @@ fn cooked_raw_and_ipv6_fragmented_frames_read_back() {
     assert_eq!((back.payload.len(), back.port), (3000, 2368));
     assert_eq!(back.payload, d[0].payload);
     assert_eq!(cap.counts().reassembly.datagrams, 1);
+}
+
+#[test]
+fn ipv6_extension_chains_are_walked_within_their_bytes() {
+    use super::ipv6_fragment;
+    // Hop-by-hop (8 bytes, next: fragment), then a fragment at 1480 bytes, more to come.
+    let mut chain = vec![44, 0, 0, 0, 0, 0, 0, 0];
+    chain.extend([17, 0, 0x05, 0xC9, 0, 0, 0x12, 0x34]);
+    assert_eq!(ipv6_fragment(Some(0), &chain), Some((1480, true, 0x1234)));
+    // The first fragment (offset 0, more) fragments; a lone fragment header (0, none) not.
+    assert_eq!(
+        ipv6_fragment(Some(44), &[17, 0, 0, 1, 0, 0, 0, 9]),
+        Some((0, true, 9))
+    );
+    assert_eq!(ipv6_fragment(Some(44), &[17, 0, 0, 0, 0, 0, 0, 9]), None);
+    // An authentication header counts in 4-byte units, plus 2.
+    let mut auth = vec![44, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+    auth.extend([17, 0, 0x00, 0x11, 0, 0, 0, 7]);
+    assert_eq!(ipv6_fragment(Some(51), &auth), Some((16, true, 7)));
+    // A chain that announces more than its bytes hold, or a header cut short: no fragment,
+    // and no read beyond the slice (etherparse 0.16's iterator reads past it here).
+    assert_eq!(ipv6_fragment(Some(0), &chain[..8]), None);
+    assert_eq!(ipv6_fragment(Some(0), &[44, 9, 0, 0]), None);
+    assert_eq!(ipv6_fragment(Some(44), &[17, 0, 0]), None);
+    assert_eq!(ipv6_fragment(Some(60), &[]), None);
+    // UDP after the extensions, or none at all: not fragmented.
+    assert_eq!(ipv6_fragment(Some(0), &[17, 0, 0, 0, 0, 0, 0, 0]), None);
+    assert_eq!(ipv6_fragment(None, &chain), None);
 }
