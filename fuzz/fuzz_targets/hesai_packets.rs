@@ -17,7 +17,8 @@ fuzz_target!(|data: &[u8]| {
     let Some((&head, mut rest)) = data.split_first() else {
         return;
     };
-    let model = [Model::Xt32, Model::Qt128, Model::Pandar128, Model::Ot128][usize::from(head >> 1 & 3)];
+    let model =
+        [Model::Xt32, Model::Qt128, Model::Pandar128, Model::Ot128][usize::from(head >> 1 & 3)];
     let cut = (head & 1 != 0).then_some(f64::from(head >> 4) * 22.5);
     let reseal = head & 8 != 0 && model != Model::Xt32;
     let calibration = (model != Model::Xt32).then(|| {
