@@ -1,7 +1,7 @@
 //! Hesai packets to sweeps: checks, order and loss detection (by the UDP sequence number when
 //! the packets carry one, else by their times), the cut, then each return to a point.
 
-use super::model::{Calibration, Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS};
+use super::model::{Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS};
 use super::wire::Packet;
 use super::wire128;
 use crate::error::{ConfigError, PacketError};
@@ -140,11 +140,10 @@ impl Decoder {
     /// must have one entry per channel of the model, and only the XT32 may go without.
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         let model = config.model;
-        let calibration = match config.calibration {
-            Some(c) => c,
-            None if model == Model::Xt32 => Calibration::nominal(),
-            None => return Err(ConfigError::Calibration),
-        };
+        let calibration = config
+            .calibration
+            .or(model.nominal_calibration())
+            .ok_or(ConfigError::Calibration)?;
         calibration.validate()?;
         if calibration.channels != model.channels() {
             return Err(ConfigError::Calibration);
@@ -237,7 +236,8 @@ impl Decoder {
             return Ok(Pushed::Again);
         }
         if self.asm.open.is_none() {
-            let start = t.saturating_add_signed(self.earliest_offset_ns(&p, returns));
+            let (earliest, _) = self.model.firing_span_ns(0, &p.firing(0, returns));
+            let start = t.saturating_add_signed(earliest);
             self.asm.begin(sink, start, None);
             self.sweep_start_ns = start;
             self.column = 0;
@@ -257,16 +257,6 @@ impl Decoder {
             return Ok(Pushed::Ended);
         }
         Ok(Pushed::Decoded)
-    }
-
-    /// The start of the packet's first firing, ns after the packet time: no channel of it
-    /// fires earlier.
-    fn earliest_offset_ns(&self, p: &View<'_>, returns: usize) -> i64 {
-        let firing = p.firing(0, returns);
-        (0..self.model.channels())
-            .map(|c| self.model.point_offset_ns(0, c, &firing))
-            .min()
-            .unwrap_or(0)
     }
 
     /// Packets missing between the last one and `p`: the sequence numbers' step, or the

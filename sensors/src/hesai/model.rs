@@ -43,6 +43,17 @@ pub struct Firing {
     pub azimuth_state: u8,
 }
 
+impl Firing {
+    /// Blocks a firing fills: its returns, at least one.
+    const fn blocks(&self) -> usize {
+        if self.returns == 0 {
+            1
+        } else {
+            self.returns
+        }
+    }
+}
+
 impl Model {
     /// Channels a block holds.
     pub const fn channels(self) -> usize {
@@ -56,6 +67,14 @@ impl Model {
         match self {
             Self::Xt32 => field::BLOCKS,
             _ => super::wire128::BLOCKS,
+        }
+    }
+    /// The angles to use without an angle correction file: the XT32's nominal ones; the
+    /// 128-channel models have none (each unit needs its own file).
+    pub const fn nominal_calibration(self) -> Option<Calibration> {
+        match self {
+            Self::Xt32 => Some(Calibration::nominal()),
+            _ => None,
         }
     }
     /// The model's name, as its manual spells it.
@@ -89,7 +108,7 @@ impl Model {
     ///   for its operational and azimuth state; the Pandar128's channel times depend on the
     ///   distance as well and are not applied (its points are up to 55.6 us early).
     pub fn point_offset_ns(self, block: usize, channel: usize, f: &Firing) -> i64 {
-        let returns = if f.returns == 0 { 1 } else { f.returns };
+        let returns = f.blocks();
         let channel_ns = match self.table_entry(block, channel, f) {
             Some(ns) if ns != NONE => i64::from(ns),
             _ => 0,
@@ -105,6 +124,14 @@ impl Model {
         }
     }
 
+    /// The earliest and the latest of block `block`'s channel times after the packet time,
+    /// ns ([`Model::point_offset_ns`]): where the firing's points begin and end.
+    pub fn firing_span_ns(self, block: usize, f: &Firing) -> (i64, i64) {
+        (0..self.channels())
+            .map(|c| self.point_offset_ns(block, c, f))
+            .fold((i64::MAX, i64::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)))
+    }
+
     /// Whether channel `channel` fires in block `block`: the QT128's channels 1-32 do not in
     /// loop 1 nor 33-64 in loop 2, and a quarter of the OT128's do not in each azimuth state
     /// of high resolution (their firing-time files list no time for them). A channel that does
@@ -115,10 +142,9 @@ impl Model {
 
     /// The firing-time file's entry for the channel in this block, if the model has one.
     fn table_entry(self, block: usize, channel: usize, f: &Firing) -> Option<u32> {
-        let returns = if f.returns == 0 { 1 } else { f.returns };
         let column = match (self, f.operational_state) {
             (Self::Qt128, _) => {
-                let lp = (usize::from(f.mode_flag) + block / returns + 1) % 2;
+                let lp = (usize::from(f.mode_flag) + block / f.blocks() + 1) % 2;
                 return QT128_NS[lp].get(channel).copied();
             }
             (Self::Ot128, 0) => usize::from(f.azimuth_state),

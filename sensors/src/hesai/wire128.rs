@@ -98,22 +98,29 @@ pub const LASERS: usize = 128;
 /// Blocks in a packet of both.
 pub const BLOCKS: usize = 2;
 
-/// Where the parts of a packet lie, computed from its header.
+/// Where the parts of a packet lie, computed from its header (for readers and writers of
+/// these packets alike).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Layout {
-    unit_len: usize,
-    block_len: usize,
+pub struct Layout {
+    /// Bytes of a channel unit: distance, reflectivity and the flagged extra bytes.
+    pub unit_len: usize,
+    /// Bytes of a block: its azimuth and the units.
+    pub block_len: usize,
     /// Where the body CRC lies: the blocks end there.
-    body_crc: usize,
-    tail: usize,
-    sequence: Option<usize>,
+    pub body_crc: usize,
+    /// Where the tail begins, after the body CRC and the functional safety part if flagged.
+    pub tail: usize,
+    /// Where the UDP sequence number lies, if flagged.
+    pub sequence: Option<usize>,
     /// Where the tail CRC lies: the tail, sequence number and IMU sample end there.
-    tail_crc: usize,
-    len: usize,
+    pub tail_crc: usize,
+    /// The packet's length.
+    pub len: usize,
 }
 
 impl Layout {
-    fn of(version: (u8, u8), flags: u8) -> Self {
+    /// The layout of a packet of `version` with header `flags`.
+    pub fn of(version: (u8, u8), flags: u8) -> Self {
         let has = |bit: u8| flags & bit != 0;
         let extra_unit_bytes = if version == VERSION_128 {
             [flag::CONFIDENCE, flag::WEIGHT, flag::LIGHT]
@@ -187,11 +194,17 @@ const CRC_TABLE: [u32; 256] = {
 /// Where the body and tail CRCs of a packet of `version` with header `flags` lie, and the
 /// ranges they cover: `(covered, at)` for the body, then for the tail.
 pub fn crc_ranges(version: (u8, u8), flags: u8) -> [(core::ops::Range<usize>, usize); 2] {
-    let l = Layout::of(version, flags);
-    [
-        (field::BODY..l.body_crc, l.body_crc),
-        (l.tail..l.tail_crc, l.tail_crc),
-    ]
+    Layout::of(version, flags).crc_ranges()
+}
+
+impl Layout {
+    /// The body's and the tail's CRC: `(covered, at)` each.
+    pub fn crc_ranges(&self) -> [(core::ops::Range<usize>, usize); 2] {
+        [
+            (field::BODY..self.body_crc, self.body_crc),
+            (self.tail..self.tail_crc, self.tail_crc),
+        ]
+    }
 }
 
 /// The header's protocol version (major, minor).
@@ -264,10 +277,9 @@ impl<'a> Packet<'a> {
     /// Whether the body CRC (over the blocks) and the tail CRC (over the tail, sequence number
     /// and IMU sample) match: CRC-32/MPEG-2, as a recorded QT128 computes them.
     fn crcs_hold(&self) -> bool {
-        let l = &self.layout;
-        let body = self.buf.get(field::BODY..l.body_crc).map(crc32_mpeg2);
-        let tail = self.buf.get(l.tail..l.tail_crc).map(crc32_mpeg2);
-        body == Some(u32_at(self.buf, l.body_crc)) && tail == Some(u32_at(self.buf, l.tail_crc))
+        self.layout.crc_ranges().into_iter().all(|(covered, at)| {
+            self.buf.get(covered).map(crc32_mpeg2) == Some(u32_at(self.buf, at))
+        })
     }
 
     /// Protocol version (major, minor): [`VERSION_QT`] or [`VERSION_128`].

@@ -5,8 +5,9 @@
 //! The sensor is told by the options or found in the capture: Velodyne data packets are 1206
 //! bytes on port 2368 unless `--port` says otherwise (the model is in each packet's product
 //! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
-//! need the sensor's metadata JSON (`--meta`), Hesai PandarXT-32 packets are 1076 or 1080 bytes
-//! on port 2368 (found there without `--sensor xt32` when no Velodyne packets are), Livox SDK 1
+//! need the sensor's metadata JSON (`--meta`), Hesai packets start `EE FF` and their protocol
+//! version on port 2368 (the model found from it when no Velodyne packets are; the 128-channel
+//! models need their angle correction file, `--calibration`), Livox SDK 1
 //! packets come to port 56001 (found there without `--sensor livox`), Livox SDK 2 (Mid-360)
 //! packets to port 56301 (found there without `--sensor mid360`). IMU packets (Ouster's on
 //! their own port, Livox SDK 1's on the data port, SDK 2's on their own) become the sweeps' IMU
@@ -593,7 +594,7 @@ fn hesai_decoder(
 ) -> Result<PcapSweeps> {
     let calibration = match opts.calibration.as_deref() {
         Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
-        None if model.channels() != hesai::CHANNELS => bail!(
+        None if model.nominal_calibration().is_none() => bail!(
             "{}: packets of a {}: give its angle correction file (the CSV Hesai ships with \
              the sensor) with --calibration",
             path.display(),

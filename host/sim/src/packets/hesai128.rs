@@ -87,33 +87,20 @@ impl Spec {
             },
         }
     }
-    /// Bytes of a channel unit: distance, reflectivity and, when flagged, confidence.
-    fn unit_len(&self) -> usize {
-        3 + usize::from(self.flags & wire128::flag::CONFIDENCE != 0)
-    }
-    fn block_len(&self) -> usize {
-        field::AZIMUTH.end + wire128::LASERS * self.unit_len()
-    }
-    /// Where the tail begins: after the blocks, the body CRC and the functional safety part.
-    fn tail(&self) -> usize {
-        field::BODY + wire128::BLOCKS * self.block_len() + field::BODY_CRC_LEN + field::SAFETY_LEN
+    /// Where the packet's parts lie.
+    fn layout(&self) -> wire128::Layout {
+        wire128::Layout::of(self.version, self.flags)
     }
     /// Time from packet time to block `block`, channel `channel`'s firing, ns.
     fn channel_ns(&self, block: usize, channel: usize) -> i64 {
         self.model
             .point_offset_ns(block, channel, &self.firing(block))
     }
-    /// Time from packet time to block `block`'s start, ns: no channel fires before it.
-    fn block_ns(&self, block: usize) -> i64 {
-        (0..wire128::LASERS)
-            .map(|c| self.channel_ns(block, c))
-            .min()
-            .unwrap_or(0)
-    }
     /// Trajectory time of packet 0's time stamp, ns: whole microseconds, its first firing
     /// at or just after 0.
     fn first_stamp_ns(&self) -> i64 {
-        -self.block_ns(0).div_euclid(1000) * 1000
+        let (start, _) = self.model.firing_span_ns(0, &self.firing(0));
+        -start.div_euclid(1000) * 1000
     }
 }
 
@@ -157,23 +144,24 @@ impl PacketSim<'_> {
     /// Trajectory time of 128-channel packet `p`'s last firing.
     pub(super) fn hesai128_last_offset(&self, p: u64) -> f64 {
         let spec = Spec::of(self.sensor);
-        let last = (0..wire128::LASERS)
-            .map(|c| spec.channel_ns(wire128::BLOCKS - 1, c))
-            .max()
-            .unwrap_or(0);
+        let last_block = wire128::BLOCKS - 1;
+        let (_, last) = spec
+            .model
+            .firing_span_ns(last_block, &spec.firing(last_block));
         (self.hesai128_stamp_ns(p) + last) as f64 * 1e-9
     }
 
     pub(super) fn hesai128_packet(&self, p: u64) -> (Packet, Vec<Truth>) {
         let spec = Spec::of(self.sensor);
-        let mut buf = vec![0u8; wire128::packet_len(spec.version, spec.flags)];
+        let layout = spec.layout();
+        let mut buf = vec![0u8; layout.len];
         write_header(
             &mut buf,
             spec.version,
             (wire128::LASERS, wire128::BLOCKS),
             spec.flags,
         );
-        let (unit_len, block_len, tail) = (spec.unit_len(), spec.block_len(), spec.tail());
+        let (unit_len, block_len, tail) = (layout.unit_len, layout.block_len, layout.tail);
         let mut truth = Vec::new();
         let mut azimuth_states = 0u16;
         for b in 0..wire128::BLOCKS {
@@ -199,9 +187,8 @@ impl PacketSim<'_> {
                 ));
             }
         }
-        let body_end = field::BODY + wire128::BLOCKS * block_len;
-        put_crc(&mut buf, field::BODY..body_end);
-        let safety = body_end + field::BODY_CRC_LEN;
+        // The functional safety part (flagged on both) follows the body CRC.
+        let safety = layout.body_crc + field::BODY_CRC_LEN;
         buf[safety..safety + SAFETY.len()].copy_from_slice(&SAFETY);
         put_crc(&mut buf, safety + 1..safety + SAFETY.len());
         let f = spec.firing(0);
@@ -210,14 +197,12 @@ impl PacketSim<'_> {
         buf[tail + field::AZIMUTH_STATE.start..tail + field::AZIMUTH_STATE.end]
             .copy_from_slice(&azimuth_states.to_le_bytes());
         self.hesai_tail(&mut buf, tail, self.hesai128_stamp_ns(p));
-        let sequence = tail + field::TAIL_LEN;
-        buf[sequence..sequence + 4].copy_from_slice(&(p as u32).to_le_bytes());
-        let imu = if spec.flags & wire128::flag::IMU != 0 {
-            field::IMU_LEN
-        } else {
-            0
-        };
-        put_crc(&mut buf, tail..sequence + field::SEQUENCE_LEN + imu);
+        if let Some(at) = layout.sequence {
+            buf[at..at + field::SEQUENCE_LEN].copy_from_slice(&(p as u32).to_le_bytes());
+        }
+        for (covered, _) in layout.crc_ranges() {
+            put_crc(&mut buf, covered);
+        }
         (
             Packet {
                 offset: self.hesai128_last_offset(p),
@@ -420,10 +405,11 @@ mod tests {
         // Ethernet, IPv4 and UDP headers: 42 bytes.
         let b = &frame.data[42..];
         let crc_at = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
-        let body_end = field::BODY + wire128::BLOCKS * QT128.block_len();
+        let layout = QT128.layout();
+        let (body_end, tail) = (layout.body_crc, layout.tail);
         let safety = body_end + field::BODY_CRC_LEN;
-        let tail = QT128.tail();
         let tail_crc = tail + field::TAIL_LEN + field::SEQUENCE_LEN;
+        assert_eq!(tail_crc, layout.tail_crc);
         assert_eq!(b.len(), 1127);
         assert_eq!(
             wire128::crc32_mpeg2(&b[field::BODY..body_end]),
