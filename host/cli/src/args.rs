@@ -60,7 +60,7 @@ pub struct SensorArgs {
     #[arg(long)]
     pub meta: Option<PathBuf>,
     /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV); without one,
-    /// the model's published angles.
+    /// the model's published angles (the QT128, Pandar128 and OT128 have none: they need it).
     #[arg(long)]
     pub calibration: Option<PathBuf>,
     /// UDP port of the sensor's data packets [default: Velodyne and Hesai 2368, Ouster the
