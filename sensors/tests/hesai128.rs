@@ -155,7 +155,7 @@ fn every_return_takes_its_channels_angles_and_firing_time() {
         let cal = calibration();
         let t0 = (DATE_NS + 250_000_000) as i64;
         let start = log.starts[0].start_ns as i64;
-        let mut times = Vec::new();
+        let (mut times, mut nears) = (Vec::new(), 0);
         for &(_, p, t, m) in &log.points {
             let (k, c) = (usize::from(m.column), usize::from(m.ring));
             let raw = if c % 2 == 0 {
@@ -180,11 +180,15 @@ fn every_return_takes_its_channels_angles_and_firing_time() {
                 mode_flag: spec.mode_flag,
                 operational_state: spec.operational_state,
                 azimuth_state: (spec.azimuth_states >> (14 - 2 * k) & 3) as u8,
+                near: d < 2.85,
             };
+            nears += usize::from(state.near);
             let want_ns = t0 + model.point_offset_ns(k, c, &state) - start;
             assert_eq!(t, want_ns as f64 * 1e-9, "{model:?} block {k} channel {c}");
             times.push(want_ns);
         }
+        // Returns on both sides of the Pandar128's near-field limit (0.8 m to 4.8 m).
+        assert!(nears > 0 && nears < times.len(), "{model:?}: {nears} near");
         // The sweep begins at the first firing's start: no point before it, the first soon
         // after.
         let first = times.iter().min().copied().unwrap_or(-1);

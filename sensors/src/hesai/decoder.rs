@@ -1,7 +1,9 @@
 //! Hesai packets to sweeps: checks, order and loss detection (by the UDP sequence number when
 //! the packets carry one, else by their times), the cut, then each return to a point.
 
-use super::model::{Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS};
+use super::model::{
+    Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS, PANDAR128_NEAR_M,
+};
 use super::wire::Packet;
 use super::wire128;
 use crate::error::{ConfigError, PacketError};
@@ -95,6 +97,7 @@ impl<'a> View<'a> {
                 mode_flag: p.mode_flag(),
                 operational_state: p.operational_state(),
                 azimuth_state: p.azimuth_state(k),
+                near: false,
             },
         }
     }
@@ -284,9 +287,12 @@ impl Decoder {
             let azimuth = f64::from(p.azimuth(block)) * 0.01;
             let state = p.firing(block, returns);
             for (c, beam) in self.beams.iter().enumerate().take(channels) {
-                let offset = self.model.point_offset_ns(block, c, &state);
-                let time = (base + offset) as f64 * 1e-9;
                 let mut emit = |raw: (u16, u8), ret| {
+                    let near = f64::from(raw.0) * DISTANCE_UNIT_M < PANDAR128_NEAR_M;
+                    let offset = self
+                        .model
+                        .point_offset_ns(block, c, &Firing { near, ..state });
+                    let time = (base + offset) as f64 * 1e-9;
                     let meta = PointMeta {
                         ring: c as u16,
                         column: self.column,

@@ -1,7 +1,8 @@
 //! The models decoded, their published timing, the per-channel [`Calibration`] (Hesai's angle
 //! correction file) and the decoder's [`Config`].
 
-use super::firetimes::{NONE, OT128_NS, QT128_NS};
+pub use super::firetimes::PANDAR128_NEAR_M;
+use super::firetimes::{NONE, OT128_NS, PANDAR128_NS, QT128_NS};
 use super::wire::field;
 use crate::error::ConfigError;
 use crate::sweep::Return;
@@ -41,6 +42,9 @@ pub struct Firing {
     pub operational_state: u8,
     /// Protocol 1.4: the block's azimuth state.
     pub azimuth_state: u8,
+    /// The return is nearer than [`PANDAR128_NEAR_M`]: the Pandar128's channels fire at other
+    /// times for it. The other models ignore it.
+    pub near: bool,
 }
 
 impl Firing {
@@ -104,9 +108,9 @@ impl Model {
     ///   times of Hesai's firing-time file for the QT128C2X.
     /// - Pandar128 and OT128: the packet time stamps its last firing; firings are 27.778 us
     ///   apart in high resolution and 55.556 us otherwise; the Pandar128's firing starts
-    ///   3.148 us after it. The OT128's channels fire at the times of Hesai's firing-time file
-    ///   for its operational and azimuth state; the Pandar128's channel times depend on the
-    ///   distance as well and are not applied (its points are up to 55.6 us early).
+    ///   3.148 us after it. Their channels fire at the times of Hesai's firing-time file for
+    ///   the operational and azimuth state, and on the Pandar128 for the return's distance
+    ///   ([`Firing::near`]).
     pub fn point_offset_ns(self, block: usize, channel: usize, f: &Firing) -> i64 {
         let returns = f.blocks();
         let channel_ns = match self.table_entry(block, channel, f) {
@@ -125,16 +129,20 @@ impl Model {
     }
 
     /// The earliest and the latest of block `block`'s channel times after the packet time,
-    /// ns ([`Model::point_offset_ns`]): where the firing's points begin and end.
+    /// near and far, ns ([`Model::point_offset_ns`]): where the firing's points begin and end.
     pub fn firing_span_ns(self, block: usize, f: &Firing) -> (i64, i64) {
-        (0..self.channels())
-            .map(|c| self.point_offset_ns(block, c, f))
+        [false, true]
+            .iter()
+            .flat_map(|&near| {
+                let f = Firing { near, ..*f };
+                (0..self.channels()).map(move |c| self.point_offset_ns(block, c, &f))
+            })
             .fold((i64::MAX, i64::MIN), |(lo, hi), t| (lo.min(t), hi.max(t)))
     }
 
     /// Whether channel `channel` fires in block `block`: the QT128's channels 1-32 do not in
-    /// loop 1 nor 33-64 in loop 2, and a quarter of the OT128's do not in each azimuth state
-    /// of high resolution (their firing-time files list no time for them). A channel that does
+    /// loop 1 nor 33-64 in loop 2, and a quarter of the OT128's and Pandar128's do not in each
+    /// azimuth state of high resolution (their firing-time files list no time for them). A channel that does
     /// not fire has no return.
     pub fn fires(self, block: usize, channel: usize, f: &Firing) -> bool {
         self.table_entry(block, channel, f) != Some(NONE)
@@ -149,10 +157,26 @@ impl Model {
             }
             (Self::Ot128, 0) => usize::from(f.azimuth_state),
             (Self::Ot128, 2) if f.azimuth_state < 2 => 4 + usize::from(f.azimuth_state),
+            (Self::Pandar128, 0) if f.azimuth_state < 4 => {
+                return pandar128_entry(usize::from(f.azimuth_state), channel, f.near)
+            }
+            (Self::Pandar128, s @ (2 | 3)) if f.azimuth_state < 2 => {
+                let column = 4 + 2 * usize::from(s - 2) + usize::from(f.azimuth_state);
+                return pandar128_entry(column, channel, f.near);
+            }
             _ => return None,
         };
         OT128_NS.get(column).and_then(|c| c.get(channel)).copied()
     }
+}
+
+/// The Pandar128's firing-time entry for a (state) column of its file, far or near.
+fn pandar128_entry(column: usize, channel: usize, near: bool) -> Option<u32> {
+    let column = 2 * column + usize::from(near);
+    PANDAR128_NS
+        .get(column)
+        .and_then(|c| c.get(channel))
+        .copied()
 }
 
 /// Time from a channel's firing to the next channel's within a firing, ns.
@@ -356,12 +380,29 @@ mod tests {
             azimuth_state,
             ..Firing::default()
         };
-        // Pandar128: block 1 is the stamped firing, block 0 one firing earlier.
+        // Pandar128: block 1 is the stamped firing, block 0 one firing earlier; channel 8
+        // fires 32.564 us into a standard firing in azimuth state 0.
         let p = Model::Pandar128;
-        assert_eq!(p.point_offset_ns(1, 7, &f(2, 0, 1)), 3_148);
-        assert_eq!(p.point_offset_ns(0, 7, &f(2, 0, 1)), 3_148 - 55_556);
-        assert_eq!(p.point_offset_ns(0, 7, &f(0, 0, 1)), 3_148 - 27_778);
-        assert_eq!(p.point_offset_ns(0, 7, &f(2, 0, 2)), 3_148);
+        assert_eq!(p.point_offset_ns(1, 7, &f(2, 0, 1)), 3_148 + 32_564);
+        assert_eq!(
+            p.point_offset_ns(0, 7, &f(2, 0, 1)),
+            3_148 - 55_556 + 32_564
+        );
+        assert_eq!(p.point_offset_ns(0, 7, &f(2, 0, 2)), 3_148 + 32_564);
+        // High resolution: channel 8 does not fire in azimuth state 0, in state 1 at 4.786 us.
+        assert!(!p.fires(0, 7, &f(0, 0, 1)) && p.fires(0, 7, &f(0, 1, 1)));
+        assert_eq!(p.point_offset_ns(0, 7, &f(0, 1, 1)), 3_148 - 27_778 + 4_786);
+        // A near return of channel 1 fires later: 5.201 us, not 4.436 us; energy saving
+        // (state 3), azimuth state 1, channel 6: 30.209 us.
+        let near = Firing {
+            near: true,
+            ..f(0, 0, 1)
+        };
+        assert_eq!(p.point_offset_ns(1, 0, &f(0, 0, 1)), 3_148 + 4_436);
+        assert_eq!(p.point_offset_ns(1, 0, &near), 3_148 + 5_201);
+        assert_eq!(p.point_offset_ns(1, 5, &f(3, 1, 1)), 3_148 + 30_209);
+        // The span covers near returns: channel 47's 55.184 us in standard state 0.
+        assert_eq!(p.firing_span_ns(1, &f(2, 0, 1)).1, 3_148 + 55_184);
         // OT128, standard mode, azimuth state 0: channel 1 at 46.645 us, state 1 the same;
         // high resolution state 1: 18.867 us; channel 3 does not fire in high-res state 1.
         let o = Model::Ot128;

@@ -369,6 +369,7 @@ mod tests {
                         mode_flag: p.mode_flag(),
                         operational_state: p.operational_state(),
                         azimuth_state: p.azimuth_state(b),
+                        near: false,
                     };
                     assert_eq!(f, spec.firing(b));
                     for c in 0..wire128::LASERS {
