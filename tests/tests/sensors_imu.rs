@@ -154,3 +154,93 @@ fn livox_imu_packets_reach_the_frames_and_convert_writes_imu_csv() {
     let csv = imu::read_csv(&out.join(imu::CSV_NAME)).unwrap();
     assert_eq!(csv, got, "imu.csv holds every sample, exactly");
 }
+
+/// Every frame of a folder, with its IMU samples.
+fn folder_frames(dir: &std::path::Path) -> Vec<kiss_odom_io::Frame> {
+    let mut ds = kiss_odom_io::open(dir, kiss_odom_io::Format::Auto, &Default::default()).unwrap();
+    let mut frames = Vec::new();
+    while let Some(item) = ds.frames.next_item().unwrap() {
+        match item {
+            kiss_odom_io::Item::Frame(f) => frames.push(f),
+            other => panic!("{other:?}"),
+        }
+    }
+    frames
+}
+
+#[test]
+fn a_simulated_imu_reaches_each_frame_up_to_its_time_and_convert_writes_it_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let run = |args: &[&str], out: &std::path::Path| {
+        let args: Vec<OsString> = args.iter().map(OsString::from).collect();
+        let r = kiss_odom_tests::kiss_odom(&args, out);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+    };
+    let s = sim.to_str().unwrap();
+    run(
+        &[
+            "simulate",
+            "--out",
+            s,
+            "--frames",
+            "6",
+            "--seed",
+            "11",
+            "--profile",
+            "handheld",
+            "--beams",
+            "16",
+            "--columns",
+            "256",
+            "--imu-rate",
+            "200",
+        ],
+        &sim,
+    );
+    let written = imu::read_csv(&sim.join(imu::CSV_NAME)).unwrap();
+    // 200 Hz from 0 s to 0.1 s past the last point (at 0.5996 s): 0 to 0.695 s.
+    assert_eq!(written.len(), 140);
+    let frames = folder_frames(&sim);
+    let times: Vec<f64> = std::fs::read_to_string(sim.join("times.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    let mut handed: Vec<ImuSample> = Vec::new();
+    for (k, f) in frames.iter().enumerate() {
+        let before = if k == 0 { f64::MIN } else { times[k - 1] };
+        let last = k + 1 == frames.len();
+        assert!(!f.imu.is_empty());
+        for s in &f.imu {
+            assert!(
+                s.seconds() > before && (last || s.seconds() <= times[k]),
+                "frame {k}"
+            );
+        }
+        println!("frame {k}: {} samples up to {:.4} s", f.imu.len(), times[k]);
+        handed.extend(&f.imu);
+    }
+    assert_eq!(
+        handed, written,
+        "every sample in exactly one frame, in order"
+    );
+    let out = dir.path().join("converted");
+    run(
+        &["convert", s, "--out", out.to_str().unwrap(), "--quiet"],
+        &out,
+    );
+    assert_eq!(imu::read_csv(&out.join(imu::CSV_NAME)).unwrap(), written);
+    // A broken imu.csv is a warning, not a failed run.
+    std::fs::write(sim.join(imu::CSV_NAME), "time,gyro\n1,2\n").unwrap();
+    let ds = kiss_odom_io::open(&sim, kiss_odom_io::Format::Auto, &Default::default()).unwrap();
+    assert!(
+        ds.info
+            .warnings
+            .iter()
+            .any(|w| w.contains("no IMU samples used")),
+        "{:?}",
+        ds.info.warnings
+    );
+    assert!(folder_frames(&sim).iter().all(|f| f.imu.is_empty()));
+}

@@ -223,6 +223,9 @@ fn bad_flags_are_refused_without_panicking() {
         &["--dropout", "1"],
         &["--seed", "-3"],
         &["--profile", "moon"],
+        &["--imu-rate", "0"],
+        &["--imu-rate", "inf"],
+        &["--imu-exact"],
     ] {
         simulate_fails(&dir, bad);
     }

@@ -2,7 +2,7 @@
 //! `kiss-odom-sim` and written in the generic layout (and as sensor packets).
 
 use anyhow::Result;
-use kiss_odom_sim::{Format, Lidar, PacketSensor, Profile, Request, SimParams, Written};
+use kiss_odom_sim::{Format, ImuSpec, Lidar, PacketSensor, Profile, Request, SimParams, Written};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -66,6 +66,14 @@ pub struct SimulateArgs {
     /// What to write.
     #[arg(long, value_enum, default_value_t = Format::Generic)]
     pub format: Format,
+    /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
+    /// 200), with white noise, turn-on biases that then walk, and gravity, 11, 23 and -44 mm
+    /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it.
+    #[arg(long)]
+    pub imu_rate: Option<f64>,
+    /// With --imu-rate: the exact rates and forces, without noise or bias.
+    #[arg(long, requires = "imu_rate")]
+    pub imu_exact: bool,
     /// Replace a dataset already in --out (removes only its frame files, poses, times and
     /// sim.toml). The new one appears only once complete.
     #[arg(long)]
@@ -79,6 +87,14 @@ impl SimulateArgs {
             params: self.params(),
             sensor: self.sensor,
             format: self.format,
+            imu: self.imu_rate.map(|rate| {
+                let spec = ImuSpec::mems(rate);
+                if self.imu_exact {
+                    spec.exact()
+                } else {
+                    spec
+                }
+            }),
             overwrite: self.overwrite,
         }
     }

@@ -37,6 +37,11 @@ impl ImuSample {
         }
     }
 
+    /// Its time in seconds.
+    pub fn seconds(&self) -> f64 {
+        self.time_ns as f64 * 1e-9
+    }
+
     /// Its `imu.csv` row, with a line end: the time to the nanosecond, the rest as Rust prints
     /// an f64 (the shortest text that reads back to the same number).
     pub fn push_csv_row(&self, out: &mut String) {

@@ -37,7 +37,7 @@ pub fn build(profile: Profile, seed: u64, route: &Route) -> Scene {
         Profile::Field => Scene::new(vec![ground], City::new(route, seed).field()),
         Profile::Corridor => Scene::new(corridor, Vec::new()),
         Profile::Tunnel => Scene::new(corridor, City::new(route, seed).tunnel()),
-        Profile::Urban | Profile::Fast => {
+        Profile::Urban | Profile::Fast | Profile::Handheld | Profile::Drone => {
             Scene::new(vec![ground], City::new(route, seed).generate())
         }
         Profile::Suburban => Scene::new(vec![ground], City::new(route, seed).suburb()),

@@ -4,13 +4,14 @@
 //! `kiss-odom run` reads, for tests, fuzzing, benchmarks, the deskew study and degenerate-scene
 //! stress tests. A seeded scene ([`city`], built from [`shapes`] and indexed by [`scene`]) is
 //! swept by a multi-beam sensor ([`sensor`]) riding a smooth parametric trajectory
-//! ([`trajectory`]) of a [`Profile`]: a [`Simulation`]. [`packets`] fires a real sensor's beams
+//! ([`trajectory`]) of a [`Profile`]: a [`Simulation`], with an [`imu`] riding along. [`packets`] fires a real sensor's beams
 //! at its own timing and packs its UDP packets, [`capture`] writes them as a pcap, [`writer`]
 //! the generic layout, and [`sequence`] a whole sequence. Every random draw is keyed by indices
 //! ([`rng`]), so the bytes depend on the seed and parameters only, never on the thread count.
 
 pub mod capture;
 pub mod city;
+pub mod imu;
 pub mod packets;
 pub mod profile;
 pub mod rng;
@@ -22,6 +23,7 @@ pub mod simulation;
 pub mod trajectory;
 pub mod writer;
 
+pub use imu::ImuSpec;
 pub use packets::{PacketSensor, PacketSim};
 pub use profile::Profile;
 pub use scene::{Scene, Surface};

@@ -27,4 +27,18 @@ pub enum Profile {
     /// both sides, yards, hedges, trees and lamp posts: a 16-beam sensor's map fills its whole
     /// `r_max` disc (use with `--sensor vlp16`).
     Suburban,
+    /// The urban scene walked with a hand-held sensor at 1-1.8 m/s from a standing start: the
+    /// walker looks around (yaw swings up to about 150 deg/s), the hand pitches and rolls by
+    /// 5-15 degrees and bobs with each step.
+    Handheld,
+    /// The urban scene flown at 3-10 m/s, 5-11 m up with climbs and descents up to 2.5 m/s,
+    /// banking into turns, with fast yaw swings (up to about 200 deg/s).
+    Drone,
+}
+
+impl Profile {
+    /// Whether the sensor swings about its path (a hand or a multirotor, not a car).
+    pub const fn swings(self) -> bool {
+        matches!(self, Self::Handheld | Self::Drone)
+    }
 }

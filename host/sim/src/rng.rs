@@ -37,6 +37,10 @@ pub enum Purpose {
     Scene = 3,
     /// Per-ray range noise, dropout and intensity.
     Ray = 4,
+    /// A hand's or a multirotor's swings about its path.
+    Swing = 5,
+    /// IMU noise and biases.
+    Imu = 6,
 }
 
 /// A SplitMix64 sequence: fast, seedable from any key, good enough for scene generation.

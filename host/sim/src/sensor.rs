@@ -340,6 +340,8 @@ mod tests {
             Profile::Tunnel,
             Profile::Field,
             Profile::Suburban,
+            Profile::Handheld,
+            Profile::Drone,
         ] {
             let sim = small(profile, 0.0);
             let f = sim.frame(4);

@@ -1,9 +1,11 @@
 //! A whole simulated sequence written to a folder: the frames and ground truth in the generic
-//! layout ([`crate::writer`]), `sim.toml`, and with [`Format::Pcap`] the same sweeps as the
-//! sensor's packets ([`crate::packets`], [`crate::capture`]). The folder appears only once
+//! layout ([`crate::writer`]), `sim.toml`, with [`Format::Pcap`] the same sweeps as the
+//! sensor's packets ([`crate::packets`], [`crate::capture`]), and an IMU's `imu.csv`
+//! ([`crate::imu`]) if asked for. The folder appears only once
 //! complete; a stop asked for between frames leaves none.
 
 use crate::capture;
+use crate::imu::{self, ImuSpec};
 use crate::packets::{PacketSensor, PacketSim};
 use crate::profile::Profile;
 use crate::sensor::Lidar;
@@ -36,6 +38,8 @@ pub struct Request {
     pub sensor: Option<PacketSensor>,
     /// What to write.
     pub format: Format,
+    /// An IMU riding along, written to `imu.csv`.
+    pub imu: Option<ImuSpec>,
     /// Replace a sequence already in the folder.
     pub overwrite: bool,
 }
@@ -71,7 +75,20 @@ struct Provenance<'a> {
     sensor: &'a Lidar,
     #[serde(skip_serializing_if = "Option::is_none")]
     packets: Option<PacketSummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    imu: Option<ImuSummary>,
     scene: SceneSummary,
+}
+
+#[derive(Serialize)]
+struct ImuSummary {
+    #[serde(flatten)]
+    spec: ImuSpec,
+    /// The turn-on biases this seed drew (rad/s, m/s^2); they then walk.
+    gyro_bias_turn_on: [f64; 3],
+    accel_bias_turn_on: [f64; 3],
+    /// Samples in `imu.csv`.
+    samples: usize,
 }
 
 #[derive(Serialize)]
@@ -95,7 +112,8 @@ const LAYOUT: &str = "velodyne/NNNNNN.bin: f32 LE x y z intensity, sensor frame 
     at the end of each sweep (its last column) in the frame of the first sweep's end; \
     times.txt: end-of-sweep times (s); packets.pcap (if written): the same sweeps as the \
     sensor's UDP packets, exact points above before range quantisation, in decoder order; \
-    packets.json: Ouster metadata";
+    packets.json: Ouster metadata; imu.csv (if written): time (s, the frames' clock plus the \
+    IMU's offset), angular rate (rad/s) and specific force (m/s^2) in the IMU's axes";
 
 /// The simulation parameters of `request`, with the rate a packet sensor rounds to.
 pub fn params_of(request: &Request) -> Result<SimParams> {
@@ -131,6 +149,14 @@ pub fn write(
         None => sim.end_offset(last),
     };
     let route_m = sim.trajectory().arc_length(end_offset);
+    // The IMU runs on a little past the last point, so the last sweep is covered.
+    let imu_samples = match &request.imu {
+        Some(spec) => {
+            spec.validate().map_err(anyhow::Error::msg)?;
+            imu::samples(&sim, spec, end_offset + 0.1)
+        }
+        None => Vec::new(),
+    };
     let provenance = Provenance {
         generator: "kiss-odom simulate",
         version: env!("CARGO_PKG_VERSION"),
@@ -148,6 +174,15 @@ pub fn write(
                 packets_per_sweep: p.packets_per_sweep(),
                 pcap: request.format == Format::Pcap,
             }),
+        imu: request.imu.map(|spec| {
+            let (gyro, accel) = imu::turn_on_bias(&spec, params.seed);
+            ImuSummary {
+                spec,
+                gyro_bias_turn_on: gyro,
+                accel_bias_turn_on: accel,
+                samples: imu_samples.len(),
+            }
+        }),
         scene: SceneSummary {
             planes: sim.scene().planes().count(),
             solids: sim.scene().solids().len(),
@@ -155,6 +190,11 @@ pub fn write(
         },
     };
     let mut writer = DatasetWriter::create(out, request.overwrite, &provenance)?;
+    if request.imu.is_some() {
+        let path = writer.staging().join(imu::CSV_NAME);
+        std::fs::write(&path, imu::csv(&imu_samples))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     let mut pcap = match (request.format, request.sensor) {
         (Format::Pcap, Some(sensor)) => {
             if sensor == PacketSensor::Os1 {

@@ -173,7 +173,11 @@ impl Route {
         let mut b = Builder::new(-ROUTE_BEFORE_START);
         let end = length + ROUTE_AFTER_END;
         match profile {
-            Profile::Urban | Profile::Plane | Profile::Field => {
+            Profile::Urban
+            | Profile::Plane
+            | Profile::Field
+            | Profile::Handheld
+            | Profile::Drone => {
                 b.straight(ROUTE_BEFORE_START + rng.range(30.0, 80.0));
                 while b.s < end {
                     let angle = if rng.chance(0.6) {
@@ -526,6 +530,9 @@ struct MotionParams {
     /// roll and pitch (rad) and height (m).
     wobble: [[f64; 2]; 3],
     height: f64,
+    /// Swings about the path (hand-held or flying): for yaw, pitch and roll (rad) and height
+    /// (m), a slow and a fast wave, each `(amplitude, shortest period, longest period)` (s).
+    swing: [[(f64, f64, f64); 2]; 4],
 }
 
 impl MotionParams {
@@ -544,6 +551,7 @@ impl MotionParams {
                 [0.02, 0.004],
             ],
             height: 1.73,
+            swing: [[(0.0, 1.0, 1.0); 2]; 4],
         };
         match profile {
             Profile::Urban | Profile::Plane | Profile::Field => car,
@@ -561,6 +569,41 @@ impl MotionParams {
                 launch_tau: 2.0,
                 ..car
             },
+            // Walking: no body roll or pitch from the path, but the walker looks around and
+            // the hand swings and bobs with the steps (about 2 a second).
+            Profile::Handheld => Self {
+                speed: (1.0, 1.8),
+                launch_tau: 1.0,
+                roll_gain: 0.0,
+                pitch_gain: 0.0,
+                wobble: [[0.0; 2]; 3],
+                height: 1.4,
+                swing: [
+                    [(0.5, 2.5, 4.5), (0.12, 0.8, 1.5)],
+                    [(0.15, 2.0, 5.0), (0.04, 0.45, 0.6)],
+                    [(0.1, 2.0, 5.0), (0.03, 0.45, 0.6)],
+                    [(0.05, 3.0, 6.0), (0.025, 0.45, 0.6)],
+                ],
+                ..car
+            },
+            // A multirotor banks into turns and pitches to accelerate, looks around fast and
+            // climbs and descends.
+            Profile::Drone => Self {
+                speed: (3.0, 10.0),
+                launch_tau: 2.0,
+                roll_gain: 2.5 * deg,
+                roll_max: 20.0 * deg,
+                pitch_gain: 2.5 * deg,
+                pitch_max: 15.0 * deg,
+                wobble: [[0.0; 2]; 3],
+                height: 8.0,
+                swing: [
+                    [(1.0, 4.0, 8.0), (0.25, 1.0, 2.0)],
+                    [(0.08, 2.0, 4.0), (0.02, 0.3, 0.6)],
+                    [(0.08, 2.0, 4.0), (0.02, 0.3, 0.6)],
+                    [(3.0, 10.0, 20.0), (0.2, 2.0, 4.0)],
+                ],
+            },
         }
     }
 }
@@ -574,6 +617,8 @@ pub struct Trajectory {
     roll: [Wave; 2],
     pitch: [Wave; 2],
     bounce: [Wave; 2],
+    /// Swings in yaw, pitch, roll and height, if the profile has them.
+    swing: Option<[[Wave; 2]; 4]>,
 }
 
 impl Trajectory {
@@ -593,6 +638,13 @@ impl Trajectory {
         // Speed never exceeds the band's top, so this covers the whole run.
         let length = motion.speed.1 * duration.max(0.0);
         let route = Route::generate(profile, seed, length, &speed);
+        // Drawn from a stream of their own, so the cars' trajectories are unchanged.
+        let mut rng = Stream::new(seed, Purpose::Swing);
+        let swing = profile.swings().then(|| {
+            motion
+                .swing
+                .map(|axis| axis.map(|(amp, lo, hi)| Wave::random(&mut rng, amp, (lo, hi))))
+        });
         Self {
             route,
             speed,
@@ -600,6 +652,7 @@ impl Trajectory {
             roll,
             pitch,
             bounce,
+            swing,
         }
     }
 
@@ -629,31 +682,42 @@ impl Trajectory {
         let sum = |w: &[Wave; 2]| w[0].at(t) + w[1].at(t);
         // The body rolls out of a turn and pitches nose-up when accelerating (about +y, a
         // positive pitch is nose-down).
-        let roll = -saturate(m.roll_gain, m.roll_max, lateral) + sum(&self.roll);
-        let pitch = -saturate(m.pitch_gain, m.pitch_max, longitudinal) + sum(&self.pitch);
-        let yaw = self.route.heading(s);
+        let mut roll = -saturate(m.roll_gain, m.roll_max, lateral) + sum(&self.roll);
+        let mut pitch = -saturate(m.pitch_gain, m.pitch_max, longitudinal) + sum(&self.pitch);
+        let mut yaw = self.route.heading(s);
         let [x, y] = self.route.position(s);
-        ([roll, pitch, yaw], [x, y, m.height + sum(&self.bounce)])
+        let mut z = m.height + sum(&self.bounce);
+        if let Some([sy, sp, sr, sz]) = &self.swing {
+            yaw += sum(sy);
+            pitch += sum(sp);
+            roll += sum(sr);
+            z += sum(sz);
+        }
+        ([roll, pitch, yaw], [x, y, z])
     }
 
     /// World-from-sensor pose at time `t` (s since the start of the first sweep).
     pub fn pose(&self, t: f64) -> PoseM {
         let ([roll, pitch, yaw], p) = self.state(t);
-        let (sr, cr) = (libm::sin(roll), libm::cos(roll));
-        let (sp, cp) = (libm::sin(pitch), libm::cos(pitch));
-        let (sy, cy) = (libm::sin(yaw), libm::cos(yaw));
-        // Rz(yaw) Ry(pitch) Rx(roll).
-        #[rustfmt::skip]
-        let r = Matrix3::new(
-            cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
-            sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
-            -sp,     cp * sr,                cp * cr,
-        );
         IsometryMatrix3::from_parts(
             Translation3::new(p[0], p[1], p[2]),
-            Rotation3::from_matrix_unchecked(r),
+            rotation_zyx(roll, pitch, yaw),
         )
     }
+}
+
+/// `Rz(yaw) Ry(pitch) Rx(roll)` (rad), on `libm` so the bits are the same everywhere.
+pub fn rotation_zyx(roll: f64, pitch: f64, yaw: f64) -> Rotation3<f64> {
+    let (sr, cr) = (libm::sin(roll), libm::cos(roll));
+    let (sp, cp) = (libm::sin(pitch), libm::cos(pitch));
+    let (sy, cy) = (libm::sin(yaw), libm::cos(yaw));
+    #[rustfmt::skip]
+    let r = Matrix3::new(
+        cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+        sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+        -sp,     cp * sr,                cp * cr,
+    );
+    Rotation3::from_matrix_unchecked(r)
 }
 
 #[cfg(test)]

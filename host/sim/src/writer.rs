@@ -24,13 +24,14 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 6] = [
+const OWNED_FILES: [&str; 7] = [
     "poses.txt",
     "times.txt",
     "sim.toml",
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
+    crate::imu::CSV_NAME,
 ];
 const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
 

@@ -6,6 +6,7 @@
 //! PATH/timestamps/<stem>.bin        per-point times, f64 little-endian, one per point
 //! PATH/poses.txt                    ground truth, KITTI 3x4, LiDAR frame, end of each sweep
 //! PATH/times.txt                    frame times, one number per line
+//! PATH/imu.csv                      IMU samples (`crate::imu`), on the frames' clock
 //! ```
 //!
 //! This is what `kiss-odom simulate` writes and what most recordings can be converted to. Row
@@ -13,12 +14,15 @@
 //! place in time order for time-named frames); a side file with fewer or more rows than that
 //! needs is reported. Frames are read one at a time when asked for ([`FileSource`], shared with
 //! the KITTI layout); a missing or bad frame becomes an [`Item::Skipped`], a bad timestamps
-//! file a [`Frame::warnings`] entry.
+//! file a [`Frame::warnings`] entry. Each frame takes the IMU samples up to its time (its
+//! `times.txt` row, else its latest point) that no earlier frame took; the last frame takes the
+//! rest.
 
 use super::file_cloud::{truncation_warning, Cloud};
 use super::listing::{self, Listing, Naming, Slot};
 use super::{bin, pcd, ply};
 use crate::dataset::{Dataset, DatasetInfo, Format, Frame, FrameSource, Item, OpenOptions};
+use crate::imu::{self, ImuSample};
 use crate::poses;
 use anyhow::{bail, Context, Result};
 use std::io::Read;
@@ -107,6 +111,9 @@ pub struct FileSource {
     /// Applied to every scan read (the KITTI correction).
     correct: Option<fn(&mut [[f64; 3]])>,
     next: usize,
+    /// IMU samples (`imu.csv`) and the first not yet handed on.
+    imu: Vec<ImuSample>,
+    imu_next: usize,
 }
 
 impl FileSource {
@@ -126,7 +133,26 @@ impl FileSource {
             max_points,
             correct: None,
             next: 0,
+            imu: Vec::new(),
+            imu_next: 0,
         }
+    }
+
+    /// Hands `samples` (time order) on with the frames.
+    pub fn with_imu(mut self, samples: Vec<ImuSample>) -> Self {
+        self.imu = samples;
+        self
+    }
+
+    /// The samples after the last handed on, up to `end` (s; all if `None`).
+    fn imu_until(&mut self, end: Option<f64>) -> Vec<ImuSample> {
+        let rest = &self.imu[self.imu_next..];
+        let n = match end {
+            Some(end) => rest.partition_point(|s| s.seconds() <= end),
+            None => rest.len(),
+        };
+        self.imu_next += n;
+        rest[..n].to_vec()
     }
 
     /// Applies `correct` to every scan read.
@@ -219,6 +245,14 @@ impl FrameSource for FileSource {
             correct(&mut frame.points);
         }
         self.attach_timestamps(path, cloud.declared, &mut frame);
+        if !self.imu.is_empty() {
+            let last = self.next == self.slots.len();
+            let latest = frame
+                .stamps
+                .as_ref()
+                .map(|s| s.iter().copied().fold(f64::MIN, f64::max));
+            frame.imu = self.imu_until(if last { None } else { time.or(latest) });
+        }
         Ok(Some(Item::Frame(frame)))
     }
 
@@ -228,6 +262,14 @@ impl FrameSource for FileSource {
             return false;
         }
         self.next = self.slots.partition_point(|s| s.index < index);
+        // The frame before takes the samples up to its time.
+        let before = index
+            .checked_sub(1)
+            .and_then(|i| self.times.as_ref()?.get(i).copied());
+        self.imu_next = match before {
+            Some(t) => self.imu.partition_point(|s| s.seconds() <= t),
+            None => 0,
+        };
         true
     }
 }
@@ -327,6 +369,15 @@ pub fn open(root: &Path, format: Option<Format>, opts: &OpenOptions) -> Result<D
         &listing,
         ground_truth.is_some() || frame_times.is_some(),
     ));
+    let imu_path = root.join(imu::CSV_NAME);
+    let imu_samples = match imu_path.is_file().then(|| imu::read_csv(&imu_path)) {
+        Some(Ok(samples)) => samples,
+        Some(Err(e)) => {
+            warnings.push(format!("{e:#}; no IMU samples used"));
+            Vec::new()
+        }
+        None => Vec::new(),
+    };
 
     let info = DatasetInfo {
         ground_truth,
@@ -336,7 +387,8 @@ pub fn open(root: &Path, format: Option<Format>, opts: &OpenOptions) -> Result<D
         kitti_correction: false,
         warnings,
     };
-    let frames = FileSource::new(listing, stamps_dir, frame_times, opts.scan_points);
+    let frames =
+        FileSource::new(listing, stamps_dir, frame_times, opts.scan_points).with_imu(imu_samples);
     Ok(Dataset {
         frames: Box::new(frames),
         info,

@@ -2,7 +2,7 @@
 
 use super::*;
 
-fn profiles() -> [Profile; 7] {
+fn profiles() -> [Profile; 9] {
     [
         Profile::Urban,
         Profile::Corridor,
@@ -11,6 +11,8 @@ fn profiles() -> [Profile; 7] {
         Profile::Tunnel,
         Profile::Field,
         Profile::Suburban,
+        Profile::Handheld,
+        Profile::Drone,
     ]
 }
 
@@ -72,7 +74,12 @@ fn pose_is_continuous_at_knots_and_piece_boundaries() {
 
 #[test]
 fn speed_stays_in_the_profile_band_and_varies() {
-    for (profile, lo, hi) in [(Profile::Urban, 5.0, 15.0), (Profile::Fast, 20.0, 30.0)] {
+    for (profile, lo, hi) in [
+        (Profile::Urban, 5.0, 15.0),
+        (Profile::Fast, 20.0, 30.0),
+        (Profile::Handheld, 1.0, 1.8),
+        (Profile::Drone, 3.0, 10.0),
+    ] {
         let tr = Trajectory::generate(profile, 9, 200.0);
         assert_eq!(tr.speed(0.0), 0.0, "a standing start");
         let (mut vmin, mut vmax) = (f64::MAX, f64::MIN);
@@ -163,4 +170,24 @@ fn first_pose_starts_at_the_origin_heading_along_x() {
     let tr = Trajectory::generate(Profile::Urban, 0, 10.0);
     let ([_, _, yaw], p) = tr.state(0.0);
     assert!(p[0].abs() < 1e-9 && p[1].abs() < 1e-9 && yaw.abs() < 1e-12);
+}
+
+#[test]
+fn the_drone_flies_5_to_11_m_up_and_climbs_at_most_2_5_m_per_s_and_the_walker_stays_low() {
+    for seed in [1, 2, 3] {
+        let (mut lo, mut hi, mut climb) = (f64::MAX, f64::MIN, 0.0f64);
+        let tr = Trajectory::generate(Profile::Drone, seed, 120.0);
+        for i in 0..12_000 {
+            let t = i as f64 * 0.01;
+            let z = tr.state(t).1[2];
+            let dz = (tr.state(t + 1e-4).1[2] - tr.state(t - 1e-4).1[2]) / 2e-4;
+            (lo, hi, climb) = (lo.min(z), hi.max(z), climb.max(dz.abs()));
+        }
+        println!("drone seed {seed}: {lo:.2}-{hi:.2} m up, climbing up to {climb:.2} m/s");
+        assert!(lo >= 4.7 && hi <= 11.3 && hi - lo > 3.0 && climb <= 2.55 && climb > 0.8);
+        let walker = Trajectory::generate(Profile::Handheld, seed, 60.0);
+        let zs = (0..6_000).map(|i| walker.state(i as f64 * 0.01).1[2]);
+        let (wlo, whi) = zs.fold((f64::MAX, f64::MIN), |(a, b), z| (a.min(z), b.max(z)));
+        assert!(wlo > 1.3 && whi < 1.5, "hand at {wlo}-{whi} m");
+    }
 }
