@@ -15,6 +15,7 @@ mod dataset_process;
 mod degeneracy;
 mod embedded;
 mod golden;
+mod imu_prior;
 mod live;
 mod metrics;
 mod readers;

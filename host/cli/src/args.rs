@@ -158,6 +158,34 @@ pub struct PipelineArgs {
     /// none, the reference's behaviour].
     #[arg(long)]
     pub budget: Option<u64>,
+    /// The gyroscope prior: `auto` predicts and deskews each frame with the rotation the
+    /// recording's IMU measured (a folder's imu.csv, an Ouster's or Livox's IMU packets; the
+    /// IMU's clock must be the frames'), learning the gyroscope's bias from ICP; frames without
+    /// samples fall back to the constant-velocity model and say so in frames.csv; `off`: the
+    /// reference's prediction [default: off].
+    #[arg(long, value_enum)]
+    pub imu: Option<ImuMode>,
+    /// The IMU's pose in the LiDAR frame, X,Y,Z,ROLL,PITCH,YAW (m, deg; Rz Ry Rx), as
+    /// `simulate` writes it in sim.toml [default: 0,0,0,0,0,0].
+    #[arg(
+        long,
+        value_delimiter = ',',
+        num_args = 6,
+        allow_negative_numbers = true
+    )]
+    pub imu_extrinsic: Option<Vec<f64>>,
+    /// The IMU's clock minus the LiDAR's (s) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub imu_time_offset: Option<f64>,
+}
+
+/// Whether the gyroscope prior runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ImuMode {
+    /// With the IMU samples the recording carries.
+    Auto,
+    /// Without (the reference's constant-velocity prediction).
+    Off,
 }
 
 /// How the core runs.
@@ -283,6 +311,15 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     }
     if let Some(b) = p.budget {
         s.registration.work_budget = Some(b);
+    }
+    if let Some(m) = p.imu {
+        s.imu.enabled = m == ImuMode::Auto;
+    }
+    if let Some(e) = &p.imu_extrinsic {
+        s.imu.extrinsic.copy_from_slice(e);
+    }
+    if let Some(t) = p.imu_time_offset {
+        s.imu.time_offset = t;
     }
     if let Some(x) = c.scalar {
         s.runtime.scalar = x;

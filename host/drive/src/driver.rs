@@ -18,11 +18,11 @@
 //! [`Driver::deskewed_scan`] give its clouds for a viewer or a published message.
 
 use crate::engine::{self, Batch, Call, Engine};
-use crate::outcome::{FrameMeta, Outcome, Step};
+use crate::outcome::{FrameMeta, ImuUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
-use kiss_odom_core::{Capacities, FrameError, HighWater};
+use kiss_odom_core::{Capacities, FrameError, HighWater, Prior};
 use kiss_odom_io::{Frame, Item};
 use nalgebra::Isometry3;
 use std::time::Duration;
@@ -109,9 +109,23 @@ impl Driver {
         self.on_empty = policy;
     }
 
-    /// Registers a frame read from a dataset.
+    /// Registers a frame read from a dataset; with the gyroscope prior on (`[imu]`), its IMU
+    /// samples predict and deskew it, its sweep ending at its latest point's time (else at the
+    /// frame's time).
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
-        self.register_points(FrameMeta::of(frame), &frame.points, frame.stamps.as_deref())
+        let stamps = frame.stamps.as_deref();
+        let end = stamps
+            .and_then(|s| s.iter().copied().reduce(f64::max))
+            .or(frame.time);
+        let prior = end.and_then(|end| self.engine.prior_before(&frame.imu, end));
+        let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;
+        self.engine.prior_after();
+        outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
+            prior: prior.unwrap_or(Prior::NoSamples),
+            samples: frame.imu.len(),
+            bias,
+        });
+        Ok(outcome)
     }
 
     /// Registers a scan given as points (sensor frame, m) with optional per-point capture
@@ -141,6 +155,7 @@ impl Driver {
             cpu: Duration::ZERO,
             input_points: 0,
             scan_motion: self.engine.scan_motion(),
+            imu: None,
         }
     }
 
@@ -224,6 +239,7 @@ impl Driver {
             cpu: call.cpu,
             input_points: call.input_points,
             scan_motion: self.engine.scan_motion(),
+            imu: None,
         })
     }
 

@@ -11,8 +11,10 @@ use crate::widen::{widen, widen_report};
 use anyhow::Result;
 use cpu_time::ThreadTime;
 use kiss_odom_core::{
-    Capacities, Exact, FrameError, FrameReport, HighWater, Odometry, PointCodec, Quantized, Real,
+    Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, Odometry, PointCodec, Prior,
+    Quantized, Real,
 };
+use kiss_odom_io::imu::ImuSample;
 use nalgebra::Isometry3;
 use std::time::{Duration, Instant};
 
@@ -115,6 +117,12 @@ pub(crate) trait Engine: Send {
     fn map_points(&self) -> Vec<[f64; 3]>;
     /// `points` deskewed and cropped as the last frame was.
     fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]>;
+    /// The gyroscope prior, if on, before a frame whose sweep ends at `end` (s): what it did.
+    fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior>;
+    /// The gyroscope prior after the frame (its bias learns from the registered rotation).
+    fn prior_after(&mut self);
+    /// The gyroscope prior's bias estimate, if it is on.
+    fn imu_bias(&self) -> Option<[f64; 3]>;
 }
 
 /// The build `settings.runtime` asks for.
@@ -129,10 +137,13 @@ pub(crate) fn build(settings: &Settings) -> Result<Box<dyn Engine>> {
     )
 }
 
-/// The odometry owning its words, and a buffer for points converted to its scalar.
+/// The odometry owning its words, a buffer for points converted to its scalar, and the
+/// gyroscope prior with its samples in that scalar.
 struct Core<T: Real, P: PointCodec<T>> {
     odom: Odometry<T, P, Box<[u64]>>,
     points: Vec<[T; 3]>,
+    prior: Option<GyroPrior<T>>,
+    imu: Vec<kiss_odom_core::ImuSample<T>>,
 }
 
 impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
@@ -142,6 +153,8 @@ impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
         Ok(Self {
             odom,
             points: Vec::new(),
+            prior: settings.imu.core::<T>()?.map(GyroPrior::new),
+            imu: Vec::new(),
         })
     }
 }
@@ -214,6 +227,9 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     }
     fn reset(&mut self) {
         self.odom.reset();
+        if let Some(p) = &mut self.prior {
+            *p = GyroPrior::new(*p.config());
+        }
     }
     fn pose(&self) -> Isometry3<f64> {
         widen(self.odom.pose())
@@ -262,5 +278,24 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         let kept = self.odom.deskewed_scan(&pts, stamps, &mut out);
         out.truncate(kept.kept);
         wide(&out)
+    }
+    fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior> {
+        let prior = self.prior.as_mut()?;
+        self.imu.clear();
+        self.imu
+            .extend(samples.iter().map(|s| kiss_odom_core::ImuSample {
+                time: s.seconds(),
+                gyro: s.gyro.map(T::of),
+                accel: s.accel.map(T::of),
+            }));
+        Some(prior.before_frame(&mut self.odom, &self.imu, end))
+    }
+    fn prior_after(&mut self) {
+        if let Some(p) = &mut self.prior {
+            p.after_frame(&self.odom);
+        }
+    }
+    fn imu_bias(&self) -> Option<[f64; 3]> {
+        self.prior.as_ref().map(|p| p.bias().map(|b| b.wide()))
     }
 }

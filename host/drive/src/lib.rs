@@ -19,6 +19,6 @@ pub mod widen;
 pub use capacity::CapacityWarnings;
 pub use driver::{Build, Driver, OnEmpty, Preloaded};
 pub use error::one_line;
-pub use outcome::{FrameMeta, Outcome, Step};
+pub use outcome::{FrameMeta, ImuUse, Outcome, Step};
 pub use pool::Pool;
-pub use settings::{Scalar, Settings, Storage};
+pub use settings::{Imu, Scalar, Settings, Storage};

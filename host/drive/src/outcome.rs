@@ -1,7 +1,7 @@
 //! What the driver answers for each frame: where it came from, what became of it, the pose
 //! after it and what it cost.
 
-use kiss_odom_core::{FrameReport, Status};
+use kiss_odom_core::{FrameReport, Prior, Status};
 use kiss_odom_io::Frame;
 use nalgebra::Isometry3;
 use std::time::Duration;
@@ -60,6 +60,19 @@ pub struct Outcome {
     /// The motion the frame was deskewed with: the constant-velocity model before it was
     /// registered (a pose at another instant of the sweep moves along it).
     pub scan_motion: Isometry3<f64>,
+    /// What the gyroscope prior did, when it is on.
+    pub imu: Option<ImuUse>,
+}
+
+/// What the gyroscope prior did for a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuUse {
+    /// Used, or why not.
+    pub prior: Prior,
+    /// IMU samples that came with the frame.
+    pub samples: usize,
+    /// The bias estimate after the frame, LiDAR axes, rad/s.
+    pub bias: [f64; 3],
 }
 
 impl Outcome {

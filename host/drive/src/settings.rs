@@ -179,6 +179,9 @@ pub struct Settings {
     pub capacities: Caps,
     /// Execution.
     pub runtime: Runtime,
+    /// The opt-in gyroscope prior (left out of the file when off with its defaults).
+    #[serde(skip_serializing_if = "Imu::is_default")]
+    pub imu: Imu,
 }
 
 impl Default for Data {
@@ -441,6 +444,7 @@ impl Settings {
         self.core_config::<f64>()
             .err()
             .or_else(|| self.capacities().err())
+            .or_else(|| self.imu.core::<f64>().err())
     }
 
     /// Checks every value the core will get. The error names the setting at fault and its
@@ -552,7 +556,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 23] {
+fn fields() -> [Field; 27] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -577,8 +581,15 @@ fn fields() -> [Field; 23] {
         field!(capacities.source_points, true),
         field!(capacities.map_voxels, true),
         field!(capacities.map_points, true),
+        field!(imu.enabled, false),
+        field!(imu.time_offset, true),
+        field!(imu.bias_gain, true),
+        field!(imu.max_gap, true),
     ]
 }
+
+mod imu;
+pub use imu::Imu;
 
 #[cfg(test)]
 mod tests;

@@ -1,7 +1,7 @@
 //! What a run records, frame by frame: the rows of `frames.csv` (one typed row per frame, one
 //! 0/1 column per status flag), the poses and times of the pose files.
 
-use kiss_odom_core::{Flag, Status};
+use kiss_odom_core::{Flag, Prior, Status};
 use kiss_odom_drive::{Outcome, Step};
 use kiss_odom_sensors::SweepStats;
 use nalgebra::Isometry3;
@@ -121,6 +121,17 @@ pub struct FrameRow {
     pub pose_latency_ms: Option<f64>,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
+    /// With `--imu auto`: `used` (the gyroscope's rotation predicted and deskewed the frame),
+    /// or why not (`first`, `no_samples`, `gap`, `bad_samples`); empty otherwise.
+    pub imu_prior: Option<&'static str>,
+    /// With `--imu auto`: IMU samples that came with the frame.
+    pub imu_samples: Option<usize>,
+    /// With `--imu auto`: the gyroscope bias estimate after the frame, LiDAR axes (rad/s).
+    pub gyro_bias_x: Option<f64>,
+    /// See `gyro_bias_x`.
+    pub gyro_bias_y: Option<f64>,
+    /// See `gyro_bias_x`.
+    pub gyro_bias_z: Option<f64>,
     /// The core's flags, written as one column each.
     #[serde(skip)]
     pub status: Status,
@@ -171,6 +182,11 @@ impl FrameRow {
             azimuth_jumps: None,
             pose_latency_ms: None,
             deskewed: r.is_some_and(|r| r.deskewed),
+            imu_prior: o.imu.map(|u| prior_name(u.prior)),
+            imu_samples: o.imu.map(|u| u.samples),
+            gyro_bias_x: o.imu.map(|u| u.bias[0]),
+            gyro_bias_y: o.imu.map(|u| u.bias[1]),
+            gyro_bias_z: o.imu.map(|u| u.bias[2]),
             status: o.status().unwrap_or_default(),
         }
     }
@@ -194,6 +210,17 @@ impl FrameRow {
         add(&mut self.packets_out_of_order, s.out_of_order);
         add(&mut self.packets_bad, s.bad_packets);
         add(&mut self.packets_other_sensor, s.other_sensor);
+    }
+}
+
+/// What `frames.csv` calls what the gyroscope prior did.
+fn prior_name(p: Prior) -> &'static str {
+    match p {
+        Prior::Used(_) => "used",
+        Prior::First => "first",
+        Prior::NoSamples => "no_samples",
+        Prior::Gap => "gap",
+        Prior::BadSamples => "bad_samples",
     }
 }
 
@@ -263,6 +290,7 @@ mod tests {
             cpu: std::time::Duration::ZERO,
             input_points: 0,
             scan_motion: Isometry3::identity(),
+            imu: None,
         };
         let mut row = FrameRow::of(&skipped);
         let mut csv = csv::Writer::from_writer(Vec::new());
@@ -282,7 +310,7 @@ mod tests {
             "{first}"
         );
         assert!(
-            first.ends_with(",,,,false,0,0,0,0,0,0,0,0,0,0,0,0"),
+            first.ends_with(",,,,false,,,,,,0,0,0,0,0,0,0,0,0,0,0,0"),
             "{first}"
         );
         let second = lines.next().unwrap();

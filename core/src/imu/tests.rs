@@ -1,0 +1,238 @@
+use super::*;
+use crate::config::{Capacities, Config};
+use crate::geometry::Pose;
+use crate::local_map::Exact;
+use crate::testutil::{yard, Rng};
+use std::println;
+use std::vec;
+use std::vec::Vec;
+
+type Odom = Odometry<f64, Exact, Vec<u64>>;
+
+fn odometry() -> Odom {
+    let caps = Capacities {
+        scan_points: 4000,
+        merge_points: 4000,
+        source_points: 2000,
+        map_voxels: 8192,
+        map_points: 32768,
+        plane_terms: false,
+    };
+    let words = vec![0u64; caps.arena_words::<f64, Exact>()];
+    Odometry::new(Config::new(50.0), caps, words).unwrap()
+}
+
+/// Samples at `hz` over `[t0, t1]` of a body turning at `rate(t)` (LiDAR axes), seen by an
+/// IMU turned by `r_li` and offset by `offset` s, plus `bias` (IMU axes).
+fn samples(
+    t0: f64,
+    t1: f64,
+    hz: f64,
+    rate: impl Fn(f64) -> [f64; 3],
+    r_li: UnitQuaternion<f64>,
+    offset: f64,
+    bias: [f64; 3],
+) -> Vec<ImuSample<f64>> {
+    let n = ((t1 - t0) * hz).round() as usize;
+    (0..n)
+        .map(|k| {
+            let t = t0 + (k as f64 + 0.5) / hz;
+            let w = r_li.inverse() * Vector3::from(rate(t)) + Vector3::from(bias);
+            ImuSample {
+                time: t + offset,
+                gyro: w.into(),
+                accel: [0.0; 3],
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_constant_rate_integrates_to_its_rotation_through_a_turned_mount_and_a_clock_offset() {
+    let r_li = UnitQuaternion::from_euler_angles(0.3, -1.1, 2.0);
+    let prior = GyroPrior::new(ImuConfig {
+        lidar_from_imu: r_li,
+        time_offset: 0.25,
+        ..ImuConfig::new()
+    });
+    let w = [0.4, -1.5, 2.5];
+    let s = samples(1.0, 1.1, 200.0, |_| w, r_li, 0.25, [0.0; 3]);
+    let q = prior.rotation(&s, 1.0, 1.1).unwrap();
+    let want = UnitQuaternion::from_scaled_axis(Vector3::from(w) * 0.1);
+    let err = q.angle_to(&want);
+    println!("constant rate: {err:.1e} rad off (tolerance 1e-12)");
+    assert!(err < 1e-12);
+}
+
+#[test]
+fn gaps_missing_or_disordered_samples_give_no_prior_and_leave_the_model() {
+    let mut odom = odometry();
+    let delta = Pose::new(Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.1));
+    assert!(odom.set_last_delta(delta));
+    let mut prior = GyroPrior::new(ImuConfig::new());
+    let good = samples(
+        0.0,
+        0.1,
+        100.0,
+        |_| [0.0, 0.0, 1.0],
+        UnitQuaternion::identity(),
+        0.0,
+        [0.0; 3],
+    );
+    assert_eq!(prior.before_frame(&mut odom, &good, 0.0), Prior::First);
+    assert_eq!(prior.before_frame(&mut odom, &[], 0.1), Prior::NoSamples);
+    let mut holed = good.clone();
+    holed.drain(2..8);
+    assert_eq!(prior.before_frame(&mut odom, &holed, 0.2), Prior::Gap);
+    // The samples end 60 ms before the sweep does.
+    let early = samples(
+        0.2,
+        0.24,
+        100.0,
+        |_| [0.0; 3],
+        UnitQuaternion::identity(),
+        0.0,
+        [0.0; 3],
+    );
+    assert_eq!(prior.before_frame(&mut odom, &early, 0.3), Prior::Gap);
+    let mut swapped = samples(
+        0.3,
+        0.4,
+        100.0,
+        |_| [0.0; 3],
+        UnitQuaternion::identity(),
+        0.0,
+        [0.0; 3],
+    );
+    swapped.swap(3, 4);
+    assert_eq!(
+        prior.before_frame(&mut odom, &swapped, 0.4),
+        Prior::BadSamples
+    );
+    let mut nan = samples(
+        0.4,
+        0.5,
+        100.0,
+        |_| [0.0; 3],
+        UnitQuaternion::identity(),
+        0.0,
+        [0.0; 3],
+    );
+    nan[5].gyro[1] = f64::NAN;
+    assert_eq!(prior.before_frame(&mut odom, &nan, 0.5), Prior::BadSamples);
+    assert_eq!(*odom.last_delta(), delta, "the model is untouched");
+    // A good frame replaces the rotation only.
+    let s = samples(
+        0.5,
+        0.6,
+        100.0,
+        |_| [0.0, 0.0, 2.0],
+        UnitQuaternion::identity(),
+        0.0,
+        [0.0; 3],
+    );
+    assert_eq!(prior.before_frame(&mut odom, &s, 0.6), Prior::Used(10));
+    assert_eq!(odom.last_delta().translation, delta.translation);
+    assert!((odom.last_delta().rotation.angle() - 0.2).abs() < 1e-12);
+}
+
+#[test]
+fn the_bias_estimate_converges_to_the_gyroscopes_bias() {
+    let mut odom = odometry();
+    let r_li = UnitQuaternion::from_euler_angles(0.0, 0.0, 1.0);
+    let mut prior = GyroPrior::new(ImuConfig {
+        lidar_from_imu: r_li,
+        ..ImuConfig::new()
+    });
+    let bias = [0.01, -0.007, 0.004];
+    let rate = |t: f64| [0.3 * t.sin(), 0.2, -0.5 * (2.0 * t).cos()];
+    prior.before_frame(&mut odom, &[], 0.0);
+    for k in 1..=60 {
+        let (t0, t1) = ((k - 1) as f64 * 0.1, k as f64 * 0.1);
+        let s = samples(t0, t1, 400.0, rate, r_li, 0.0, bias);
+        assert_eq!(prior.before_frame(&mut odom, &s, t1), Prior::Used(40));
+        // ICP found the true rotation.
+        let truth = GyroPrior::new(ImuConfig::new())
+            .rotation(
+                &samples(
+                    t0,
+                    t1,
+                    400.0,
+                    rate,
+                    UnitQuaternion::identity(),
+                    0.0,
+                    [0.0; 3],
+                ),
+                t0,
+                t1,
+            )
+            .unwrap();
+        let mut d = *odom.last_delta();
+        d.rotation = truth;
+        odom.set_last_delta(d);
+        prior.after_frame(&odom);
+    }
+    let want = r_li * Vector3::from(bias);
+    let err = (Vector3::from(prior.bias()) - want).norm();
+    println!(
+        "bias after 60 frames: {:?} (true {want:?}), {err:.1e} rad/s off",
+        prior.bias()
+    );
+    assert!(err < 1e-4 * want.norm().max(1.0) + 2e-5);
+}
+
+/// A sensor in the yard turning fast and unevenly (yaw rate 3 rad/s and more, changing within a
+/// sweep), each point seen at its own time: the end poses' worst error with and without the
+/// prior.
+fn turning_run(with_prior: bool) -> f64 {
+    let mut scene = vec![[0.0; 3]; 4000];
+    let n = yard(&mut scene);
+    let yaw = |t: f64| 3.0 * t + 0.8 * (7.0 * t).sin();
+    let rate = |t: f64| [0.0, 0.0, 3.0 + 5.6 * (7.0 * t).cos()];
+    let at = |t: f64| {
+        Pose::new(
+            Vector3::new(0.5 * t, 0.2 * t, 0.0),
+            Vector3::new(0.0, 0.0, yaw(t)),
+        )
+    };
+    let mut odom = odometry();
+    let mut prior = GyroPrior::new(ImuConfig::new());
+    let mut rng = Rng(7);
+    let mut worst: f64 = 0.0;
+    for k in 0..25 {
+        let (t0, t1) = (k as f64 * 0.1, (k + 1) as f64 * 0.1);
+        let mut points = Vec::with_capacity(n);
+        let mut stamps = Vec::with_capacity(n);
+        for p in &scene[..n] {
+            let t = t0 + 0.1 * rng.next();
+            let local = at(t).inverse() * crate::geometry::Point::from(*p);
+            points.push([local.x, local.y, local.z]);
+            stamps.push(t);
+        }
+        if with_prior {
+            let s = samples(
+                t0,
+                t1,
+                400.0,
+                rate,
+                UnitQuaternion::identity(),
+                0.0,
+                [0.0; 3],
+            );
+            prior.before_frame(&mut odom, &s, t1);
+        }
+        let report = odom.register_frame(&points, Some(&stamps)).unwrap();
+        prior.after_frame(&odom);
+        let truth = at(0.1).inverse() * at(t1);
+        worst = worst.max((report.pose.translation.vector - truth.translation.vector).norm());
+    }
+    worst
+}
+
+#[test]
+fn a_fast_uneven_turn_is_tracked_with_the_prior_and_lost_without() {
+    let (with, without) = (turning_run(true), turning_run(false));
+    println!("25 frames turning at 3 +- 5.6 rad/s: worst position error {with:.3} m with the prior, {without:.3} m without");
+    assert!(with < 0.25, "{with}");
+    assert!(without > 4.0 * with, "{without} vs {with}");
+}
