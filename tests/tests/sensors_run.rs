@@ -361,3 +361,41 @@ fn a_second_sensor_on_the_port_is_a_warning_naming_the_file_and_strict_refuses_i
     let strict = run(&two, &dir.path().join("strict"), &["--strict"]);
     assert_eq!(strict.code, 1, "{}", strict.stderr);
 }
+
+#[test]
+fn the_gyroscope_prior_on_the_os1_128_uses_its_imu_packets_and_stays_at_ouster_sdks_poses() {
+    if !have_data() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sdk =
+        read_kitti(&data().join("ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")).unwrap();
+    let (pcap, meta) = os1_128();
+    let r = run(
+        &pcap,
+        &dir.path().join("imu"),
+        &[
+            "--meta",
+            arg(&meta),
+            "--pose-time",
+            "middle",
+            "--imu",
+            "auto",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    // Ten IMU packets a sweep, on the clock of the sweeps' points: sweeps 1 and 2 use them.
+    assert_eq!(r.column("imu_prior"), ["first", "used", "used"]);
+    assert_eq!(r.column("imu_samples"), ["10", "10", "10"]);
+    let with = poses(&r.out);
+    let without = run_os1(dir.path(), "off", &["--pose-time", "middle"]);
+    let (dt, dr) = worst_of(&with, &sdk);
+    let (ot, or) = worst_of(&without, &sdk);
+    println!(
+        "deskewed at mid-sweep, with the gyroscope prior: worst {dt:.4} m / {dr:.4} deg from \
+         ouster-sdk's poses; without: {ot:.4} m / {or:.4} deg (tolerance \
+         {OUSTER_SDK_DESKEWED_TOL_M} m / {OUSTER_SDK_TOL_DEG} deg)"
+    );
+    assert!(dt <= OUSTER_SDK_DESKEWED_TOL_M && dr <= OUSTER_SDK_TOL_DEG);
+    assert_ne!(with, without, "the prior changed the poses");
+}

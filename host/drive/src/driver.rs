@@ -110,12 +110,16 @@ impl Driver {
     }
 
     /// Registers a frame read from a dataset; with the gyroscope prior on (`[imu]`), its IMU
-    /// samples predict and deskew it, its sweep ending at its latest point's time (else at the
-    /// frame's time).
+    /// samples predict and deskew it, its sweep ending (on the IMU's clock, the sensor's) at
+    /// its last point: a decoded sweep's sensor time, else its latest point's time, else the
+    /// frame's time.
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
         let stamps = frame.stamps.as_deref();
-        let end = stamps
-            .and_then(|s| s.iter().copied().reduce(f64::max))
+        let end = frame
+            .sweep
+            .as_ref()
+            .map(|s| s.end_s)
+            .or_else(|| stamps.and_then(|s| s.iter().copied().reduce(f64::max)))
             .or(frame.time);
         let prior = end.and_then(|end| self.engine.prior_before(&frame.imu, end));
         let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;
