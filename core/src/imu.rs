@@ -143,19 +143,24 @@ impl<T: Real> GyroPrior<T> {
     }
 
     /// After the frame: the rotation ICP registered (`odom`'s new motion model) against the
-    /// gyroscope's, as a rate, corrects the bias by [`ImuConfig::bias_gain`] of it.
-    pub fn after_frame<P: PointCodec<T>, S: Storage>(&mut self, odom: &Odometry<T, P, S>) {
+    /// gyroscope's, as a rate, corrects the bias by [`ImuConfig::bias_gain`] of it. Returns
+    /// that disagreement (rad/s) when the frame used the prior: a few hundredths is the bias
+    /// and ICP's noise; a wrong extrinsic or clock shows as much more on fast turns.
+    pub fn after_frame<P: PointCodec<T>, S: Storage>(
+        &mut self,
+        odom: &Odometry<T, P, S>,
+    ) -> Option<T> {
         // `dt` is positive: `rotation` refused an empty interval.
-        let Some((gyro, dt)) = self.pending.take() else {
-            return;
-        };
+        let (gyro, dt) = self.pending.take()?;
         let (err, _) = so3_log(&(gyro.inverse() * odom.last_delta().rotation));
         // The gyroscope turned by (rate - bias_est) where the sensor turned by (rate - bias):
         // the registered rotation is short by (bias - bias_est) dt.
-        let step = err * (self.config.bias_gain / T::of(dt));
+        let rate = err / T::of(dt);
+        let step = rate * self.config.bias_gain;
         if step.iter().all(|v| v.is_finite()) {
             self.bias -= step;
         }
+        Some(rate.norm())
     }
 
     /// The rotation from `start` to `end` (LiDAR clock, s) of the body, LiDAR axes: each

@@ -66,6 +66,13 @@ class FrameReport:
     deskewed: bool = False
     stamp_problem: Optional[str] = None
     dropped: Mapping[str, int] = field(default_factory=dict)
+    #: With the gyroscope prior on: ``"used"`` or why not (``"first"``, ``"no_samples"``,
+    #: ``"gap"``, ``"bad_samples"``), the samples it had, the bias estimate after the frame
+    #: and how far ICP's rotation rate was from the gyroscope's (rad/s) when it was used.
+    imu_prior: Optional[str] = None
+    imu_samples: int = 0
+    gyro_bias: Optional[Tuple[float, float, float]] = None
+    imu_residual: Optional[float] = None
 
     @property
     def ok(self) -> bool:
@@ -74,7 +81,10 @@ class FrameReport:
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> "FrameReport":
-        return cls(**{**d, "flags": tuple(d.get("flags", ()))})
+        d = {**d, "flags": tuple(d.get("flags", ()))}
+        if d.get("gyro_bias") is not None:
+            d["gyro_bias"] = tuple(d["gyro_bias"])
+        return cls(**d)
 
 
 class LocalMap:
@@ -140,6 +150,27 @@ class KissICP:
             deskewed, source, report = self._odom.register_frame(frame, timestamps)
             self.last_report = FrameReport.from_dict(report)
         return deskewed, source
+
+    def add_imu(self, time: float, gyro, accel) -> None:
+        """One IMU sample for the gyroscope prior (on with ``{"imu": {"enabled": True}}`` in
+        the config; ``imu.extrinsic`` and ``imu.time_offset`` place it): ``time`` in seconds on
+        the clock of the frames' timestamps, ``gyro`` in rad/s, ``accel`` in m/s^2, IMU axes.
+        The next ``register_frame`` (with timestamps in seconds) is predicted and deskewed with
+        the rotation the samples since the last frame measured; ``last_report.imu_prior``
+        says whether it was. Without the prior on, a ``ValueError``."""
+        g = [float(v) for v in gyro]
+        a = [float(v) for v in accel]
+        if len(g) != 3 or len(a) != 3:
+            raise ValueError("gyro and accel take three values each")
+        with self._lock:
+            self._odom.add_imu(float(time), g, a)
+
+    @property
+    def gyro_bias(self) -> Optional[np.ndarray]:
+        """The gyroscope prior's bias estimate (rad/s, LiDAR axes), ``None`` when it is off."""
+        with self._lock:
+            b = self._odom.gyro_bias()
+        return None if b is None else np.array(b)
 
     @property
     def last_pose(self) -> np.ndarray:

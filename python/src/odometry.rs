@@ -7,8 +7,8 @@
 
 use crate::convert::{self, narrow, Numpy};
 use kiss_odom_core::{
-    Exact, Flag, FrameError, FrameReport, Odometry as Core, PointCodec, Quantized, Real,
-    StampProblem,
+    Exact, Flag, FrameError, FrameReport, GyroPrior, ImuSample, Odometry as Core, PointCodec,
+    Prior, Quantized, Real, StampProblem,
 };
 use kiss_odom_drive::pool::Pool;
 use kiss_odom_drive::settings::{Scalar, Settings, Storage};
@@ -58,6 +58,45 @@ pub struct Odometry {
     /// `scan_points` points each ([`trim`]).
     input: Vec<[f64; 3]>,
     deskewed: Vec<[f64; 3]>,
+    /// The gyroscope prior (settings `imu.enabled`) in the engine's scalar, and the samples
+    /// `add_imu` gave since the last frame.
+    prior: Option<Gyro>,
+    imu: Vec<ImuSample<f64>>,
+}
+
+/// The gyroscope prior in the scalar of the engine.
+enum Gyro {
+    F64(GyroPrior<f64>),
+    F32(GyroPrior<f32>),
+}
+
+/// The prior's step before a frame ending at `end` (s), in `odom`'s scalar.
+fn prior_before<T: Real, P: PointCodec<T>>(
+    prior: &mut GyroPrior<T>,
+    odom: &mut Owned<T, P>,
+    samples: &[ImuSample<f64>],
+    end: f64,
+) -> Prior {
+    let s: Vec<ImuSample<T>> = samples
+        .iter()
+        .map(|s| ImuSample {
+            time: s.time,
+            gyro: s.gyro.map(T::of),
+            accel: s.accel.map(T::of),
+        })
+        .collect();
+    prior.before_frame(odom, &s, end)
+}
+
+/// What the report calls what the prior did.
+fn prior_name(p: Prior) -> &'static str {
+    match p {
+        Prior::Used(_) => "used",
+        Prior::First => "first",
+        Prior::NoSamples => "no_samples",
+        Prior::Gap => "gap",
+        Prior::BadSamples => "bad_samples",
+    }
 }
 
 fn build<T: Numpy, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
@@ -79,12 +118,26 @@ impl Odometry {
             (Scalar::F32, Storage::Quantized) => Engine::F32Quantized(build(&settings)?),
         };
         let pool = Pool::new(settings.threads()).map_err(value_error)?;
+        let prior = match settings.runtime.scalar {
+            Scalar::F64 => settings
+                .imu
+                .core()
+                .map_err(value_error)?
+                .map(|c| Gyro::F64(GyroPrior::new(c))),
+            Scalar::F32 => settings
+                .imu
+                .core()
+                .map_err(value_error)?
+                .map(|c| Gyro::F32(GyroPrior::new(c))),
+        };
         Ok(Self {
             engine,
             pool,
             settings,
             input: Vec::new(),
             deskewed: Vec::new(),
+            prior,
+            imu: Vec::new(),
         })
     }
 }
@@ -197,6 +250,34 @@ fn map_points<T: Real, P: PointCodec<T>>(odom: &Owned<T, P>) -> Vec<[f64; 3]> {
     out
 }
 
+impl Odometry {
+    /// The gyroscope prior before a frame with `stamps` (its sweep ends at the latest): what it
+    /// did and the samples it had; `None` when the prior is off or the frame has no times.
+    fn prior_before(&mut self, stamps: Option<&[f64]>) -> Option<(Prior, usize)> {
+        let end = stamps?.iter().copied().reduce(f64::max)?;
+        let samples = core::mem::take(&mut self.imu);
+        let prior = match (self.prior.as_mut()?, &mut self.engine) {
+            (Gyro::F64(p), Engine::F64Exact(o)) => prior_before(p, o, &samples, end),
+            (Gyro::F64(p), Engine::F64Quantized(o)) => prior_before(p, o, &samples, end),
+            (Gyro::F32(p), Engine::F32Exact(o)) => prior_before(p, o, &samples, end),
+            (Gyro::F32(p), Engine::F32Quantized(o)) => prior_before(p, o, &samples, end),
+            _ => return None,
+        };
+        Some((prior, samples.len()))
+    }
+
+    /// The gyroscope prior after the frame: ICP's disagreement with it (rad/s), if used.
+    fn prior_after(&mut self) -> Option<f64> {
+        match (self.prior.as_mut()?, &self.engine) {
+            (Gyro::F64(p), Engine::F64Exact(o)) => p.after_frame(o),
+            (Gyro::F64(p), Engine::F64Quantized(o)) => p.after_frame(o),
+            (Gyro::F32(p), Engine::F32Exact(o)) => p.after_frame(o).map(f64::from),
+            (Gyro::F32(p), Engine::F32Quantized(o)) => p.after_frame(o).map(f64::from),
+            _ => None,
+        }
+    }
+}
+
 #[pymethods]
 impl Odometry {
     /// An odometry with `kiss-odom run`'s settings given as JSON (the layout of its
@@ -228,18 +309,47 @@ impl Odometry {
         }
         .filter(|s| !s.is_empty());
         let index = self.frames();
+        let prior = self.prior_before(stamps.as_deref());
         let (engine, pool, points) = (&mut self.engine, &self.pool, &self.input);
         let deskewed = &mut self.deskewed;
         let out = py
             .detach(|| each!(engine, o => one_frame(o, pool, points, stamps.as_deref(), deskewed)))
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let residual = self.prior_after();
         let report = report_dict(py, out.report.as_ref(), index, self.input.len())?;
+        if let Some((prior, samples)) = prior {
+            report.set_item("imu_prior", prior_name(prior))?;
+            report.set_item("imu_samples", samples)?;
+            report.set_item("gyro_bias", self.gyro_bias())?;
+            report.set_item("imu_residual", residual)?;
+        }
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
         let keep = each!(&self.engine, o => o.capacities().scan_points);
         trim(&mut self.input, keep);
         trim(&mut self.deskewed, keep);
         let source = convert::points_array(py, out.source)?;
         (deskewed, source, report).into_pyobject(py)
+    }
+
+    /// Adds one IMU sample for the gyroscope prior (settings `imu.enabled`): `time` in seconds
+    /// on the clock of the frames' timestamps (plus `imu.time_offset`), `gyro` in rad/s and
+    /// `accel` in m/s^2, IMU axes. The next frame uses those given since the last one.
+    fn add_imu(&mut self, time: f64, gyro: [f64; 3], accel: [f64; 3]) -> PyResult<()> {
+        if self.prior.is_none() {
+            return Err(PyValueError::new_err(
+                "add_imu needs the gyroscope prior: settings imu.enabled = true",
+            ));
+        }
+        self.imu.push(ImuSample { time, gyro, accel });
+        Ok(())
+    }
+
+    /// The gyroscope prior's bias estimate (rad/s, LiDAR axes), or `None` when it is off.
+    fn gyro_bias(&self) -> Option<[f64; 3]> {
+        match self.prior.as_ref()? {
+            Gyro::F64(p) => Some(p.bias()),
+            Gyro::F32(p) => Some(p.bias().map(f64::from)),
+        }
     }
 
     /// The latest pose, 4x4 (kiss-icp's `last_pose`).
@@ -286,7 +396,13 @@ impl Odometry {
 
     /// Back to the state of a new odometry.
     fn reset(&mut self) {
-        each!(&mut self.engine, o => o.reset())
+        each!(&mut self.engine, o => o.reset());
+        self.imu.clear();
+        self.prior = match self.prior.take() {
+            Some(Gyro::F64(p)) => Some(Gyro::F64(GyroPrior::new(*p.config()))),
+            Some(Gyro::F32(p)) => Some(Gyro::F32(GyroPrior::new(*p.config()))),
+            None => None,
+        };
     }
 
     /// Frames registered or skipped so far.
@@ -324,7 +440,11 @@ impl Odometry {
 /// `kiss-odom run`'s default settings as JSON (the layout of its `config.toml`).
 #[pyfunction]
 fn default_settings_json() -> PyResult<String> {
-    serde_json::to_string(&Settings::default()).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    let err = |e: serde_json::Error| PyRuntimeError::new_err(e.to_string());
+    let mut v = serde_json::to_value(Settings::default()).map_err(err)?;
+    // `config.toml` leaves the prior's section out while it is off; a dict may set it.
+    v["imu"] = serde_json::to_value(kiss_odom_drive::Imu::default()).map_err(err)?;
+    serde_json::to_string(&v).map_err(err)
 }
 
 /// A settings file as settings JSON: a `config.toml` (as `kiss-odom run` writes it) or

@@ -123,11 +123,12 @@ impl Driver {
             .or(frame.time);
         let prior = end.and_then(|end| self.engine.prior_before(&frame.imu, end));
         let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;
-        self.engine.prior_after();
+        let residual = self.engine.prior_after();
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
             prior: prior.unwrap_or(Prior::NoSamples),
             samples: frame.imu.len(),
             bias,
+            residual,
         });
         Ok(outcome)
     }

@@ -119,8 +119,9 @@ pub(crate) trait Engine: Send {
     fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]>;
     /// The gyroscope prior, if on, before a frame whose sweep ends at `end` (s): what it did.
     fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior>;
-    /// The gyroscope prior after the frame (its bias learns from the registered rotation).
-    fn prior_after(&mut self);
+    /// The gyroscope prior after the frame (its bias learns from the registered rotation):
+    /// how far ICP's rotation rate was from the gyroscope's, rad/s, if the frame used it.
+    fn prior_after(&mut self) -> Option<f64>;
     /// The gyroscope prior's bias estimate, if it is on.
     fn imu_bias(&self) -> Option<[f64; 3]>;
 }
@@ -290,10 +291,11 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
             }));
         Some(prior.before_frame(&mut self.odom, &self.imu, end))
     }
-    fn prior_after(&mut self) {
-        if let Some(p) = &mut self.prior {
-            p.after_frame(&self.odom);
-        }
+    fn prior_after(&mut self) -> Option<f64> {
+        self.prior
+            .as_mut()?
+            .after_frame(&self.odom)
+            .map(|r| r.wide())
     }
     fn imu_bias(&self) -> Option<[f64; 3]> {
         self.prior.as_ref().map(|p| p.bias().map(|b| b.wide()))

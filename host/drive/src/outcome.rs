@@ -73,6 +73,8 @@ pub struct ImuUse {
     pub samples: usize,
     /// The bias estimate after the frame, LiDAR axes, rad/s.
     pub bias: [f64; 3],
+    /// How far ICP's rotation rate was from the gyroscope's, rad/s, if the frame used it.
+    pub residual: Option<f64>,
 }
 
 impl Outcome {

@@ -132,6 +132,9 @@ pub struct FrameRow {
     pub gyro_bias_y: Option<f64>,
     /// See `gyro_bias_x`.
     pub gyro_bias_z: Option<f64>,
+    /// With `--imu auto`, on frames that used the prior: how far ICP's rotation rate was from
+    /// the gyroscope's (rad/s).
+    pub imu_residual: Option<f64>,
     /// The core's flags, written as one column each.
     #[serde(skip)]
     pub status: Status,
@@ -187,6 +190,7 @@ impl FrameRow {
             gyro_bias_x: o.imu.map(|u| u.bias[0]),
             gyro_bias_y: o.imu.map(|u| u.bias[1]),
             gyro_bias_z: o.imu.map(|u| u.bias[2]),
+            imu_residual: o.imu.and_then(|u| u.residual),
             status: o.status().unwrap_or_default(),
         }
     }
@@ -310,7 +314,7 @@ mod tests {
             "{first}"
         );
         assert!(
-            first.ends_with(",,,,false,,,,,,0,0,0,0,0,0,0,0,0,0,0,0"),
+            first.ends_with(",,,,false,,,,,,,0,0,0,0,0,0,0,0,0,0,0,0"),
             "{first}"
         );
         let second = lines.next().unwrap();
