@@ -96,6 +96,31 @@ fn without_samples_the_prior_changes_nothing_and_an_imu_that_stops_is_survived()
     assert!(states[1..14].iter().all(|s| s == "used"));
     assert!(states[16..].iter().all(|s| s == "no_samples"));
     assert_eq!(stops.number("registered_frames"), 30.0);
+    // An extrinsic off by 5 degrees is used, and shows in ICP's disagreement with the
+    // gyroscope; a malformed one is refused.
+    std::fs::write(sim.join("imu.csv"), &csv).unwrap();
+    let mean = |r: &kiss_odom_tests::Run| {
+        let v: Vec<f64> = r.column("imu_residual")[1..]
+            .iter()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let right = run(&sim, &tmp.path().join("right"), &["--imu", "auto"]);
+    let tilted = run(
+        &sim,
+        &tmp.path().join("tilted"),
+        &["--imu", "auto", "--imu-extrinsic", "0,0,0,5,0,0"],
+    );
+    let (r, t) = (mean(right.ok()), mean(tilted.ok()));
+    println!("mean disagreement: {r:.4} rad/s with the right extrinsic, {t:.4} with it 5 deg off");
+    assert!(t > 1.4 * r, "{t} vs {r}");
+    let bad = run(
+        &sim,
+        &tmp.path().join("bad"),
+        &["--imu", "auto", "--imu-extrinsic", "0,0,5"],
+    );
+    bad.failed_with(&["--imu-extrinsic", "6 numbers"]);
     // A clock offset the prior cannot bridge (0.2 s) is flagged frame by frame, not used.
     std::fs::write(sim.join("imu.csv"), &csv).unwrap();
     let shifted = run(

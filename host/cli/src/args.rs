@@ -170,7 +170,7 @@ pub struct PipelineArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        num_args = 6,
+        value_name = "X,Y,Z,ROLL,PITCH,YAW",
         allow_negative_numbers = true
     )]
     pub imu_extrinsic: Option<Vec<f64>>,
@@ -316,7 +316,12 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
         s.imu.enabled = m == ImuMode::Auto;
     }
     if let Some(e) = &p.imu_extrinsic {
-        s.imu.extrinsic.copy_from_slice(e);
+        s.imu.extrinsic = e.as_slice().try_into().map_err(|_| {
+            anyhow::anyhow!(
+                "--imu-extrinsic takes 6 numbers, X,Y,Z,ROLL,PITCH,YAW, not {}",
+                e.len()
+            )
+        })?;
     }
     if let Some(t) = p.imu_time_offset {
         s.imu.time_offset = t;
