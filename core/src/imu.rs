@@ -164,8 +164,7 @@ impl<T: Real> GyroPrior<T> {
     }
 
     /// The rotation from `start` to `end` (LiDAR clock, s) of the body, LiDAR axes: each
-    /// sample's rate, less the bias, held until the next sample (the first also back to
-    /// `start`).
+    /// sample's rate, less the bias, over the part of the interval nearest to it.
     fn rotation(
         &self,
         samples: &[ImuSample<T>],
@@ -194,9 +193,11 @@ impl<T: Real> GyroPrior<T> {
         let mut q = UnitQuaternion::identity();
         let mut from = start;
         for (i, s) in samples.iter().enumerate() {
-            let until = samples
-                .get(i + 1)
-                .map_or(end, |n| lidar_time(n).clamp(start, end));
+            // Each sample's rate holds from half way after the one before to half way before
+            // the next: the nearest sample, no half-period lag.
+            let until = samples.get(i + 1).map_or(end, |n| {
+                (0.5 * (lidar_time(s) + lidar_time(n))).clamp(start, end)
+            });
             if until > from {
                 let rate = r_li * Vector3::from(s.gyro) - self.bias;
                 q *= so3_exp(&(rate * T::of(until - from))).0;
