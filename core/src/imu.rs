@@ -81,6 +81,19 @@ pub enum Prior {
     BadSamples,
 }
 
+impl Prior {
+    /// Its name in reports: `used`, `first`, `no_samples`, `gap`, `bad_samples`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Used(_) => "used",
+            Self::First => "first",
+            Self::NoSamples => "no_samples",
+            Self::Gap => "gap",
+            Self::BadSamples => "bad_samples",
+        }
+    }
+}
+
 /// The gyroscope prior's state: the bias estimate and the last sweep's end.
 #[derive(Clone, Copy, Debug)]
 pub struct GyroPrior<T: Real> {

@@ -88,17 +88,6 @@ fn prior_before<T: Real, P: PointCodec<T>>(
     prior.before_frame(odom, &s, end)
 }
 
-/// What the report calls what the prior did.
-fn prior_name(p: Prior) -> &'static str {
-    match p {
-        Prior::Used(_) => "used",
-        Prior::First => "first",
-        Prior::NoSamples => "no_samples",
-        Prior::Gap => "gap",
-        Prior::BadSamples => "bad_samples",
-    }
-}
-
 fn build<T: Numpy, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
     let config = s.core_config::<T>().map_err(value_error)?;
     let caps = s.capacities().map_err(value_error)?;
@@ -318,7 +307,7 @@ impl Odometry {
         let residual = self.prior_after();
         let report = report_dict(py, out.report.as_ref(), index, self.input.len())?;
         if let Some((prior, samples)) = prior {
-            report.set_item("imu_prior", prior_name(prior))?;
+            report.set_item("imu_prior", prior.name())?;
             report.set_item("imu_samples", samples)?;
             report.set_item("gyro_bias", self.gyro_bias())?;
             report.set_item("imu_residual", residual)?;

@@ -1,7 +1,7 @@
 //! What a run records, frame by frame: the rows of `frames.csv` (one typed row per frame, one
 //! 0/1 column per status flag), the poses and times of the pose files.
 
-use kiss_odom_core::{Flag, Prior, Status};
+use kiss_odom_core::{Flag, Status};
 use kiss_odom_drive::{Outcome, Step};
 use kiss_odom_sensors::SweepStats;
 use nalgebra::Isometry3;
@@ -185,7 +185,7 @@ impl FrameRow {
             azimuth_jumps: None,
             pose_latency_ms: None,
             deskewed: r.is_some_and(|r| r.deskewed),
-            imu_prior: o.imu.map(|u| prior_name(u.prior)),
+            imu_prior: o.imu.map(|u| u.prior.name()),
             imu_samples: o.imu.map(|u| u.samples),
             gyro_bias_x: o.imu.map(|u| u.bias[0]),
             gyro_bias_y: o.imu.map(|u| u.bias[1]),
@@ -214,17 +214,6 @@ impl FrameRow {
         add(&mut self.packets_out_of_order, s.out_of_order);
         add(&mut self.packets_bad, s.bad_packets);
         add(&mut self.packets_other_sensor, s.other_sensor);
-    }
-}
-
-/// What `frames.csv` calls what the gyroscope prior did.
-fn prior_name(p: Prior) -> &'static str {
-    match p {
-        Prior::Used(_) => "used",
-        Prior::First => "first",
-        Prior::NoSamples => "no_samples",
-        Prior::Gap => "gap",
-        Prior::BadSamples => "bad_samples",
     }
 }
 
