@@ -37,6 +37,7 @@
 //! | adaptive threshold | Sec. III-D, Eq. (5)-(8) | `threshold` |
 //! | robust point-to-point ICP | Sec. III-E, Eq. (9)-(13) | `registration` |
 //! | one scan, in that order | Sec. III | `odometry::frame` |
+//! | (opt-in) the prediction's rotation from a gyroscope | beyond Sec. III-A | `imu` ([`GyroPrior`]) |
 //!
 //! The stage functions are reachable through [`stages`], the unstable surface used by the
 //! cross-check against the reference, the benchmarks and bindings. Where the paper is silent,
