@@ -239,6 +239,7 @@ fn turning_run(with_prior: bool) -> f64 {
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
 fn a_fast_uneven_turn_is_tracked_with_the_prior_and_lost_without() {
     let (with, without) = (turning_run(true), turning_run(false));
     println!("25 frames turning at 3 +- 5.6 rad/s: worst position error {with:.3} m with the prior, {without:.3} m without");
