@@ -117,9 +117,9 @@ impl<T: Real> GyroPrior<T> {
         }
     }
 
-    /// Its configuration.
-    pub fn config(&self) -> &ImuConfig<T> {
-        &self.config
+    /// Back to the state [`Self::new`] left, for an odometry that was reset.
+    pub fn reset(&mut self) {
+        *self = Self::new(self.config);
     }
 
     /// The bias estimate, LiDAR axes, rad/s.

@@ -387,11 +387,11 @@ impl Odometry {
     fn reset(&mut self) {
         each!(&mut self.engine, o => o.reset());
         self.imu.clear();
-        self.prior = match self.prior.take() {
-            Some(Gyro::F64(p)) => Some(Gyro::F64(GyroPrior::new(*p.config()))),
-            Some(Gyro::F32(p)) => Some(Gyro::F32(GyroPrior::new(*p.config()))),
-            None => None,
-        };
+        match &mut self.prior {
+            Some(Gyro::F64(p)) => p.reset(),
+            Some(Gyro::F32(p)) => p.reset(),
+            None => {}
+        }
     }
 
     /// Frames registered or skipped so far.

@@ -47,6 +47,11 @@ fn samples(
         .collect()
 }
 
+/// [`samples`] of an IMU with the LiDAR's axes and clock and no bias.
+fn aligned(t0: f64, t1: f64, hz: f64, rate: impl Fn(f64) -> [f64; 3]) -> Vec<ImuSample<f64>> {
+    samples(t0, t1, hz, rate, UnitQuaternion::identity(), 0.0, [0.0; 3])
+}
+
 #[test]
 fn a_constant_rate_integrates_to_its_rotation_through_a_turned_mount_and_a_clock_offset() {
     let r_li = UnitQuaternion::from_euler_angles(0.3, -1.1, 2.0);
@@ -70,67 +75,27 @@ fn gaps_missing_or_disordered_samples_give_no_prior_and_leave_the_model() {
     let delta = Pose::new(Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.1));
     assert!(odom.set_last_delta(delta));
     let mut prior = GyroPrior::new(ImuConfig::new());
-    let good = samples(
-        0.0,
-        0.1,
-        100.0,
-        |_| [0.0, 0.0, 1.0],
-        UnitQuaternion::identity(),
-        0.0,
-        [0.0; 3],
-    );
+    let good = aligned(0.0, 0.1, 100.0, |_| [0.0, 0.0, 1.0]);
     assert_eq!(prior.before_frame(&mut odom, &good, 0.0), Prior::First);
     assert_eq!(prior.before_frame(&mut odom, &[], 0.1), Prior::NoSamples);
     let mut holed = good.clone();
     holed.drain(2..8);
     assert_eq!(prior.before_frame(&mut odom, &holed, 0.2), Prior::Gap);
     // The samples end 60 ms before the sweep does.
-    let early = samples(
-        0.2,
-        0.24,
-        100.0,
-        |_| [0.0; 3],
-        UnitQuaternion::identity(),
-        0.0,
-        [0.0; 3],
-    );
+    let early = aligned(0.2, 0.24, 100.0, |_| [0.0; 3]);
     assert_eq!(prior.before_frame(&mut odom, &early, 0.3), Prior::Gap);
-    let mut swapped = samples(
-        0.3,
-        0.4,
-        100.0,
-        |_| [0.0; 3],
-        UnitQuaternion::identity(),
-        0.0,
-        [0.0; 3],
-    );
+    let mut swapped = aligned(0.3, 0.4, 100.0, |_| [0.0; 3]);
     swapped.swap(3, 4);
     assert_eq!(
         prior.before_frame(&mut odom, &swapped, 0.4),
         Prior::BadSamples
     );
-    let mut nan = samples(
-        0.4,
-        0.5,
-        100.0,
-        |_| [0.0; 3],
-        UnitQuaternion::identity(),
-        0.0,
-        [0.0; 3],
-    );
+    let mut nan = aligned(0.4, 0.5, 100.0, |_| [0.0; 3]);
     nan[5].gyro[1] = f64::NAN;
     assert_eq!(prior.before_frame(&mut odom, &nan, 0.5), Prior::BadSamples);
     assert_eq!(*odom.last_delta(), delta, "the model is untouched");
     // A good frame replaces the rotation only.
-    let s = samples(
-        0.5,
-        0.6,
-        100.0,
-        |_| [0.0, 0.0, 2.0],
-        UnitQuaternion::identity(),
-        0.0,
-        [0.0; 3],
-    );
+    let s = aligned(0.5, 0.6, 100.0, |_| [0.0, 0.0, 2.0]);
     assert_eq!(prior.before_frame(&mut odom, &s, 0.6), Prior::Used(10));
     assert_eq!(odom.last_delta().translation, delta.translation);
     assert!((odom.last_delta().rotation.angle() - 0.2).abs() < 1e-12);
@@ -154,19 +119,7 @@ fn the_bias_estimate_converges_to_the_gyroscopes_bias() {
         assert_eq!(prior.before_frame(&mut odom, &s, t1), Prior::Used(40));
         // ICP found the true rotation.
         let truth = GyroPrior::new(ImuConfig::new())
-            .rotation(
-                &samples(
-                    t0,
-                    t1,
-                    400.0,
-                    rate,
-                    UnitQuaternion::identity(),
-                    0.0,
-                    [0.0; 3],
-                ),
-                t0,
-                t1,
-            )
+            .rotation(&aligned(t0, t1, 400.0, rate), t0, t1)
             .unwrap();
         let mut d = *odom.last_delta();
         d.rotation = truth;
@@ -188,6 +141,13 @@ fn the_bias_estimate_converges_to_the_gyroscopes_bias() {
         prior.bias()
     );
     assert!(err < 1e-4 * want.norm().max(1.0) + 2e-5);
+    // Reset: no bias, no sweep before the next.
+    prior.reset();
+    assert_eq!(prior.bias(), [0.0; 3]);
+    assert_eq!(
+        prior.before_frame(&mut odom, &aligned(6.0, 6.1, 400.0, rate), 6.1),
+        Prior::First
+    );
 }
 
 /// A sensor in the yard turning fast and unevenly (yaw rate 3 rad/s and more, changing within a
@@ -219,15 +179,7 @@ fn turning_run(with_prior: bool) -> f64 {
             stamps.push(t);
         }
         if with_prior {
-            let s = samples(
-                t0,
-                t1,
-                400.0,
-                rate,
-                UnitQuaternion::identity(),
-                0.0,
-                [0.0; 3],
-            );
+            let s = aligned(t0, t1, 400.0, rate);
             prior.before_frame(&mut odom, &s, t1);
         }
         let report = odom.register_frame(&points, Some(&stamps)).unwrap();

@@ -229,7 +229,7 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     fn reset(&mut self) {
         self.odom.reset();
         if let Some(p) = &mut self.prior {
-            *p = GyroPrior::new(*p.config());
+            p.reset();
         }
     }
     fn pose(&self) -> Isometry3<f64> {
