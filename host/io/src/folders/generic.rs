@@ -14,9 +14,9 @@
 //! place in time order for time-named frames); a side file with fewer or more rows than that
 //! needs is reported. Frames are read one at a time when asked for ([`FileSource`], shared with
 //! the KITTI layout); a missing or bad frame becomes an [`Item::Skipped`], a bad timestamps
-//! file a [`Frame::warnings`] entry. Each frame takes the IMU samples up to its time (its
-//! `times.txt` row, else its latest point) that no earlier frame took; the last frame takes the
-//! rest.
+//! file a [`Frame::warnings`] entry. Each frame takes the IMU samples up to its end (its
+//! latest point's time, the clock the IMU shares; else its `times.txt` row) that no earlier
+//! frame took; the last frame takes the rest.
 
 use super::file_cloud::{truncation_warning, Cloud};
 use super::listing::{self, Listing, Naming, Slot};
@@ -251,7 +251,8 @@ impl FrameSource for FileSource {
                 .stamps
                 .as_ref()
                 .map(|s| s.iter().copied().fold(f64::MIN, f64::max));
-            frame.imu = self.imu_until(if last { None } else { time.or(latest) });
+            // The end the frame driver integrates the gyroscope prior to.
+            frame.imu = self.imu_until(if last { None } else { latest.or(time) });
         }
         Ok(Some(Item::Frame(frame)))
     }
