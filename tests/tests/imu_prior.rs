@@ -79,6 +79,10 @@ fn without_samples_the_prior_changes_nothing_and_an_imu_that_stops_is_survived()
     let states = none.column("imu_prior");
     assert_eq!(states[0], "first");
     assert!(states[1..].iter().all(|s| s == "no_samples"), "{states:?}");
+    // Once, counted: a pose the user did not ask for.
+    none.warning_with(&["frame 1 ", "no IMU sample", "without the gyroscope prior"]);
+    assert_eq!(none.number("warnings"), 1.0);
+    assert_eq!(off.number("warnings"), 0.0);
     // The IMU stops after 1.5 s: the frames after it fall back and say so; the run goes on.
     let kept: Vec<&str> = csv
         .lines()
@@ -96,6 +100,7 @@ fn without_samples_the_prior_changes_nothing_and_an_imu_that_stops_is_survived()
     assert!(states[1..14].iter().all(|s| s == "used"));
     assert!(states[16..].iter().all(|s| s == "no_samples"));
     assert_eq!(stops.number("registered_frames"), 30.0);
+    stops.warning_with(&["no IMU sample", "without the gyroscope prior"]);
     // An extrinsic off by 5 degrees is used, and shows in ICP's disagreement with the
     // gyroscope; a malformed one is refused.
     std::fs::write(sim.join("imu.csv"), &csv).unwrap();
@@ -130,6 +135,13 @@ fn without_samples_the_prior_changes_nothing_and_an_imu_that_stops_is_survived()
     );
     let states = shifted.ok().column("imu_prior");
     assert!(states[1..].iter().all(|s| s == "gap"), "{states:?}");
+    shifted.warning_with(&["frame 1 ", "imu.max_gap", "--imu-time-offset"]);
+    let strict = run(
+        &sim,
+        &tmp.path().join("strict"),
+        &["--imu", "auto", "--imu-time-offset", "0.2", "--strict"],
+    );
+    strict.failed_with(&["imu.max_gap", "--strict"]);
     assert_eq!(
         shifted.lines("poses_kitti.txt"),
         off.lines("poses_kitti.txt")

@@ -24,7 +24,7 @@ pub use record::{FrameRow, PacketTotals, Record, RowKind};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::Flag;
-use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, Step};
+use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, PriorWarnings, Step};
 use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
 use nalgebra::Isometry3;
 use observe::{Observer, Seen};
@@ -270,6 +270,7 @@ fn frame_loop(
     let mut frames = Selection::new(dataset.frames.as_mut(), args.common.input.range());
     let bar = progress_bar(frames.len_hint(), args.run.quiet);
     let mut core_s = 0.0;
+    let mut prior = PriorWarnings::default();
     let end = loop {
         if let Some(sig) = crate::interrupt::requested() {
             break End::Interrupted(sig);
@@ -318,6 +319,13 @@ fn frame_loop(
         }
         if let (true, Some(first)) = (args.run.strict, full.first()) {
             break End::Failed(anyhow!("{first} (--strict)"));
+        }
+        // So does a frame the gyroscope prior, asked for, could not predict.
+        if let Some(w) = prior.check(&outcome) {
+            warn(record, &bar, &w);
+            if args.run.strict {
+                break End::Failed(anyhow!("{w} (--strict)"));
+            }
         }
         if outcome.step == Step::Empty {
             warn(

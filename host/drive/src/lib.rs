@@ -13,6 +13,7 @@ mod engine;
 pub mod error;
 pub mod outcome;
 pub mod pool;
+pub mod prior;
 pub mod settings;
 pub mod widen;
 
@@ -21,4 +22,5 @@ pub use driver::{Build, Driver, OnEmpty, Preloaded};
 pub use error::one_line;
 pub use outcome::{FrameMeta, ImuUse, Outcome, Step};
 pub use pool::Pool;
+pub use prior::PriorWarnings;
 pub use settings::{Imu, Scalar, Settings, Storage};
