@@ -13,6 +13,8 @@ cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
 DATA=${DATA:-target/imu-prior}; mkdir -p "$DATA"
 rows="$DATA/rows.tsv"; : > "$rows"
+printf '[imu]\nbias_gain = 0.02\n' > "$DATA/g002.toml"
+printf '[imu]\nbias_gain = 0.0\n' > "$DATA/g0.toml"
 for spec in "drone 500" "handheld 1000"; do
   set -- $spec
   for seed in ${SEEDS:-1 2 3}; do
@@ -22,8 +24,6 @@ for spec in "drone 500" "handheld 1000"; do
     for variant in "off:" "prior:--imu auto" "gain 0.02:--imu auto --config $DATA/g002.toml" \
                    "gain 0:--imu auto --config $DATA/g0.toml" "prior, no deskew:--imu auto --no-deskew"; do
       name=${variant%%:*}; args=${variant#*:}
-      printf '[imu]\nbias_gain = 0.02\n' > "$DATA/g002.toml"
-      printf '[imu]\nbias_gain = 0.0\n' > "$DATA/g0.toml"
       out="$d.${name// /_}"; out=${out//,/}
       # shellcheck disable=SC2086
       $B run "$d" --deskew $args --out "$out" -q 2>/dev/null >/dev/null
