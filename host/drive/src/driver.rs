@@ -115,13 +115,20 @@ impl Driver {
     /// frame's time.
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
         let stamps = frame.stamps.as_deref();
-        let end = frame
-            .sweep
-            .as_ref()
-            .map(|s| s.end_s)
-            .or_else(|| stamps.and_then(|s| s.iter().copied().reduce(f64::max)))
-            .or(frame.time);
-        let prior = end.and_then(|end| self.engine.prior_before(&frame.imu, end));
+        // Only with the prior on: the sweep's end costs a pass over the stamps of a folder's
+        // frame.
+        let end = || {
+            frame
+                .sweep
+                .as_ref()
+                .map(|s| s.end_s)
+                .or_else(|| stamps.and_then(|s| s.iter().copied().reduce(f64::max)))
+                .or(frame.time)
+        };
+        let prior = match self.engine.imu_bias() {
+            Some(_) => end().and_then(|end| self.engine.prior_before(&frame.imu, end)),
+            None => None,
+        };
         let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;
         let residual = self.engine.prior_after();
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
