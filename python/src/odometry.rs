@@ -243,6 +243,7 @@ impl Odometry {
     /// The gyroscope prior before a frame with `stamps` (its sweep ends at the latest): what it
     /// did and the samples it had; `None` when the prior is off or the frame has no times.
     fn prior_before(&mut self, stamps: Option<&[f64]>) -> Option<(Prior, usize)> {
+        self.prior.as_ref()?;
         let end = stamps?.iter().copied().reduce(f64::max)?;
         let samples = core::mem::take(&mut self.imu);
         let prior = match (self.prior.as_mut()?, &mut self.engine) {
