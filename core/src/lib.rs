@@ -79,7 +79,7 @@ mod testutil;
 pub use config::{Capacities, Config, Degeneracy, Robust, MAX_RANGE_LIMIT};
 pub use deskew::StampProblem;
 pub use error::{ConfigError, FrameError};
-pub use geometry::{Point, Pose};
+pub use geometry::{widen_pose, Point, Pose};
 pub use hold::{Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
 pub use imu::{GyroPrior, ImuConfig, ImuSample, Prior};
 pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized};

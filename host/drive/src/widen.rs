@@ -1,22 +1,12 @@
 //! The core's poses and frame reports in any scalar as `f64`, the one scalar the host speaks.
 
 use kiss_odom_core::{FrameReport, Real};
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use nalgebra::Isometry3;
 
 /// A pose in any scalar as `f64`. The quaternion is renormalised after widening, as every
 /// pose file this tool ever wrote was (the baseline poses are byte-compared).
 pub fn widen<T: Real>(p: &Isometry3<T>) -> Isometry3<f64> {
-    let q = p.rotation.coords;
-    let t = p.translation.vector;
-    Isometry3::from_parts(
-        Translation3::new(t.x.wide(), t.y.wide(), t.z.wide()),
-        UnitQuaternion::new_normalize(Quaternion::new(
-            q.w.wide(),
-            q.x.wide(),
-            q.y.wide(),
-            q.z.wide(),
-        )),
-    )
+    kiss_odom_core::widen_pose(p)
 }
 
 /// A frame report in any scalar as `f64` (its pose by [`widen`]).
