@@ -21,6 +21,7 @@ pub mod error;
 pub mod hesai;
 pub mod livox;
 pub mod ouster;
+pub mod pose_datagram;
 pub mod sweep;
 mod time;
 pub mod velodyne;
