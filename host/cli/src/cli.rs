@@ -23,6 +23,9 @@ pub enum Command {
     Live(crate::live::LiveArgs),
     /// Send a pcap recording as UDP at its recorded pace (to test `live` without a sensor).
     Replay(crate::replay::ReplayArgs),
+    /// Collect the poses a receiver that runs the odometry (the `embedded/` network firmware)
+    /// sends, one UDP datagram per sweep, into `run`'s outputs.
+    ListenPoses(crate::listen::ListenArgs),
     /// Write a recording (pcap, bag, MCAP, folder) as the generic layout: velodyne/*.bin
     /// (f32 x y z intensity) and timestamps/*.bin (f64 per-point times).
     Convert(crate::convert::ConvertArgs),
@@ -62,6 +65,7 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
         Command::Run(a) => crate::run::execute(&a, err),
         Command::Live(a) => crate::live::execute(&a, err),
         Command::Replay(a) => crate::replay::execute(&a),
+        Command::ListenPoses(a) => crate::listen::execute(&a, err),
         Command::Convert(a) => crate::convert::execute(&a, err),
         Command::Eval(a) => crate::eval::execute(&a),
         Command::Simulate(a) => crate::simulate::execute(&a),

@@ -5,7 +5,8 @@
 //!
 //! [`run`] feeds a recording's frames to the driver and writes what each command writes;
 //! [`live`] is `run` on a socket, watching each pose as it comes; [`mod@bench`] and
-//! [`crosscheck`] time and compare the same frames against the reference kiss-icp.
+//! [`crosscheck`] time and compare the same frames against the reference kiss-icp;
+//! [`listen`] collects the poses a receiver that runs the odometry itself sends.
 
 pub mod args;
 pub mod bench;
@@ -14,6 +15,7 @@ pub mod convert;
 pub mod crosscheck;
 pub mod eval;
 pub mod interrupt;
+pub mod listen;
 pub mod live;
 pub mod memory;
 pub mod plot;

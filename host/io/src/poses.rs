@@ -132,10 +132,16 @@ fn numbered_kitti_rows(text: &str, name: &str) -> Result<Vec<(usize, Rows)>> {
 
 /// KITTI text of `poses`, one line each.
 pub fn format_kitti(poses: &[Isometry3<f64>]) -> String {
+    let rows: Vec<Rows> = poses.iter().map(rows_from_isometry).collect();
+    format_kitti_rows(&rows)
+}
+
+/// KITTI text of `rows` as given, one line each: every number in the shortest scientific form
+/// that parses back to the same `f64` (`{:e}`).
+pub fn format_kitti_rows(rows: &[Rows]) -> String {
     let mut out = String::new();
-    for pose in poses {
-        let rows = rows_from_isometry(pose);
-        let line: Vec<String> = rows.iter().map(|v| format!("{v:e}")).collect();
+    for r in rows {
+        let line: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
         let _ = writeln!(out, "{}", line.join(" "));
     }
     out

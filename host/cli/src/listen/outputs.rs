@@ -1,0 +1,204 @@
+//! What `listen-poses` writes: `poses_kitti.txt` through `run`'s writer, `frames.csv` (a row
+//! per sweep with the receiver's figures and running counters) and `summary.json`.
+
+use super::received::{Received, Undecodable};
+use anyhow::Result;
+use kiss_odom_core::Flag;
+use kiss_odom_sensors::pose_datagram::{Counters, Link};
+use serde::ser::{Serialize, SerializeStruct, Serializer};
+use std::net::SocketAddr;
+use std::path::Path;
+
+/// Every file `listen-poses` writes.
+pub const OUTPUTS: [&str; 3] = ["poses_kitti.txt", "frames.csv", "summary.json"];
+
+/// The receiver's [`Counters`] as named columns and JSON fields.
+pub struct Totals(pub Counters);
+
+impl Totals {
+    /// Each counter with its name, in the datagram's order.
+    pub fn fields(&self) -> [(&'static str, u32); 8] {
+        let c = &self.0;
+        [
+            ("packets", c.packets),
+            ("lost", c.lost),
+            ("bad", c.bad),
+            ("foreign", c.foreign),
+            ("wrong_size", c.wrong_size),
+            ("overflow", c.overflow),
+            ("unsent", c.unsent),
+            ("frame_errors", c.frame_errors),
+        ]
+    }
+}
+
+impl Serialize for Totals {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut st = s.serialize_struct("Counters", 8)?;
+        for (name, v) in self.fields() {
+            st.serialize_field(name, &v)?;
+        }
+        st.end()
+    }
+}
+
+/// One line of `frames.csv` before the counter columns.
+#[derive(serde::Serialize)]
+struct Row {
+    sweep: u32,
+    start_ns: u64,
+    points: u32,
+    status: String,
+    iterations: u16,
+    sweep_lost: u32,
+    link: String,
+}
+
+/// `ok`, or the names of the set bits joined by `|`; a bit without a name is `bitN`.
+fn names(bits: u16, known: impl IntoIterator<Item = (u16, &'static str)>) -> String {
+    let mut rest = bits;
+    let mut parts: Vec<String> = Vec::new();
+    for (bit, name) in known {
+        if bits & bit != 0 {
+            parts.push(name.into());
+            rest &= !bit;
+        }
+    }
+    parts.extend(
+        (0..16)
+            .filter(|k| rest & (1 << k) != 0)
+            .map(|k| format!("bit{k}")),
+    );
+    if parts.is_empty() {
+        "ok".into()
+    } else {
+        parts.join("|")
+    }
+}
+
+/// `summary.json`.
+#[derive(serde::Serialize)]
+pub struct Summary {
+    /// The address listened on.
+    pub bind: String,
+    /// Sweeps received (duplicates not counted).
+    pub sweeps: usize,
+    /// The first sweep received.
+    pub first_sweep: Option<u32>,
+    /// The last sweep received.
+    pub last_sweep: Option<u32>,
+    /// Sweeps between the first and the last whose datagram did not come.
+    pub missing: u64,
+    /// Their indices (see `received::MISSING_LISTED`).
+    pub missing_sweeps: Vec<u32>,
+    /// Datagrams of a sweep that had already come.
+    pub duplicates: u64,
+    /// Datagrams that came after a later sweep's.
+    pub out_of_order: u64,
+    /// Datagrams of any kind.
+    pub datagrams: u64,
+    /// Datagrams that were not pose datagrams, by reason.
+    pub undecodable: Undecodable,
+    /// The receiver's counters as of the last sweep (they are running totals).
+    pub counters: Option<Totals>,
+    /// Who sent datagrams, and how many.
+    pub senders: Vec<serde_json::Value>,
+    /// Whether SIGINT or SIGTERM stopped the listening.
+    pub interrupted: bool,
+}
+
+impl Summary {
+    /// The summary of `r`, received on `bound`.
+    pub fn of(bound: SocketAddr, r: &Received, interrupted: bool) -> Self {
+        let (missing_sweeps, missing) = r.missing();
+        Self {
+            bind: bound.to_string(),
+            sweeps: r.sweeps.len(),
+            first_sweep: r.sweeps.keys().next().copied(),
+            last_sweep: r.sweeps.keys().next_back().copied(),
+            missing,
+            missing_sweeps,
+            duplicates: r.duplicates,
+            out_of_order: r.out_of_order,
+            datagrams: r.datagrams,
+            undecodable: r.undecodable,
+            counters: r.sweeps.values().next_back().map(|d| Totals(d.counters)),
+            senders: r
+                .senders
+                .iter()
+                .map(|(a, n)| serde_json::json!({ "address": a.to_string(), "datagrams": n }))
+                .collect(),
+            interrupted,
+        }
+    }
+
+    /// The line printed at the end.
+    pub fn line(&self) -> String {
+        let mut line = format!(
+            "listen-poses: {} sweeps, {} missing",
+            self.sweeps, self.missing
+        );
+        for (n, what) in [
+            (self.duplicates, "duplicate"),
+            (self.undecodable.total(), "undecodable"),
+        ] {
+            if n > 0 {
+                line += &format!(", {n} {what}");
+            }
+        }
+        if let Some(t) = &self.counters {
+            let c: Vec<String> = t.fields().iter().map(|(k, v)| format!("{k}={v}")).collect();
+            line += &format!(", counters: {}", c.join(" "));
+        }
+        line
+    }
+}
+
+/// Writes the outputs into `dir`: `summary.json` always, the others when a sweep came (as
+/// `run` writes no pose file without a pose).
+pub fn write(dir: &Path, s: &Summary, r: &Received) -> Result<()> {
+    if !r.sweeps.is_empty() {
+        let rows: Vec<[f64; 12]> = r.sweeps.values().map(|d| d.pose).collect();
+        let kitti = kiss_odom_io::poses::format_kitti_rows(&rows);
+        kiss_odom_io::write::write(&dir.join("poses_kitti.txt"), kitti.as_bytes())?;
+        kiss_odom_io::write::write_with(&dir.join("frames.csv"), |w| {
+            let mut csv = csv::Writer::from_writer(w);
+            for d in r.sweeps.values() {
+                let row = Row {
+                    sweep: d.sweep,
+                    start_ns: d.start_ns,
+                    points: d.points,
+                    status: names(d.status, Flag::ALL.map(|f| (f as u16, f.name()))),
+                    iterations: d.iterations,
+                    sweep_lost: d.sweep_lost,
+                    link: names(d.link, Link::ALL.map(|l| (l as u16, l.name()))),
+                };
+                csv.serialize((row, Totals(d.counters)))?;
+            }
+            csv.flush()?;
+            Ok(())
+        })?;
+    }
+    let json = serde_json::to_string_pretty(s)? + "\n";
+    kiss_odom_io::write::write(&dir.join("summary.json"), json.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kiss_odom_core::Status;
+
+    #[test]
+    fn bits_are_named_as_the_core_names_them_and_unknown_bits_are_kept() {
+        let flags = || Flag::ALL.map(|f| (f as u16, f.name()));
+        let s = Status::OK.with(Flag::Degenerate).with(Flag::Capacity);
+        assert_eq!(names(s.bits(), flags()), s.to_string());
+        assert_eq!(names(0, flags()), "ok");
+        assert_eq!(names(1 << 15 | 1, flags()), "timestamps_ignored|bit15");
+        let link = Link::Gap as u16 | Link::Bad as u16;
+        assert_eq!(
+            names(link, Link::ALL.map(|l| (l as u16, l.name()))),
+            "gap|bad"
+        );
+    }
+}
