@@ -26,7 +26,13 @@ macro_rules! out {
 
 #[cfg_attr(feature = "defmt", allow(dead_code))]
 mod lines;
+#[cfg(all(feature = "net", target_arch = "arm", target_os = "none"))]
+mod net;
 mod profile;
+#[cfg(all(feature = "net", not(all(target_arch = "arm", target_os = "none"))))]
+compile_error!(
+    "`net` is firmware for the MPS2 boards' LAN9118: build it for thumbv7em-none-eabihf"
+);
 #[cfg(feature = "packets")]
 mod stream;
 mod workload;

@@ -26,9 +26,14 @@ pub const CAPS: Capacities = Capacities {
 };
 #[cfg(feature = "full")]
 const SIZES: Capacities = Capacities::FULL_SCALE;
-#[cfg(any(feature = "tiny", feature = "packets"))]
+#[cfg(any(feature = "tiny", feature = "packets", feature = "net"))]
 const SIZES: Capacities = Capacities::TINY;
-#[cfg(not(any(feature = "full", feature = "tiny", feature = "packets")))]
+#[cfg(not(any(
+    feature = "full",
+    feature = "tiny",
+    feature = "packets",
+    feature = "net"
+)))]
 const SIZES: Capacities = Capacities::SMALL;
 
 /// Arena length in `u64` words, computed at compile time so the arena can be a `static`.
@@ -46,7 +51,7 @@ pub const CODEC_NAME: &str = if cfg!(feature = "exact") {
 };
 pub const CAPS_NAME: &str = if cfg!(feature = "full") {
     "full_scale"
-} else if cfg!(any(feature = "tiny", feature = "packets")) {
+} else if cfg!(any(feature = "tiny", feature = "packets", feature = "net")) {
     "tiny"
 } else {
     "small"
@@ -61,6 +66,7 @@ pub extern "C" fn kiss_frame_mark() {
 }
 
 /// Exit status of a frame that returned an error.
+#[cfg_attr(feature = "net", allow(dead_code))]
 pub const EXIT_FRAME_ERROR: i32 = 2;
 /// Exit status when the odometry could not be built.
 pub const EXIT_CONFIG_ERROR: i32 = 3;

@@ -5,20 +5,21 @@
 //! `frame` and `pose` lines must agree character for character; `cost` and the summary lines
 //! carry the per-target measurements.
 
+#[cfg(not(any(feature = "packets", feature = "net")))]
+use crate::profile::{kiss_frame_mark, EXIT_FRAME_ERROR};
 use crate::profile::{
-    kiss_frame_mark, Codec, Scalar, ARENA_WORDS, CAPS, CAPS_NAME, CODEC_NAME, EXIT_CONFIG_ERROR,
-    EXIT_FRAME_ERROR, SCALAR_NAME,
+    Codec, Scalar, ARENA_WORDS, CAPS, CAPS_NAME, CODEC_NAME, EXIT_CONFIG_ERROR, SCALAR_NAME,
 };
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 use kiss_odom_core::FrameReport;
 use kiss_odom_core::{Config, Degeneracy, Odometry, Robust, Words};
 
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 /// Points per push in the `tiny` profile: one VLP-16 data packet (12 blocks of 32 returns).
 const PACKET_POINTS: usize = 384;
 
 /// Where one frame sits in the embedded point data.
-#[cfg_attr(feature = "packets", allow(dead_code))]
+#[cfg_attr(any(feature = "packets", feature = "net"), allow(dead_code))]
 pub struct FrameInfo {
     /// First point.
     pub start: usize,
@@ -41,24 +42,24 @@ pub mod frames {
 }
 
 #[repr(C, align(8))]
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 struct Aligned<B: ?Sized>(B);
 
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 static BYTES: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/frames.bin")));
 
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 static STAMPS: &Aligned<[u8]> = &Aligned(*include_bytes!(concat!(env!("OUT_DIR"), "/stamps.bin")));
 
 /// The points of one embedded frame.
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 pub fn points(f: &FrameInfo) -> &'static [[Scalar; 3]] {
     let all: &'static [[Scalar; 3]] = bytemuck::cast_slice(&BYTES.0);
     &all[f.start..f.start + f.len]
 }
 
 /// The per-point capture times of one embedded frame (`tiny` only).
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 pub fn stamps(f: &FrameInfo) -> &'static [f64] {
     let all: &'static [f64] = bytemuck::cast_slice(&STAMPS.0);
     all.get(f.start..f.start + f.len).unwrap_or(&[])
@@ -70,7 +71,7 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 /// (`plane_gate` 1, `lateral_prior` 1, `prediction_prior` 0.01: its tunnel setting, the most
 /// work a frame of robust mode's plane registration takes) on those voxels.
 pub fn config() -> Config<Scalar> {
-    let base = if cfg!(any(feature = "tiny", feature = "packets")) {
+    let base = if cfg!(any(feature = "tiny", feature = "packets", feature = "net")) {
         // Config::tiny() itself at its 50 m and 2 m; `far` widens both.
         Config {
             max_range: frames::MAX_RANGE as Scalar,
@@ -124,7 +125,9 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
     };
     #[cfg(feature = "packets")]
     let total = crate::stream::run(&mut odom, insns, counter);
-    #[cfg(not(feature = "packets"))]
+    #[cfg(feature = "net")]
+    let total = crate::net::run(&mut odom, insns, counter);
+    #[cfg(not(any(feature = "packets", feature = "net")))]
     let total = embedded_frames(&mut odom, insns, counter);
     let total = match total {
         Ok(t) => t,
@@ -156,7 +159,7 @@ pub fn run(state: &mut Words<ARENA_WORDS>, insns: fn() -> Option<u64>, counter: 
 
 /// Registers every embedded frame; the total instruction count where measured, or the exit
 /// status of the first failing frame.
-#[cfg(not(feature = "packets"))]
+#[cfg(not(any(feature = "packets", feature = "net")))]
 fn embedded_frames<S: kiss_odom_core::Storage>(
     odom: &mut Odometry<Scalar, Codec, S>,
     insns: fn() -> Option<u64>,
@@ -209,7 +212,7 @@ fn embedded_frames<S: kiss_odom_core::Storage>(
 
 /// Prints one frame: the report line, the pose line (see `lines`) and, where measured, the
 /// cost line.
-#[cfg(not(any(feature = "defmt", feature = "packets")))]
+#[cfg(not(any(feature = "defmt", feature = "packets", feature = "net")))]
 fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64>, counter: &str) {
     out!("{}", crate::lines::FrameLine(i, f.len, r));
     out!("{}", crate::lines::PoseLine(i, &r.pose));
@@ -220,7 +223,7 @@ fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64
 
 /// defmt flavour of [`emit_frame`]: the same fields, binary-encoded (decode with
 /// `defmt-print -e ELF`).
-#[cfg(all(feature = "defmt", not(feature = "packets")))]
+#[cfg(all(feature = "defmt", not(any(feature = "packets", feature = "net"))))]
 fn emit_frame(i: usize, f: &FrameInfo, r: &FrameReport<Scalar>, cost: Option<u64>, _counter: &str) {
     defmt::info!(
         "frame {=usize} status={} iterations={=u32} correspondences={=u32} points={=usize} merge={=u32} source={=u32} map_voxels={=u32} map_points={=u32} dropped={}",

@@ -34,8 +34,18 @@ unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
     process::exit(99)
 }
 
+/// The 100 Hz tick of the network firmware: it only wakes the loop, which keeps the time.
+#[cfg(feature = "net")]
+#[exception]
+fn SysTick() {}
+
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
+    #[cfg(feature = "net")]
+    if irqn == crate::net::IRQ as i16 {
+        crate::net::on_irq();
+        return;
+    }
     semihosting::println!("error unexpected exception {}", irqn);
     process::exit(99)
 }
