@@ -5,6 +5,7 @@
 //! `--idle`.
 #![cfg(target_os = "linux")]
 
+use crate::common;
 use kiss_odom_sensors::pose_datagram::{Counters, Link, PoseDatagram};
 use nalgebra::{Isometry3, Vector3};
 use std::net::UdpSocket;
@@ -28,15 +29,7 @@ fn listen(addr: &str, out: &Path, extra: &[&str]) -> Child {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let start = Instant::now();
-    // Listening once the address cannot be taken (a hang guard, not a speed check).
-    while UdpSocket::bind(addr).is_ok() {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("listen-poses ended ({status}) before listening");
-        }
-        assert!(start.elapsed() < Duration::from_secs(60), "never listened");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    common::wait_listening(&mut child, addr, "listen-poses", Duration::from_secs(60));
     child
 }
 

@@ -8,6 +8,7 @@
 //! BENCHMARKS.md; only the signal's bound is checked, with margin.
 #![cfg(target_os = "linux")]
 
+use crate::common;
 use kiss_odom_io::capture::pcap;
 use std::io::{BufRead, BufReader, Read};
 use std::net::UdpSocket;
@@ -64,18 +65,7 @@ fn live(addr: &str, sensor: &[&str], out: &Path, extra: &[&str]) -> Child {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let start = Instant::now();
-    // Listening once the address cannot be taken (a hang guard, not a speed check).
-    while UdpSocket::bind(addr).is_ok() {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("live ended ({status}) before listening");
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "live never listened"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    common::wait_listening(&mut child, addr, "live", Duration::from_secs(120));
     child
 }
 
