@@ -5,9 +5,9 @@
 # bits, so equal text is bit-identical; on a mismatch the largest pose difference is printed.
 #
 #   embedded/compare.sh [case...]     cases: thumbv7em thumbv7em-full thumbv7em-robust m7 m7-f64
-#                                            m7-tiny m7-packets m7-far m7-mid360 aarch64 aarch64-small
+#                                            m7-tiny m7-imu m7-packets m7-far m7-mid360 aarch64 aarch64-small
 #                                            riscv32 riscv32-f64 riscv32-full
-#                                     (default: thumbv7em thumbv7em-robust m7-f64 m7-tiny
+#                                     (default: thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu
 #                                     m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
 #
 # Outputs go to embedded/target/compare/<case>.{qemu,host}.txt. Exits 0 when all agree, 1 on
@@ -21,7 +21,7 @@ mkdir -p "$out"
 source "$here/qemu-or-skip.sh"
 
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
+[ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
 
 failed=0
 for c in "${cases[@]}"; do
@@ -32,6 +32,7 @@ for c in "${cases[@]}"; do
     m7) target=m7; features="" ;;
     m7-f64) target=m7; features="f64" ;;
     m7-tiny) target=m7; features="tiny" ;;
+    m7-imu) target=m7; features="tiny,imu" ;;
     m7-packets) target=m7; features="packets" ;;
     m7-far) target=m7; features="packets,far" ;;
     m7-mid360) target=m7; features="packets,mid360" ;;
@@ -64,7 +65,7 @@ for c in "${cases[@]}"; do
     failed=1
     continue
   fi
-  pick() { grep -E '^(config|input|frame|pose) ' "$1"; }
+  pick() { grep -E '^(config|input|frame|pose|imu) ' "$1"; }
   frames=$(grep -c '^pose ' "$out/$c.qemu.txt" || true)
   if [ "$frames" -gt 0 ] && diff <(pick "$out/$c.host.txt") <(pick "$out/$c.qemu.txt") > "$out/$c.diff"; then
     echo "PASS $c: $frames poses bit-identical to the host (qemu run $((mid - start)) s incl. build)"

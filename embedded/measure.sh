@@ -4,7 +4,7 @@
 #   embedded/measure.sh [case...]
 #
 # Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny
-# m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64
+# m7-imu m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64
 # rv-full (default: all).
 # m7-packets streams a generated VLP-16 recording packet by packet through the decoder and the
 # core, m7-mid360 a Livox Mid-360 one; the -decode cases run the decoder alone; all four add a
@@ -18,7 +18,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 out="$here/target/measure"
 mkdir -p "$out"
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64 rv-full)
+[ ${#cases[@]} -gt 0 ] || cases=(m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny m7-imu m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64 rv-full)
 
 spec() {
   case "$1" in
@@ -29,6 +29,7 @@ spec() {
     m7-small) echo "m7:" ;;
     m7-small-f64) echo "m7:f64" ;;
     m7-tiny) echo "m7:tiny" ;;
+    m7-imu) echo "m7:tiny,imu" ;;
     m7-packets) echo "m7:packets" ;;
     m7-packets-decode) echo "m7:packets,baseline" ;;
     m7-mid360) echo "m7:packets,mid360" ;;

@@ -94,10 +94,15 @@ kiss_odom() {
       cargo run --release -q -p kiss-odom -- "$@")
   fi
 }
-if [[ ",$features," == *",tiny,"* ]]; then
-  vlp="${KISS_EMBED_VLP16:-$here/target/vlp16}"
+# `imu`: a hand-held walk with the IMU's samples at 200 Hz instead.
+if [[ ",$features," == *",tiny,"* ]] || [[ ",$features," == *",imu,"* ]]; then
+  if [[ ",$features," == *",imu,"* ]]; then
+    vlp="${KISS_EMBED_VLP16:-$here/target/vlp16-imu}"; sim=(--profile handheld --imu-rate 200)
+  else
+    vlp="${KISS_EMBED_VLP16:-$here/target/vlp16}"; sim=()
+  fi
   if [ ! -f "$vlp/sim.toml" ]; then
-    kiss_odom simulate --out "$vlp" --frames 40 \
+    kiss_odom simulate --out "$vlp" --frames 40 "${sim[@]}" \
       --seed 11 --beams 16 --columns 1800 --fov-up 15 --fov-down -15 --max-range 100 \
       --overwrite >&2 || { echo "error: cannot generate the VLP-16 sweeps" >&2; exit 96; }
   fi

@@ -33,6 +33,8 @@ mod profile;
 compile_error!(
     "`net` is firmware for the MPS2 boards' LAN9118: build it for thumbv7em-none-eabihf"
 );
+#[cfg(feature = "imu")]
+mod imu;
 #[cfg(feature = "packets")]
 mod stream;
 mod workload;

@@ -166,6 +166,8 @@ fn embedded_frames<S: kiss_odom_core::Storage>(
     counter: &str,
 ) -> Result<Option<u64>, i32> {
     let mut total: Option<u64> = Some(0);
+    #[cfg(feature = "imu")]
+    let mut imu = crate::imu::Imu::new();
     for (i, f) in frames::FRAMES.iter().enumerate() {
         let pts = points(f);
         out!(
@@ -182,6 +184,8 @@ fn embedded_frames<S: kiss_odom_core::Storage>(
         }
         kiss_frame_mark();
         let t0 = insns();
+        #[cfg(feature = "imu")]
+        imu.before(odom, i, f.t_max);
         let result = if cfg!(feature = "tiny") {
             // Packet by packet, as a sensor delivers them: the sweep is never held whole.
             let mut input = odom.begin_frame(Some((f.t_min, f.t_max)));
@@ -195,8 +199,12 @@ fn embedded_frames<S: kiss_odom_core::Storage>(
         } else {
             odom.register_frame(pts, None)
         };
+        #[cfg(feature = "imu")]
+        imu.after(odom);
         let t1 = insns();
         kiss_frame_mark();
+        #[cfg(feature = "imu")]
+        imu.print(i);
         let cost = t0.zip(t1).map(|(a, b)| b - a);
         total = total.zip(cost).map(|(a, b)| a + b);
         match result {
