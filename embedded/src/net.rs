@@ -12,7 +12,7 @@
 //! the `packets` profile shows the streamed alternative, which needs none but deskews each
 //! sweep with the previous sweep's span.
 //!
-//! Only the first sender on the port is decoded. Datagrams of another length, from another
+//! Only the first sender of a datagram of the sensor's length is decoded. Datagrams of another length, from another
 //! sender, refused by the decoder or dropped at a full ring are counted and sent with every
 //! pose. A sweep the sensor never ends (it stopped, or its last packets were lost) is ended
 //! after [`IDLE`] of silence: a lost packet is a counted gap, never a stall.
@@ -156,13 +156,14 @@ impl Net<'_> {
                 .get_mut::<udp::Socket>(self.udp)
                 .recv_slice(buf)
             {
+                // The sensor is the first sender of a datagram of its packets' length.
                 Ok((len, meta)) => {
-                    let sensor = *self.sensor.get_or_insert(meta.endpoint);
-                    if meta.endpoint != sensor {
+                    if self.sensor.is_some_and(|s| s != meta.endpoint) {
                         self.counters.foreign += 1;
                     } else if len != PACKET_LEN {
                         self.counters.wrong_size += 1;
                     } else {
+                        self.sensor = Some(meta.endpoint);
                         self.counters.packets += 1;
                         return Next::Packet(len);
                     }
