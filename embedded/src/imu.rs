@@ -3,8 +3,8 @@
 //! `kiss-odom run --imu auto` does on the host. The samples are embedded as `build.rs` cut them
 //! per frame; each frame's are converted into a fixed buffer the caller owns.
 
+use crate::frames;
 use crate::profile::{Codec, Scalar};
-use crate::workload::frames;
 use kiss_odom_core::{GyroPrior, ImuConfig, ImuSample, Odometry, Prior, Real, Storage};
 
 /// Samples a frame may bring: 0.16 s at 400 Hz (the first frame brings 0.2 s at the drive's

@@ -24,6 +24,7 @@ macro_rules! out {
     ($($t:tt)*) => { std::println!($($t)*) };
 }
 
+mod frames;
 #[cfg_attr(feature = "defmt", allow(dead_code))]
 mod lines;
 #[cfg(all(feature = "net", target_arch = "arm", target_os = "none"))]

@@ -11,8 +11,8 @@
 //! Each sweep's cost (decoding and odometry) is measured between two `kiss_frame_mark` calls,
 //! so `run.sh` reports it as that frame's `cost`; `input` lines give the packets of each sweep.
 
+use crate::frames::PACKET_LEN as LEN;
 use crate::profile::{kiss_frame_mark, Codec, Scalar, EXIT_CONFIG_ERROR, EXIT_FRAME_ERROR};
-use crate::workload::frames::PACKET_LEN as LEN;
 use kiss_odom_core::{Odometry, Storage};
 use kiss_odom_sensors::{Chunk, Decode, Pushed, SweepSink, SweepStart, SweepStats, CHUNK};
 

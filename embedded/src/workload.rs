@@ -5,6 +5,9 @@
 //! `frame` and `pose` lines must agree character for character; `cost` and the summary lines
 //! carry the per-target measurements.
 
+use crate::frames;
+#[cfg(not(any(feature = "packets", feature = "net")))]
+use crate::frames::FrameInfo;
 #[cfg(not(any(feature = "packets", feature = "net")))]
 use crate::profile::{kiss_frame_mark, EXIT_FRAME_ERROR};
 use crate::profile::{
@@ -17,29 +20,6 @@ use kiss_odom_core::{Config, Degeneracy, Odometry, Robust, Words};
 #[cfg(not(any(feature = "packets", feature = "net")))]
 /// Points per push in the `tiny` profile: one VLP-16 data packet (12 blocks of 32 returns).
 const PACKET_POINTS: usize = 384;
-
-/// Where one frame sits in the embedded point data.
-#[cfg_attr(any(feature = "packets", feature = "net"), allow(dead_code))]
-pub struct FrameInfo {
-    /// First point.
-    pub start: usize,
-    /// Points kept.
-    pub len: usize,
-    /// Points in the scan file.
-    pub raw: usize,
-    /// Points after the range crop.
-    pub cropped: usize,
-    /// First and last capture time of the sweep (`tiny`; 0 otherwise).
-    pub t_min: f64,
-    /// See `t_min`.
-    pub t_max: f64,
-}
-
-/// What `build.rs` generated from kitti-mini.
-pub mod frames {
-    use super::FrameInfo;
-    include!(concat!(env!("OUT_DIR"), "/frames.rs"));
-}
 
 #[repr(C, align(8))]
 #[cfg(not(any(feature = "packets", feature = "net")))]
