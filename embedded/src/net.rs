@@ -33,6 +33,7 @@ use link::{Clock, Net, Next};
 use ring::SLOT;
 use smoltcp::iface::{Config, Interface, SocketSet};
 use smoltcp::socket::udp;
+use smoltcp::time::Duration;
 use smoltcp::wire::{EthernetAddress, IpAddress, IpCidr, Ipv4Address};
 use static_cell::ConstStaticCell;
 
@@ -43,11 +44,11 @@ const GATEWAY: Ipv4Address = Ipv4Address::new(10, 0, 2, 2);
 /// The sensor's data port.
 const SENSOR_PORT: u16 = 2368;
 /// A VLP-16 data packet.
-const PACKET_LEN: usize = 1206;
-/// Silence that ends an open sweep, microseconds.
-const IDLE: i64 = 1_000_000;
+const PACKET_LEN: usize = velodyne::wire::field::LEN;
+/// Silence that ends an open sweep.
+const IDLE: Duration = Duration::from_secs(1);
 /// The longest the last poses may wait for the network (ARP) before the program stops.
-const FLUSH: i64 = 3_000_000;
+const FLUSH: Duration = Duration::from_secs(3);
 /// Datagrams the socket holds each way (the ring in front of it holds the backlog).
 const SOCKET_SLOTS: usize = 4;
 
@@ -249,7 +250,7 @@ pub fn run<P: PointCodec<Scalar>, S: Storage>(
             stats.packets,
             n,
             stats.lost_packets,
-            stats.bad_packets + stats.out_of_order + stats.other_sensor,
+            refused(&stats),
             idle
         );
         if let Ok(r) = &result {
@@ -268,13 +269,31 @@ pub fn run<P: PointCodec<Scalar>, S: Storage>(
         }
     }
     net.flush();
-    let c = net.counters();
     let high = critical_section::with(|cs| RING.borrow_ref(cs).high_water());
     out!(
-        "net sweeps={} packets={} lost={} bad={} foreign={} wrong_size={} overflow={} unsent={} frame_errors={} ring_high_water={}",
-        sweep, c.packets, c.lost, c.bad, c.foreign, c.wrong_size, c.overflow, c.unsent, c.frame_errors, high
+        "net sweeps={} {} ring_high_water={}",
+        sweep,
+        Named(&net.counters()),
+        high
     );
     Ok(None)
+}
+
+/// Packets the decoder refused in a sweep: corrupt, late, or another sensor's.
+fn refused(stats: &SweepStats) -> u32 {
+    stats.bad_packets + stats.out_of_order + stats.other_sensor
+}
+
+/// The counters as `name=value` words, in the datagram's order.
+struct Named<'a>(&'a Counters);
+
+impl core::fmt::Display for Named<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for (k, (name, n)) in self.0.named().iter().enumerate() {
+            write!(f, "{}{name}={n}", if k > 0 { " " } else { "" })?;
+        }
+        Ok(())
+    }
 }
 
 /// The sweep's pose datagram; counts the sweep's losses and a refused sweep.
@@ -303,7 +322,7 @@ fn datagram<P: PointCodec<Scalar>, S: Storage>(
         }
     };
     net.counters.lost += stats.lost_packets;
-    net.counters.bad += stats.bad_packets + stats.out_of_order + stats.other_sensor;
+    net.counters.bad += refused(stats);
     let now = net.counters();
     let bits = [
         (result.is_err(), Link::FrameError),

@@ -122,17 +122,22 @@ pub struct Counters {
 }
 
 impl Counters {
-    fn words(&self) -> [u32; 8] {
+    /// Each counter with its name (a `frames.csv` column, a `summary.json` field), in the
+    /// datagram's order.
+    pub fn named(&self) -> [(&'static str, u32); 8] {
         [
-            self.packets,
-            self.lost,
-            self.bad,
-            self.foreign,
-            self.wrong_size,
-            self.overflow,
-            self.unsent,
-            self.frame_errors,
+            ("packets", self.packets),
+            ("lost", self.lost),
+            ("bad", self.bad),
+            ("foreign", self.foreign),
+            ("wrong_size", self.wrong_size),
+            ("overflow", self.overflow),
+            ("unsent", self.unsent),
+            ("frame_errors", self.frame_errors),
         ]
+    }
+    fn words(&self) -> [u32; 8] {
+        self.named().map(|(_, v)| v)
     }
     fn from_words(w: [u32; 8]) -> Self {
         Self {

@@ -97,7 +97,7 @@ impl Net<'_> {
                 last = now;
                 continue;
             }
-            if idle_ends && (now - last).total_micros() as i64 >= IDLE {
+            if idle_ends && now - last >= IDLE {
                 return Next::Idle;
             }
             sleep();
@@ -137,7 +137,7 @@ impl Net<'_> {
             let now = self.clock.now(&self.nic);
             self.iface.poll(now, &mut self.nic, &mut self.sockets);
             let queued = self.sockets.get::<udp::Socket>(self.udp).send_queue();
-            if queued == 0 || (now - start).total_micros() as i64 >= FLUSH {
+            if queued == 0 || now - start >= FLUSH {
                 return;
             }
             sleep();
