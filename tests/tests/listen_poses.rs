@@ -118,7 +118,10 @@ fn poses_come_back_bit_exact_in_sweep_order_with_losses_duplicates_and_junk_coun
     );
     assert_eq!(
         stderr.trim(),
-        "listen-poses: 3 sweeps, 1 missing, 1 duplicate, 1 undecodable, counters: packets=300 \
+        "warning: 1 pose datagram(s) lost on the way (missing_sweeps in summary.json)\n\
+         warning: 1 datagram(s) that are not pose datagrams, skipped\n\
+         warning: the receiver counted lost=2: packets missing in the sensor's sequence\n\
+         listen-poses: 3 sweeps, 1 missing, 1 duplicate, 1 undecodable, counters: packets=300 \
          lost=2 bad=0 foreign=0 wrong_size=0 overflow=0 unsent=0 frame_errors=0"
     );
 
@@ -166,6 +169,7 @@ fn poses_come_back_bit_exact_in_sweep_order_with_losses_duplicates_and_junk_coun
         serde_json::json!([{"address": from, "datagrams": 5}])
     );
     assert_eq!(s["interrupted"], false);
+    assert_eq!(s["warnings"], 3, "one per kind of loss printed");
 }
 
 #[test]

@@ -87,6 +87,9 @@ pub fn execute(args: &ListenArgs, err: &mut dyn Write) -> Result<i32> {
     };
     let summary = Summary::of(bound, &received, signal.is_some());
     outputs::write(&args.out, &summary, &received)?;
+    for w in &summary.warned {
+        writeln!(err, "warning: {w}")?;
+    }
     match received.datagrams {
         _ if signal.is_some() || !received.sweeps.is_empty() => {}
         0 => bail!(

@@ -15,27 +15,10 @@ pub const OUTPUTS: [&str; 3] = ["poses_kitti.txt", "frames.csv", "summary.json"]
 /// The receiver's [`Counters`] as named columns and JSON fields.
 pub struct Totals(pub Counters);
 
-impl Totals {
-    /// Each counter with its name, in the datagram's order.
-    pub fn fields(&self) -> [(&'static str, u32); 8] {
-        let c = &self.0;
-        [
-            ("packets", c.packets),
-            ("lost", c.lost),
-            ("bad", c.bad),
-            ("foreign", c.foreign),
-            ("wrong_size", c.wrong_size),
-            ("overflow", c.overflow),
-            ("unsent", c.unsent),
-            ("frame_errors", c.frame_errors),
-        ]
-    }
-}
-
 impl Serialize for Totals {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let mut st = s.serialize_struct("Counters", 8)?;
-        for (name, v) in self.fields() {
+        for (name, v) in self.0.named() {
             st.serialize_field(name, &v)?;
         }
         st.end()
@@ -105,12 +88,58 @@ pub struct Summary {
     pub senders: Vec<serde_json::Value>,
     /// Whether SIGINT or SIGTERM stopped the listening.
     pub interrupted: bool,
+    /// Warnings printed: what was lost on the way or changed poses (see [`Self::warned`]).
+    pub warnings: usize,
+    /// Their text.
+    #[serde(skip)]
+    pub warned: Vec<String>,
+}
+
+/// What each counter but `packets` means when it is not 0.
+fn meaning(counter: &str) -> &'static str {
+    match counter {
+        "lost" => "packets missing in the sensor's sequence",
+        "bad" => "packets the receiver's decoder refused",
+        "foreign" => "datagrams from a second sender, skipped",
+        "wrong_size" => "datagrams of the wrong length or fragments, skipped",
+        "overflow" => "frames dropped at the receiver's full ring",
+        "unsent" => "pose datagrams the receiver could not send",
+        "frame_errors" => "sweeps the core refused (pose carried on the motion model)",
+        _ => "",
+    }
+}
+
+/// One line per kind of loss: pose datagrams missing or undecodable here, and each of the
+/// receiver's loss counters that is not 0 (the sweeps are flagged in `frames.csv`'s `link`).
+fn warnings(missing: u64, undecodable: u64, counters: Option<&Counters>) -> Vec<String> {
+    let mut w = Vec::new();
+    if missing > 0 {
+        w.push(format!(
+            "{missing} pose datagram(s) lost on the way (missing_sweeps in summary.json)"
+        ));
+    }
+    if undecodable > 0 {
+        w.push(format!(
+            "{undecodable} datagram(s) that are not pose datagrams, skipped"
+        ));
+    }
+    for (name, n) in counters.map(Counters::named).into_iter().flatten() {
+        if name != "packets" && n > 0 {
+            w.push(format!(
+                "the receiver counted {name}={n}: {}",
+                meaning(name)
+            ));
+        }
+    }
+    w
 }
 
 impl Summary {
     /// The summary of `r`, received on `bound`.
     pub fn of(bound: SocketAddr, r: &Received, interrupted: bool) -> Self {
         let (missing_sweeps, missing) = r.missing();
+        let last = r.sweeps.values().next_back().map(|d| d.counters);
+        let warned = warnings(missing, r.undecodable.total(), last.as_ref());
         Self {
             bind: bound.to_string(),
             sweeps: r.sweeps.len(),
@@ -122,13 +151,15 @@ impl Summary {
             out_of_order: r.out_of_order,
             datagrams: r.datagrams,
             undecodable: r.undecodable,
-            counters: r.sweeps.values().next_back().map(|d| Totals(d.counters)),
+            counters: last.map(Totals),
             senders: r
                 .senders
                 .iter()
                 .map(|(a, n)| serde_json::json!({ "address": a.to_string(), "datagrams": n }))
                 .collect(),
             interrupted,
+            warnings: warned.len(),
+            warned,
         }
     }
 
@@ -147,7 +178,11 @@ impl Summary {
             }
         }
         if let Some(t) = &self.counters {
-            let c: Vec<String> = t.fields().iter().map(|(k, v)| format!("{k}={v}")).collect();
+            let c: Vec<String> =
+                t.0.named()
+                    .iter()
+                    .map(|(k, v)| format!("{k}={v}"))
+                    .collect();
             line += &format!(", counters: {}", c.join(" "));
         }
         line
