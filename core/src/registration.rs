@@ -78,6 +78,8 @@ pub struct Alignment<T: Real> {
     pub iterations: u32,
     /// Correspondences in the last iteration.
     pub correspondences: u32,
+    /// Of those, the point-to-plane ones (0 without plane terms).
+    pub plane_correspondences: u32,
     /// Whether `|dx| < gamma` was reached (false when the cap stopped it).
     pub converged: bool,
     /// Whether a normal-equation system could not be solved (fewer than 3 usable
@@ -343,8 +345,9 @@ fn run_iteration<T: Real, P: PointCodec<T>, E: Executor, C: WorkChunk<T>>(
     }
 }
 
-/// The chunks' partial systems summed in chunk order, combined (see [`combine`]).
-fn summed<T: Real, C: WorkChunk<T>>(chunks: &mut [C]) -> [T; SYSTEM_LEN] {
+/// The chunks' partial systems summed in chunk order, combined (see [`combine`]), and the
+/// number of point-to-plane correspondences among them.
+fn summed<T: Real, C: WorkChunk<T>>(chunks: &mut [C]) -> ([T; SYSTEM_LEN], T) {
     let mut point = [T::zero(); SYSTEM_LEN];
     let mut plane = [T::zero(); SYSTEM_LEN];
     for c in chunks.iter_mut() {
@@ -359,7 +362,7 @@ fn summed<T: Real, C: WorkChunk<T>>(chunks: &mut [C]) -> [T; SYSTEM_LEN] {
             }
         }
     }
-    combine(&point, &plane)
+    (combine(&point, &plane), plane[27])
 }
 
 /// Registers `source` (sensor frame) to `map` starting from `initial_guess` (the reference's
@@ -381,6 +384,7 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
         pose: *initial_guess,
         iterations: 0,
         correspondences: 0,
+        plane_correspondences: 0,
         converged: true,
         singular: false,
         rms: T::zero(),
@@ -444,12 +448,13 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
                 out.budget_spent = true;
                 break;
             }
-            let mut sum = summed(chunks);
+            let (mut sum, planar) = summed(chunks);
             if let Some(prior) = &params.prior {
                 prior.add(&mut sum, &(t_icp * initial_guess).translation.vector);
             }
             out.iterations += 1;
             out.correspondences = sum[27].wide() as u32;
+            out.plane_correspondences = planar.wide() as u32;
             out.rms = if sum[27] > T::zero() {
                 (sum[28] / sum[27]).sqrt_l()
             } else {

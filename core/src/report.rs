@@ -248,6 +248,9 @@ pub struct FrameReport<T: Real> {
     pub work: u64,
     /// Correspondences in the last iteration.
     pub correspondences: u32,
+    /// Of those, the point-to-plane ones (robust mode's plane terms; 0 in a registration
+    /// without them).
+    pub plane_correspondences: u32,
     /// `sigma_t` used for this frame (threshold `3 sigma`, kernel `kernel_scale * sigma`).
     pub sigma: T,
     /// RMS residual of the last iteration's correspondences (m).

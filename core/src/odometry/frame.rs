@@ -161,6 +161,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             iterations: f.icp.iterations,
             work: f.icp.work,
             correspondences: f.icp.correspondences,
+            plane_correspondences: f.icp.plane_correspondences,
             sigma: f.sigma,
             rms: f.icp.rms,
             model_error,

@@ -353,9 +353,20 @@ fn the_moved_points_are_the_source_at_the_registered_pose_in_either_layout() {
             .map(|(m, s)| (m - a.pose * Point::from(*s)).norm())
             .fold(0.0, f64::max);
         std::println!(
-            "planes {planes}: worst |moved - pose * source| {worst:.1e} m (tolerance 1e-3)"
+            "planes {planes}: worst |moved - pose * source| {worst:.1e} m (tolerance 1e-3); \
+             {} of {} correspondences point-to-plane",
+            a.plane_correspondences,
+            a.correspondences
         );
         assert!(worst < 1e-3);
+        // The fixture's walls and ground are planar: with plane terms most correspondences
+        // are point-to-plane, without them none.
+        if planes {
+            assert!(a.plane_correspondences > a.correspondences / 2);
+            assert!(a.plane_correspondences <= a.correspondences);
+        } else {
+            assert_eq!(a.plane_correspondences, 0);
+        }
     }
 }
 

@@ -18,6 +18,7 @@ pub fn widen_report<T: Real>(r: &FrameReport<T>) -> FrameReport<f64> {
         iterations: r.iterations,
         work: r.work,
         correspondences: r.correspondences,
+        plane_correspondences: r.plane_correspondences,
         sigma: r.sigma.wide(),
         rms: r.rms.wide(),
         model_error: r.model_error.wide(),

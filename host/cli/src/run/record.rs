@@ -65,6 +65,8 @@ pub struct FrameRow {
     pub work: Option<u64>,
     /// Correspondences in the last iteration.
     pub correspondences: Option<u32>,
+    /// Of those, the point-to-plane ones (robust mode and the `accurate` preset).
+    pub plane_correspondences: Option<u32>,
     /// The threshold's sigma the frame was registered with.
     pub sigma: f64,
     /// Map voxels after the update.
@@ -159,6 +161,7 @@ impl FrameRow {
             iterations: r.map(|r| r.iterations),
             work: r.map(|r| r.work),
             correspondences: r.map(|r| r.correspondences),
+            plane_correspondences: r.map(|r| r.plane_correspondences),
             sigma: o.sigma,
             map_voxels: r.map(|r| r.map_voxels),
             map_points: r.map(|r| r.map_points),
