@@ -5,10 +5,12 @@
 # bits, so equal text is bit-identical; on a mismatch the largest pose difference is printed.
 #
 #   embedded/compare.sh [case...]     cases: thumbv7em thumbv7em-full thumbv7em-robust m7 m7-f64
-#                                            m7-tiny m7-imu m7-packets m7-far m7-mid360 aarch64 aarch64-small
+#                                            m7-tiny m7-imu m7-accurate m7-packets m7-far m7-mid360
+#                                            aarch64 aarch64-small
 #                                            riscv32 riscv32-f64 riscv32-full
 #                                     (default: thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu
-#                                     m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
+#                                     m7-accurate m7-packets m7-far m7-mid360 aarch64 riscv32
+#                                     riscv32-f64)
 #
 # Outputs go to embedded/target/compare/<case>.{qemu,host}.txt. Exits 0 when all agree, 1 on
 # a mismatch or a failed run; prints "SKIP: ..." and exits 0 when QEMU could not be installed.
@@ -21,7 +23,7 @@ mkdir -p "$out"
 source "$here/qemu-or-skip.sh"
 
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
+[ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu m7-accurate m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
 
 failed=0
 for c in "${cases[@]}"; do
@@ -33,6 +35,7 @@ for c in "${cases[@]}"; do
     m7-f64) target=m7; features="f64" ;;
     m7-tiny) target=m7; features="tiny" ;;
     m7-imu) target=m7; features="tiny,imu" ;;
+    m7-accurate) target=m7; features="tiny,accurate" ;;
     m7-packets) target=m7; features="packets" ;;
     m7-far) target=m7; features="packets,far" ;;
     m7-mid360) target=m7; features="packets,mid360" ;;

@@ -19,9 +19,9 @@ pub type Codec = kiss_odom_core::Quantized;
 
 /// Capacities of this build (`full` feature: full scale; `tiny`: a 16-beam sensor in 512 KiB;
 /// microcontroller scale otherwise).
-/// The `robust` feature adds room for point-to-plane terms.
+/// The `robust` and `accurate` features add room for point-to-plane terms.
 pub const CAPS: Capacities = Capacities {
-    plane_terms: cfg!(feature = "robust"),
+    plane_terms: cfg!(any(feature = "robust", feature = "accurate")),
     ..SIZES
 };
 #[cfg(feature = "full")]

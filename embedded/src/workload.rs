@@ -49,7 +49,9 @@ pub fn stamps(f: &FrameInfo) -> &'static [f64] {
 /// (1 m in both profiles; `Config::new(50.0)` alone would give 0.5 m voxels); under the
 /// `robust` feature, robust mode with plane terms on every frame and the motion prior
 /// (`plane_gate` 1, `lateral_prior` 1, `prediction_prior` 0.01: its tunnel setting, the most
-/// work a frame of robust mode's plane registration takes) on those voxels.
+/// work a frame of robust mode's plane registration takes) on those voxels; under `accurate`,
+/// the `accurate` preset's registration on voxels half as large (as `Config::accurate` halves
+/// the reference's).
 pub fn config() -> Config<Scalar> {
     let base = if cfg!(any(feature = "tiny", feature = "packets", feature = "net")) {
         // Config::tiny() itself at its 50 m and 2 m; `far` widens both.
@@ -72,6 +74,13 @@ pub fn config() -> Config<Scalar> {
         Config {
             degeneracy: Degeneracy::Robust,
             robust: Robust::tunnel(),
+            ..base
+        }
+    } else if cfg!(feature = "accurate") {
+        Config {
+            voxel_size: base.voxel_size / 2.0,
+            degeneracy: Degeneracy::Robust,
+            robust: Robust::accurate(),
             ..base
         }
     } else {

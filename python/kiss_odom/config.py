@@ -3,7 +3,9 @@ into the settings of ``kiss-odom run`` (the layout of the ``config.toml`` it wri
 
 Accepted by :func:`settings_from` (and so by :class:`kiss_odom.KissICP`):
 
-- ``None``: the defaults, which are kiss-icp 1.3.0's (max range 100 m, voxel max_range/100);
+- ``None``: the defaults, which are kiss-icp 1.3.0's (max range 100 m, voxel max_range/100),
+  or those of the ``accurate`` preset with ``preset="accurate"`` (voxel max_range/200,
+  point-to-plane terms where the map is planar; see the README's "Which preset");
 - a kiss-icp ``KISSConfig`` (``kiss_icp.config.load_config(...)``), or the path of one of its
   YAML files (``.yaml``/``.yml``, read by the compiled module as ``kiss-odom run --config``
   reads it: neither PyYAML nor kiss-icp is needed; the voxel size is made explicit at
@@ -32,12 +34,13 @@ from kiss_odom import _native
 ConfigLike = Union[None, Mapping[str, Any], str, os.PathLike, Any]
 
 
-def defaults() -> dict:
-    """The default settings (those of ``kiss-odom run``)."""
-    return json.loads(_native.default_settings_json())
+def defaults(preset: Optional[str] = None) -> dict:
+    """The settings of a preset (``"default"``, the default, or ``"accurate"``), those of
+    ``kiss-odom run --preset``."""
+    return json.loads(_native.default_settings_json(preset))
 
 
-def _as_dict(config: ConfigLike) -> dict:
+def _as_dict(config: ConfigLike, preset: Optional[str] = None) -> dict:
     if config is None:
         return {}
     if isinstance(config, (str, os.PathLike)):
@@ -45,7 +48,7 @@ def _as_dict(config: ConfigLike) -> dict:
         if not path.is_file():
             raise ValueError(f"{path}: no such configuration file")
         if path.suffix.lower() in (".toml", ".yaml", ".yml"):
-            return json.loads(_native.load_settings_json(str(path)))
+            return json.loads(_native.load_settings_json(str(path), preset))
         raise ValueError(f"{path}: a configuration is a .toml (kiss-odom) or .yaml (kiss-icp) file")
     if hasattr(config, "model_dump"):  # kiss-icp's pydantic KISSConfig
         return config.model_dump()
@@ -69,17 +72,21 @@ def _merge(base: dict, over: dict, where: str = "") -> None:
 def settings_from(
     config: ConfigLike = None,
     *,
+    preset: Optional[str] = None,
     scalar: Optional[str] = None,
     map_storage: Optional[str] = None,
     capacities: Union[None, str, Mapping[str, int]] = None,
     threads: Optional[int] = None,
 ) -> dict:
-    """The ``kiss-odom run`` settings for ``config`` plus kiss-odom's extras: ``scalar``
-    (``"f64"`` or ``"f32"``), ``map_storage`` (``"exact"`` or ``"quantized"``),
+    """The ``kiss-odom run`` settings for ``config`` plus kiss-odom's extras: ``preset``
+    (``"default"`` or ``"accurate"``: the defaults every setting ``config`` does not give
+    takes; replaces the config's ``pipeline.preset``), ``scalar`` (``"f64"`` or ``"f32"``), ``map_storage`` (``"exact"`` or ``"quantized"``),
     ``capacities`` (``"full"``, ``"small"`` or a dict of the five capacities) and ``threads``
     (0: all cores; results do not depend on it)."""
-    given = _as_dict(config)
+    given = _as_dict(config, preset)
     given.pop("out_dir", None)
+    pipeline = dict(given.pop("pipeline", None) or {})
+    preset = preset or pipeline.get("preset") or "default"
     registration = dict(given.get("registration") or {})
     runtime = dict(given.get("runtime") or {})
     if "max_num_threads" in registration:
@@ -97,8 +104,9 @@ def settings_from(
     given["runtime"].update({k: v for k, v in extras.items() if v is not None})
     if capacities is not None:
         given["capacities"] = {**given.get("capacities", {}), **capacities}
-    settings = defaults()
+    settings = defaults(preset)
     _merge(settings, given)
+    settings["pipeline"]["preset"] = preset
     _refuse_non_finite(settings)
     return settings
 

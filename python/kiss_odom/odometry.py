@@ -52,6 +52,9 @@ class FrameReport:
     flags: Tuple[str, ...] = ()
     iterations: int = 0
     correspondences: int = 0
+    #: Of the last iteration's correspondences, the point-to-plane ones (robust mode and the
+    #: ``accurate`` preset).
+    plane_correspondences: int = 0
     sigma: float = float("nan")
     rms: float = float("nan")
     model_error: float = float("nan")
@@ -118,7 +121,8 @@ class KissICP:
 
     ``config`` is anything :func:`kiss_odom.settings_from` accepts (a kiss-icp
     ``KISSConfig``, its YAML, our ``config.toml``, a dict or ``None``); the keyword extras
-    pick the scalar (``"f64"``/``"f32"``), the map storage (``"exact"``/``"quantized"``),
+    pick the preset (``"default"``: kiss-icp's poses; ``"accurate"``: the lowest error
+    measured, settings the config does not give take its values), the scalar (``"f64"``/``"f32"``), the map storage (``"exact"``/``"quantized"``),
     the capacities (``"full"``/``"small"``/dict) and the thread count. A bad setting is a
     ``ValueError`` naming it.
     """
@@ -127,13 +131,19 @@ class KissICP:
         self,
         config: ConfigLike = None,
         *,
+        preset: Optional[str] = None,
         scalar: Optional[str] = None,
         map_storage: Optional[str] = None,
         capacities: Any = None,
         threads: Optional[int] = None,
     ):
         self.settings = settings_from(
-            config, scalar=scalar, map_storage=map_storage, capacities=capacities, threads=threads
+            config,
+            preset=preset,
+            scalar=scalar,
+            map_storage=map_storage,
+            capacities=capacities,
+            threads=threads,
         )
         self._odom = _native.Odometry.from_json(json.dumps(self.settings))
         # Every call into `_odom` holds it (see the module doc, "Threads").

@@ -11,7 +11,7 @@ use kiss_odom_core::{
     Prior, Quantized, Real, StampProblem,
 };
 use kiss_odom_drive::pool::Pool;
-use kiss_odom_drive::settings::{Scalar, Settings, Storage};
+use kiss_odom_drive::settings::{PresetName, Scalar, Settings, Storage};
 use kiss_odom_drive::widen::{widen, widen_report};
 use nalgebra::Matrix4;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -204,6 +204,7 @@ fn report_dict<'py>(
     d.set_item("flags", flags)?;
     d.set_item("iterations", r.iterations)?;
     d.set_item("correspondences", r.correspondences)?;
+    d.set_item("plane_correspondences", r.plane_correspondences)?;
     d.set_item("sigma", r.sigma)?;
     d.set_item("rms", r.rms)?;
     d.set_item("model_error", r.model_error)?;
@@ -427,22 +428,35 @@ impl Odometry {
     }
 }
 
-/// `kiss-odom run`'s default settings as JSON (the layout of its `config.toml`).
+/// The preset named `name` (`"default"` or `"accurate"`; `None`: the default).
+fn preset_named(name: Option<&str>) -> PyResult<PresetName> {
+    name.map_or(Ok(PresetName::Default), |n| {
+        serde_json::from_value(serde_json::Value::from(n)).map_err(|_| {
+            PyValueError::new_err(format!("preset must be 'default' or 'accurate', not {n:?}"))
+        })
+    })
+}
+
+/// `kiss-odom run`'s settings of a preset as JSON (the layout of its `config.toml`).
 #[pyfunction]
-fn default_settings_json() -> PyResult<String> {
+#[pyo3(signature = (preset=None))]
+fn default_settings_json(preset: Option<&str>) -> PyResult<String> {
     let err = |e: serde_json::Error| PyRuntimeError::new_err(e.to_string());
-    let mut v = serde_json::to_value(Settings::default()).map_err(err)?;
+    let mut v = serde_json::to_value(Settings::preset(preset_named(preset)?)).map_err(err)?;
     // `config.toml` leaves the prior's section out while it is off; a dict may set it.
     v["imu"] = serde_json::to_value(kiss_odom_drive::Imu::default()).map_err(err)?;
     serde_json::to_string(&v).map_err(err)
 }
 
 /// A settings file as settings JSON: a `config.toml` (as `kiss-odom run` writes it) or
-/// kiss-icp's YAML (`.yaml`/`.yml`, read as `run --config` reads it); unknown keys are errors,
-/// and so are NaN and inf (JSON would write them as `null`, "not given").
+/// kiss-icp's YAML (`.yaml`/`.yml`, read as `run --config` reads it), over the defaults of
+/// `preset` when given (else of the file's); unknown keys are errors, and so are NaN and inf
+/// (JSON would write them as `null`, "not given").
 #[pyfunction]
-fn load_settings_json(path: std::path::PathBuf) -> PyResult<String> {
-    let s = Settings::load(&path).map_err(value_error)?;
+#[pyo3(signature = (path, preset=None))]
+fn load_settings_json(path: std::path::PathBuf, preset: Option<&str>) -> PyResult<String> {
+    let preset = preset.map(|p| preset_named(Some(p))).transpose()?;
+    let s = Settings::load_as(&path, preset).map_err(value_error)?;
     s.refuse_non_finite()
         .map_err(|e| value_error(e.context(path.display().to_string())))?;
     serde_json::to_string(&s).map_err(|e| PyRuntimeError::new_err(e.to_string()))

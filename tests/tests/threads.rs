@@ -33,10 +33,20 @@ fn kiss_odom(args: &[&OsString]) {
 
 /// `poses_kitti.txt` of `kiss-odom run DATASET --threads N [extra]`, for N in 1, 2 and 4.
 fn poses_per_thread_count(dataset: &Path, extra: &[&str], out: &Path) -> Vec<(usize, Vec<u8>)> {
-    [1usize, 2, 4]
+    poses_for_threads(dataset, extra, out, &[1, 2, 4])
+}
+
+/// The same for each thread count of `threads`.
+fn poses_for_threads(
+    dataset: &Path,
+    extra: &[&str],
+    out: &Path,
+    threads: &[usize],
+) -> Vec<(usize, Vec<u8>)> {
+    threads
         .iter()
         .map(|&n| {
-            let dir = out.join(format!("threads-{n}"));
+            let dir = out.join(format!("threads-{n}{}", extra.join("")));
             let mut args: Vec<OsString> = vec![
                 "run".into(),
                 dataset.into(),
@@ -117,4 +127,37 @@ fn simulated_poses_are_bit_identical_for_1_2_and_4_threads() {
     kiss_odom(&sim.iter().collect::<Vec<_>>());
     let runs = poses_per_thread_count(&data, &[], tmp.path());
     assert_identical("simulated urban", &runs, 8);
+}
+
+#[test]
+fn the_accurate_preset_is_bit_identical_for_1_2_and_3_threads_and_counts_its_plane_terms() {
+    let seq = kitti_mini().join("sequences/01");
+    let tmp = tempfile::tempdir().unwrap();
+    let extra = ["--frames", "0..5", "--preset", "accurate"];
+    let runs = poses_for_threads(&seq, &extra, tmp.path(), &[1, 2, 3]);
+    assert_identical("kitti-mini 01, accurate preset", &runs, 5);
+    let default = poses_for_threads(&seq, &["--frames", "0..5"], tmp.path(), &[1]);
+    assert_ne!(
+        default[0].1, runs[0].1,
+        "the preset's poses are not the default's"
+    );
+    // frames.csv: every frame after the first registered with point-to-plane terms.
+    let csv = std::fs::read_to_string(
+        tmp.path()
+            .join(format!("threads-1{}/frames.csv", extra.join(""))),
+    )
+    .unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (planar, all) = (col("plane_correspondences"), col("correspondences"));
+    let counts: Vec<(u64, u64)> = lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[planar].parse().unwrap(), f[all].parse().unwrap())
+        })
+        .collect();
+    println!("accurate preset, kitti-mini 01: (point-to-plane, all) correspondences {counts:?}");
+    assert_eq!(counts[0].0, 0, "the first frame has no map");
+    assert!(counts[1..].iter().all(|&(p, a)| p > 0 && p <= a));
 }

@@ -18,7 +18,6 @@ use crate::local_map::{MapView, PointCodec};
 use crate::observability::observability;
 use crate::registration::{
     align_points_to_map, moved_points, Alignment, Executor, IcpParams, MotionPrior,
-    PLANE_KERNEL_SCALE,
 };
 use crate::scalar::Real;
 
@@ -120,7 +119,7 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
             let (hold, sideways) = (cfg.robust.prediction_prior, cfg.robust.lateral_prior);
             let prior =
                 (at.frames >= 2).then(|| MotionPrior::new(&at.last_pose, &at.pose, hold, sideways));
-            (T::of(PLANE_KERNEL_SCALE), prior)
+            (cfg.robust.kernel_scale, prior)
         } else {
             (cfg.kernel_scale, None)
         };

@@ -1,4 +1,5 @@
-//! Every parameter of a run, as TOML: defaults, then `--config FILE`, then command-line flags.
+//! Every parameter of a run, as TOML: a preset's defaults, then `--config FILE`, then
+//! command-line flags.
 //! The `config.toml` a run writes holds the values actually used and can be passed back with
 //! `--config` to repeat the run. `--config` also reads kiss-icp's YAML (a `.yaml` or `.yml`
 //! file, [`Settings::from_kiss_icp_yaml`]).
@@ -52,6 +53,38 @@ impl From<DegeneracyMode> for Degeneracy {
             DegeneracyMode::Reference => Degeneracy::Reference,
             DegeneracyMode::Robust => Degeneracy::Robust,
             DegeneracyMode::Hold => Degeneracy::Hold,
+        }
+    }
+}
+
+/// The set of defaults a run starts from (`[pipeline] preset`, `--preset`): every setting
+/// not given takes the preset's value.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum PresetName {
+    /// kiss-icp 1.3.0's parameters: its poses, bit for bit.
+    #[default]
+    Default,
+    /// The lowest error measured here (`Config::accurate`): point-to-plane terms where the
+    /// map is planar on every frame, `r_max / 200` voxels; about half the default's frame rate.
+    Accurate,
+}
+
+/// Which defaults the settings start from.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Pipeline {
+    /// `default` or `accurate`.
+    pub preset: PresetName,
+}
+
+impl From<Degeneracy> for DegeneracyMode {
+    fn from(d: Degeneracy) -> Self {
+        match d {
+            Degeneracy::Reference => DegeneracyMode::Reference,
+            Degeneracy::Robust => DegeneracyMode::Robust,
+            Degeneracy::Hold => DegeneracyMode::Hold,
         }
     }
 }
@@ -116,6 +149,9 @@ pub struct Registration {
     /// Robust mode's vehicle prior per correspondence: no sideways motion along the sensor's
     /// y axis (`Robust::lateral_prior`); 0: none.
     pub lateral_prior: f64,
+    /// Robust mode's Geman-McClure scale over sigma in registrations with plane terms
+    /// (`Robust::kernel_scale`).
+    pub plane_kernel_scale: f64,
     /// `reference`, `robust` or `hold`.
     pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
@@ -167,6 +203,8 @@ pub struct Runtime {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Settings {
+    /// The preset.
+    pub pipeline: Pipeline,
     /// Sensor data.
     pub data: Data,
     /// Map.
@@ -225,6 +263,7 @@ impl Default for Registration {
             plane_gate: Robust::<f64>::new().plane_gate,
             prediction_prior: Robust::<f64>::new().prediction_prior,
             lateral_prior: Robust::<f64>::new().lateral_prior,
+            plane_kernel_scale: Robust::<f64>::new().kernel_scale,
             degeneracy: DegeneracyMode::Reference,
             work_budget: None,
         }
@@ -254,27 +293,91 @@ impl Default for Runtime {
 }
 
 impl Settings {
+    /// The defaults of `preset`: every pipeline setting from the core's configuration of that
+    /// preset (`Config::new` or `Config::accurate`), the voxel size left to follow the range.
+    pub fn preset(preset: PresetName) -> Self {
+        let mut s = Self::default();
+        s.pipeline.preset = preset;
+        let c = s.core_defaults();
+        s.mapping.max_points_per_voxel = c.max_points_per_voxel;
+        s.mapping.alpha = c.alpha;
+        s.mapping.beta = c.beta;
+        s.adaptive_threshold.initial_threshold = c.initial_threshold;
+        s.adaptive_threshold.min_motion_th = c.min_motion_threshold;
+        let r = &mut s.registration;
+        r.max_num_iterations = c.max_iterations;
+        r.convergence_criterion = c.convergence_criterion;
+        r.max_correspondence_factor = c.max_correspondence_factor;
+        r.degeneracy_ratio = c.degeneracy_ratio;
+        r.plane_gate = c.robust.plane_gate;
+        r.prediction_prior = c.robust.prediction_prior;
+        r.lateral_prior = c.robust.lateral_prior;
+        r.plane_kernel_scale = c.robust.kernel_scale;
+        r.degeneracy = c.degeneracy.into();
+        s
+    }
+
+    /// The core's configuration of this preset at this range.
+    fn core_defaults(&self) -> Config<f64> {
+        match self.pipeline.preset {
+            PresetName::Default => Config::new(self.data.max_range),
+            PresetName::Accurate => Config::accurate(self.data.max_range),
+        }
+    }
+
     /// Reads a settings file: kiss-icp's YAML when its name ends in `.yaml` or `.yml`, else
     /// TOML (the layout of `config.toml`). Unknown keys are errors (a typo must not silently
     /// fall back).
     pub fn load(path: &Path) -> Result<Self> {
+        Self::load_as(path, None)
+    }
+
+    /// [`Self::load`], over the defaults of `preset` when given (replacing the file's
+    /// `[pipeline] preset`), else of the file's preset.
+    pub fn load_as(path: &Path, preset: Option<PresetName>) -> Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
         let yaml = path
             .extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
         if yaml {
-            return Self::from_kiss_icp_yaml(&text).with_context(|| {
+            let base = Self::preset(preset.unwrap_or_default());
+            return Self::from_kiss_icp_yaml_over(&text, base).with_context(|| {
                 format!("{}: invalid kiss-icp YAML configuration", path.display())
             });
         }
-        toml::from_str(&text).with_context(|| {
+        let context = || {
             format!(
                 "{}: invalid configuration (read as TOML; a kiss-icp YAML file needs a .yaml \
                  or .yml name)",
                 path.display()
             )
-        })
+        };
+        // Read once as settings for the errors' line numbers, then over the preset's defaults.
+        let file: Settings = toml::from_str(&text).with_context(context)?;
+        let table: toml::Table = toml::from_str(&text).with_context(context)?;
+        Self::preset(preset.unwrap_or(file.pipeline.preset))
+            .overlaid(table)
+            .with_context(context)
+    }
+
+    /// These settings with every value `over` gives in its place (sections merged key by key).
+    fn overlaid(&self, over: toml::Table) -> Result<Self> {
+        fn merge(base: &mut toml::Table, over: toml::Table) {
+            for (key, value) in over {
+                match (base.get_mut(&key), value) {
+                    (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+                    (_, value) => {
+                        base.insert(key, value);
+                    }
+                }
+            }
+        }
+        let mut base = toml::Table::try_from(self)?;
+        merge(&mut base, over);
+        let mut s: Settings = base.try_into()?;
+        s.pipeline.preset = self.pipeline.preset;
+        Ok(s)
     }
 
     /// Settings from kiss-icp's YAML configuration (`kiss_icp.config.load_config`'s file), read
@@ -284,9 +387,15 @@ impl Settings {
     /// `null` as not given, and the voxel size made explicit at `max_range / 100` when not given,
     /// as kiss-icp does. `adaptive_threshold.fixed_threshold` is refused: the core always adapts.
     pub fn from_kiss_icp_yaml(text: &str) -> Result<Self> {
+        Self::from_kiss_icp_yaml_over(text, Settings::default())
+    }
+
+    /// [`Self::from_kiss_icp_yaml`] over `base` (a preset's defaults): each section's keys
+    /// replace `base`'s.
+    fn from_kiss_icp_yaml_over(text: &str, base: Settings) -> Result<Self> {
         use serde_yaml_ng::Value;
         let doc: Value = serde_yaml_ng::from_str(text)?;
-        let mut s = Settings::default();
+        let mut s = base;
         let top = match doc {
             Value::Null => return Ok(s.with_explicit_voxel()),
             Value::Mapping(m) => m,
@@ -303,8 +412,16 @@ impl Settings {
                 .map(|(k, v)| (k.clone(), v.clone()));
             Ok(Value::Mapping(kept.collect()))
         };
-        fn section<T: serde::de::DeserializeOwned>(name: &str, v: Value) -> Result<T> {
-            serde_yaml_ng::from_value(v).with_context(|| format!("`{name}`"))
+        fn section<T: serde::de::DeserializeOwned + Serialize>(
+            name: &str,
+            base: &T,
+            v: Value,
+        ) -> Result<T> {
+            let mut merged = serde_yaml_ng::to_value(base)?;
+            if let (Value::Mapping(m), Value::Mapping(over)) = (&mut merged, v) {
+                m.extend(over);
+            }
+            serde_yaml_ng::from_value(merged).with_context(|| format!("`{name}`"))
         }
         let mut threads = None;
         for (key, value) in &top {
@@ -314,8 +431,8 @@ impl Settings {
             }
             match name {
                 "out_dir" => {}
-                "data" => s.data = section(name, given(name, value)?)?,
-                "mapping" => s.mapping = section(name, given(name, value)?)?,
+                "data" => s.data = section(name, &s.data, given(name, value)?)?,
+                "mapping" => s.mapping = section(name, &s.mapping, given(name, value)?)?,
                 "adaptive_threshold" => {
                     let mut v = given(name, value)?;
                     if let Some(t) = v.as_mapping_mut().and_then(|m| m.remove("fixed_threshold")) {
@@ -325,15 +442,15 @@ impl Settings {
                             serde_yaml_ng::to_string(&t).unwrap_or_default().trim()
                         );
                     }
-                    s.adaptive_threshold = section(name, v)?;
+                    s.adaptive_threshold = section(name, &s.adaptive_threshold, v)?;
                 }
                 "registration" => {
                     let mut v = given(name, value)?;
                     threads = v.as_mapping_mut().and_then(|m| m.remove("max_num_threads"));
-                    s.registration = section(name, v)?;
+                    s.registration = section(name, &s.registration, v)?;
                 }
-                "capacities" => s.capacities = section(name, given(name, value)?)?,
-                "runtime" => s.runtime = section(name, given(name, value)?)?,
+                "capacities" => s.capacities = section(name, &s.capacities, given(name, value)?)?,
+                "runtime" => s.runtime = section(name, &s.runtime, given(name, value)?)?,
                 _ => bail!(
                     "unknown section `{}` (kiss-icp's: data, mapping, adaptive_threshold, \
                      registration, out_dir; kiss-odom's: capacities, runtime)",
@@ -346,13 +463,14 @@ impl Settings {
             .and_then(|r| r.get("threads"))
             .is_some_and(|t| !t.is_null());
         if let (Some(t), false) = (threads, runtime_threads) {
-            s.runtime.threads = section("registration.max_num_threads", t)
+            s.runtime.threads = serde_yaml_ng::from_value(t)
+                .context("`registration.max_num_threads`")
                 .map(|t: Option<usize>| t.unwrap_or(0))?;
         }
         Ok(s.with_explicit_voxel())
     }
 
-    /// These settings with the voxel size given (`max_range / 100` when it was not).
+    /// These settings with the voxel size given (the preset's when it was not).
     fn with_explicit_voxel(mut self) -> Self {
         self.mapping.voxel_size = Some(self.voxel_size());
         self
@@ -367,11 +485,12 @@ impl Settings {
         Ok(toml::to_string(&s)?)
     }
 
-    /// `v`: explicit, or `max_range / 100` as in the paper (in every mode).
+    /// `v`: explicit, or the preset's: `max_range / 100` as in the paper (`accurate`:
+    /// `max_range / 200`).
     pub fn voxel_size(&self) -> f64 {
         self.mapping
             .voxel_size
-            .unwrap_or_else(|| Config::new(self.data.max_range).voxel_size)
+            .unwrap_or_else(|| self.core_defaults().voxel_size)
     }
 
     /// The Geman-McClure scale over sigma of the reference's registration: explicit, or 1 as
@@ -421,6 +540,7 @@ impl Settings {
             plane_gate: T::of(self.registration.plane_gate),
             prediction_prior: T::of(self.registration.prediction_prior),
             lateral_prior: T::of(self.registration.lateral_prior),
+            kernel_scale: T::of(self.registration.plane_kernel_scale),
         };
         c.degeneracy = self.registration.degeneracy.into();
         c.work_budget = self.registration.work_budget;
@@ -455,7 +575,7 @@ impl Settings {
         let Some(e) = self.fault() else {
             return Ok(());
         };
-        let defaults = Settings::default();
+        let defaults = Settings::preset(self.pipeline.preset);
         let culprits: Vec<String> = fields()
             .iter()
             .filter(|f| {
@@ -556,7 +676,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 27] {
+fn fields() -> [Field; 28] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -574,6 +694,7 @@ fn fields() -> [Field; 27] {
         field!(registration.plane_gate, true),
         field!(registration.prediction_prior, true),
         field!(registration.lateral_prior, true),
+        field!(registration.plane_kernel_scale, true),
         field!(registration.degeneracy, false),
         field!(registration.work_budget, false),
         field!(capacities.scan_points, true),

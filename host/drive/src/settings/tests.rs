@@ -208,3 +208,65 @@ fn threads_are_capped_to_the_cores_with_a_warning() {
     s.runtime.threads = 1;
     assert_eq!((s.threads(), s.threads_warning()), (1, None));
 }
+
+#[test]
+fn the_accurate_preset_gives_its_defaults_and_what_is_given_wins() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    // No file: the preset's configuration, its voxels following the range.
+    let a = Settings::preset(PresetName::Accurate);
+    assert_eq!(a.core_config::<f64>().unwrap(), Config::accurate(100.0));
+    assert!(a.capacities().unwrap().plane_terms);
+    let default = Settings::preset(PresetName::Default);
+    assert_eq!(default, Settings::default());
+    // From a file: what it gives wins, the rest is the preset's.
+    let p = file(
+        "a.toml",
+        "[pipeline]\npreset = \"accurate\"\n[data]\nmax_range = 60.0\n[registration]\nmax_num_iterations = 70\n",
+    );
+    let s = Settings::load(&p).unwrap();
+    let want = Config {
+        max_iterations: 70,
+        ..Config::accurate(60.0)
+    };
+    assert_eq!(s.core_config::<f64>().unwrap(), want);
+    // The flag replaces the file's preset; the file's values still win.
+    let d = Settings::load_as(&p, Some(PresetName::Default)).unwrap();
+    assert_eq!(d.voxel_size(), 0.6);
+    assert_eq!(d.registration.degeneracy, DegeneracyMode::Reference);
+    assert_eq!(d.registration.max_num_iterations, 70);
+    // A plain file over the accurate preset.
+    let plain = file("b.toml", "[data]\nmax_range = 80.0\n");
+    let s = Settings::load_as(&plain, Some(PresetName::Accurate)).unwrap();
+    assert_eq!(s.core_config::<f64>().unwrap(), Config::accurate(80.0));
+    // config.toml as `run` writes it loads back to the same settings.
+    let written = file("c.toml", &s.to_toml().unwrap());
+    assert_eq!(
+        Settings::load(&written)
+            .unwrap()
+            .core_config::<f64>()
+            .unwrap(),
+        Config::accurate(80.0)
+    );
+    // kiss-icp's YAML over the preset: its keys win, the preset gives the rest.
+    let yaml = file(
+        "k.yaml",
+        "data:\n  max_range: 50.0\nmapping:\n  max_points_per_voxel: 12\n",
+    );
+    let s = Settings::load_as(&yaml, Some(PresetName::Accurate)).unwrap();
+    let want = Config {
+        max_points_per_voxel: 12,
+        ..Config::accurate(50.0)
+    };
+    assert_eq!(s.core_config::<f64>().unwrap(), want);
+    // Unknown keys are still refused, with the file named.
+    let bad = file("d.toml", "[pipeline]\npreset = \"accurate\"\nvoxel = 1\n");
+    let e = format!("{:#}", Settings::load(&bad).unwrap_err());
+    assert!(e.contains("d.toml") && e.contains("voxel"), "{e}");
+    let bad = file("e.toml", "[pipeline]\npreset = \"fastest\"\n");
+    assert!(Settings::load(&bad).is_err());
+}

@@ -1,0 +1,49 @@
+#!/usr/bin/env python3
+"""The Markdown table of bench/accurate.sh's results (BENCHMARKS.md, "The accurate preset").
+
+    python3 bench/accurate_table.py RESULTS.jsonl
+
+A run is won when the preset's KITTI relative error (where the run is long enough to have
+one) and ATE are at or below both kiss-icp's (our default mode) and GenZ-ICP's.
+"""
+
+import json
+import sys
+from collections import defaultdict
+
+
+def cell(r):
+    if r is None:
+        return "n/a"
+    k = r.get("kitti_t_err_pct")
+    return f"{'-' if k is None else f'{k:.3f}'} / {r['ate_m']:.3f}"
+
+
+def at_or_below(a, b):
+    pairs = [(a.get(k), b.get(k)) for k in ("kitti_t_err_pct", "ate_m")]
+    return all(x is None or y is None or x <= y for x, y in pairs)
+
+
+def main():
+    runs = defaultdict(dict)
+    for line in open(sys.argv[1]):
+        r = json.loads(line)
+        runs[r["run"]][r["system"].split("-")[0]] = r
+    print("| run | kiss-icp (default): KITTI % / ATE m | accurate | GenZ-ICP (preset) "
+          "| MAD-ICP | accurate/default f/s | point-to-plane frames | accurate wins |")
+    print("|---|---|---|---|---|---|---|---|")
+    won = 0
+    for name, s in runs.items():
+        ref, acc, gz, mad = (s.get(k) for k in ("default", "accurate", "genz", "mad"))
+        wins = acc is not None and all(at_or_below(acc, o) for o in (ref, gz) if o)
+        won += wins
+        preset = f" ({gz['system'][5:]})" if gz else ""
+        ratio = f"{acc['hz'] / ref['hz']:.2f}" if acc and ref else "n/a"
+        print(f"| {name} | {cell(ref)} | **{cell(acc)}** | {cell(gz)}{preset} | {cell(mad)} "
+              f"| {ratio} | {acc.get('plane_frames', 'n/a') if acc else 'n/a'} "
+              f"| {'yes' if wins else 'no'} |")
+    print(f"\naccurate at or below kiss-icp and GenZ-ICP on {won} of {len(runs)} runs")
+
+
+if __name__ == "__main__":
+    main()
