@@ -115,7 +115,7 @@ pub struct Robust<T> {
     /// turn's motion across it then fixes the motion along it. 0: none.
     pub lateral_prior: T,
     /// The Geman-McClure scale of a registration with plane terms, over `sigma` (default
-    /// [`crate::PLANE_KERNEL_SCALE`], the paper's 1/3).
+    /// [`crate::stages::PLANE_KERNEL_SCALE`], the paper's 1/3).
     pub kernel_scale: T,
 }
 
