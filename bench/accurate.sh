@@ -11,11 +11,13 @@
 # kitti-mini, `outdoor` elsewhere), MAD-ICP its defaults (`kitti` reader on kitti-mini).
 # ACCURATE_ARGS adds flags to the preset's runs (to measure a candidate setting).
 #
+# The preset also runs in f32 (`accuratef32`), for its error against f64's.
+#
 # Writes $OUT/results.jsonl (one line per run and system) and prints the Markdown table
 # (bench/accurate_table.py). Every system runs on one thread; run it alone at `nice` on a
 # shared machine. The peers' venvs are made here (target/genzvenv, target/madvenv; MAD-ICP is
 # built from its sdist, a few minutes). REUSE_PEERS=1 keeps the peers' poses of an earlier run
-# in the same $OUT (they do not depend on kiss-odom).
+# in the same $OUT (they do not depend on kiss-odom); PEERS=0 records only such kept runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FRAMES=${1:-500}
@@ -30,8 +32,10 @@ BIN=${BIN:-target/release/kiss-odom}
 read -r -a extra <<< "${ACCURATE_ARGS:-}"
 [ -x "$BIN" ] || cargo build --release -q -p kiss-odom
 . bench/peers.sh
-genz_venv
-mad_venv
+if [ "${PEERS:-1}" != 0 ]; then
+  genz_venv
+  mad_venv
+fi
 mkdir -p "$OUT"
 : > "$OUT/results.jsonl"
 
@@ -50,6 +54,7 @@ for p in $PROFILES; do
     echo "== $name" >&2
     ours "$name" "$d" default >/dev/null
     ours "$name" "$d" accurate --preset accurate "${extra[@]}" >/dev/null
+    ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
     genz "$name" "$d" "$preset" "$d/poses.txt"
     mad "$name" "$d" "$d/poses.txt"
   done
@@ -60,6 +65,7 @@ for sq in $( [[ " $PROFILES " == *" kitti "* ]] && ls "$KITTI/sequences"); do
   echo "== $name" >&2
   gt=$(ours "$name" "$d" default)
   ours "$name" "$d" accurate --preset accurate "${extra[@]}" >/dev/null
+  ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
   genz "$name" "$d" kitti "$gt" --no-deskew
   mad "$name" "$d" "$gt" --kitti
 done

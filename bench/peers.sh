@@ -55,9 +55,13 @@ ours() {
 }
 
 # peer NAME SYSTEM GT COMMAND...: a peer's run (its poses to $OUT/NAME-SYSTEM.txt, which
-# COMMAND gets as its last argument), kept with REUSE_PEERS=1 when an earlier run left them.
+# COMMAND gets as its last argument), kept with REUSE_PEERS=1 when an earlier run left them;
+# with PEERS=0 only such kept runs are recorded (the peers run elsewhere).
 peer() {
   local o=$OUT/$1-$2.txt info
+  if [ "${PEERS:-1}" = 0 ] && [ ! -f "$o.json" ]; then
+    return 0
+  fi
   if [ -n "${REUSE_PEERS:-}" ] && [ -f "$o.json" ]; then
     info=$(cat "$o.json")  # a peer's poses do not depend on kiss-odom: keep an earlier run's
   else

@@ -302,7 +302,7 @@ mod tests {
         assert_eq!(&header[..3], ["index", "source", "outcome"]);
         let first = lines.next().unwrap();
         assert!(
-            first.starts_with("7,\"a,b.bin\",skipped,,,,,2.0,,,,,"),
+            first.starts_with("7,\"a,b.bin\",skipped,,,,,,2.0,,,,,"),
             "{first}"
         );
         assert!(
