@@ -17,8 +17,8 @@ pub type Codec = kiss_odom_core::Exact;
 #[cfg(not(feature = "exact"))]
 pub type Codec = kiss_odom_core::Quantized;
 
-/// Capacities of this build (`full` feature: full scale; `tiny`: a 16-beam sensor in 512 KiB;
-/// microcontroller scale otherwise).
+/// Capacities of this build (`full` feature: full scale; `tiny`: a 16-beam sensor in 512 KiB,
+/// `TINY_ACCURATE` with `accurate`; microcontroller scale otherwise).
 /// The `robust` and `accurate` features add room for point-to-plane terms.
 pub const CAPS: Capacities = Capacities {
     plane_terms: cfg!(any(feature = "robust", feature = "accurate")),
@@ -26,8 +26,16 @@ pub const CAPS: Capacities = Capacities {
 };
 #[cfg(feature = "full")]
 const SIZES: Capacities = Capacities::FULL_SCALE;
-#[cfg(any(feature = "tiny", feature = "packets", feature = "net"))]
+#[cfg(all(
+    any(feature = "tiny", feature = "packets", feature = "net"),
+    not(feature = "accurate")
+))]
 const SIZES: Capacities = Capacities::TINY;
+#[cfg(all(
+    any(feature = "tiny", feature = "packets", feature = "net"),
+    feature = "accurate"
+))]
+const SIZES: Capacities = Capacities::TINY_ACCURATE;
 #[cfg(not(any(
     feature = "full",
     feature = "tiny",
@@ -52,7 +60,11 @@ pub const CODEC_NAME: &str = if cfg!(feature = "exact") {
 pub const CAPS_NAME: &str = if cfg!(feature = "full") {
     "full_scale"
 } else if cfg!(any(feature = "tiny", feature = "packets", feature = "net")) {
-    "tiny"
+    if cfg!(feature = "accurate") {
+        "tiny_accurate"
+    } else {
+        "tiny"
+    }
 } else {
     "small"
 };
