@@ -500,5 +500,11 @@ mod tests {
         };
         assert_eq!(back, r, "nothing else differs from robust mode");
         assert!(a.validate().is_ok());
+        // Its 16-beam capacities: room for plane terms, more of every buffer than TINY's.
+        let (t, ta) = (Capacities::TINY, Capacities::TINY_ACCURATE);
+        assert!(ta.validate().is_ok() && ta.plane_terms);
+        assert_eq!(ta.scan_points, t.scan_points);
+        assert!(ta.merge_points > 2 * t.merge_points && ta.source_points > 2 * t.source_points);
+        assert!(ta.map_voxels > 2 * t.map_voxels && ta.map_points > 2 * t.map_points);
     }
 }
