@@ -11,7 +11,7 @@
 # kitti-mini, `outdoor` elsewhere), MAD-ICP its defaults (`kitti` reader on kitti-mini).
 # ACCURATE_ARGS adds flags to the preset's runs (to measure a candidate setting).
 #
-# The preset also runs in f32 (`accuratef32`), for its error against f64's.
+# The preset also runs in f32 (`accuratef32`), for its error against f64's (F32=0: not).
 #
 # Writes $OUT/results.jsonl (one line per run and system) and prints the Markdown table
 # (bench/accurate_table.py). Every system runs on one thread; run it alone at `nice` on a
@@ -54,7 +54,7 @@ for p in $PROFILES; do
     echo "== $name" >&2
     ours "$name" "$d" default >/dev/null
     ours "$name" "$d" accurate --preset accurate "${extra[@]}" >/dev/null
-    ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
+    [ "${F32:-1}" = 0 ] || ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
     genz "$name" "$d" "$preset" "$d/poses.txt"
     mad "$name" "$d" "$d/poses.txt"
   done
@@ -65,7 +65,7 @@ for sq in $( [[ " $PROFILES " == *" kitti "* ]] && ls "$KITTI/sequences"); do
   echo "== $name" >&2
   gt=$(ours "$name" "$d" default)
   ours "$name" "$d" accurate --preset accurate "${extra[@]}" >/dev/null
-  ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
+  [ "${F32:-1}" = 0 ] || ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
   genz "$name" "$d" kitti "$gt" --no-deskew
   mad "$name" "$d" "$gt" --kitti
 done

@@ -117,7 +117,7 @@ pub struct PipelineArgs {
     pub config: Option<PathBuf>,
     /// The defaults every setting not given takes: `default` (kiss-icp 1.3.0's poses, bit for
     /// bit) or `accurate` (the lowest error measured: point-to-plane terms where the map is
-    /// planar on every frame, max_range / 200 voxels; about half the frame rate); replaces
+    /// planar on every frame, max_range / 200 voxels; 3-10 times the time); replaces
     /// the file's `[pipeline] preset` [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,

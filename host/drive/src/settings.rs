@@ -67,7 +67,7 @@ pub enum PresetName {
     #[default]
     Default,
     /// The lowest error measured here (`Config::accurate`): point-to-plane terms where the
-    /// map is planar on every frame, `r_max / 200` voxels; about half the default's frame rate.
+    /// map is planar on every frame, `r_max / 200` voxels; 3-10 times the default's time.
     Accurate,
 }
 
