@@ -25,12 +25,7 @@ SEEDS=${2:-"1 2 3"}
 PROFILES=${PROFILES:-"urban fast corridor tunnel field vlp16 mid360 kitti"}
 GEN=${GEN:-/work/data-gen/accurate}
 OUT=${OUT:-$GEN/results-$FRAMES}
-KITTI=${KISS_ODOM_KITTI_MINI:-../shared/data/kitti-mini}
-GENZ=${GENZ_VENV:-target/genzvenv}
-MAD=${MAD_VENV:-target/madvenv}
-BIN=${BIN:-target/release/kiss-odom}
 read -r -a extra <<< "${ACCURATE_ARGS:-}"
-[ -x "$BIN" ] || cargo build --release -q -p kiss-odom
 . bench/peers.sh
 if [ "${PEERS:-1}" != 0 ]; then
   genz_venv

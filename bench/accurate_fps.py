@@ -23,6 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import kiss_odom
 import numpy as np
 from kiss_icp.config import load_config
 from kiss_icp.kiss_icp import KissICP
@@ -32,26 +33,15 @@ BIN = os.environ.get("BIN", str(REPO / "target/release/kiss-odom"))
 
 
 def frames(data: Path):
-    """The frames as kiss-odom reads them: KITTI scans with its elevation correction."""
+    """The frames as kiss-odom reads them: KITTI scans with kiss-icp's elevation correction."""
     kitti = (data / "calib.txt").exists()
     for f in sorted((data / "velodyne").glob("*.bin")):
         pts = np.fromfile(f, dtype=np.float32).reshape(-1, 4)[:, :3].astype(np.float64)
         stamps = data / "timestamps" / f.name
         if kitti:
-            yield correct_kitti(pts), np.array([])
+            yield kiss_odom.correct_kitti_scan(pts), np.array([])
         else:
             yield pts, (np.fromfile(stamps, dtype="<f8") if stamps.exists() else np.array([]))
-
-
-def correct_kitti(pts: np.ndarray) -> np.ndarray:
-    """kiss-icp's KITTI loader's correction: each point turned up by 0.205 degrees."""
-    angle = np.deg2rad(0.205)
-    axis = np.cross(pts, [0.0, 0.0, 1.0])
-    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
-    c, s = np.cos(angle), np.sin(angle)
-    cross = np.cross(axis, pts)
-    dot = np.sum(axis * pts, axis=1, keepdims=True)
-    return pts * c + cross * s + axis * dot * (1 - c)
 
 
 def kiss_icp_seconds(loaded) -> float:

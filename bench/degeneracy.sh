@@ -23,10 +23,6 @@ SEEDS=${2:-"1 2 3"}
 PROFILES=${PROFILES:-"corridor plane tunnel field urban fast kitti"}
 GEN=${GEN:-/work/data-gen/degeneracy}
 OUT=${OUT:-$GEN/results-$FRAMES}
-KITTI=${KISS_ODOM_KITTI_MINI:-../shared/data/kitti-mini}
-GENZ=${GENZ_VENV:-target/genzvenv}
-BIN=${BIN:-target/release/kiss-odom}
-[ -x "$BIN" ] || cargo build --release -q -p kiss-odom
 . bench/peers.sh
 genz_venv
 mkdir -p "$OUT"

@@ -1,6 +1,12 @@
-# Shared by bench/degeneracy.sh and bench/accurate.sh (sourced, not run): the peers' venvs,
-# running each system on a folder and recording its scores as one JSON line in $OUT/results.jsonl.
-# Needs BIN (kiss-odom), OUT, GENZ (GenZ-ICP's venv) and, for `mad`, MAD (MAD-ICP's venv).
+# Shared by bench/degeneracy.sh and bench/accurate.sh (sourced, not run, from the repository's
+# root): the peers' venvs, running each system on a folder and recording its scores as one JSON
+# line in $OUT/results.jsonl. Needs OUT; BIN (kiss-odom, built when missing), GENZ and MAD (the
+# peers' venvs) and KITTI (kitti-mini) have defaults.
+BIN=${BIN:-target/release/kiss-odom}
+GENZ=${GENZ_VENV:-target/genzvenv}
+MAD=${MAD_VENV:-target/madvenv}
+KITTI=${KISS_ODOM_KITTI_MINI:-../shared/data/kitti-mini}
+[ -x "$BIN" ] || cargo build --release -q -p kiss-odom
 
 # GenZ-ICP 0.3.2. It reads its presets' YAML files with PyYAML, which only its heavy `[all]`
 # extra (open3d, polyscope, ouster-sdk...) brings: installed beside the package instead.

@@ -137,7 +137,7 @@ impl<T: Real> Robust<T> {
             plane_gate: T::one(),
             prediction_prior: T::of(0.01),
             lateral_prior: T::one(),
-            kernel_scale: T::of(PLANE_KERNEL_SCALE),
+            ..Self::new()
         }
     }
 
@@ -146,9 +146,7 @@ impl<T: Real> Robust<T> {
     pub fn accurate() -> Self {
         Self {
             plane_gate: T::one(),
-            prediction_prior: T::zero(),
-            lateral_prior: T::zero(),
-            kernel_scale: T::of(PLANE_KERNEL_SCALE),
+            ..Self::new()
         }
     }
 
@@ -208,9 +206,10 @@ impl<T: Real> Config<T> {
 
     /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
     /// preset"), on ordinary scenes as well as degenerate ones (not on a bare corridor, whose
-    /// axis only a car's priors pin), at 3-10 times the default's time. Every frame is registered with point-to-plane terms where the map is planar
-    /// (GenZ-ICP's weighting, see `registration::planes`) and point-to-point terms elsewhere, on
-    /// a map of `r_max / 200` voxels, with no motion prior (the priors assume a car; a
+    /// axis only a car's priors pin), at 3-10 times the default's time. Every frame is
+    /// registered with point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
+    /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
+    /// voxels, with no motion prior (the priors assume a car; a
     /// hand-held, legged or flying sensor breaks them). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {

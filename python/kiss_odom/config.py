@@ -80,8 +80,9 @@ def settings_from(
 ) -> dict:
     """The ``kiss-odom run`` settings for ``config`` plus kiss-odom's extras: ``preset``
     (``"default"`` or ``"accurate"``: the defaults every setting ``config`` does not give
-    takes; replaces the config's ``pipeline.preset``), ``scalar`` (``"f64"`` or ``"f32"``), ``map_storage`` (``"exact"`` or ``"quantized"``),
-    ``capacities`` (``"full"``, ``"small"`` or a dict of the five capacities) and ``threads``
+    takes; replaces the config's ``pipeline.preset``), ``scalar`` (``"f64"`` or ``"f32"``),
+    ``map_storage`` (``"exact"`` or ``"quantized"``), ``capacities`` (``"full"``,
+    ``"small"`` or a dict of the five capacities) and ``threads``
     (0: all cores; results do not depend on it)."""
     given = _as_dict(config, preset)
     given.pop("out_dir", None)

@@ -428,12 +428,12 @@ impl Odometry {
     }
 }
 
-/// The preset named `name` (`"default"` or `"accurate"`; `None`: the default).
-fn preset_named(name: Option<&str>) -> PyResult<PresetName> {
-    name.map_or(Ok(PresetName::Default), |n| {
-        serde_json::from_value(serde_json::Value::from(n)).map_err(|_| {
-            PyValueError::new_err(format!("preset must be 'default' or 'accurate', not {n:?}"))
-        })
+/// The preset named `name` (`"default"` or `"accurate"`).
+fn preset_named(name: &str) -> PyResult<PresetName> {
+    serde_json::from_value(serde_json::Value::from(name)).map_err(|_| {
+        PyValueError::new_err(format!(
+            "preset must be 'default' or 'accurate', not {name:?}"
+        ))
     })
 }
 
@@ -442,7 +442,8 @@ fn preset_named(name: Option<&str>) -> PyResult<PresetName> {
 #[pyo3(signature = (preset=None))]
 fn default_settings_json(preset: Option<&str>) -> PyResult<String> {
     let err = |e: serde_json::Error| PyRuntimeError::new_err(e.to_string());
-    let mut v = serde_json::to_value(Settings::preset(preset_named(preset)?)).map_err(err)?;
+    let preset = preset.map(preset_named).transpose()?.unwrap_or_default();
+    let mut v = serde_json::to_value(Settings::preset(preset)).map_err(err)?;
     // `config.toml` leaves the prior's section out while it is off; a dict may set it.
     v["imu"] = serde_json::to_value(kiss_odom_drive::Imu::default()).map_err(err)?;
     serde_json::to_string(&v).map_err(err)
@@ -455,7 +456,7 @@ fn default_settings_json(preset: Option<&str>) -> PyResult<String> {
 #[pyfunction]
 #[pyo3(signature = (path, preset=None))]
 fn load_settings_json(path: std::path::PathBuf, preset: Option<&str>) -> PyResult<String> {
-    let preset = preset.map(|p| preset_named(Some(p))).transpose()?;
+    let preset = preset.map(preset_named).transpose()?;
     let s = Settings::load_as(&path, preset).map_err(value_error)?;
     s.refuse_non_finite()
         .map_err(|e| value_error(e.context(path.display().to_string())))?;
