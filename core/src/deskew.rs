@@ -7,9 +7,9 @@
 //! are therefore end-of-sweep poses. We follow the reference.
 
 use crate::geometry::{Point, Pose};
-use crate::lie::{se3_exp, se3_log};
+use crate::lie::{se3_exp, se3_log, so3_exp, so3_log};
 use crate::scalar::Real;
-use nalgebra::Vector6;
+use nalgebra::{UnitQuaternion, Vector6};
 
 /// Why a scan's timestamps were not used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,9 +66,72 @@ impl TimeSpan {
     }
 }
 
-/// Applies Eq. (4) in the reference's end-of-sweep form to points of one scan.
-pub struct Deskewer<T: Real> {
+/// Intervals of a sweep at whose ends [`SweepRotation`] keeps the rotation.
+pub const SWEEP_KNOTS: usize = 16;
+
+/// How the sensor turned through one sweep when its rate was not constant (measured, e.g. by a
+/// gyroscope): the rotation from the sensor's axes at normalised time `s` to its axes at the
+/// sweep's end, kept at `s = k / SWEEP_KNOTS` and at a constant rate between those knots.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SweepRotation<T: Real> {
+    /// `knots[k]`: the rotation from the axes at `s = k / SWEEP_KNOTS` to the end's.
+    knots: [UnitQuaternion<T>; SWEEP_KNOTS + 1],
+}
+
+impl<T: Real> SweepRotation<T> {
+    /// From the body's rotation since the sweep's start at each knot (`turned[0]` the
+    /// identity, `turned[SWEEP_KNOTS]` the whole sweep's).
+    pub fn from_start(turned: &[UnitQuaternion<T>; SWEEP_KNOTS + 1]) -> Self {
+        let to_end = turned[SWEEP_KNOTS].inverse();
+        Self {
+            knots: turned.map(|q| to_end * q),
+        }
+    }
+
+    /// The rotation from the axes at normalised time `s` to the end's; outside `[0, 1]` the
+    /// first or last interval's rate goes on.
+    pub fn at(&self, s: f64) -> UnitQuaternion<T> {
+        let x = s * SWEEP_KNOTS as f64;
+        // In range, and 0 for NaN: `as` saturates.
+        let k = (libm::floor(x) as usize).min(SWEEP_KNOTS - 1);
+        let (a, b) = (self.knots[k], self.knots[k + 1]);
+        let (step, _) = so3_log(&(a.inverse() * b));
+        a * so3_exp(&(step * T::of(x - k as f64))).0
+    }
+}
+
+/// The motion of one sweep as deskewing applies it: Eq. (4) in the reference's end-of-sweep
+/// form, the sensor at normalised time `s` moved by `Exp((s - 1) Log(dT))` to the end, its
+/// rotation replaced by a measured [`SweepRotation`] when there is one.
+#[derive(Clone, Copy, Debug)]
+pub struct SweepMotion<T: Real> {
     xi: Vector6<T>,
+    rotation: Option<SweepRotation<T>>,
+}
+
+impl<T: Real> SweepMotion<T> {
+    /// The motion of a sweep that moved by `relative_motion` (the last frame's delta), turning
+    /// as `rotation` measured if given (the translation stays `relative_motion`'s).
+    pub fn new(relative_motion: &Pose<T>, rotation: Option<SweepRotation<T>>) -> Self {
+        Self {
+            xi: se3_log(relative_motion),
+            rotation,
+        }
+    }
+
+    /// The motion from the sensor at normalised time `s` to the sweep's end.
+    pub fn at(&self, s: f64) -> Pose<T> {
+        let mut m = se3_exp(&(self.xi * T::of(s - 1.0)));
+        if let Some(r) = &self.rotation {
+            m.rotation = r.at(s);
+        }
+        m
+    }
+}
+
+/// Applies a [`SweepMotion`] to the points of one scan.
+pub struct Deskewer<T: Real> {
+    motion: SweepMotion<T>,
     span: TimeSpan,
     cached_s: f64,
     cached: Pose<T>,
@@ -77,8 +140,18 @@ pub struct Deskewer<T: Real> {
 impl<T: Real> Deskewer<T> {
     /// A deskewer for a scan whose sweep moved by `relative_motion` (the last frame's delta).
     pub fn new(relative_motion: &Pose<T>, span: TimeSpan) -> Self {
+        Self::turning(relative_motion, None, span)
+    }
+
+    /// The same, with the sensor's rotation through the sweep measured (`Some`) instead of
+    /// the constant rate of `relative_motion`'s; the translation stays `relative_motion`'s.
+    pub fn turning(
+        relative_motion: &Pose<T>,
+        rotation: Option<SweepRotation<T>>,
+        span: TimeSpan,
+    ) -> Self {
         Self {
-            xi: se3_log(relative_motion),
+            motion: SweepMotion::new(relative_motion, rotation),
             span,
             cached_s: f64::NAN,
             cached: Pose::identity(),
@@ -91,7 +164,7 @@ impl<T: Real> Deskewer<T> {
         let s = self.span.normalise(t);
         // Sensors fire many points at one instant: reuse the pose while the time repeats.
         if s.to_bits() != self.cached_s.to_bits() {
-            self.cached = se3_exp(&(self.xi * T::of(s - 1.0)));
+            self.cached = self.motion.at(s);
             self.cached_s = s;
         }
         self.cached * p

@@ -2,8 +2,10 @@
 //! the constant-velocity model `dT_{t-1}` (Eq. (1)); a sensor that turns fast breaks that model
 //! before ICP starts. [`GyroPrior`] replaces the model's rotation by the rotation the gyroscope
 //! measured over the sweep (end of the last sweep to the end of this one), keeps its
-//! translation, and hands it to the odometry as the motion to predict and deskew with
-//! ([`Odometry::set_last_delta`], kiss-icp's assignable `last_delta`). After the scan is
+//! translation, and hands it to the odometry as the motion to predict with
+//! ([`Odometry::set_last_delta`], kiss-icp's assignable `last_delta`). Each point is deskewed
+//! with the rotation the gyroscope measured up to its own time ([`Odometry::set_sweep_rotation`],
+//! unless [`ImuConfig::point_deskew`] is off: then at the sweep's mean rate). After the scan is
 //! registered, the rotation ICP found is compared with the gyroscope's and the difference, as a
 //! rate, corrects the gyroscope's bias estimate by a fraction ([`ImuConfig::bias_gain`]).
 //!
@@ -11,6 +13,7 @@
 //! predicts it; an odometry never given a prior is the reference, bit for bit. The samples are
 //! the caller's slice (those since the last frame): nothing is stored but the bias and a time.
 
+use crate::deskew::{SweepRotation, SWEEP_KNOTS};
 use crate::lie::{so3_exp, so3_log};
 use crate::local_map::PointCodec;
 use crate::odometry::Odometry;
@@ -43,6 +46,9 @@ pub struct ImuConfig<T> {
     /// Longest gap between samples (and between the sweep's ends and the nearest sample)
     /// that the prior bridges, s; a longer one and the frame gets no prior.
     pub max_gap: f64,
+    /// Deskew each point with the rotation measured up to its time (`true`), or the whole
+    /// sweep at the rate of the rotation measured over it.
+    pub point_deskew: bool,
 }
 
 impl<T: Real> ImuConfig<T> {
@@ -54,6 +60,7 @@ impl<T: Real> ImuConfig<T> {
             time_offset: 0.0,
             bias_gain: T::of(0.1),
             max_gap: 0.05,
+            point_deskew: true,
         }
     }
 }
@@ -129,8 +136,9 @@ impl<T: Real> GyroPrior<T> {
 
     /// Before a frame whose sweep ends at `end` (LiDAR clock, s): the rotation `samples` (the
     /// IMU's, those since the last frame, in time order) measured since the last sweep's end
-    /// replaces the rotation of `odom`'s motion model. Call [`Self::after_frame`] once the frame
-    /// is registered (or skipped).
+    /// replaces the rotation of `odom`'s motion model, and deskews the frame (see
+    /// [`ImuConfig::point_deskew`]). Call [`Self::after_frame`] once the frame is registered (or
+    /// skipped).
     pub fn before_frame<P: PointCodec<T>, S: Storage>(
         &mut self,
         odom: &mut Odometry<T, P, S>,
@@ -139,10 +147,11 @@ impl<T: Real> GyroPrior<T> {
     ) -> Prior {
         let start = self.last_end.replace(end);
         self.pending = None;
+        odom.set_sweep_rotation(None);
         let Some(start) = start else {
             return Prior::First;
         };
-        let rotation = match self.rotation(samples, start, end) {
+        let (rotation, sweep) = match self.rotation(samples, start, end) {
             Ok(r) => r,
             Err(why) => return why,
         };
@@ -150,6 +159,9 @@ impl<T: Real> GyroPrior<T> {
         delta.rotation = rotation;
         if !odom.set_last_delta(delta) {
             return Prior::BadSamples;
+        }
+        if self.config.point_deskew {
+            odom.set_sweep_rotation(Some(sweep));
         }
         self.pending = Some((rotation, end - start));
         Prior::Used(samples.len() as u32)
@@ -177,13 +189,14 @@ impl<T: Real> GyroPrior<T> {
     }
 
     /// The rotation from `start` to `end` (LiDAR clock, s) of the body, LiDAR axes: each
-    /// sample's rate, less the bias, over the part of the interval nearest to it.
+    /// sample's rate, less the bias, over the part of the interval nearest to it; and the same
+    /// rotation through the interval, at its knots.
     fn rotation(
         &self,
         samples: &[ImuSample<T>],
         start: f64,
         end: f64,
-    ) -> Result<UnitQuaternion<T>, Prior> {
+    ) -> Result<(UnitQuaternion<T>, SweepRotation<T>), Prior> {
         let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
             return Err(Prior::NoSamples);
         };
@@ -203,6 +216,9 @@ impl<T: Real> GyroPrior<T> {
             return Err(Prior::Gap);
         }
         let r_li = self.config.lidar_from_imu;
+        let knot = |k: usize| start + (end - start) * (k as f64 / SWEEP_KNOTS as f64);
+        let mut turned = [UnitQuaternion::identity(); SWEEP_KNOTS + 1];
+        let mut next = 1;
         let mut q = UnitQuaternion::identity();
         let mut from = start;
         for (i, s) in samples.iter().enumerate() {
@@ -213,11 +229,17 @@ impl<T: Real> GyroPrior<T> {
             });
             if until > from {
                 let rate = r_li * Vector3::from(s.gyro) - self.bias;
+                while next < SWEEP_KNOTS && knot(next) <= until {
+                    turned[next] = q * so3_exp(&(rate * T::of(knot(next) - from))).0;
+                    next += 1;
+                }
                 q *= so3_exp(&(rate * T::of(until - from))).0;
                 from = until;
             }
         }
-        Ok(q)
+        // The last interval ends at `end`: every knot is filled, the last with the whole turn.
+        turned[next..].fill(q);
+        Ok((q, SweepRotation::from_start(&turned)))
     }
 }
 

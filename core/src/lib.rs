@@ -77,7 +77,7 @@ mod voxel;
 mod testutil;
 
 pub use config::{Capacities, Config, Degeneracy, Robust, MAX_RANGE_LIMIT};
-pub use deskew::StampProblem;
+pub use deskew::{StampProblem, SweepRotation, SWEEP_KNOTS};
 pub use error::{ConfigError, FrameError};
 pub use geometry::{widen_pose, Point, Pose};
 pub use hold::{Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
@@ -96,7 +96,7 @@ pub use storage::{Storage, Words};
 /// `Registration`, `AdaptiveThreshold`) call. Names and signatures here may change between
 /// versions without notice; applications use [`Odometry`].
 pub mod stages {
-    pub use crate::deskew::{Deskewer, TimeSpan};
+    pub use crate::deskew::{Deskewer, SweepMotion, TimeSpan};
     pub use crate::downsample::{
         cloud_words, grid_slots_for, reference_order, reference_order_bytes, robin_bucket_count,
         scratch_words_for, voxel_downsample, Dedup, Downsampled,

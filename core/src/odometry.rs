@@ -24,11 +24,12 @@ pub use layout::Layout;
 
 use crate::config::Degeneracy;
 use crate::config::{Capacities, Config};
+use crate::deskew::{SweepMotion, SweepRotation};
 use crate::error::{ConfigError, FrameError};
 use crate::geometry::Pose;
 use crate::lie::renormalize;
 use crate::local_map::{Exact, MapMut, MapState, MapView, PointCodec};
-use crate::preprocess::{preprocess, Preprocessed};
+use crate::preprocess::{Preprocessed, Preprocessor};
 use crate::registration::{Executor, Sequential};
 use crate::report::{FrameReport, HighWater};
 use crate::scalar::Real;
@@ -60,6 +61,10 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     last_delta: Pose<T>,
     /// The motion the last registered scan was deskewed with (its `last_delta` at the time).
     scan_motion: Pose<T>,
+    /// The measured rotation through the next scan's sweep, if one was given.
+    sweep_rotation: Option<SweepRotation<T>>,
+    /// The one the last registered scan was deskewed with.
+    scan_rotation: Option<SweepRotation<T>>,
     frames: u64,
     merge_len: usize,
     source_len: usize,
@@ -100,6 +105,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             last_pose: Pose::identity(),
             last_delta: Pose::identity(),
             scan_motion: Pose::identity(),
+            sweep_rotation: None,
+            scan_rotation: None,
             frames: 0,
             merge_len: 0,
             source_len: 0,
@@ -132,6 +139,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.last_pose = Pose::identity();
         self.last_delta = Pose::identity();
         self.scan_motion = Pose::identity();
+        self.sweep_rotation = None;
+        self.scan_rotation = None;
         self.frames = 0;
         self.merge_len = 0;
         self.source_len = 0;
@@ -187,6 +196,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// Advances one frame on the constant-velocity model alone, as the reference does when a
     /// scan is empty: the pose becomes the prediction and the velocity is kept.
     pub fn skip_frame(&mut self) -> Pose<T> {
+        self.sweep_rotation = None;
         self.last_pose *= self.last_delta;
         renormalize(&mut self.last_pose);
         self.frames += 1;
@@ -207,9 +217,16 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     }
     /// The motion the last registered scan was deskewed with: the constant-velocity model
     /// (`last_delta`) as it stood before that scan was registered. Deskewing put the sensor at
-    /// fraction `s` of that sweep at `pose * Exp((s - 1) Log(scan_motion))`.
+    /// fraction `s` of that sweep at `pose * Exp((s - 1) Log(scan_motion))`, turned as measured
+    /// instead if a [`Self::set_sweep_rotation`] was given for it.
     pub fn scan_motion(&self) -> &Pose<T> {
         &self.scan_motion
+    }
+    /// The motion from the sensor at normalised time `s` of the last registered sweep to its
+    /// end, as deskewing applied it: `last_pose() * scan_motion_at(s)` is the sensor's pose at
+    /// `s`.
+    pub fn scan_motion_at(&self, s: f64) -> Pose<T> {
+        SweepMotion::new(&self.scan_motion, self.scan_rotation).at(s)
     }
     /// Replaces the latest pose, from which the next scan is predicted (kiss-icp's Python
     /// users assign `last_pose`, e.g. to start at a known pose). The map stays where it is.
@@ -223,14 +240,23 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         ok
     }
     /// Replaces the constant-velocity model that predicts and deskews the next scan
-    /// (kiss-icp's assignable `last_delta`). Non-finite: refused (`false`), nothing changes.
+    /// (kiss-icp's assignable `last_delta`), and drops a [`Self::set_sweep_rotation`].
+    /// Non-finite: refused (`false`), nothing changes.
     pub fn set_last_delta(&mut self, delta: Pose<T>) -> bool {
         let ok = is_finite_pose(&delta);
         if ok {
             self.last_delta = delta;
             renormalize(&mut self.last_delta);
+            self.sweep_rotation = None;
         }
         ok
+    }
+    /// Deskews the next scan with the sensor's rotation through its sweep as measured (a
+    /// gyroscope's), point by point, instead of `last_delta`'s constant rate; the translation
+    /// and the prediction stay `last_delta`'s. Holds for the next registered or skipped scan
+    /// only; `None` goes back to the constant rate.
+    pub fn set_sweep_rotation(&mut self, rotation: Option<SweepRotation<T>>) {
+        self.sweep_rotation = rotation;
     }
     /// Empties the local map and keeps the poses, threshold and counters (kiss-icp's
     /// `local_map.clear()`): the next scan takes its prediction and seeds the map again.
@@ -279,15 +305,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         out: &mut [[T; 3]],
     ) -> Preprocessed {
         let c = &self.config;
-        preprocess(
-            points,
-            stamps,
-            &self.scan_motion,
-            c.min_range,
-            c.max_range,
-            c.deskew,
-            out,
-        )
+        let span = Preprocessor::<T>::span(c.deskew, stamps, points.len());
+        let (lo, hi) = (c.min_range, c.max_range);
+        Preprocessor::with_span(lo, hi, span, &self.scan_motion, self.scan_rotation)
+            .run(points, stamps, out)
     }
     /// Parameters in use.
     pub fn config(&self) -> &Config<T> {

@@ -3,7 +3,7 @@
 //! As in the reference, points are deskewed first and cropped on their deskewed range
 //! `min_range < |p| < max_range`. Non-finite points never reach the crop; they are counted.
 
-use crate::deskew::{Deskewer, StampProblem, TimeSpan};
+use crate::deskew::{Deskewer, StampProblem, SweepRotation, TimeSpan};
 use crate::geometry::{Point, Pose};
 use crate::scalar::Real;
 
@@ -42,22 +42,33 @@ impl<T: Real> Preprocessor<T> {
         n_points: usize,
         relative_motion: &Pose<T>,
     ) -> Self {
-        let span = match (deskew, stamps) {
-            (true, Some(s)) => Some(TimeSpan::of(s, n_points)),
-            _ => None,
-        };
-        Self::with_span(min_range, max_range, span, relative_motion)
+        let span = Self::span(deskew, stamps, n_points);
+        Self::with_span(min_range, max_range, span, relative_motion, None)
     }
 
-    /// Prepares a scan whose timestamps, if any, were checked to span `span`.
+    /// The span a scan's `stamps` give when it is to be deskewed.
+    pub fn span(
+        deskew: bool,
+        stamps: Option<&[f64]>,
+        n_points: usize,
+    ) -> Option<Result<TimeSpan, StampProblem>> {
+        stamps.filter(|_| deskew).map(|s| TimeSpan::of(s, n_points))
+    }
+
+    /// Prepares a scan whose timestamps, if any, were checked to span `span`, with the
+    /// sensor's rotation through the sweep when it was measured (see [`Deskewer::turning`]).
     pub fn with_span(
         min_range: T,
         max_range: T,
         span: Option<Result<TimeSpan, StampProblem>>,
         relative_motion: &Pose<T>,
+        rotation: Option<SweepRotation<T>>,
     ) -> Self {
         let (deskewer, stamp_problem) = match span {
-            Some(Ok(span)) => (Some(Deskewer::new(relative_motion, span)), None),
+            Some(Ok(span)) => (
+                Some(Deskewer::turning(relative_motion, rotation, span)),
+                None,
+            ),
             Some(Err(e)) => (None, Some(e)),
             None => (None, None),
         };
@@ -122,33 +133,45 @@ pub fn preprocess<T: Real>(
     deskew: bool,
     out: &mut [[T; 3]],
 ) -> Preprocessed {
-    let mut pre = Preprocessor::new(
+    Preprocessor::new(
         min_range,
         max_range,
         deskew,
         stamps,
         points.len(),
         relative_motion,
-    );
-    let mut res = Preprocessed {
-        deskewed: pre.deskews(),
-        stamp_problem: pre.stamp_problem(),
-        ..Preprocessed::default()
-    };
-    for (i, raw) in points.iter().enumerate() {
-        let t = stamps.and_then(|s| s.get(i).copied());
-        match pre.point(raw, t) {
-            Ok(p) => {
-                if let Some(o) = out.get_mut(res.kept) {
-                    *o = [p.x, p.y, p.z];
+    )
+    .run(points, stamps, out)
+}
+
+impl<T: Real> Preprocessor<T> {
+    /// Preprocesses a whole scan into `out`, as [`preprocess`] describes.
+    pub fn run(
+        mut self,
+        points: &[[T; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut [[T; 3]],
+    ) -> Preprocessed {
+        let mut res = Preprocessed {
+            deskewed: self.deskews(),
+            stamp_problem: self.stamp_problem(),
+            ..Preprocessed::default()
+        };
+        for (i, raw) in points.iter().enumerate() {
+            let t = stamps.and_then(|s| s.get(i).copied());
+            match self.point(raw, t) {
+                Ok(p) => {
+                    if let Some(o) = out.get_mut(res.kept) {
+                        *o = [p.x, p.y, p.z];
+                    }
+                    res.kept += 1;
                 }
-                res.kept += 1;
+                Err(Drop::NonFinite) => res.non_finite += 1,
+                Err(Drop::OutOfRange) => res.out_of_range += 1,
             }
-            Err(Drop::NonFinite) => res.non_finite += 1,
-            Err(Drop::OutOfRange) => res.out_of_range += 1,
         }
+        res
     }
-    res
 }
 
 #[cfg(test)]

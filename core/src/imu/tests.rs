@@ -62,7 +62,7 @@ fn a_constant_rate_integrates_to_its_rotation_through_a_turned_mount_and_a_clock
     });
     let w = [0.4, -1.5, 2.5];
     let s = samples(1.0, 1.1, 200.0, |_| w, r_li, 0.25, [0.0; 3]);
-    let q = prior.rotation(&s, 1.0, 1.1).unwrap();
+    let (q, _) = prior.rotation(&s, 1.0, 1.1).unwrap();
     let want = UnitQuaternion::from_scaled_axis(Vector3::from(w) * 0.1);
     let err = q.angle_to(&want);
     println!("constant rate: {err:.1e} rad off (tolerance 1e-12)");
@@ -122,7 +122,8 @@ fn the_bias_estimate_converges_to_the_gyroscopes_bias() {
         // ICP found the true rotation.
         let truth = GyroPrior::new(ImuConfig::new())
             .rotation(&aligned(t0, t1, 400.0, rate), t0, t1)
-            .unwrap();
+            .unwrap()
+            .0;
         let mut d = *odom.last_delta();
         d.rotation = truth;
         odom.set_last_delta(d);
@@ -152,14 +153,43 @@ fn the_bias_estimate_converges_to_the_gyroscopes_bias() {
     );
 }
 
+/// The uneven turn below: yaw (rad) at `t` (s), and its rate.
+fn uneven_yaw(t: f64) -> f64 {
+    3.0 * t + 0.8 * (7.0 * t).sin()
+}
+fn uneven_rate(t: f64) -> [f64; 3] {
+    [0.0, 0.0, 3.0 + 5.6 * (7.0 * t).cos()]
+}
+
+#[test]
+fn the_sweep_rotation_follows_an_uneven_turn_point_by_point() {
+    let (t0, t1) = (0.3, 0.4);
+    let prior = GyroPrior::new(ImuConfig::new());
+    let (_, sweep) = prior
+        .rotation(&aligned(t0, t1, 400.0, uneven_rate), t0, t1)
+        .unwrap();
+    let yaw_to_end = |s: f64| uneven_yaw(t0 + s * (t1 - t0)) - uneven_yaw(t1);
+    let (mut worst, mut constant) = (0.0f64, 0.0f64);
+    for i in 0..=100 {
+        let s = i as f64 / 100.0;
+        let want = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw_to_end(s));
+        worst = worst.max(sweep.at(s).angle_to(&want));
+        // The constant rate the sweep's whole turn gives.
+        constant = constant.max(((1.0 - s) * yaw_to_end(0.0) - yaw_to_end(s)).abs());
+    }
+    println!(
+        "uneven turn: sweep rotation {worst:.1e} rad off at worst (tolerance 2e-3); a constant \
+         rate {constant:.1e} rad"
+    );
+    assert!(worst < 2e-3 && constant > 20.0 * worst);
+}
+
 /// A sensor in the yard turning fast and unevenly (yaw rate 3 rad/s and more, changing within a
-/// sweep), each point seen at its own time: the end poses' worst error with and without the
-/// prior.
-fn turning_run(with_prior: bool) -> f64 {
+/// sweep), each point seen at its own time: the end poses' worst error with `prior`, if any.
+fn turning_run(prior: Option<ImuConfig<f64>>) -> f64 {
     let mut scene = vec![[0.0; 3]; 4000];
     let n = yard(&mut scene);
-    let yaw = |t: f64| 3.0 * t + 0.8 * (7.0 * t).sin();
-    let rate = |t: f64| [0.0, 0.0, 3.0 + 5.6 * (7.0 * t).cos()];
+    let (yaw, rate) = (uneven_yaw, uneven_rate);
     let at = |t: f64| {
         Pose::new(
             Vector3::new(0.5 * t, 0.2 * t, 0.0),
@@ -167,7 +197,8 @@ fn turning_run(with_prior: bool) -> f64 {
         )
     };
     let mut odom = odometry();
-    let mut prior = GyroPrior::new(ImuConfig::new());
+    let with_prior = prior.is_some();
+    let mut prior = GyroPrior::new(prior.unwrap_or_default());
     let mut rng = Rng(7);
     let mut worst: f64 = 0.0;
     for k in 0..25 {
@@ -195,8 +226,33 @@ fn turning_run(with_prior: bool) -> f64 {
 #[test]
 #[cfg_attr(miri, ignore = "minutes per ICP run under Miri")]
 fn a_fast_uneven_turn_is_tracked_with_the_prior_and_lost_without() {
-    let (with, without) = (turning_run(true), turning_run(false));
-    println!("25 frames turning at 3 +- 5.6 rad/s: worst position error {with:.3} m with the prior, {without:.3} m without");
+    let mean_rate = ImuConfig {
+        point_deskew: false,
+        ..ImuConfig::new()
+    };
+    let (with, mean, without) = (
+        turning_run(Some(ImuConfig::new())),
+        turning_run(Some(mean_rate)),
+        turning_run(None),
+    );
+    println!(
+        "25 frames turning at 3 +- 5.6 rad/s: worst position error {with:.3} m with the prior, \
+         {mean:.3} m deskewing at its mean rate, {without:.3} m without"
+    );
     assert!(with < 0.25, "{with}");
+    assert!(mean > 1.15 * with, "{mean} vs {with}");
     assert!(without > 4.0 * with, "{without} vs {with}");
+}
+
+#[test]
+fn each_outcome_has_its_own_report_name() {
+    let all = [
+        Prior::Used(3),
+        Prior::First,
+        Prior::NoSamples,
+        Prior::Gap,
+        Prior::BadSamples,
+    ];
+    let names = all.map(Prior::name);
+    assert_eq!(names, ["used", "first", "no_samples", "gap", "bad_samples"]);
 }

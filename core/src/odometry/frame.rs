@@ -126,6 +126,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// predicts the next scan and deskews it.
     fn advance(&mut self, pose: Pose<T>) {
         self.scan_motion = self.last_delta;
+        self.scan_rotation = self.sweep_rotation.take();
         self.last_delta = self.last_pose.inverse() * pose;
         self.last_pose = pose;
         renormalize(&mut self.last_pose);

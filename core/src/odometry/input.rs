@@ -29,10 +29,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         stamps: Option<&[f64]>,
         points: usize,
     ) -> FrameInput<'_, T, P, S> {
-        let span = match stamps {
-            Some(s) if self.config.deskew => Some(TimeSpan::of(s, points)),
-            _ => None,
-        };
+        let span = Preprocessor::<T>::span(self.config.deskew, stamps, points);
         self.begin(span)
     }
 
@@ -46,7 +43,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
     fn begin(&mut self, span: Option<Result<TimeSpan, StampProblem>>) -> FrameInput<'_, T, P, S> {
         let cfg = &self.config;
-        let pre = Preprocessor::with_span(cfg.min_range, cfg.max_range, span, &self.last_delta);
+        let (lo, hi) = (cfg.min_range, cfg.max_range);
+        let pre = Preprocessor::with_span(lo, hi, span, &self.last_delta, self.sweep_rotation);
         let mut scan = Received {
             stamp_problem: pre.stamp_problem(),
             deskews: pre.deskews(),

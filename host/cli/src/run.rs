@@ -392,7 +392,7 @@ fn add(
         record.sweeps = true;
     }
     let pose = match o.report() {
-        Some(r) if r.deskewed => pose_time.pose(&o.pose, &o.scan_motion),
+        Some(r) if r.deskewed => pose_time.pose(&o.pose, &o.sweep),
         _ => o.pose,
     };
     record.rows.push(row);

@@ -166,7 +166,7 @@ impl Driver {
             latency: Duration::ZERO,
             cpu: Duration::ZERO,
             input_points: 0,
-            scan_motion: self.engine.scan_motion(),
+            sweep: self.engine.sweep_motions(),
             imu: None,
         }
     }
@@ -250,7 +250,7 @@ impl Driver {
             latency: call.latency,
             cpu: call.cpu,
             input_points: call.input_points,
-            scan_motion: self.engine.scan_motion(),
+            sweep: self.engine.sweep_motions(),
             imu: None,
         })
     }

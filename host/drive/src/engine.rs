@@ -5,6 +5,7 @@
 //! Everything crosses the trait in `f64`: points are converted into a buffer the core reads
 //! (outside the timed call), reports and poses are widened.
 
+use crate::outcome::SweepMotions;
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use crate::widen::{widen, widen_report};
@@ -95,8 +96,8 @@ pub(crate) trait Engine: Send {
     fn pose(&self) -> Isometry3<f64>;
     /// The latest motion: from the previous pose to the latest, in the previous sensor frame.
     fn last_delta(&self) -> Isometry3<f64>;
-    /// The motion the latest frame was deskewed with (the model before it was registered).
-    fn scan_motion(&self) -> Isometry3<f64>;
+    /// Where deskewing put the sensor within the latest frame's sweep.
+    fn sweep_motions(&self) -> SweepMotions;
     /// The threshold's current sigma.
     fn sigma(&self) -> f64;
     /// High-water marks since start.
@@ -238,8 +239,11 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     fn last_delta(&self) -> Isometry3<f64> {
         widen(self.odom.last_delta())
     }
-    fn scan_motion(&self) -> Isometry3<f64> {
-        widen(self.odom.scan_motion())
+    fn sweep_motions(&self) -> SweepMotions {
+        SweepMotions {
+            start: widen(&self.odom.scan_motion_at(0.0)),
+            middle: widen(&self.odom.scan_motion_at(0.5)),
+        }
     }
     fn sigma(&self) -> f64 {
         self.odom.sigma().wide()

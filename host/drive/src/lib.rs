@@ -20,7 +20,7 @@ pub mod widen;
 pub use capacity::CapacityWarnings;
 pub use driver::{Build, Driver, OnEmpty, Preloaded};
 pub use error::one_line;
-pub use outcome::{FrameMeta, ImuUse, Outcome, Step};
+pub use outcome::{FrameMeta, ImuUse, Outcome, Step, SweepMotions};
 pub use pool::Pool;
 pub use prior::PriorWarnings;
 pub use settings::{Imu, Scalar, Settings, Storage};

@@ -39,6 +39,26 @@ pub enum Step {
     Skipped(String),
 }
 
+/// The motions from the sensor at the start and at the middle of a sweep to its end, as the
+/// frame was deskewed (the constant-velocity model before it was registered, turning as the
+/// gyroscope measured with the prior): the sensor's pose then is the frame's pose times one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SweepMotions {
+    /// From the sweep's start.
+    pub start: Isometry3<f64>,
+    /// From its middle.
+    pub middle: Isometry3<f64>,
+}
+
+impl Default for SweepMotions {
+    fn default() -> Self {
+        Self {
+            start: Isometry3::identity(),
+            middle: Isometry3::identity(),
+        }
+    }
+}
+
 /// The answer to one frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outcome {
@@ -57,9 +77,8 @@ pub struct Outcome {
     pub cpu: Duration,
     /// Points given.
     pub input_points: usize,
-    /// The motion the frame was deskewed with: the constant-velocity model before it was
-    /// registered (a pose at another instant of the sweep moves along it).
-    pub scan_motion: Isometry3<f64>,
+    /// Where deskewing put the sensor at the sweep's start and middle.
+    pub sweep: SweepMotions,
     /// What the gyroscope prior did, when it is on.
     pub imu: Option<ImuUse>,
 }

@@ -2,7 +2,7 @@
 
 use crate::args::CommonArgs;
 use crate::viz::ViewArgs;
-use kiss_odom_core::stages::{se3_exp, se3_log};
+use kiss_odom_drive::SweepMotions;
 use nalgebra::Isometry3;
 use std::path::PathBuf;
 
@@ -74,17 +74,15 @@ impl PoseTime {
         }
     }
 
-    /// The pose at this instant of a sweep whose end pose is `end`, `delta` being the motion
-    /// the sweep was deskewed with (the constant-velocity model before registration):
-    /// deskewing moved every point along `Exp((s - 1) Log(delta))` to the end, so the sensor at
-    /// fraction `s` is `end` times that. The map's own frames keep that convention; the motion
-    /// registration finds afterwards does not (the first deskewed frame's pose is relative to
-    /// undeskewed sweeps, which sit at their middle).
-    pub fn pose(self, end: &Isometry3<f64>, delta: &Isometry3<f64>) -> Isometry3<f64> {
-        if self == Self::End {
-            return *end;
+    /// The pose at this instant of a sweep whose end pose is `end`, `sweep` being where
+    /// deskewing put the sensor within it. The map's own frames keep that convention; the
+    /// motion registration finds afterwards does not (the first deskewed frame's pose is
+    /// relative to undeskewed sweeps, which sit at their middle).
+    pub fn pose(self, end: &Isometry3<f64>, sweep: &SweepMotions) -> Isometry3<f64> {
+        match self {
+            Self::End => *end,
+            Self::Start => end * sweep.start,
+            Self::Middle => end * sweep.middle,
         }
-        let xi = se3_log(delta) * (self.fraction() - 1.0);
-        end * se3_exp(&xi)
     }
 }

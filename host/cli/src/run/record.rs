@@ -285,7 +285,7 @@ mod tests {
             latency: std::time::Duration::ZERO,
             cpu: std::time::Duration::ZERO,
             input_points: 0,
-            scan_motion: Isometry3::identity(),
+            sweep: Default::default(),
             imu: None,
         };
         let mut row = FrameRow::of(&skipped);

@@ -22,6 +22,9 @@ pub struct Imu {
     pub bias_gain: f64,
     /// Longest gap in the samples the prior bridges, s.
     pub max_gap: f64,
+    /// Deskew each point with the rotation the gyroscope measured up to its time (or, `false`,
+    /// the whole sweep at the mean rate of the rotation measured over it).
+    pub point_deskew: bool,
 }
 
 impl Default for Imu {
@@ -33,6 +36,7 @@ impl Default for Imu {
             time_offset: core.time_offset,
             bias_gain: core.bias_gain,
             max_gap: core.max_gap,
+            point_deskew: core.point_deskew,
         }
     }
 }
@@ -80,6 +84,7 @@ impl Imu {
             time_offset: self.time_offset,
             bias_gain: T::of(self.bias_gain),
             max_gap: self.max_gap,
+            point_deskew: self.point_deskew,
         }))
     }
 }
