@@ -2,26 +2,30 @@
 # The gyroscope prior (`run --imu auto`) against the LiDAR-only reference on generated
 # hand-held and drone runs with an IMU (`simulate --imu-rate 200`: noise, turn-on biases that
 # walk), deskew on, seeds 1-3: drone 500 frames, hand-held 1,000 (KITTI's 100 m segments need
-# that at walking pace). Variants: the bias gain (0.1 default, 0.02, 0: no bias estimate) and
-# the prior without deskewing. Prints a markdown table: KITTI relative translation error, ATE,
-# mean relative rotation error per frame.
+# that at walking pace). Variants: each point deskewed with the gyroscope's rotation to its time
+# (the prior) or the sweep at the rotation's mean rate, the bias gain (0.1 default, 0.02, 0: no
+# bias estimate) and the prior without deskewing. Prints a markdown table: KITTI relative
+# translation error, ATE, mean relative rotation error per frame.
 #
-#   bench/imu_prior.sh     (DATA=target/imu-prior, SEEDS="1 2 3"; drives kept for reruns)
+#   bench/imu_prior.sh     (DATA=target/imu-prior, SEEDS="1 2 3", BIN=a kiss-odom to use;
+#                           drives kept for reruns)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p kiss-odom
-B=target/release/kiss-odom
+B=${BIN:-target/release/kiss-odom}
+[ -n "${BIN:-}" ] || cargo build --release -q -p kiss-odom
 DATA=${DATA:-target/imu-prior}; mkdir -p "$DATA"
 rows="$DATA/rows.tsv"; : > "$rows"
 printf '[imu]\nbias_gain = 0.02\n' > "$DATA/g002.toml"
 printf '[imu]\nbias_gain = 0.0\n' > "$DATA/g0.toml"
+printf '[imu]\npoint_deskew = false\n' > "$DATA/mean.toml"
 for spec in "drone 500" "handheld 1000"; do
   set -- $spec
   for seed in ${SEEDS:-1 2 3}; do
     d="$DATA/$1-$seed"
     [ -f "$d/imu.csv" ] || $B simulate --out "$d" --frames "$2" --seed "$seed" --profile "$1" \
       --imu-rate 200 --overwrite >/dev/null
-    for variant in "off:" "prior:--imu auto" "gain 0.02:--imu auto --config $DATA/g002.toml" \
+    for variant in "off:" "prior:--imu auto" "mean rate:--imu auto --config $DATA/mean.toml" \
+                   "gain 0.02:--imu auto --config $DATA/g002.toml" \
                    "gain 0:--imu auto --config $DATA/g0.toml" "prior, no deskew:--imu auto --no-deskew"; do
       name=${variant%%:*}; args=${variant#*:}
       out="$d.${name// /_}"; out=${out//,/}

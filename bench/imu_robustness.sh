@@ -8,8 +8,8 @@
 #                                bench/imu_prior.sh is reused when there)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p kiss-odom
-B=target/release/kiss-odom
+B=${BIN:-target/release/kiss-odom}
+[ -n "${BIN:-}" ] || cargo build --release -q -p kiss-odom
 DATA=${DATA:-target/imu-prior}; SEED=${SEED:-1}; mkdir -p "$DATA"
 row() { # drive, variant, run folder
   python3 - "$1" "$2" "$3" <<'P'
