@@ -222,22 +222,32 @@ fn topic_choice_follows_the_reference_rules() {
     };
     let pc = |t: &str| t == "PC2";
     let one = topics(&[("/points", "PC2"), ("/imu", "Imu")]);
-    assert_eq!(choose_topic("f", &one, pc, "PC2", None).unwrap(), "/points");
+    assert_eq!(
+        choose_topic("f", &one, pc, Wanted::cloud("PC2"), None).unwrap(),
+        "/points"
+    );
     let two = topics(&[("/b", "PC2"), ("/a", "PC2"), ("/imu", "Imu")]);
-    let e = choose_topic("f", &two, pc, "PC2", None).unwrap_err();
+    let e = choose_topic("f", &two, pc, Wanted::cloud("PC2"), None).unwrap_err();
     assert!(
         e.contains("several") && e.contains("/a, /b") && e.contains("--topic"),
         "{e}"
     );
     assert_eq!(
-        choose_topic("f", &two, pc, "PC2", Some("/b")).unwrap(),
+        choose_topic("f", &two, pc, Wanted::cloud("PC2"), Some("/b")).unwrap(),
         "/b"
     );
-    let e = choose_topic("f", &two, pc, "PC2", Some("/imu")).unwrap_err();
+    let e = choose_topic("f", &two, pc, Wanted::cloud("PC2"), Some("/imu")).unwrap_err();
     assert!(e.contains("/imu carries Imu"), "{e}");
-    let e = choose_topic("f", &two, pc, "PC2", Some("/nope")).unwrap_err();
+    let e = choose_topic("f", &two, pc, Wanted::cloud("PC2"), Some("/nope")).unwrap_err();
     assert!(e.contains("no topic /nope"), "{e}");
-    let e = choose_topic("f", &topics(&[("/imu", "Imu")]), pc, "PC2", None).unwrap_err();
+    let e = choose_topic(
+        "f",
+        &topics(&[("/imu", "Imu")]),
+        pc,
+        Wanted::cloud("PC2"),
+        None,
+    )
+    .unwrap_err();
     assert!(
         e.contains("no PC2 topic") && e.contains("/imu (Imu)"),
         "{e}"
