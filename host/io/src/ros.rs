@@ -2,7 +2,7 @@
 //! files ([`mcap`]). Both carry `sensor_msgs/PointCloud2`: [`message`] parses its bytes in
 //! either generation's serialization into a view, [`pointcloud2`] decodes the view's fields
 //! into points and per-point times. With `--imu`, their `sensor_msgs/Imu` topic
-//! ([`imu_topic`], read by [`imu_msg`]) gives the frames' IMU samples.
+//! (`imu_topic`, read by [`imu_msg`]) gives the frames' IMU samples.
 
 pub mod bag;
 pub mod bag_records;

@@ -8,7 +8,7 @@
 //! whatever order they were written in; a bag written out of order says so in a dataset
 //! warning. A chunk is decompressed when the stream reaches it, so a bag never has to fit in
 //! memory, and [`FrameSource::seek`] is cheap. With `--imu`, the messages of its
-//! `sensor_msgs/Imu` topic ([`imu_topic`]) are read when it is opened.
+//! `sensor_msgs/Imu` topic (`imu_topic`) are read when it is opened.
 
 use super::bag_records;
 use super::bag_records::{Bag, MessageRef};

@@ -10,7 +10,7 @@
 //! reader streams the data section in file order and warns at the first message out of order.
 //! The message body is CDR; [`message`](super::message) parses it into a
 //! [`PointCloud2`](super::pointcloud2::PointCloud2) view and [`pointcloud2`] decodes it. With
-//! `--imu`, the messages of its `sensor_msgs/msg/Imu` topic ([`imu_topic`]) are read when it is
+//! `--imu`, the messages of its `sensor_msgs/msg/Imu` topic (`imu_topic`) are read when it is
 //! opened, in one pass over the data section.
 
 use super::message::parse_cdr;

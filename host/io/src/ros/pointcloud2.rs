@@ -520,10 +520,10 @@ pub(crate) fn choose_topic(
 }
 
 /// The topics of `topics` whose type `is_wanted` accepts, sorted, each once.
-pub(crate) fn wanted_topics<'t>(
-    topics: &'t [(String, String)],
+pub(crate) fn wanted_topics(
+    topics: &[(String, String)],
     is_wanted: impl Fn(&str) -> bool,
-) -> Vec<&'t str> {
+) -> Vec<&str> {
     let mut out: Vec<&str> = topics
         .iter()
         .filter(|(_, ty)| is_wanted(ty))

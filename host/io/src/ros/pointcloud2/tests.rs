@@ -253,3 +253,18 @@ fn topic_choice_follows_the_reference_rules() {
         "{e}"
     );
 }
+
+#[test]
+fn a_cloud_ends_at_its_latest_point_time_unless_those_are_offsets() {
+    let header = 1_700_000_000.25;
+    // Seconds on the header's clock: the driver takes the latest of them.
+    assert_eq!(
+        sweep_end(header, Some(&[header - 0.1, header - 0.001])),
+        None
+    );
+    // Offsets from the sweep's start (Ouster's `t` in ns, Velodyne's `time` in s): the header.
+    assert_eq!(sweep_end(header, Some(&[0.0, 99_000_000.0])), Some(header));
+    assert_eq!(sweep_end(header, Some(&[-0.1, 0.0])), Some(header));
+    assert_eq!(sweep_end(header, None), None);
+    assert_eq!(sweep_end(header, Some(&[])), None);
+}
