@@ -523,4 +523,35 @@ mod tests {
         let e = check_reference_compatible(&s).unwrap_err().to_string();
         assert!(e.contains("registration.kernel_scale"), "{e}");
     }
+
+    #[test]
+    fn imu_takes_auto_off_an_existing_file_or_a_topic_and_any_but_off_turns_the_prior_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("imu.csv");
+        std::fs::write(&csv, "").unwrap();
+        let csv_arg = csv.to_str().unwrap();
+        let parse = |v: &str| {
+            let w = Wrap::try_parse_from(["x", "--imu", v]).unwrap();
+            w.pipeline.imu.unwrap()
+        };
+        assert_eq!(parse("auto"), ImuMode::Auto);
+        assert_eq!(parse("off"), ImuMode::Off);
+        assert_eq!(parse(csv_arg), ImuMode::File(csv.clone()));
+        // A path that is not a file is a topic name.
+        let missing = dir.path().join("missing.csv");
+        let missing = missing.to_str().unwrap();
+        assert_eq!(parse(missing), ImuMode::Topic(missing.into()));
+        assert_eq!(parse("/imu").input(), ImuInput::Topic("/imu".into()));
+        for (v, on) in [
+            ("auto", true),
+            ("off", false),
+            ("/imu", true),
+            (csv_arg, true),
+        ] {
+            assert_eq!(resolve(&["--imu", v], None).unwrap().imu.enabled, on, "{v}");
+        }
+        let e = ImuMode::recording_only(Some(&parse("/imu")), "live").unwrap_err();
+        assert!(e.to_string().contains("not a topic (/imu)"), "{e}");
+        assert!(ImuMode::recording_only(Some(&ImuMode::Auto), "live").is_ok());
+    }
 }
