@@ -16,6 +16,7 @@ mod degeneracy;
 mod embedded;
 mod golden;
 mod imu_prior;
+mod imu_readers;
 mod listen_poses;
 mod live;
 mod metrics;

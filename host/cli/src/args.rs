@@ -6,7 +6,7 @@
 use anyhow::{bail, Result};
 use kiss_odom_core::Capacities;
 use kiss_odom_drive::settings::{DegeneracyMode, PresetName, Scalar, Settings, Storage};
-use kiss_odom_io::{Format, OpenOptions};
+use kiss_odom_io::{Format, ImuInput, OpenOptions};
 use kiss_odom_io::{FrameRange, SensorKind, SensorOptions};
 use std::path::{Path, PathBuf};
 
@@ -29,6 +29,18 @@ impl CommonArgs {
     /// The settings these options ask for; see [`settings`].
     pub fn settings(&self, threads: Option<usize>) -> Result<Settings> {
         settings(&self.pipeline, &self.core, threads)
+    }
+
+    /// [`InputArgs::open_options`], with the IMU samples `--imu` asks for.
+    pub fn open_options(&self, scan_points: usize) -> OpenOptions {
+        OpenOptions {
+            imu: self
+                .pipeline
+                .imu
+                .as_ref()
+                .map_or(ImuInput::Builtin, ImuMode::input),
+            ..self.input.open_options(scan_points)
+        }
     }
 }
 
@@ -98,12 +110,14 @@ impl InputArgs {
     }
 
     /// Options for `io::open`: read at most `scan_points` points of a frame (the core's
-    /// `Capacities::scan_points`, which ignores the rest anyway).
+    /// `Capacities::scan_points`, which ignores the rest anyway); the IMU samples the
+    /// recording carries (a bag's IMU topic is read with [`CommonArgs::open_options`]).
     pub fn open_options(&self, scan_points: usize) -> OpenOptions {
         OpenOptions {
             topic: self.topic.clone(),
             scan_points,
             sensor: self.sensor.options(),
+            imu: ImuInput::Builtin,
         }
     }
 }
@@ -165,11 +179,14 @@ pub struct PipelineArgs {
     #[arg(long)]
     pub budget: Option<u64>,
     /// The gyroscope prior: `auto` predicts and deskews each frame with the rotation the
-    /// recording's IMU measured (a folder's imu.csv, an Ouster's or Livox's IMU packets; the
-    /// IMU's clock must be the frames'), learning the gyroscope's bias from ICP; frames without
-    /// samples fall back to the constant-velocity model and say so in frames.csv; `off`: the
-    /// reference's prediction [default: off].
-    #[arg(long, value_enum)]
+    /// recording's IMU measured (a folder's imu.csv, an Ouster's or Livox's IMU packets, a bag's
+    /// or MCAP file's only sensor_msgs/Imu topic; the IMU's clock must be the frames'),
+    /// learning the gyroscope's bias from ICP; frames without samples fall back to the
+    /// constant-velocity model and say so in frames.csv. A FILE (an existing path) is an
+    /// imu.csv for any input, in place of the recording's own samples; any other value is the
+    /// bag's or MCAP file's sensor_msgs/Imu TOPIC. `off`: the reference's prediction [default:
+    /// off].
+    #[arg(long, value_name = "auto|off|TOPIC|FILE", value_parser = ImuMode::parse)]
     pub imu: Option<ImuMode>,
     /// The IMU's pose in the LiDAR frame, X,Y,Z,ROLL,PITCH,YAW (m, deg; Rz Ry Rx), as
     /// `simulate` writes it in sim.toml [default: 0,0,0,0,0,0].
@@ -185,13 +202,52 @@ pub struct PipelineArgs {
     pub imu_time_offset: Option<f64>,
 }
 
-/// Whether the gyroscope prior runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// Whether the gyroscope prior runs, and with which samples.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ImuMode {
     /// With the IMU samples the recording carries.
     Auto,
     /// Without (the reference's constant-velocity prediction).
     Off,
+    /// With a bag's or MCAP file's `sensor_msgs/Imu` topic.
+    Topic(String),
+    /// With an `imu.csv`, for any input.
+    File(PathBuf),
+}
+
+impl ImuMode {
+    /// `auto`, `off`, an existing file, else a topic.
+    pub fn parse(value: &str) -> Result<Self, String> {
+        Ok(match value {
+            "auto" => Self::Auto,
+            "off" => Self::Off,
+            "" => return Err("give auto, off, a topic or an imu.csv".into()),
+            file if Path::new(file).is_file() => Self::File(file.into()),
+            topic => Self::Topic(topic.into()),
+        })
+    }
+
+    /// Where the reader takes the samples from.
+    pub fn input(&self) -> ImuInput {
+        match self {
+            Self::Auto => ImuInput::Auto,
+            Self::Off => ImuInput::Builtin,
+            Self::Topic(t) => ImuInput::Topic(t.clone()),
+            Self::File(f) => ImuInput::File(f.clone()),
+        }
+    }
+
+    /// Refuses a topic or file where no recording is read (`live`, the ROS 2 node).
+    pub fn recording_only(mode: Option<&Self>, command: &str) -> Result<()> {
+        match mode {
+            Some(Self::Topic(v)) => bail!("{command}: --imu takes auto or off, not a topic ({v})"),
+            Some(Self::File(f)) => bail!(
+                "{command}: --imu takes auto or off, not a file ({})",
+                f.display()
+            ),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// How the core runs.
@@ -318,8 +374,8 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     if let Some(b) = p.budget {
         s.registration.work_budget = Some(b);
     }
-    if let Some(m) = p.imu {
-        s.imu.enabled = m == ImuMode::Auto;
+    if let Some(m) = &p.imu {
+        s.imu.enabled = *m != ImuMode::Off;
     }
     if let Some(e) = &p.imu_extrinsic {
         s.imu.extrinsic = e.as_slice().try_into().map_err(|_| {
@@ -466,5 +522,36 @@ mod tests {
         let s = resolve(&["--config", file.to_str().unwrap()], None).unwrap();
         let e = check_reference_compatible(&s).unwrap_err().to_string();
         assert!(e.contains("registration.kernel_scale"), "{e}");
+    }
+
+    #[test]
+    fn imu_takes_auto_off_an_existing_file_or_a_topic_and_any_but_off_turns_the_prior_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("imu.csv");
+        std::fs::write(&csv, "").unwrap();
+        let csv_arg = csv.to_str().unwrap();
+        let parse = |v: &str| {
+            let w = Wrap::try_parse_from(["x", "--imu", v]).unwrap();
+            w.pipeline.imu.unwrap()
+        };
+        assert_eq!(parse("auto"), ImuMode::Auto);
+        assert_eq!(parse("off"), ImuMode::Off);
+        assert_eq!(parse(csv_arg), ImuMode::File(csv.clone()));
+        // A path that is not a file is a topic name.
+        let missing = dir.path().join("missing.csv");
+        let missing = missing.to_str().unwrap();
+        assert_eq!(parse(missing), ImuMode::Topic(missing.into()));
+        assert_eq!(parse("/imu").input(), ImuInput::Topic("/imu".into()));
+        for (v, on) in [
+            ("auto", true),
+            ("off", false),
+            ("/imu", true),
+            (csv_arg, true),
+        ] {
+            assert_eq!(resolve(&["--imu", v], None).unwrap().imu.enabled, on, "{v}");
+        }
+        let e = ImuMode::recording_only(Some(&parse("/imu")), "live").unwrap_err();
+        assert!(e.to_string().contains("not a topic (/imu)"), "{e}");
+        assert!(ImuMode::recording_only(Some(&ImuMode::Auto), "live").is_ok());
     }
 }

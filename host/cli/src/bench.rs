@@ -63,7 +63,7 @@ pub fn load(args: &BenchArgs, scan_points: usize, err: &mut dyn Write) -> Result
     let mut dataset = io::open(
         &args.dataset,
         args.common.input.format,
-        &args.common.input.open_options(scan_points),
+        &args.common.open_options(scan_points),
     )?;
     let mut out = Vec::new();
     for item in Selection::new(dataset.frames.as_mut(), args.common.input.range()) {

@@ -285,10 +285,7 @@ fn sequence_checks(
         Format::Auto => io::open::detect(&args.dataset)?,
         f => f,
     };
-    let opts = args
-        .common
-        .input
-        .open_options(settings.capacities()?.scan_points);
+    let opts = args.common.open_options(settings.capacities()?.scan_points);
     let mut dataset = io::open(&args.dataset, format, &opts)?;
     progress(args, err, "reading frames")?;
     let frames = sequence::preload(&mut dataset, range, err)?;

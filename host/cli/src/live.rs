@@ -241,6 +241,7 @@ pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
     if args.sensor.port.is_some() {
         bail!("live listens on the port of --udp; --port is for recordings");
     }
+    crate::args::ImuMode::recording_only(args.pipeline.imu.as_ref(), "live")?;
     let idle = match args.idle_timeout {
         Some(s) if s > 0.0 => Some(crate::interrupt::seconds(s)),
         Some(s) => bail!("--idle-timeout must be a positive number of seconds, not {s}"),

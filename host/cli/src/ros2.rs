@@ -146,6 +146,7 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
 
 /// Settings and node parameters from the defaults, `--config`, `--params` and the flags.
 pub fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)> {
+    crate::args::ImuMode::recording_only(args.pipeline.imu.as_ref(), "ros2")?;
     let mut settings = crate::args::from_file(&args.pipeline)?;
     let mut p = params::NodeParams::default();
     if let Some(path) = &args.params {

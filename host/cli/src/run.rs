@@ -71,12 +71,7 @@ pub(crate) fn execute_on(
         kiss_odom_io::write::refuse_input(&args.run.out.join(name), &inputs[1..3])?;
     }
     let mut driver = Driver::new(&settings)?;
-    let opened = open(
-        &args
-            .common
-            .input
-            .open_options(settings.capacities()?.scan_points),
-    );
+    let opened = open(&args.common.open_options(settings.capacities()?.scan_points));
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     kiss_odom_io::write::remove_stale(&args.run.out, &OUTPUTS)?;
     for path in crate::viz::files(&args.view) {

@@ -1,5 +1,6 @@
 //! `kiss-odom simulate`: a LiDAR sequence with exact ground truth, ray cast by
-//! `kiss-odom-sim` and written in the generic layout (and as sensor packets).
+//! `kiss-odom-sim` and written in the generic layout (and as sensor packets or a ROS
+//! recording).
 
 use anyhow::Result;
 use kiss_odom_sim::{Format, ImuSpec, Lidar, PacketSensor, Profile, Request, SimParams, Written};
@@ -68,7 +69,8 @@ pub struct SimulateArgs {
     pub format: Format,
     /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
     /// 200), with white noise, turn-on biases that then walk, and gravity, 11, 23 and -44 mm
-    /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it.
+    /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it. With
+    /// --format bag or mcap, the samples are also in the recording as sensor_msgs/Imu on /imu.
     #[arg(long)]
     pub imu_rate: Option<f64>,
     /// With --imu-rate: the exact rates and forces, without noise or bias.

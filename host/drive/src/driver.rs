@@ -111,22 +111,15 @@ impl Driver {
 
     /// Registers a frame read from a dataset; with the gyroscope prior on (`[imu]`), its IMU
     /// samples predict and deskew it, its sweep ending (on the IMU's clock, the sensor's) at
-    /// its last point: a decoded sweep's sensor time, else its latest point's time, else the
-    /// frame's time.
+    /// [`Frame::sweep_end`].
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
         let stamps = frame.stamps.as_deref();
         // Only with the prior on: the sweep's end costs a pass over the stamps of a folder's
         // frame.
-        let end = || {
-            frame
-                .sweep
-                .as_ref()
-                .map(|s| s.end_s)
-                .or_else(|| stamps.and_then(|s| s.iter().copied().reduce(f64::max)))
-                .or(frame.time)
-        };
         let prior = match self.engine.imu_bias() {
-            Some(_) => end().and_then(|end| self.engine.prior_before(&frame.imu, end)),
+            Some(_) => frame
+                .sweep_end()
+                .and_then(|end| self.engine.prior_before(&frame.imu, end)),
             None => None,
         };
         let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;

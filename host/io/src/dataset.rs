@@ -40,9 +40,32 @@ pub struct Frame {
     pub intensity: Option<Vec<f32>>,
     /// For a sweep decoded from sensor packets: its packet statistics and time span.
     pub sweep: Option<SweepInfo>,
-    /// IMU samples that arrived with the frame (sensor captures whose sensor sends them),
-    /// in arrival order; every sample of a recording is in exactly one frame.
+    /// IMU samples that arrived with the frame (sensor captures whose sensor sends them, a
+    /// folder's `imu.csv`, a bag's or MCAP file's `sensor_msgs/Imu` topic, `--imu FILE`), in
+    /// time order; every sample of a recording is in exactly one frame.
     pub imu: Vec<crate::imu::ImuSample>,
+    /// The sweep's end on the sensor's clock (s) where the reader knows it and the points'
+    /// times do not tell it: a bag's or MCAP file's cloud whose point times are offsets, not
+    /// seconds on its header's clock, ends at its header stamp.
+    pub end: Option<f64>,
+}
+
+impl Frame {
+    /// The instant the sweep ends on the sensor's clock, which its IMU shares (s): a decoded
+    /// sweep's last point, else what the reader knows ([`Frame::end`]), else its latest point's
+    /// time, else its time. The gyroscope prior integrates to it and IMU samples are handed
+    /// on with the frame up to it.
+    pub fn sweep_end(&self) -> Option<f64> {
+        self.sweep
+            .as_ref()
+            .map(|s| s.end_s)
+            .or(self.end)
+            .or_else(|| {
+                let stamps = self.stamps.as_deref()?;
+                stamps.iter().copied().reduce(f64::max)
+            })
+            .or(self.time)
+    }
 }
 
 /// What a source yields.
@@ -185,12 +208,30 @@ pub struct OpenOptions {
     pub scan_points: usize,
     /// How to decode a sensor recording (pcap).
     pub sensor: SensorOptions,
+    /// Where the frames' IMU samples come from.
+    pub imu: ImuInput,
+}
+
+/// Where the frames' IMU samples come from (`--imu`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum ImuInput {
+    /// What the format carries anyway: a folder's `imu.csv`, a sensor's IMU packets; a bag's
+    /// or MCAP file's IMU topics are not read.
+    #[default]
+    Builtin,
+    /// Also a bag's or MCAP file's only `sensor_msgs/Imu` topic, if it has exactly one.
+    Auto,
+    /// This `sensor_msgs/Imu` topic of a bag or MCAP file; an error for other inputs.
+    Topic(String),
+    /// This `imu.csv`, for any input, instead of what the recording carries.
+    File(PathBuf),
 }
 
 impl Default for OpenOptions {
     fn default() -> Self {
         Self {
             topic: None,
+            imu: ImuInput::Builtin,
             sensor: SensorOptions::default(),
             scan_points: kiss_odom_core::Capacities::FULL_SCALE.scan_points,
         }

@@ -3,6 +3,8 @@
 //! accel_z`, time in seconds on the sensor's clock (the frames' `stamps` clock), angular rate in
 //! rad/s and specific force in m/s^2, both in the IMU's own axes as the sensor sends them.
 
+pub mod attach;
+
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::path::Path;

@@ -29,8 +29,8 @@ pub mod select;
 pub mod write;
 
 pub use dataset::{
-    Dataset, DatasetInfo, Format, Frame, FrameSource, Item, OpenOptions, SensorKind, SensorOptions,
-    SweepInfo, Trailer,
+    Dataset, DatasetInfo, Format, Frame, FrameSource, ImuInput, Item, OpenOptions, SensorKind,
+    SensorOptions, SweepInfo, Trailer,
 };
 pub use open::open;
 pub use select::{FrameRange, Selection};

@@ -4,10 +4,12 @@
 //! get a correction no other data should get, and refuses a KITTI-shaped folder it cannot
 //! read as KITTI; bag, MCAP and pcap/pcapng files are recognised by extension; anything else
 //! is the generic layout with the one frame format its files show (several is refused). An
-//! explicit format always wins.
+//! explicit format always wins. An `imu.csv` given with `--imu FILE` goes to the frames of any
+//! format by time, in place of the IMU samples the recording carries.
 
-use crate::dataset::{Dataset, Format, FrameSource, Item, OpenOptions, Trailer};
+use crate::dataset::{Dataset, Format, FrameSource, ImuInput, Item, OpenOptions, Trailer};
 use crate::folders::{generic, kitti};
+use crate::imu::{self, attach::WithImu};
 use anyhow::{bail, Result};
 use std::path::Path;
 
@@ -55,6 +57,18 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
         Format::Pcap => crate::capture::frames::open(path, opts)?,
         Format::Auto => bail!("{}: format detection failed", path.display()),
     };
+    match &opts.imu {
+        ImuInput::File(file) => {
+            let samples = imu::read_csv(file)?;
+            let times = dataset.info.frame_times.clone();
+            dataset.frames = Box::new(WithImu::new(dataset.frames, samples).with_times(times));
+        }
+        ImuInput::Topic(topic) if !matches!(format, Format::Bag | Format::Mcap) => bail!(
+            "--imu {topic}: no such file, and {} is not a bag or MCAP file to have such a topic",
+            path.display()
+        ),
+        _ => {}
+    }
     dataset.frames = Box::new(TimeOrder {
         inner: dataset.frames,
         last: None,

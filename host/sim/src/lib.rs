@@ -4,10 +4,12 @@
 //! `kiss-odom run` reads, for tests, fuzzing, benchmarks, the deskew study and degenerate-scene
 //! stress tests. A seeded scene ([`city`], built from [`shapes`] and indexed by [`scene`]) is
 //! swept by a multi-beam sensor ([`sensor`]) riding a smooth parametric trajectory
-//! ([`trajectory`]) of a [`Profile`]: a [`Simulation`], with an [`imu`] riding along. [`packets`] fires a real sensor's beams
-//! at its own timing and packs its UDP packets, [`capture`] writes them as a pcap, [`writer`]
-//! the generic layout, and [`sequence`] a whole sequence. Every random draw is keyed by indices
-//! ([`rng`]), so the bytes depend on the seed and parameters only, never on the thread count.
+//! ([`trajectory`]) of a [`Profile`]: a [`Simulation`], with an [`imu`] riding along.
+//! [`packets`] fires a real sensor's beams at its own timing and packs its UDP packets,
+//! [`capture`] writes them as a pcap, [`ros`] the frames and IMU samples as a ROS bag or MCAP
+//! file, [`writer`] the generic layout, and [`sequence`] a whole sequence. Every random draw is
+//! keyed by indices ([`rng`]), so the bytes depend on the seed and parameters only, never on
+//! the thread count.
 
 pub mod capture;
 pub mod city;
@@ -15,6 +17,7 @@ pub mod imu;
 pub mod packets;
 pub mod profile;
 pub mod rng;
+pub mod ros;
 pub mod scene;
 pub mod sensor;
 pub mod sequence;

@@ -1,13 +1,15 @@
 //! A whole simulated sequence written to a folder: the frames and ground truth in the generic
 //! layout ([`crate::writer`]), `sim.toml`, with [`Format::Pcap`] the same sweeps as the
-//! sensor's packets ([`crate::packets`], [`crate::capture`]), and an IMU's `imu.csv`
-//! ([`crate::imu`]) if asked for. The folder appears only once
+//! sensor's packets ([`crate::packets`], [`crate::capture`]), with [`Format::Bag`] or
+//! [`Format::Mcap`] the same frames and IMU samples as a ROS recording ([`crate::ros`]), and
+//! an IMU's `imu.csv` ([`crate::imu`]) if asked for. The folder appears only once
 //! complete; a stop asked for between frames leaves none.
 
 use crate::capture;
 use crate::imu::{self, ImuSpec};
 use crate::packets::{PacketSensor, PacketSim};
 use crate::profile::Profile;
+use crate::ros;
 use crate::sensor::Lidar;
 use crate::simulation::{SimParams, Simulation};
 use crate::writer::DatasetWriter;
@@ -27,6 +29,12 @@ pub enum Format {
     /// `packets.pcap` (needs a packet sensor; an Ouster's metadata goes to `packets.json`, a
     /// QT128's or OT128's angle correction file to `packets.csv`).
     Pcap,
+    /// The generic layout and the same frames as `sensor_msgs/PointCloud2` on `/points` in
+    /// the ROS 1 bag `points.bag`, with `--imu-rate` the IMU's samples as `sensor_msgs/Imu` on
+    /// `/imu`.
+    Bag,
+    /// As `bag`, in the ROS 2 MCAP file `points.mcap` (CDR messages).
+    Mcap,
 }
 
 /// Everything that decides a written sequence.
@@ -112,7 +120,9 @@ const LAYOUT: &str = "velodyne/NNNNNN.bin: f32 LE x y z intensity, sensor frame 
     at the end of each sweep (its last column) in the frame of the first sweep's end; \
     times.txt: end-of-sweep times (s); packets.pcap (if written): the same sweeps as the \
     sensor's UDP packets, exact points above before range quantisation, in decoder order; \
-    packets.json: Ouster metadata; imu.csv (if written): time (s, the frames' clock plus the \
+    packets.json: Ouster metadata; points.bag or points.mcap (if written): the frames as \
+    sensor_msgs/PointCloud2 on /points (x y z intensity f32, time f64 s) stamped at the sweep's \
+    end, the IMU samples as sensor_msgs/Imu on /imu; imu.csv (if written): time (s, the frames' clock plus the \
     IMU's offset), angular rate (rad/s) and specific force (m/s^2) in the IMU's axes";
 
 /// The simulation parameters of `request`, with the rate a packet sensor rounds to.
@@ -218,6 +228,15 @@ pub fn write(
         }
         _ => None,
     };
+    let mut ros = match request.format {
+        Format::Bag => Some((ros::Container::Bag, ros::BAG_NAME)),
+        Format::Mcap => Some((ros::Container::Mcap, ros::MCAP_NAME)),
+        Format::Generic | Format::Pcap => None,
+    }
+    .map(|(container, name)| {
+        ros::RosWriter::create(&writer.staging().join(name), container, imu_samples.clone())
+    })
+    .transpose()?;
     let mut points = 0usize;
     for k in 0..params.frames {
         if stop() {
@@ -237,11 +256,17 @@ pub fn write(
             None => (sim.frame(k), sim.ground_truth(k)),
         };
         points += frame.points.len();
+        if let Some(r) = ros.as_mut() {
+            r.write_frame(&frame)?;
+        }
         writer.write_frame(&frame, &truth)?;
         progress(k + 1);
     }
     if let Some(c) = pcap {
         c.finish()?;
+    }
+    if let Some(r) = ros {
+        r.finish()?;
     }
     writer.finish()?;
     Ok(Written::Complete { points, route_m })

@@ -9,6 +9,8 @@
 //! DIR/packets.pcap           with --format pcap: the same sweeps as sensor packets
 //! DIR/packets.json           with --format pcap and an Ouster: its metadata
 //! DIR/packets.csv            with --format pcap and a QT128 or OT128: its angle correction file
+//! DIR/points.bag             with --format bag: the frames (and IMU samples) as a ROS 1 bag
+//! DIR/points.mcap            with --format mcap: the same as a ROS 2 MCAP file
 //! ```
 //!
 //! Numbers in text files are written with Rust's shortest round-trip formatting, so parsing
@@ -24,7 +26,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 7] = [
+const OWNED_FILES: [&str; 9] = [
     "poses.txt",
     "times.txt",
     "sim.toml",
@@ -32,6 +34,8 @@ const OWNED_FILES: [&str; 7] = [
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
     crate::imu::CSV_NAME,
+    crate::ros::BAG_NAME,
+    crate::ros::MCAP_NAME,
 ];
 const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
 

@@ -91,6 +91,7 @@ impl Sweep {
             warnings: Vec::new(),
             intensity: Some(self.meta.iter().map(|m| f32::from(m.intensity)).collect()),
             sweep: Some(sweep),
+            end: None,
             imu: self.imu,
         }
     }

@@ -16,13 +16,15 @@
 //! the KITTI layout); a missing or bad frame becomes an [`Item::Skipped`], a bad timestamps
 //! file a [`Frame::warnings`] entry. Each frame takes the IMU samples up to its end (its
 //! latest point's time, the clock the IMU shares; else its `times.txt` row) that no earlier
-//! frame took; the last frame takes the rest.
+//! frame took; the last frame takes the rest ([`WithImu`]).
 
 use super::file_cloud::{truncation_warning, Cloud};
 use super::listing::{self, Listing, Naming, Slot};
 use super::{bin, pcd, ply};
-use crate::dataset::{Dataset, DatasetInfo, Format, Frame, FrameSource, Item, OpenOptions};
-use crate::imu::{self, ImuSample};
+use crate::dataset::{
+    Dataset, DatasetInfo, Format, Frame, FrameSource, ImuInput, Item, OpenOptions,
+};
+use crate::imu::{self, attach::WithImu};
 use crate::poses;
 use anyhow::{bail, Context, Result};
 use std::io::Read;
@@ -111,9 +113,6 @@ pub struct FileSource {
     /// Applied to every scan read (the KITTI correction).
     correct: Option<fn(&mut [[f64; 3]])>,
     next: usize,
-    /// IMU samples (`imu.csv`) and the first not yet handed on.
-    imu: Vec<ImuSample>,
-    imu_next: usize,
 }
 
 impl FileSource {
@@ -133,26 +132,7 @@ impl FileSource {
             max_points,
             correct: None,
             next: 0,
-            imu: Vec::new(),
-            imu_next: 0,
         }
-    }
-
-    /// Hands `samples` (time order) on with the frames.
-    pub fn with_imu(mut self, samples: Vec<ImuSample>) -> Self {
-        self.imu = samples;
-        self
-    }
-
-    /// The samples after the last handed on, up to `end` (s; all if `None`).
-    fn imu_until(&mut self, end: Option<f64>) -> Vec<ImuSample> {
-        let rest = &self.imu[self.imu_next..];
-        let n = match end {
-            Some(end) => rest.partition_point(|s| s.seconds() <= end),
-            None => rest.len(),
-        };
-        self.imu_next += n;
-        rest[..n].to_vec()
     }
 
     /// Applies `correct` to every scan read.
@@ -235,6 +215,7 @@ impl FrameSource for FileSource {
             warnings: Vec::new(),
             intensity: None,
             sweep: None,
+            end: None,
             imu: Vec::new(),
         };
         if cloud.declared > frame.points.len() {
@@ -245,15 +226,6 @@ impl FrameSource for FileSource {
             correct(&mut frame.points);
         }
         self.attach_timestamps(path, cloud.declared, &mut frame);
-        if !self.imu.is_empty() {
-            let last = self.next == self.slots.len();
-            let latest = frame
-                .stamps
-                .as_ref()
-                .map(|s| s.iter().copied().fold(f64::MIN, f64::max));
-            // The end the frame driver integrates the gyroscope prior to.
-            frame.imu = self.imu_until(if last { None } else { latest.or(time) });
-        }
         Ok(Some(Item::Frame(frame)))
     }
 
@@ -263,14 +235,6 @@ impl FrameSource for FileSource {
             return false;
         }
         self.next = self.slots.partition_point(|s| s.index < index);
-        // The frame before takes the samples up to its time.
-        let before = index
-            .checked_sub(1)
-            .and_then(|i| self.times.as_ref()?.get(i).copied());
-        self.imu_next = match before {
-            Some(t) => self.imu.partition_point(|s| s.seconds() <= t),
-            None => 0,
-        };
         true
     }
 }
@@ -370,8 +334,10 @@ pub fn open(root: &Path, format: Option<Format>, opts: &OpenOptions) -> Result<D
         &listing,
         ground_truth.is_some() || frame_times.is_some(),
     ));
+    // `--imu FILE` replaces the folder's own, so that is not read.
     let imu_path = root.join(imu::CSV_NAME);
-    let imu_samples = match imu_path.is_file().then(|| imu::read_csv(&imu_path)) {
+    let own_imu = imu_path.is_file() && !matches!(opts.imu, ImuInput::File(_));
+    let imu_samples = match own_imu.then(|| imu::read_csv(&imu_path)) {
         Some(Ok(samples)) => samples,
         Some(Err(e)) => {
             warnings.push(format!("{e:#}; no IMU samples used"));
@@ -388,12 +354,16 @@ pub fn open(root: &Path, format: Option<Format>, opts: &OpenOptions) -> Result<D
         kitti_correction: false,
         warnings,
     };
-    let frames =
-        FileSource::new(listing, stamps_dir, frame_times, opts.scan_points).with_imu(imu_samples);
-    Ok(Dataset {
-        frames: Box::new(frames),
-        info,
-    })
+    let mut frames: Box<dyn FrameSource> = Box::new(FileSource::new(
+        listing,
+        stamps_dir,
+        frame_times.clone(),
+        opts.scan_points,
+    ));
+    if !imu_samples.is_empty() {
+        frames = Box::new(WithImu::new(frames, imu_samples).with_times(frame_times));
+    }
+    Ok(Dataset { frames, info })
 }
 
 #[cfg(test)]

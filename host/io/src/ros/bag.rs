@@ -7,13 +7,16 @@
 //! Frames are the messages of one topic in receive-time order (as `rosbag play` plays them),
 //! whatever order they were written in; a bag written out of order says so in a dataset
 //! warning. A chunk is decompressed when the stream reaches it, so a bag never has to fit in
-//! memory, and [`FrameSource::seek`] is cheap.
+//! memory, and [`FrameSource::seek`] is cheap. With `--imu`, the messages of its
+//! `sensor_msgs/Imu` topic (`imu_topic`) are read when it is opened.
 
 use super::bag_records;
 use super::bag_records::{Bag, MessageRef};
 use super::message::parse_ros1;
 use super::pointcloud2::{self, MessageAt};
+use super::{imu_msg, imu_topic};
 use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
+use crate::imu::{attach::WithImu, ImuSample};
 use anyhow::{anyhow, bail, Result};
 use std::collections::HashMap;
 use std::path::Path;
@@ -30,7 +33,7 @@ pub const POINTCLOUD2_MD5: &str = "1158d486dd51d683ce2f1be655c3c181";
 pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     let label = path.display().to_string();
     let limit = pointcloud2::record_limit(opts.scan_points);
-    let bag = Bag::open(path, limit).map_err(|e| anyhow!("{label}: {e}"))?;
+    let mut bag = Bag::open(path, limit).map_err(|e| anyhow!("{label}: {e}"))?;
     if bag.connections.is_empty() {
         if let Some(d) = &bag.damage {
             bail!("{label}: damaged before its first message: {d}");
@@ -45,13 +48,21 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         &label,
         &topics,
         |t| t == POINTCLOUD2_TYPE,
-        POINTCLOUD2_TYPE,
+        pointcloud2::Wanted::cloud(POINTCLOUD2_TYPE),
         opts.topic.as_deref(),
     )
     .map_err(|e| match &bag.damage {
         Some(d) => anyhow!("{e}; the bag is damaged: {d}"),
         None => anyhow!(e),
     })?;
+    let imu_topic = imu_topic::choose(
+        &label,
+        &topics,
+        |t| t == imu_msg::ROS1_TYPE,
+        imu_msg::ROS1_TYPE,
+        &opts.imu,
+    )
+    .map_err(|e| anyhow!(e))?;
     let ours: HashMap<u32, ConnKind> = bag
         .connections
         .iter()
@@ -74,6 +85,7 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     if let Some(w) = pointcloud2::time_order(&label, &topic, &mut plan, |m| m.time) {
         warnings.push(w);
     }
+    let imu = imu_topic.map(|t| read_imu(&mut bag, &label, &t, &mut warnings));
     let source = BagSource {
         bag,
         file: label,
@@ -84,14 +96,58 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         max_points: opts.scan_points,
         done: false,
     };
+    let mut frames: Box<dyn FrameSource> = Box::new(source);
+    if let Some(samples) = imu {
+        frames = Box::new(WithImu::new(frames, samples));
+    }
     Ok(Dataset {
-        frames: Box::new(source),
+        frames,
         info: DatasetInfo {
             format: Some(Format::Bag),
             warnings,
             ..DatasetInfo::default()
         },
     })
+}
+
+/// The samples of the `sensor_msgs/Imu` messages on `topic`, read in file order, in stamp
+/// order; what went wrong goes to `warnings`.
+fn read_imu(bag: &mut Bag, file: &str, topic: &str, warnings: &mut Vec<String>) -> Vec<ImuSample> {
+    let usable: HashMap<u32, Option<String>> = bag
+        .connections
+        .iter()
+        .filter(|(_, c)| c.topic == topic)
+        .map(|(&id, c)| {
+            let wrong = (c.tp != imu_msg::ROS1_TYPE || c.md5 != imu_msg::ROS1_MD5)
+                .then(|| format!("{} with md5 {}", c.tp, c.md5));
+            (id, wrong)
+        })
+        .collect();
+    let mut refs: Vec<MessageRef> = bag
+        .messages
+        .iter()
+        .filter(|m| usable.contains_key(&m.conn))
+        .copied()
+        .collect();
+    refs.sort_by_key(|m| m.time);
+    // Numbered in receive order, read chunk by chunk.
+    let mut order: Vec<(usize, MessageRef)> = refs.into_iter().enumerate().collect();
+    order.sort_by_key(|(_, m)| (m.chunk, m.offset));
+    let mut collected = imu_topic::Collector::new(file, topic);
+    for (index, m) in order {
+        if let Some(Some(wrong)) = usable.get(&m.conn) {
+            collected.refuse(index, wrong);
+            continue;
+        }
+        match bag.message(m) {
+            Ok(body) => collected.push(index, imu_msg::parse_ros1(body)),
+            Err(e) => {
+                collected.stop(index, &e);
+                break;
+            }
+        }
+    }
+    collected.finish(warnings)
 }
 
 /// Whether messages of a connection on the chosen topic can be decoded.

@@ -9,11 +9,15 @@
 //! order says so in a dataset warning. Without a summary (a file cut short) or chunks, a linear
 //! reader streams the data section in file order and warns at the first message out of order.
 //! The message body is CDR; [`message`](super::message) parses it into a
-//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and [`pointcloud2`] decodes it.
+//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and [`pointcloud2`] decodes it. With
+//! `--imu`, the messages of its `sensor_msgs/msg/Imu` topic (`imu_topic`) are read when it is
+//! opened, in one pass over the data section.
 
 use super::message::parse_cdr;
 use super::pointcloud2::{self, MessageAt};
+use super::{imu_msg, imu_topic};
 use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
+use crate::imu::{attach::WithImu, ImuSample};
 use anyhow::{anyhow, bail, Context, Result};
 use mcap::records::{op, Record};
 use mcap::sans_io::indexed_reader::ReadOrder;
@@ -82,10 +86,29 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         &label,
         &topics,
         |s| s == POINTCLOUD2_SCHEMA,
-        POINTCLOUD2_SCHEMA,
+        pointcloud2::Wanted::cloud(POINTCLOUD2_SCHEMA),
         opts.topic.as_deref(),
     )
     .map_err(|e| anyhow!(e))?;
+    let imu_topic = imu_topic::choose(
+        &label,
+        &topics,
+        |s| s == imu_msg::ROS2_SCHEMA,
+        imu_msg::ROS2_SCHEMA,
+        &opts.imu,
+    )
+    .map_err(|e| anyhow!(e))?;
+    let imu = match imu_topic {
+        Some(t) => Some(read_imu(
+            &mut input,
+            limit,
+            &label,
+            &t,
+            &catalog,
+            &mut warnings,
+        )?),
+        None => None,
+    };
     let total = catalog.counts.as_ref().map(|counts| {
         catalog
             .channels
@@ -128,8 +151,12 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
             latest: None,
         },
     };
+    let mut frames: Box<dyn FrameSource> = Box::new(source);
+    if let Some(samples) = imu {
+        frames = Box::new(WithImu::new(frames, samples));
+    }
     Ok(Dataset {
-        frames: Box::new(source),
+        frames,
         info: DatasetInfo {
             format: Some(Format::Mcap),
             warnings,
@@ -259,6 +286,68 @@ fn scan(input: &mut BufReader<File>, limit: u64) -> Catalog {
     }
     catalog.counts = Some(counts);
     catalog
+}
+
+/// The samples of the `sensor_msgs/msg/Imu` messages on `topic`, read in one pass over the data
+/// section (from its start: `input` is left anywhere), in stamp order; what went wrong goes to
+/// `warnings`.
+fn read_imu(
+    input: &mut BufReader<File>,
+    limit: u64,
+    file: &str,
+    topic: &str,
+    catalog: &Catalog,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<ImuSample>> {
+    let usable: HashMap<u16, Option<String>> = catalog
+        .channels
+        .iter()
+        .filter(|(_, c)| c.topic == topic)
+        .map(|(&id, c)| {
+            let schema = catalog.schema_name(c.schema_id);
+            let wrong = (schema != imu_msg::ROS2_SCHEMA || c.encoding != CDR_ENCODING)
+                .then(|| format!("{schema} ({})", c.encoding));
+            (id, wrong)
+        })
+        .collect();
+    input
+        .seek(SeekFrom::Start(0))
+        .with_context(|| format!("{file}: cannot read"))?;
+    let mut reader = LinearReader::new_with_options(reader_options(limit));
+    let mut collected = imu_topic::Collector::new(file, topic);
+    let mut index = 0;
+    while let Some(event) = reader.next_event() {
+        let record = match event {
+            Ok(LinearReadEvent::ReadRequest(need)) => {
+                let n = input
+                    .read(reader.insert(need.min(READ_PIECE)))
+                    .with_context(|| format!("{file}: cannot read"))?;
+                reader.notify_read(n);
+                continue;
+            }
+            Ok(LinearReadEvent::Record { opcode, data }) if opcode == op::MESSAGE => {
+                mcap::parse_record(opcode, data)
+            }
+            Ok(LinearReadEvent::Record { .. }) => continue,
+            Err(e) => Err(e),
+        };
+        match record {
+            Ok(Record::Message { header, data }) => {
+                match usable.get(&header.channel_id) {
+                    None => continue,
+                    Some(Some(wrong)) => collected.refuse(index, wrong),
+                    Some(None) => collected.push(index, imu_msg::parse_cdr(&data)),
+                }
+                index += 1;
+            }
+            Ok(_) => {}
+            Err(e) => {
+                collected.stop(index, &e);
+                break;
+            }
+        }
+    }
+    Ok(collected.finish(warnings))
 }
 
 /// A reader of the messages of `topic` in log-time order, if the chunk index allows it within

@@ -416,6 +416,7 @@ pub(crate) fn message_item(
         Ok(d) => {
             let name = format!("{file}:{topic}@{}", cloud.stamp);
             let warnings = d.warnings.iter().map(|w| format!("{name}: {w}")).collect();
+            let end = sweep_end(cloud.stamp.seconds(), d.stamps.as_deref());
             Item::Frame(Frame {
                 index,
                 name,
@@ -425,6 +426,7 @@ pub(crate) fn message_item(
                 warnings,
                 intensity: None,
                 sweep: None,
+                end,
                 imu: Vec::new(),
             })
         }
@@ -432,39 +434,69 @@ pub(crate) fn message_item(
     }
 }
 
-/// Picks the topic to read: `requested` if it carries point clouds, otherwise the only
-/// point-cloud topic. `topics` lists every (topic, type) pair in the file; `is_cloud` says which
-/// types are PointCloud2. Errors name the file and list the candidates.
+/// Point times further than this from the header stamp (s) are not seconds on its clock.
+pub const SAME_CLOCK_S: f64 = 1.0;
+
+/// Where a cloud stamped `header` (s) ends on the sensor's clock when its point times do not
+/// tell: at its header stamp if they are offsets or another unit (farther than
+/// [`SAME_CLOCK_S`] from it), `None` when they are seconds on its clock or absent.
+pub fn sweep_end(header: f64, stamps: Option<&[f64]>) -> Option<f64> {
+    let latest = stamps?.iter().copied().reduce(f64::max)?;
+    ((latest - header).abs() > SAME_CLOCK_S).then_some(header)
+}
+
+/// What kind of topic a reader looks for, for [`choose_topic`] and its messages.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Wanted<'a> {
+    /// The message type (or schema) name.
+    pub type_name: &'a str,
+    /// What its topics are called in a list (`point-cloud`, `IMU`).
+    pub kind: &'a str,
+    /// The flag that names one.
+    pub flag: &'a str,
+}
+
+impl<'a> Wanted<'a> {
+    /// Point clouds of `type_name`, chosen with `--topic`.
+    pub const fn cloud(type_name: &'a str) -> Self {
+        Self {
+            type_name,
+            kind: "point-cloud",
+            flag: "--topic",
+        }
+    }
+}
+
+/// Picks the topic to read: `requested` if it carries the wanted type, otherwise the only
+/// topic that does. `topics` lists every (topic, type) pair in the file; `is_wanted` says which
+/// types are the wanted one. Errors name the file and list the candidates.
 pub(crate) fn choose_topic(
     file: &str,
     topics: &[(String, String)],
-    is_cloud: impl Fn(&str) -> bool,
-    cloud_type: &str,
+    is_wanted: impl Fn(&str) -> bool,
+    wanted: Wanted<'_>,
     requested: Option<&str>,
 ) -> Result<String, String> {
-    let mut clouds: Vec<&str> = topics
-        .iter()
-        .filter(|(_, ty)| is_cloud(ty))
-        .map(|(t, _)| t.as_str())
-        .collect();
-    clouds.sort_unstable();
-    clouds.dedup();
-    let listing = if clouds.is_empty() {
+    let Wanted {
+        type_name,
+        kind,
+        flag,
+    } = wanted;
+    let candidates = wanted_topics(topics, is_wanted);
+    let listing = if candidates.is_empty() {
         "none".to_string()
     } else {
-        clouds.join(", ")
+        candidates.join(", ")
     };
     match requested {
-        Some(t) if clouds.contains(&t) => Ok(t.to_string()),
+        Some(t) if candidates.contains(&t) => Ok(t.to_string()),
         Some(t) => match topics.iter().find(|(name, _)| name == t) {
             Some((_, ty)) => Err(format!(
-                "{file}: topic {t} carries {ty}, not {cloud_type} (point-cloud topics: {listing})"
+                "{file}: topic {t} carries {ty}, not {type_name} ({kind} topics: {listing})"
             )),
-            None => Err(format!(
-                "{file}: no topic {t} (point-cloud topics: {listing})"
-            )),
+            None => Err(format!("{file}: no topic {t} ({kind} topics: {listing})")),
         },
-        None => match clouds.as_slice() {
+        None => match candidates.as_slice() {
             [only] => Ok(only.to_string()),
             [] => {
                 let mut all: Vec<String> =
@@ -472,7 +504,7 @@ pub(crate) fn choose_topic(
                 all.sort_unstable();
                 all.dedup();
                 Err(format!(
-                    "{file}: no {cloud_type} topic (topics: {})",
+                    "{file}: no {type_name} topic (topics: {})",
                     if all.is_empty() {
                         "none".to_string()
                     } else {
@@ -481,10 +513,25 @@ pub(crate) fn choose_topic(
                 ))
             }
             _ => Err(format!(
-                "{file}: several {cloud_type} topics ({listing}); choose one with --topic"
+                "{file}: several {type_name} topics ({listing}); choose one with {flag}"
             )),
         },
     }
+}
+
+/// The topics of `topics` whose type `is_wanted` accepts, sorted, each once.
+pub(crate) fn wanted_topics(
+    topics: &[(String, String)],
+    is_wanted: impl Fn(&str) -> bool,
+) -> Vec<&str> {
+    let mut out: Vec<&str> = topics
+        .iter()
+        .filter(|(_, ty)| is_wanted(ty))
+        .map(|(t, _)| t.as_str())
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 #[cfg(test)]

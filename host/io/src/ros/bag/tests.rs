@@ -1,6 +1,7 @@
 //! Tests of `bag`.
 
 use super::*;
+use crate::dataset::ImuInput;
 use crate::ros::bag_records::MAGIC;
 use crate::ros::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
 use std::collections::{BTreeMap, BTreeSet};
@@ -538,4 +539,88 @@ fn files_that_are_not_bags_are_refused() {
             .unwrap()
     );
     assert!(err.contains("cannot open"), "{err}");
+}
+
+/// A ROS 1 `sensor_msgs/Imu` stamped `ns`, angular velocity (k, 0, 0) for sample `k`.
+fn imu_msg(ns: u64, k: u32) -> Vec<u8> {
+    let mut b = Vec::new();
+    let sec = (ns / 1_000_000_000) as u32;
+    let nsec = (ns % 1_000_000_000) as u32;
+    for v in [k, sec, nsec, 3] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(b"imu");
+    let mut block = [0.0f64; 37];
+    block[13] = f64::from(k); // angular_velocity.x
+    block[27] = 9.8; // linear_acceleration.z
+    for v in block {
+        b.extend(v.to_le_bytes());
+    }
+    b
+}
+
+#[test]
+fn an_imu_topic_gives_each_frame_the_samples_up_to_its_stamp_and_a_bad_message_is_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    const IMU: (&str, &str) = (imu_msg::ROS1_TYPE, imu_msg::ROS1_MD5);
+    let conns = [conn("/points", CLOUD), conn("/imu", IMU)];
+    let t0 = 1_700_000_000u64 * 1_000_000_000;
+    let mut msgs = Vec::new();
+    // Samples every 0.25 s from t0 + 0.1 s to t0 + 4.85 s; number 6 cut short.
+    for k in 0..20u32 {
+        let ns = t0 + u64::from(k) * 250_000_000 + 100_000_000;
+        let mut body = imu_msg(ns, k);
+        if k == 6 {
+            body.truncate(100);
+        }
+        msgs.push((1, ns, body));
+    }
+    // Clouds stamped t0 + k + 0.25 s, point times offsets from it.
+    for k in 0..4u32 {
+        msgs.push((
+            0,
+            t0 + u64::from(k) * 1_000_000_000 + 250_000_000,
+            cloud_msg(k),
+        ));
+    }
+    msgs.sort_by_key(|m| m.1);
+    let (bytes, _) = write_bag(&conns, &msgs, 5, true);
+    let p = save(&dir, "imu.bag", &bytes);
+    let with = |imu: ImuInput| {
+        let opts = OpenOptions {
+            imu,
+            ..OpenOptions::default()
+        };
+        open(&p, &opts)
+    };
+    let mut ds = with(ImuInput::Auto).unwrap();
+    let (items, err) = drain(ds.frames.as_mut());
+    assert_eq!(err, None);
+    let got: Vec<Vec<f64>> = items
+        .iter()
+        .map(|i| frame(i).imu.iter().map(|s| s.gyro[0]).collect())
+        .collect();
+    // Frame k ends at its stamp, t0 + k + 0.25 s: samples 4k - 3 ..= 4k; the last takes the
+    // rest; sample 6 is missing.
+    let want: Vec<Vec<f64>> = vec![
+        vec![0.0],
+        vec![1.0, 2.0, 3.0, 4.0],
+        vec![5.0, 7.0, 8.0],
+        (9..20).map(f64::from).collect(),
+    ];
+    assert_eq!(got, want);
+    assert_eq!(frame(&items[1]).end, Some(1_700_000_001.25));
+    assert_eq!(frame(&items[1]).imu[0].accel, [0.0, 0.0, 9.8]);
+    let w = ds.info.warnings.join("\n");
+    assert!(
+        w.contains("1 message(s) on /imu") && w.contains("message 6: message ends inside"),
+        "{w}"
+    );
+    // Not asked for: not read.
+    let mut plain = with(ImuInput::Builtin).unwrap();
+    let (items, _) = drain(plain.frames.as_mut());
+    assert!(items.iter().all(|i| frame(i).imu.is_empty()));
+    // A topic the bag does not have.
+    let e = format!("{:#}", with(ImuInput::Topic("/nope".into())).err().unwrap());
+    assert!(e.contains("no topic /nope (IMU topics: /imu)"), "{e}");
 }

@@ -360,3 +360,81 @@ fn files_that_are_not_mcap_are_refused() {
         "{err}"
     );
 }
+
+/// A little-endian CDR `sensor_msgs/msg/Imu` stamped `ns`, angular velocity (k, 0, 0), frame id
+/// `imu` (4 bytes with its NUL, which end 16 bytes after the encapsulation header: the f64 need
+/// no padding).
+fn imu_cdr(ns: u64, k: u32) -> Vec<u8> {
+    let mut b = vec![0, 1, 0, 0];
+    for v in [(ns / 1_000_000_000) as u32, (ns % 1_000_000_000) as u32, 4] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(b"imu\0");
+    let mut block = [0.0f64; 37];
+    block[13] = f64::from(k); // angular_velocity.x
+    block[27] = 9.8; // linear_acceleration.z
+    for v in block {
+        b.extend(v.to_le_bytes());
+    }
+    b
+}
+
+#[test]
+fn an_imu_topic_gives_each_frame_the_samples_up_to_its_stamp_and_a_bad_message_is_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let channels = [
+        ("/points", POINTCLOUD2_SCHEMA),
+        ("/imu", imu_msg::ROS2_SCHEMA),
+    ];
+    // Samples every 0.25 s from t0 + 0.1 s, number 6 not CDR; clouds at t0 + k + 0.25 s.
+    let t0 = 1_700_000_000u64 * 1_000_000_000;
+    let mut timed: Vec<(u64, usize, Vec<u8>)> = Vec::new();
+    for k in 0..20u32 {
+        let ns = t0 + u64::from(k) * 250_000_000 + 100_000_000;
+        let mut body = imu_cdr(ns, k);
+        if k == 6 {
+            body[1] = 7;
+        }
+        timed.push((ns, 1, body));
+    }
+    for k in 0..4u32 {
+        timed.push((
+            t0 + u64::from(k) * 1_000_000_000 + 250_000_000,
+            0,
+            cloud_msg(k),
+        ));
+    }
+    timed.sort_by_key(|m| m.0);
+    let msgs: Vec<(usize, Vec<u8>)> = timed.into_iter().map(|(_, c, b)| (c, b)).collect();
+    for chunk_size in [None, Some(1024)] {
+        let p = save(
+            &dir,
+            "imu.mcap",
+            &write_mcap(&channels, &msgs, chunk_size, None),
+        );
+        let opts = OpenOptions {
+            imu: crate::dataset::ImuInput::Auto,
+            ..OpenOptions::default()
+        };
+        let mut ds = open(&p, &opts).unwrap();
+        let (items, err) = drain(ds.frames.as_mut());
+        assert_eq!(err, None);
+        let got: Vec<Vec<f64>> = items
+            .iter()
+            .map(|i| frame(i).imu.iter().map(|s| s.gyro[0]).collect())
+            .collect();
+        let want: Vec<Vec<f64>> = vec![
+            vec![0.0],
+            vec![1.0, 2.0, 3.0, 4.0],
+            vec![5.0, 7.0, 8.0],
+            (9..20).map(f64::from).collect(),
+        ];
+        assert_eq!(got, want, "chunks {chunk_size:?}: {:?}", ds.info.warnings);
+        assert_eq!(frame(&items[1]).imu[0].accel, [0.0, 0.0, 9.8]);
+        let w = ds.info.warnings.join("\n");
+        assert!(
+            w.contains("1 message(s) on /imu") && w.contains("encapsulation 0007"),
+            "{w}"
+        );
+    }
+}

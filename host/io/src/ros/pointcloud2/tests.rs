@@ -222,24 +222,49 @@ fn topic_choice_follows_the_reference_rules() {
     };
     let pc = |t: &str| t == "PC2";
     let one = topics(&[("/points", "PC2"), ("/imu", "Imu")]);
-    assert_eq!(choose_topic("f", &one, pc, "PC2", None).unwrap(), "/points");
+    assert_eq!(
+        choose_topic("f", &one, pc, Wanted::cloud("PC2"), None).unwrap(),
+        "/points"
+    );
     let two = topics(&[("/b", "PC2"), ("/a", "PC2"), ("/imu", "Imu")]);
-    let e = choose_topic("f", &two, pc, "PC2", None).unwrap_err();
+    let e = choose_topic("f", &two, pc, Wanted::cloud("PC2"), None).unwrap_err();
     assert!(
         e.contains("several") && e.contains("/a, /b") && e.contains("--topic"),
         "{e}"
     );
     assert_eq!(
-        choose_topic("f", &two, pc, "PC2", Some("/b")).unwrap(),
+        choose_topic("f", &two, pc, Wanted::cloud("PC2"), Some("/b")).unwrap(),
         "/b"
     );
-    let e = choose_topic("f", &two, pc, "PC2", Some("/imu")).unwrap_err();
+    let e = choose_topic("f", &two, pc, Wanted::cloud("PC2"), Some("/imu")).unwrap_err();
     assert!(e.contains("/imu carries Imu"), "{e}");
-    let e = choose_topic("f", &two, pc, "PC2", Some("/nope")).unwrap_err();
+    let e = choose_topic("f", &two, pc, Wanted::cloud("PC2"), Some("/nope")).unwrap_err();
     assert!(e.contains("no topic /nope"), "{e}");
-    let e = choose_topic("f", &topics(&[("/imu", "Imu")]), pc, "PC2", None).unwrap_err();
+    let e = choose_topic(
+        "f",
+        &topics(&[("/imu", "Imu")]),
+        pc,
+        Wanted::cloud("PC2"),
+        None,
+    )
+    .unwrap_err();
     assert!(
         e.contains("no PC2 topic") && e.contains("/imu (Imu)"),
         "{e}"
     );
+}
+
+#[test]
+fn a_cloud_ends_at_its_latest_point_time_unless_those_are_offsets() {
+    let header = 1_700_000_000.25;
+    // Seconds on the header's clock: the driver takes the latest of them.
+    assert_eq!(
+        sweep_end(header, Some(&[header - 0.1, header - 0.001])),
+        None
+    );
+    // Offsets from the sweep's start (Ouster's `t` in ns, Velodyne's `time` in s): the header.
+    assert_eq!(sweep_end(header, Some(&[0.0, 99_000_000.0])), Some(header));
+    assert_eq!(sweep_end(header, Some(&[-0.1, 0.0])), Some(header));
+    assert_eq!(sweep_end(header, None), None);
+    assert_eq!(sweep_end(header, Some(&[])), None);
 }
