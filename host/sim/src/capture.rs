@@ -3,9 +3,12 @@
 //! QT128 or OT128 its angle correction file.
 //!
 //! The last step of `simulate --format pcap`, after [`crate::packets`]. Datagrams are not
-//! fragmented: an OS1-64 packet (12 544 bytes) travels in one jumbo frame.
+//! fragmented: an OS1-64 packet (12 544 bytes) travels in one jumbo frame. IMU packets (the
+//! OS1's and the Mid-360's, with `--imu-rate`) go to the sensor's IMU port: the OS1's
+//! `udp_port_imu` (7503), the Mid-360's 56401 from 56400 (Livox's defaults).
 
 use crate::packets::{os1, Packet, PacketSensor};
+use crate::trajectory::PoseM;
 use anyhow::{Context, Result};
 use etherparse::PacketBuilder;
 use pcap_file::pcap::{PcapHeader, PcapPacket, PcapWriter};
@@ -28,6 +31,8 @@ pub struct CaptureWriter {
     writer: PcapWriter<BufWriter<File>>,
     /// Source and destination UDP ports.
     ports: (u16, u16),
+    /// Source and destination UDP ports of the IMU packets.
+    imu_ports: (u16, u16),
     source: [u8; 4],
     /// The capture clock at trajectory time 0 (s).
     start_time: f64,
@@ -45,30 +50,41 @@ impl CaptureWriter {
         };
         let writer = PcapWriter::with_header(BufWriter::new(file), header)
             .with_context(|| format!("writing {}", path.display()))?;
-        let (ports, source) = match sensor {
-            PacketSensor::Os1 => ((7502, 7502), [192, 168, 1, 100]),
-            // The Mid-360 sends from port 56300 to the host's 56301 (Livox's defaults).
-            PacketSensor::Mid360 => ((56300, 56301), [192, 168, 1, 160]),
+        let (ports, imu_ports, source) = match sensor {
+            PacketSensor::Os1 => ((7502, 7502), (7503, 7503), [192, 168, 1, 100]),
+            // The Mid-360 sends from port 56300 to the host's 56301, its IMU from 56400 to
+            // 56401 (Livox's defaults).
+            PacketSensor::Mid360 => ((56300, 56301), (56400, 56401), [192, 168, 1, 160]),
             // A Livox SDK 1 sensor sends its points to the host's port 56001.
-            PacketSensor::Avia => ((65000, 56001), [192, 168, 1, 150]),
+            PacketSensor::Avia => ((65000, 56001), (65000, 56001), [192, 168, 1, 150]),
             // Velodyne and Hesai.
-            _ => ((2368, 2368), [192, 168, 1, 201]),
+            _ => ((2368, 2368), (2368, 2368), [192, 168, 1, 201]),
         };
         Ok(Self {
             path: path.to_path_buf(),
             writer,
             ports,
+            imu_ports,
             source,
             // Captured on a host whose clock agrees with the sensor's.
             start_time: start_time + sensor.clock_origin_s() as f64,
         })
     }
 
-    /// Appends one packet, stamped with the time it leaves the sensor.
+    /// Appends one lidar packet, stamped with the time it leaves the sensor.
     pub fn write(&mut self, packet: &Packet) -> Result<()> {
+        self.write_to(packet, self.ports)
+    }
+
+    /// Appends one IMU packet ([`PacketSensor::imu_packet`]), to the sensor's IMU port.
+    pub fn write_imu(&mut self, packet: &Packet) -> Result<()> {
+        self.write_to(packet, self.imu_ports)
+    }
+
+    fn write_to(&mut self, packet: &Packet, (from, to): (u16, u16)) -> Result<()> {
         let builder = PacketBuilder::ethernet2([0x60, 0x76, 0x88, 0, 0, 1], [0xFF; 6])
             .ipv4(self.source, [192, 168, 1, 2], 64)
-            .udp(self.ports.0, self.ports.1);
+            .udp(from, to);
         let mut frame = Vec::with_capacity(builder.size(packet.payload.len()));
         builder
             .write(&mut frame, &packet.payload)
@@ -89,17 +105,27 @@ impl CaptureWriter {
 }
 
 /// The OS1-64's metadata in the sensor's own (firmware 2.x, `json_calibration_version` 4)
-/// layout, which ouster-sdk and `io::ouster_meta` read.
-pub fn ouster_metadata(rate_hz: f64) -> serde_json::Value {
+/// layout, which ouster-sdk and `io::ouster_meta` read; `imu`, the simulated IMU's pose in
+/// the sensor frame, becomes its `imu_to_sensor_transform` (an OS1's own otherwise).
+pub fn ouster_metadata(rate_hz: f64, imu: Option<&PoseM>) -> serde_json::Value {
     let beams = 0..os1::BEAMS;
     let width = f64::from(os1::WIDTH);
     let shift: Vec<i64> = beams
         .clone()
         .map(|u| libm::round(os1::azimuth_deg(u) / 360.0 * width) as i64)
         .collect();
-    let identity_imu = [
-        1.0, 0.0, 0.0, 6.253, 0.0, 1.0, 0.0, -11.775, 0.0, 0.0, 1.0, 7.645, 0.0, 0.0, 0.0, 1.0,
-    ];
+    let imu_to_sensor: Vec<f64> = match imu {
+        Some(pose) => {
+            let mut m = pose.to_homogeneous();
+            for r in 0..3 {
+                m[(r, 3)] *= 1000.0; // millimetres
+            }
+            m.transpose().iter().copied().collect() // row-major
+        }
+        None => vec![
+            1.0, 0.0, 0.0, 6.253, 0.0, 1.0, 0.0, -11.775, 0.0, 0.0, 1.0, 7.645, 0.0, 0.0, 0.0, 1.0,
+        ],
+    };
     serde_json::json!({
         "base_pn": "", "base_sn": "", "hostname": "", "proto_rev": "",
         "beam_altitude_angles": beams.clone().map(os1::altitude_deg).collect::<Vec<_>>(),
@@ -117,7 +143,7 @@ pub fn ouster_metadata(rate_hz: f64) -> serde_json::Value {
             "udp_profile_lidar": "RNG19_RFL8_SIG16_NIR16",
         },
         "image_rev": "kiss-odom simulate",
-        "imu_to_sensor_transform": identity_imu,
+        "imu_to_sensor_transform": imu_to_sensor,
         "initialization_id": os1::INIT_ID,
         "json_calibration_version": 4,
         "lidar_mode": format!("{}x{}", os1::WIDTH, rate_hz as u32),

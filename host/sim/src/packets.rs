@@ -19,8 +19,11 @@
 mod avia;
 mod hesai128;
 mod mid360;
+mod mid360_imu;
+mod ouster_imu;
 mod xt32;
 
+use crate::imu::ImuSample;
 use crate::rng::{key, Purpose, Stream};
 use crate::sensor::Frame;
 use crate::simulation::Simulation;
@@ -190,6 +193,25 @@ impl PacketSensor {
     /// (`Laser id,Elevation,Azimuth`); `None` for the other sensors.
     pub fn angle_file(self) -> Option<String> {
         matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
+    }
+
+    /// Whether the simulator sends this sensor's IMU samples as its IMU packets: the OS1's
+    /// and the Mid-360's.
+    pub const fn sends_imu(self) -> bool {
+        matches!(self, Self::Os1 | Self::Mid360)
+    }
+
+    /// The IMU packet carrying `sample`, the `count`th, sent at trajectory time `offset` and
+    /// stamped with the sample's time on the clock the sensor's lidar packets use; `None` for
+    /// a sensor whose IMU packets the simulator does not write ([`Self::sends_imu`]).
+    pub fn imu_packet(self, sample: &ImuSample, offset: f64, count: u64) -> Option<Packet> {
+        let ns = libm::round((sample.time + self.clock_origin_s() as f64).max(0.0) * 1e9) as u64;
+        let payload = match self {
+            Self::Os1 => ouster_imu::packet(sample, ns),
+            Self::Mid360 => mid360_imu::packet(sample, ns, count),
+            _ => return None,
+        };
+        Some(Packet { offset, payload })
     }
 
     /// The sensor clock's reading at sequence time 0, s: the Hesai sensors stamp their packets

@@ -6,7 +6,7 @@
 //! complete; a stop asked for between frames leaves none.
 
 use crate::capture;
-use crate::imu::{self, ImuSpec};
+use crate::imu::{self, ImuSample, ImuSpec};
 use crate::packets::{PacketSensor, PacketSim};
 use crate::profile::Profile;
 use crate::ros;
@@ -27,7 +27,8 @@ pub enum Format {
     Generic,
     /// The generic layout (exact points) and the same sweeps as the sensor's packets in
     /// `packets.pcap` (needs a packet sensor; an Ouster's metadata goes to `packets.json`, a
-    /// QT128's or OT128's angle correction file to `packets.csv`).
+    /// QT128's or OT128's angle correction file to `packets.csv`; with `--imu-rate` an OS1's
+    /// or a Mid-360's IMU samples are in it too, as the sensor's IMU packets).
     Pcap,
     /// The generic layout and the same frames as `sensor_msgs/PointCloud2` on `/points` in
     /// the ROS 1 bag `points.bag`, with `--imu-rate` the IMU's samples as `sensor_msgs/Imu` on
@@ -119,7 +120,8 @@ const LAYOUT: &str = "velodyne/NNNNNN.bin: f32 LE x y z intensity, sensor frame 
     time; timestamps/NNNNNN.bin: f64 LE capture time (s) per point; poses.txt: 3x4 sensor pose \
     at the end of each sweep (its last column) in the frame of the first sweep's end; \
     times.txt: end-of-sweep times (s); packets.pcap (if written): the same sweeps as the \
-    sensor's UDP packets, exact points above before range quantisation, in decoder order; \
+    sensor's UDP packets, exact points above before range quantisation, in decoder order, \
+    with an OS1's or a Mid-360's IMU samples (if written) as its IMU packets; \
     packets.json: Ouster metadata; points.bag or points.mcap (if written): the frames as \
     sensor_msgs/PointCloud2 on /points (x y z intensity f32, time f64 s) stamped at the sweep's \
     end, the IMU samples as sensor_msgs/Imu on /imu; imu.csv (if written): time (s, the frames' clock plus the \
@@ -209,8 +211,9 @@ pub fn write(
         (Format::Pcap, Some(sensor)) => {
             if sensor == PacketSensor::Os1 {
                 let path = writer.staging().join(capture::META_NAME);
-                let meta =
-                    serde_json::to_string_pretty(&capture::ouster_metadata(params.sensor.rate_hz))?;
+                let imu = request.imu.map(|spec| spec.extrinsic());
+                let meta = capture::ouster_metadata(params.sensor.rate_hz, imu.as_ref());
+                let meta = serde_json::to_string_pretty(&meta)?;
                 std::fs::write(&path, meta)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
@@ -237,6 +240,13 @@ pub fn write(
         ros::RosWriter::create(&writer.staging().join(name), container, imu_samples.clone())
     })
     .transpose()?;
+    let mut imu_packets = ImuPackets {
+        sensor: request.sensor.filter(|s| s.sends_imu() && pcap.is_some()),
+        samples: &imu_samples,
+        spec: request.imu,
+        start_time: params.start_time,
+        next: 0,
+    };
     let mut points = 0usize;
     for k in 0..params.frames {
         if stop() {
@@ -248,6 +258,7 @@ pub fn write(
                 let sweep = p.sweep(k);
                 if let Some(c) = pcap.as_mut() {
                     for packet in &sweep.packets {
+                        imu_packets.send_until(packet.offset, c)?;
                         c.write(packet)?;
                     }
                 }
@@ -262,6 +273,9 @@ pub fn write(
         writer.write_frame(&frame, &truth)?;
         progress(k + 1);
     }
+    // The capture ends with the last sweep's last packet, as a recording stopped there: the
+    // IMU samples after it (imu.csv has them) would all reach a Livox's last frame, which ends
+    // with the input.
     if let Some(c) = pcap {
         c.finish()?;
     }
@@ -270,4 +284,36 @@ pub fn write(
     }
     writer.finish()?;
     Ok(Written::Complete { points, route_m })
+}
+
+/// The IMU samples as the sensor's IMU packets, sent between its lidar packets in time order.
+struct ImuPackets<'a> {
+    /// The sensor, if it sends IMU packets and a pcap is written.
+    sensor: Option<PacketSensor>,
+    samples: &'a [ImuSample],
+    spec: Option<ImuSpec>,
+    start_time: f64,
+    /// The next sample to send.
+    next: usize,
+}
+
+impl ImuPackets<'_> {
+    /// Writes the packets of the samples read up to trajectory time `until` (s).
+    fn send_until(&mut self, until: f64, capture: &mut capture::CaptureWriter) -> Result<()> {
+        let (Some(sensor), Some(spec)) = (self.sensor, self.spec) else {
+            return Ok(());
+        };
+        while let Some(sample) = self.samples.get(self.next) {
+            // Read at its time on the frames' clock, whatever the IMU's offset stamps.
+            let offset = sample.time - spec.time_offset - self.start_time;
+            if offset > until {
+                break;
+            }
+            if let Some(packet) = sensor.imu_packet(sample, offset, self.next as u64) {
+                capture.write_imu(&packet)?;
+            }
+            self.next += 1;
+        }
+        Ok(())
+    }
 }
