@@ -15,6 +15,7 @@ mod dataset_process;
 mod degeneracy;
 mod embedded;
 mod golden;
+mod imu_pcaps;
 mod imu_prior;
 mod imu_readers;
 mod listen_poses;
