@@ -68,7 +68,10 @@ fn prior_from_the_pcap(sensor: &str, profile: &str, seed: &str) {
     let states = on.column("imu_prior");
     assert_eq!(states.len(), FRAMES, "{sensor}");
     assert_eq!(states[0], "first", "{sensor}");
-    assert!(states[1..].iter().all(|s| s == "used"), "{sensor}: {states:?}");
+    assert!(
+        states[1..].iter().all(|s| s == "used"),
+        "{sensor}: {states:?}"
+    );
     assert!(off.column("imu_prior").iter().all(String::is_empty));
     // A frame's tenth of a second holds 20 samples at 200 Hz (one more or less where a sample
     // falls on its edge).

@@ -40,14 +40,24 @@ mod tests {
         let ns = 7_000_123_456;
         let bytes = packet(&sample, ns, 70_001);
         let p = sdk2::Packet::new_checked(&bytes).unwrap();
-        assert_eq!((p.time_ns(), p.udp_cnt(), p.firings()), (ns, (70_001u64 % 65_536) as u16, 0));
+        assert_eq!(
+            (p.time_ns(), p.udp_cnt(), p.firings()),
+            (ns, (70_001u64 % 65_536) as u16, 0)
+        );
         let s = p.imu().unwrap();
         let gyro = s.gyro.map(f64::from);
         let accel = s.accel_g.map(|a| f64::from(a) * GRAVITY);
-        for (got, want) in gyro.iter().zip(sample.gyro).chain(accel.iter().zip(sample.accel)) {
+        for (got, want) in gyro
+            .iter()
+            .zip(sample.gyro)
+            .chain(accel.iter().zip(sample.accel))
+        {
             // One f32 rounding (2^-24 of the value) and, for the acceleration, g and back.
             let tol = want.abs() * f64::from(f32::EPSILON);
-            println!("{want:e}: decoded {got:e}, off {:.1e} (tol {tol:.1e})", got - want);
+            println!(
+                "{want:e}: decoded {got:e}, off {:.1e} (tol {tol:.1e})",
+                got - want
+            );
             assert!((got - want).abs() <= tol, "{got} vs {want}");
         }
     }
