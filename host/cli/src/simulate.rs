@@ -70,7 +70,9 @@ pub struct SimulateArgs {
     /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
     /// 200), with white noise, turn-on biases that then walk, and gravity, 11, 23 and -44 mm
     /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it. With
-    /// --format bag or mcap, the samples are also in the recording as sensor_msgs/Imu on /imu.
+    /// --format bag or mcap, the samples are also in the recording as sensor_msgs/Imu on /imu;
+    /// with --format pcap and --sensor os1-64 or mid360, in packets.pcap as the sensor's own
+    /// IMU packets.
     #[arg(long)]
     pub imu_rate: Option<f64>,
     /// With --imu-rate: the exact rates and forces, without noise or bias.

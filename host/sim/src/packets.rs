@@ -15,6 +15,10 @@
 //! `run` without a cut angle sees their sweeps. An Ouster's sweep is one frame id. The Livox
 //! sensors (`packets/mid360.rs`, `packets/avia.rs`) have no sweep: their frames are cut by
 //! time, as their decoder cuts them.
+//!
+//! With an IMU, the OS1 and the Mid-360 also send its samples as their own IMU packets
+//! (`packets/ouster_imu.rs`, `packets/mid360_imu.rs`), one a sample, stamped on the clock of
+//! their lidar packets.
 
 mod avia;
 mod hesai128;
