@@ -138,15 +138,18 @@ pub fn cloud_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
 /// local history is deeper, since IMU messages come many to a cloud.
 pub const IMU_HISTORY: i32 = 100;
 
-/// A reader of serialized `sensor_msgs/msg/Imu` on ROS 2 topic `name`: sensor-data QoS with a
-/// history of [`IMU_HISTORY`].
-pub fn imu_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
-    let qos = QosPolicyBuilder::new()
+/// Sensor-data QoS with a history of [`IMU_HISTORY`]: the IMU reader's and the player's.
+pub fn imu_qos() -> QosPolicies {
+    QosPolicyBuilder::new()
         .reliability(Reliability::BestEffort)
         .history(History::KeepLast { depth: IMU_HISTORY })
         .durability(Durability::Volatile)
-        .build();
-    raw_reader(dp, name, super::msg::IMU_TYPE, qos)
+        .build()
+}
+
+/// A reader of serialized `sensor_msgs/msg/Imu` on ROS 2 topic `name`, [`imu_qos`].
+pub fn imu_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
+    raw_reader(dp, name, super::msg::IMU_TYPE, imu_qos())
 }
 
 /// A reader of serialized messages of DDS type `type_name` on ROS 2 topic `name`.

@@ -9,6 +9,11 @@
 //! skipped with a warning and counted; it does not touch the odometry either. So the poses
 //! published are those `kiss-odom run` gives on the sequence of registered clouds.
 //!
+//! With the gyroscope prior on and an IMU topic ([`NodeOptions::imu_topic`]), the receiver also
+//! takes the `sensor_msgs/Imu` messages (before the clouds on each wake-up), decodes them with
+//! the readers' decoder and queues the samples ([`super::imu`]); the worker gives each cloud it
+//! registers the samples up to its sweep's end, waiting for them at most `[imu] max_gap`.
+//!
 //! Published per registered cloud, stamped with the cloud's stamp:
 //! - `nav_msgs/Odometry`: pose of the base in `lidar_odom_frame`; twist = the last motion
 //!   (previous registered cloud to this one, expressed in the base frame at the previous

@@ -98,17 +98,14 @@ pub fn run(
         POINTCLOUD2_TYPE,
         &dds::sensor_qos(),
     )?;
-    let imu_qos = rustdds::QosPolicyBuilder::new()
-        .reliability(rustdds::policy::Reliability::BestEffort)
-        .history(rustdds::policy::History::KeepLast {
-            depth: dds::IMU_HISTORY,
-        })
-        .build();
     let imu_w: Option<(Writer<Imu>, &str)> = opts
         .imu
         .as_ref()
         .map(|(_, topic)| {
-            Ok::<_, anyhow::Error>((dds::writer(&dp, topic, IMU_TYPE, &imu_qos)?, topic.as_str()))
+            Ok::<_, anyhow::Error>((
+                dds::writer(&dp, topic, IMU_TYPE, &dds::imu_qos())?,
+                topic.as_str(),
+            ))
         })
         .transpose()?;
     let stopped = || stop.load(Ordering::SeqCst);
@@ -140,7 +137,7 @@ pub fn run(
     let mut first: Option<(f64, Instant)> = None;
     let mut sent = 0u64;
     let mut imu_sent = 0u64;
-    let mut imu_matched = false;
+    let mut imu_checked = false;
     let mut next_time = 0.0;
     // One item ahead, for the first IMU sample after a cloud's end.
     let mut ahead = dataset.frames.next_item()?;
@@ -190,16 +187,15 @@ pub fn run(
             };
             let samples = frame.imu.iter().skip(lead).chain(next);
             lead = usize::from(next.is_some());
-            if !imu_matched && !frame.imu.is_empty() {
+            if !imu_checked && !frame.imu.is_empty() {
+                imu_checked = true;
                 // Discovery found the cloud reader: an IMU reader, if any, is found by now.
                 let short = wait.min(Duration::from_secs(1));
-                imu_matched = dds::wait_for_reader(w, short, &stopped);
-                if !imu_matched {
+                if !dds::wait_for_reader(w, short, &stopped) {
                     writeln!(
                         err,
                         "warning: no subscriber on {topic}; publishing the IMU samples anyway"
                     )?;
-                    imu_matched = true;
                 }
             }
             for s in samples {
