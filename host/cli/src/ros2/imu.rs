@@ -139,9 +139,9 @@ impl ImuInbox {
 
     /// The samples of a cloud whose sweep ends at `end`. When none at or after `end` has come
     /// yet, waits for one at most `wait` (the IMU topic runs behind the cloud topic), then
-    /// takes what is there: the prior then sees the samples stop short of the sweep's end and
-    /// says `gap`. Waits only once the IMU has delivered a sample, so a node whose IMU topic
-    /// is silent registers at once.
+    /// takes what is there (the prior says `gap` if they stop more than `max_gap` short of
+    /// the end). Waits only once the IMU has delivered a sample, so a node whose IMU topic is
+    /// silent registers at once.
     pub fn take_for(&self, end: Option<f64>, wait: Duration) -> Vec<ImuSample> {
         let mut q = self.lock();
         if let Some(end) = end {
