@@ -245,6 +245,85 @@ fn play_of_a_bag_and_an_mcap_feeds_a_node_that_publishes_runs_poses() {
     }
 }
 
+/// A simulated drone run recorded as a bag with its IMU, played with `--lockstep` into a node
+/// with the gyroscope prior on: every cloud is registered with the samples up to its sweep's
+/// end, as `run --imu auto` hands them on, so the poses are run's bit for bit.
+#[test]
+fn a_bag_with_an_imu_feeds_the_gyroscope_prior_and_the_poses_are_runs_with_imu_auto() {
+    let _lock = serial();
+    let data = tempfile::tempdir().unwrap();
+    let sim = data.path().join("drone");
+    let argv = [
+        "kiss-odom",
+        "simulate",
+        "--out",
+        &sim.to_string_lossy(),
+        "--profile",
+        "drone",
+        "--frames",
+        "30",
+        "--imu-rate",
+        "200",
+        "--format",
+        "bag",
+    ];
+    let mut err = Vec::new();
+    let code = kiss_odom::cli::main_with(argv.iter().map(Into::into).collect(), &mut err);
+    assert_eq!(code, 0, "{}", String::from_utf8_lossy(&err));
+    let bag = sim.join("points.bag");
+
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(7);
+    let node = start_node_imu(d, dir.path(), "/imu");
+    let played = play(&bag, d, &["--lockstep", "--imu", "auto"]);
+    let stamps = published_stamps(&played);
+    assert_eq!(stamps.len(), 30, "{played}");
+    assert!(played.contains("IMU samples on /imu"), "{played}");
+    let last = *stamps.last().unwrap();
+    let done = wait_until(Duration::from_secs(120), || node.has_registered(last));
+    let stopped = node.stop();
+    let s = &stopped.summary;
+    println!("{}", s.line());
+    assert!(done, "the last cloud was never registered");
+    assert_eq!((s.received, s.registered, s.dropped), (30, 30, 0));
+    let imu = s.imu.expect("IMU counters with the prior on");
+    assert_eq!((imu.malformed, imu.dropped), (0, 0), "{}", s.line());
+    assert!(imu.received > 30 * 15, "{}", s.line());
+    assert!(
+        s.line().contains("imu received"),
+        "the summary prints the IMU counts"
+    );
+    let run_dir = tempfile::tempdir().unwrap();
+    let expected = run_poses(&[&bag.to_string_lossy(), "--imu", "auto"], run_dir.path());
+    let without = run_poses(&[&bag.to_string_lossy()], &run_dir.path().join("off"));
+    assert_ne!(expected, without, "the prior changes the poses");
+    // Every pose but the last is run's bit for bit. `run` hands the last frame every sample
+    // left, those after its sweep's end too (a recording's last frame takes the rest), and
+    // the prior uses them; a live node cannot know a cloud is the last, so it takes those up
+    // to the end only, as for every other cloud.
+    let node: Vec<&str> = stopped.poses.lines().collect();
+    let run: Vec<&str> = expected.lines().collect();
+    assert_eq!(node.len(), run.len());
+    assert_eq!(
+        node[..node.len() - 1],
+        run[..run.len() - 1],
+        "node poses differ from run --imu auto's\n{}",
+        stopped.err
+    );
+    let last = |p: &str| read_kitti_str(p).translation.vector;
+    let gap = (last(node[node.len() - 1]) - last(run[run.len() - 1])).norm();
+    println!("last pose against run's: {gap:.3e} m (tolerance 1e-2)");
+    assert!(gap < 1e-2, "last pose {gap} m from run's");
+}
+
+/// The pose of one KITTI line.
+fn read_kitti_str(line: &str) -> Isometry3<f64> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pose.txt");
+    std::fs::write(&path, format!("{line}\n")).unwrap();
+    read_kitti(&path).unwrap()[0]
+}
+
 #[test]
 fn paced_by_the_odometry_none_is_dropped_and_faster_the_older_clouds_are_dropped_and_counted() {
     let _lock = serial();

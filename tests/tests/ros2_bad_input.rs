@@ -1,11 +1,13 @@
 //! Bad clouds on the wire: each is skipped with a counted warning, the node goes on, and the
 //! odometry is as if the bad cloud had never arrived (the poses after it are `kiss-odom run`'s
-//! on the good clouds alone). And Ctrl-C ends a node process cleanly with its summary.
+//! on the good clouds alone). A malformed IMU message is counted and warned about. And Ctrl-C
+//! ends a node process cleanly with its summary.
 
 use crate::ros2_common;
 
 use kiss_odom::ros2::dds::{self, Writer};
-use kiss_odom::ros2::msg::{Field, Header, PointCloud2, Time, POINTCLOUD2_TYPE};
+use kiss_odom::ros2::imu::ImuCounts;
+use kiss_odom::ros2::msg::{Field, Header, Imu, PointCloud2, Time, IMU_TYPE, POINTCLOUD2_TYPE};
 use ros2_common::*;
 use serde::Serialize;
 use std::io::{BufRead, BufReader};
@@ -232,4 +234,56 @@ fn ctrl_c_ends_a_node_process_cleanly_with_its_summary() {
         rest.contains("summary: received 0, registered 0, dropped 0"),
         "{rest}"
     );
+}
+
+/// With the gyroscope prior on, an IMU message that is not a `sensor_msgs/Imu` is counted and
+/// warned about, and the node goes on with the good samples.
+#[test]
+fn malformed_imu_message_is_counted_and_warned_and_the_node_goes_on() {
+    let _lock = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(10);
+    let node = start_node_imu(d, dir.path(), "/imu");
+    let dp = dds::participant(d).unwrap();
+    let w: Writer<PointCloud2> =
+        dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();
+    let imu: Writer<Imu> = dds::writer(&dp, "/imu", IMU_TYPE, &dds::sensor_qos()).unwrap();
+    // A header alone on the IMU topic, from a participant of its own.
+    let other = dds::participant(d).unwrap();
+    let bad: Writer<Header> = dds::writer(&other, "/imu", IMU_TYPE, &dds::sensor_qos()).unwrap();
+    let wait = Duration::from_secs(10);
+    assert!(dds::wait_for_reader(&w, wait, &|| false), "no node");
+    assert!(dds::wait_for_reader(&imu, wait, &|| false), "no IMU reader");
+    assert!(dds::wait_for_reader(&bad, wait, &|| false), "no IMU reader");
+    std::thread::sleep(Duration::from_millis(500));
+    bad.write(header(0.0), None).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let sample = kiss_odom_io::imu::ImuSample {
+        time_ns: 50_000_000,
+        ..Default::default()
+    };
+    imu.write(Imu::of(&sample, "imu"), None).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    w.write(good(0), None).unwrap();
+    let stopped = node.stop_after(1, Duration::from_secs(60));
+    let s = &stopped.summary;
+    println!("{}{}", stopped.out, stopped.err);
+    assert_eq!(s.registered, 1, "the node goes on");
+    assert_eq!(
+        s.imu,
+        Some(ImuCounts {
+            received: 2,
+            malformed: 1,
+            dropped: 0
+        })
+    );
+    assert_eq!(s.warnings, 1);
+    assert!(
+        stopped
+            .err
+            .contains("IMU message 1: skipped: message ends inside"),
+        "{}",
+        stopped.err
+    );
+    assert!(stopped.out.contains("imu received 2 (malformed 1)"));
 }

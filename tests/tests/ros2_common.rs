@@ -101,7 +101,29 @@ pub fn start_node(domain: u16, dir: &Path, min_period: Duration) -> Node {
 
 /// [`start_node`] with other node parameters.
 pub fn start_node_with(domain: u16, dir: &Path, min_period: Duration, params: NodeParams) -> Node {
-    let settings = Settings::default();
+    start_node_opts(domain, dir, min_period, params, None)
+}
+
+/// A node with the gyroscope prior on, reading IMU samples from `topic` (as `--imu TOPIC`).
+pub fn start_node_imu(domain: u16, dir: &Path, topic: &str) -> Node {
+    start_node_opts(
+        domain,
+        dir,
+        Duration::ZERO,
+        NodeParams::default(),
+        Some(topic.into()),
+    )
+}
+
+fn start_node_opts(
+    domain: u16,
+    dir: &Path,
+    min_period: Duration,
+    params: NodeParams,
+    imu_topic: Option<String>,
+) -> Node {
+    let mut settings = Settings::default();
+    settings.imu.enabled = imu_topic.is_some();
     let poses = dir.join("node_poses.txt");
     let opts = NodeOptions {
         settings,
@@ -109,6 +131,7 @@ pub fn start_node_with(domain: u16, dir: &Path, min_period: Duration, params: No
         domain,
         poses: Some(poses.clone()),
         min_period,
+        imu_topic,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();

@@ -184,8 +184,9 @@ pub struct PipelineArgs {
     /// learning the gyroscope's bias from ICP; frames without samples fall back to the
     /// constant-velocity model and say so in frames.csv. A FILE (an existing path) is an
     /// imu.csv for any input, in place of the recording's own samples; any other value is the
-    /// bag's or MCAP file's sensor_msgs/Imu TOPIC. `off`: the reference's prediction [default:
-    /// off].
+    /// bag's or MCAP file's sensor_msgs/Imu TOPIC (`ros2`: the node subscribes to TOPIC, or
+    /// /imu for auto; --play publishes the recording's samples there). `off`: the reference's
+    /// prediction [default: off].
     #[arg(long, value_name = "auto|off|TOPIC|FILE", value_parser = ImuMode::parse)]
     pub imu: Option<ImuMode>,
     /// The IMU's pose in the LiDAR frame, X,Y,Z,ROLL,PITCH,YAW (m, deg; Rz Ry Rx), as

@@ -9,15 +9,16 @@
 
 pub mod dds;
 pub mod engine;
+pub mod imu;
 pub mod msg;
 pub mod node;
 pub mod params;
 pub mod play;
 
-use crate::args::{CoreArgs, PipelineArgs};
+use crate::args::{CoreArgs, ImuMode, PipelineArgs};
 use anyhow::Result;
 use kiss_odom_drive::settings::Settings;
-use kiss_odom_io::Format;
+use kiss_odom_io::{Format, ImuInput};
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -128,6 +129,14 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
                 .lockstep
                 .then(|| args.odom.clone().unwrap_or_else(|| "/kiss/odometry".into())),
             domain,
+            imu: match &args.pipeline.imu {
+                None | Some(ImuMode::Auto) => Some((ImuInput::Auto, DEFAULT_IMU_TOPIC.to_string())),
+                Some(ImuMode::Off) => None,
+                Some(ImuMode::Topic(t)) => Some((ImuInput::Topic(t.clone()), t.clone())),
+                Some(ImuMode::File(f)) => {
+                    Some((ImuInput::File(f.clone()), DEFAULT_IMU_TOPIC.to_string()))
+                }
+            },
         };
         play::run(&opts, &STOP, &mut out, err)?;
         return Ok(0);
@@ -139,14 +148,31 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
         domain,
         poses: args.poses.clone(),
         min_period: std::time::Duration::from_secs_f64(args.min_period),
+        imu_topic: Some(imu_topic(args.pipeline.imu.as_ref())?),
     };
     node::run(&opts, &STOP, &mut out, err)?;
     Ok(0)
 }
 
+/// The IMU topic the node reads when the gyroscope prior is on: `--imu TOPIC`, else `/imu`.
+/// A file is refused: the node has no recording to pair it with.
+pub fn imu_topic(mode: Option<&ImuMode>) -> Result<String> {
+    match mode {
+        Some(ImuMode::Topic(t)) => Ok(t.clone()),
+        Some(ImuMode::File(f)) => anyhow::bail!(
+            "ros2: --imu takes auto, off or a topic, not a file ({})",
+            f.display()
+        ),
+        _ => Ok(DEFAULT_IMU_TOPIC.into()),
+    }
+}
+
+/// The IMU topic of `--imu auto`, for the node and the player.
+pub const DEFAULT_IMU_TOPIC: &str = "/imu";
+
 /// Settings and node parameters from the defaults, `--config`, `--params` and the flags.
 pub fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)> {
-    crate::args::ImuMode::recording_only(args.pipeline.imu.as_ref(), "ros2")?;
+    imu_topic(args.pipeline.imu.as_ref())?;
     let mut settings = crate::args::from_file(&args.pipeline)?;
     let mut p = params::NodeParams::default();
     if let Some(path) = &args.params {

@@ -27,7 +27,7 @@ pub type Writer<D> = DataWriter<D, CDRSerializerAdapter<D>>;
 /// A reader of `D` in CDR.
 pub type Reader<D> = DataReader<D, CDRDeserializerAdapter<D>>;
 
-/// A reader of serialized clouds.
+/// A reader of serialized messages (clouds, IMU samples).
 pub type CloudReader = DataReader<RawCloud, RawAdapter>;
 
 /// The ROS domain: `ROS_DOMAIN_ID` if set and valid, else 0.
@@ -130,14 +130,37 @@ pub fn wait_for_writer<D: serde::de::DeserializeOwned + 'static>(
 
 /// A reader of `sensor_msgs/msg/PointCloud2` on ROS 2 topic `name`, sensor-data QoS.
 pub fn cloud_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
-    let qos = sensor_qos();
+    raw_reader(dp, name, super::msg::POINTCLOUD2_TYPE, sensor_qos())
+}
+
+/// How many IMU messages the DDS reader keeps between two drains: a burst of 100 ms at 1 kHz.
+/// Best effort and volatile as [`sensor_qos`], so it matches any sensor publisher; only the
+/// local history is deeper, since IMU messages come many to a cloud.
+pub const IMU_HISTORY: i32 = 100;
+
+/// Sensor-data QoS with a history of [`IMU_HISTORY`]: the IMU reader's and the player's.
+pub fn imu_qos() -> QosPolicies {
+    QosPolicyBuilder::new()
+        .reliability(Reliability::BestEffort)
+        .history(History::KeepLast { depth: IMU_HISTORY })
+        .durability(Durability::Volatile)
+        .build()
+}
+
+/// A reader of serialized `sensor_msgs/msg/Imu` on ROS 2 topic `name`, [`imu_qos`].
+pub fn imu_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
+    raw_reader(dp, name, super::msg::IMU_TYPE, imu_qos())
+}
+
+/// A reader of serialized messages of DDS type `type_name` on ROS 2 topic `name`.
+fn raw_reader(
+    dp: &DomainParticipant,
+    name: &str,
+    type_name: &str,
+    qos: QosPolicies,
+) -> Result<CloudReader> {
     let topic = dp
-        .create_topic(
-            dds_topic(name),
-            super::msg::POINTCLOUD2_TYPE.into(),
-            &qos,
-            TopicKind::NoKey,
-        )
+        .create_topic(dds_topic(name), type_name.into(), &qos, TopicKind::NoKey)
         .map_err(|e| anyhow!("topic {name}: {e:?}"))?;
     let subscriber = dp
         .create_subscriber(&qos)

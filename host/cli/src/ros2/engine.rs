@@ -5,7 +5,8 @@
 use anyhow::Result;
 use kiss_odom_core::Status;
 use kiss_odom_drive::settings::Settings;
-use kiss_odom_drive::{Driver, FrameMeta, OnEmpty, Step};
+use kiss_odom_drive::{Driver, OnEmpty, Step};
+use kiss_odom_io::Frame;
 use nalgebra::Isometry3;
 
 /// What registering one cloud gave.
@@ -35,21 +36,11 @@ pub fn driver(settings: &Settings) -> Result<Driver> {
     Ok(d)
 }
 
-/// Registers cloud number `n` (sensor frame) with optional per-point times. `None` when no
-/// point was usable: the state is untouched, as if the cloud had never arrived.
-pub fn register(
-    driver: &mut Driver,
-    n: u64,
-    topic: &str,
-    points: &[[f64; 3]],
-    stamps: Option<&[f64]>,
-) -> Result<Option<Registered>> {
-    let meta = FrameMeta {
-        index: n as usize,
-        source: topic.to_string(),
-        time: None,
-    };
-    let outcome = driver.register_points(meta, points, stamps)?;
+/// Registers a cloud's frame (sensor frame, optional per-point times, and with the gyroscope
+/// prior on the IMU samples up to its sweep's end). `None` when no point was usable: the
+/// odometry is untouched, as if the cloud had never arrived.
+pub fn register(driver: &mut Driver, frame: &Frame) -> Result<Option<Registered>> {
+    let outcome = driver.register(frame)?;
     let Step::Registered(r) = &outcome.step else {
         return Ok(None);
     };
@@ -106,7 +97,13 @@ mod tests {
             s.runtime.threads = 1;
             s.capacities = kiss_odom_core::Capacities::SMALL.into();
             let mut d = driver(&s).unwrap();
-            let mut reg = |pts: &[[f64; 3]]| register(&mut d, 0, "/points", pts, None).unwrap();
+            let mut reg = |pts: &[[f64; 3]]| {
+                let frame = Frame {
+                    points: pts.to_vec(),
+                    ..Frame::default()
+                };
+                register(&mut d, &frame).unwrap()
+            };
             {
                 let first = reg(&room(0.0)).unwrap();
                 assert_eq!(first.pose, Isometry3::identity());

@@ -22,6 +22,9 @@ pub const ODOMETRY_TYPE: &str = "nav_msgs::msg::dds_::Odometry_";
 /// DDS type name of `tf2_msgs/msg/TFMessage`.
 pub const TFMESSAGE_TYPE: &str = "tf2_msgs::msg::dds_::TFMessage_";
 
+/// DDS type name of `sensor_msgs/msg/Imu`.
+pub const IMU_TYPE: &str = "sensor_msgs::msg::dds_::Imu_";
+
 /// The DDS topic of ROS 2 topic `name`: `rt/` and the name without its leading slash.
 pub fn dds_topic(name: &str) -> String {
     format!("rt/{}", name.trim_start_matches('/'))
@@ -316,6 +319,61 @@ impl PointCloud2 {
     }
 }
 
+/// `sensor_msgs/msg/Imu`, as the player publishes a recording's samples: no orientation
+/// (its covariance's first element -1, the message's convention for "not measured"), the
+/// angular velocity and linear acceleration with unknown (zero) covariance. The node reads it
+/// back with [`kiss_odom_io::ros::imu_msg::parse_cdr`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Imu {
+    /// Stamp (the sample's time) and frame.
+    pub header: Header,
+    /// Orientation (identity, not measured).
+    pub orientation: Quaternion,
+    /// Its covariance, row-major 3x3.
+    pub orientation_covariance: [f64; 9],
+    /// rad/s.
+    pub angular_velocity: Vector3,
+    /// Its covariance.
+    pub angular_velocity_covariance: [f64; 9],
+    /// m/s^2.
+    pub linear_acceleration: Vector3,
+    /// Its covariance.
+    pub linear_acceleration_covariance: [f64; 9],
+}
+
+impl Imu {
+    /// The message of `s`, stamped with its time to the nanosecond.
+    pub fn of(s: &kiss_odom_io::imu::ImuSample, frame_id: &str) -> Self {
+        let v = |a: [f64; 3]| Vector3 {
+            x: a[0],
+            y: a[1],
+            z: a[2],
+        };
+        let mut not_measured = [0.0; 9];
+        not_measured[0] = -1.0;
+        Self {
+            header: Header {
+                stamp: Time {
+                    sec: i32::try_from(s.time_ns / 1_000_000_000).unwrap_or(i32::MAX),
+                    nanosec: (s.time_ns % 1_000_000_000) as u32,
+                },
+                frame_id: frame_id.to_string(),
+            },
+            orientation: Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                w: 1.0,
+            },
+            orientation_covariance: not_measured,
+            angular_velocity: v(s.gyro),
+            angular_velocity_covariance: [0.0; 9],
+            linear_acceleration: v(s.accel),
+            linear_acceleration_covariance: [0.0; 9],
+        }
+    }
+}
+
 /// An incoming message as serialized: the 4-byte encapsulation header, then the CDR body.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RawCloud(pub Vec<u8>);
@@ -403,6 +461,27 @@ mod tests {
         assert_eq!(d.points[0], [1.5 + 1e-9, -2.0, 0.25]);
         assert!(d.points[1][0].is_nan());
         assert_eq!(d.stamps, Some(stamps.to_vec()));
+    }
+
+    #[test]
+    fn published_imu_samples_parse_back_through_the_readers_decoder() {
+        let sample = kiss_odom_io::imu::ImuSample {
+            time_ns: 1_700_000_000_123_456_789,
+            gyro: [0.1 + 1e-12, -0.2, 3.0],
+            accel: [0.5, 9.81, -1e-9],
+        };
+        for frame_id in ["", "imu", "imu_link"] {
+            let msg = Imu::of(&sample, frame_id);
+            let body = rustdds::serialization::to_vec::<_, byteorder::LittleEndian>(&msg).unwrap();
+            let raw = RawDecoder
+                .decode_bytes(&body, RepresentationIdentifier::CDR_LE)
+                .unwrap();
+            assert_eq!(
+                kiss_odom_io::ros::imu_msg::parse_cdr(&raw.0),
+                Ok(sample),
+                "{frame_id:?}"
+            );
+        }
     }
 
     #[test]

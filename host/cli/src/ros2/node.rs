@@ -9,6 +9,11 @@
 //! skipped with a warning and counted; it does not touch the odometry either. So the poses
 //! published are those `kiss-odom run` gives on the sequence of registered clouds.
 //!
+//! With the gyroscope prior on and an IMU topic ([`NodeOptions::imu_topic`]), the receiver also
+//! takes the `sensor_msgs/Imu` messages (before the clouds on each wake-up), decodes them with
+//! the readers' decoder and queues the samples ([`super::imu`]); the worker gives each cloud it
+//! registers the samples up to its sweep's end, waiting for them at most `[imu] max_gap`.
+//!
 //! Published per registered cloud, stamped with the cloud's stamp:
 //! - `nav_msgs/Odometry`: pose of the base in `lidar_odom_frame`; twist = the last motion
 //!   (previous registered cloud to this one, expressed in the base frame at the previous
@@ -22,6 +27,7 @@
 
 use super::dds::{self, Writer};
 use super::engine::{self, Registered};
+use super::imu::{ImuCounts, ImuInbox};
 use super::msg::{
     Covariance, Header, Odometry, PointCloud2, Pose, PoseWithCovariance, RawCloud, TfMessage, Time,
     TransformStamped, Twist, TwistWithCovariance, Vector3, ODOMETRY_TYPE, POINTCLOUD2_TYPE,
@@ -33,8 +39,9 @@ use anyhow::{anyhow, Context, Result};
 use kiss_odom_drive::settings::Settings;
 use kiss_odom_drive::Driver;
 use kiss_odom_io::poses::format_kitti;
+use kiss_odom_io::ros::imu_msg;
 use kiss_odom_io::ros::message::parse_cdr;
-use kiss_odom_io::ros::pointcloud2::decode;
+use kiss_odom_io::ros::pointcloud2::{decode, frame_of};
 use nalgebra::Isometry3;
 use rustdds::mio1::{Events, Interest, Poll, Token};
 use std::io::Write;
@@ -61,6 +68,9 @@ pub struct NodeOptions {
     /// Clouds arriving meanwhile are latest-only, as during a slow registration: a way to
     /// bound the node's share of the computer, and to make drops certain in tests.
     pub min_period: Duration,
+    /// The `sensor_msgs/Imu` topic whose samples feed the gyroscope prior (`None`: no
+    /// subscription). Only read with the prior on (`settings.imu.enabled`).
+    pub imu_topic: Option<String>,
 }
 
 /// Counters printed at exit.
@@ -82,6 +92,8 @@ pub struct Summary {
     pub latency_ms: Vec<f64>,
     /// Time in the core's frame call, ms.
     pub core_ms: Vec<f64>,
+    /// IMU messages, when the node subscribes to an IMU topic.
+    pub imu: Option<ImuCounts>,
 }
 
 impl Summary {
@@ -97,9 +109,15 @@ impl Summary {
                 s.last().copied().unwrap_or(0.0)
             )
         };
+        let imu = self.imu.map_or(String::new(), |c| {
+            format!(
+                ", imu received {} (malformed {}), dropped {} (queue full)",
+                c.received, c.malformed, c.dropped
+            )
+        });
         format!(
             "summary: received {}, registered {}, dropped {} (latest-only), skipped {} \
-             (malformed {}, empty {}), warnings {}, latency ms {}, core ms {}",
+             (malformed {}, empty {}), warnings {}, latency ms {}, core ms {}{imu}",
             self.received,
             self.registered,
             self.dropped,
@@ -108,7 +126,7 @@ impl Summary {
             self.empty,
             self.warnings,
             stats(&self.latency_ms),
-            stats(&self.core_ms)
+            stats(&self.core_ms),
         )
     }
 }
@@ -166,6 +184,11 @@ pub fn run(
     let p = &opts.params;
     let dp = dds::participant(opts.domain)?;
     let mut reader = dds::cloud_reader(&dp, &p.points_topic)?;
+    let imu_topic = opts
+        .imu_topic
+        .as_ref()
+        .filter(|_| opts.settings.imu.enabled);
+    let mut imu_reader = imu_topic.map(|t| dds::imu_reader(&dp, t)).transpose()?;
     let publish = Publishers {
         params: p.clone(),
         extrinsic: p.base_to_lidar.map(|_| p.extrinsic()).transpose()?,
@@ -204,14 +227,21 @@ pub fn run(
             String::new()
         }
     )?;
+    if let Some(t) = imu_topic {
+        writeln!(out, "gyroscope prior on, IMU samples from {t}")?;
+    }
 
     let mailbox = Mailbox::default();
+    let inbox = ImuInbox::new();
+    let imu = imu_reader.as_mut().map(|r| (r, &inbox));
     let mut summary = std::thread::scope(|scope| -> Result<Summary> {
-        let receiver = scope.spawn(|| receive(&mut reader, &mailbox, stop));
+        let receiver = scope.spawn(|| receive(&mut reader, imu, &mailbox, stop));
         let result = engine::driver(&opts.settings).and_then(|mut driver| {
             let cycle = Cycle {
                 min_period: opts.min_period,
                 stop,
+                imu: imu_topic
+                    .map(|_| (&inbox, Duration::from_secs_f64(opts.settings.imu.max_gap))),
             };
             work(
                 &mut driver,
@@ -234,19 +264,39 @@ pub fn run(
     let (received, dropped) = mailbox.counts();
     summary.received = received;
     summary.dropped = dropped;
+    if imu_topic.is_some() {
+        summary.warnings += warn_imu(&inbox, err);
+        summary.imu = Some(inbox.counts());
+    }
     writeln!(out, "{}", summary.line())?;
     Ok(summary)
 }
 
-/// Moves every cloud the reader delivers into the mailbox until `stop`.
-fn receive(reader: &mut dds::CloudReader, mailbox: &Mailbox, stop: &AtomicBool) -> Result<()> {
+/// Moves every cloud the reader delivers into the mailbox, and every IMU message into the
+/// inbox (decoded; a malformed one is counted and its error kept for a warning), until `stop`.
+/// IMU messages are drained first, so the samples that came before a cloud are there when
+/// the worker takes it.
+fn receive(
+    reader: &mut dds::CloudReader,
+    mut imu: Option<(&mut dds::CloudReader, &ImuInbox)>,
+    mailbox: &Mailbox,
+    stop: &AtomicBool,
+) -> Result<()> {
     let mut poll = Poll::new()?;
     poll.registry()
         .register(reader, Token(0), Interest::READABLE)?;
+    if let Some((r, _)) = imu.as_mut() {
+        poll.registry().register(*r, Token(1), Interest::READABLE)?;
+    }
     let mut events = Events::with_capacity(4);
     while !stop.load(Ordering::SeqCst) {
         poll.poll(&mut events, Some(TICK))?;
         // Drain on every wake-up and every tick: readiness is edge-triggered.
+        if let Some((r, inbox)) = imu.as_mut() {
+            while let Ok(Some(sample)) = r.take_next_sample() {
+                inbox.put(imu_msg::parse_cdr(&sample.into_value().0));
+            }
+        }
         while let Ok(Some(sample)) = reader.take_next_sample() {
             mailbox.put(sample.into_value());
         }
@@ -254,10 +304,21 @@ fn receive(reader: &mut dds::CloudReader, mailbox: &Mailbox, stop: &AtomicBool) 
     Ok(())
 }
 
-/// How often the worker may take a cloud, and the flag that ends it.
+/// Prints the warnings of the malformed IMU messages since the last call; returns how many.
+fn warn_imu(inbox: &ImuInbox, err: &mut dyn Write) -> u64 {
+    let errors = inbox.take_errors();
+    for e in &errors {
+        let _ = writeln!(err, "warning: {e}");
+    }
+    errors.len() as u64
+}
+
+/// How often the worker may take a cloud, the flag that ends it, and with the prior on the IMU
+/// samples and how long a cloud may wait for those up to its end.
 struct Cycle<'a> {
     min_period: Duration,
     stop: &'a AtomicBool,
+    imu: Option<(&'a ImuInbox, Duration)>,
 }
 
 /// The worker loop: one registered or skipped cloud per mailbox delivery.
@@ -287,6 +348,9 @@ fn work(
         };
         next_take = Instant::now() + cycle.min_period;
         n += 1;
+        if let Some((inbox, _)) = cycle.imu {
+            s.warnings += warn_imu(inbox, err);
+        }
         let mut warn = |msg: String, s: &mut Summary| {
             s.warnings += 1;
             let _ = writeln!(err, "warning: cloud {n}: {msg}");
@@ -303,7 +367,7 @@ fn work(
             sec: cloud.stamp.sec as i32,
             nanosec: cloud.stamp.nsec,
         };
-        let decoded = match decode(&cloud) {
+        let mut decoded = match decode(&cloud) {
             Ok(d) => d,
             Err(e) => {
                 s.malformed += 1;
@@ -311,18 +375,22 @@ fn work(
                 continue;
             }
         };
-        for w in &decoded.warnings {
+        for w in std::mem::take(&mut decoded.warnings) {
             warn(format!("stamp {}: {w}", cloud.stamp), &mut s);
         }
-        let registered = if decoded.points.is_empty() {
+        let topic = publish.params.points_topic.clone();
+        let mut frame = frame_of(n as usize, topic, cloud.stamp, decoded);
+        let registered = if frame.points.is_empty() {
             None
         } else {
-            let topic = &publish.params.points_topic;
-            engine::register(driver, n, topic, &decoded.points, decoded.stamps.as_deref())?
+            if let Some((inbox, wait)) = cycle.imu {
+                frame.imu = inbox.take_for(frame.sweep_end(), wait);
+            }
+            engine::register(driver, &frame)?
         };
         let Some(r) = registered else {
             s.empty += 1;
-            let what = if decoded.points.is_empty() {
+            let what = if frame.points.is_empty() {
                 "empty cloud"
             } else {
                 "no usable point (all non-finite or out of range)"

@@ -9,11 +9,20 @@
 //! cloud also waits for the odometry of the one before (its stamp on the node's odometry
 //! topic, at most `wait` seconds): a node on any machine then gets every cloud, none dropped,
 //! and the pace is the node's.
+//!
+//! With the recording's IMU samples ([`PlayOptions::imu`]: a bag's or MCAP file's
+//! `sensor_msgs/Imu` topic, a folder's `imu.csv`) the player also publishes them as
+//! `sensor_msgs/Imu`, interleaved by time with the clouds: right before a cloud go the samples
+//! the readers hand on with its frame (those up to its sweep's end, see
+//! [`kiss_odom_io::imu::attach`]) and the first sample after that end, as a live IMU's would
+//! have arrived before the cloud. The node then has every sample up to the cloud's end when the
+//! cloud comes and never waits for more. Samples go out in those bursts, not at their own pace.
 
 use super::dds::{self, Writer};
 use super::msg::{Header, Odometry, PointCloud2, Time, ODOMETRY_TYPE, POINTCLOUD2_TYPE};
+use super::msg::{Imu, IMU_TYPE};
 use anyhow::{bail, Result};
-use kiss_odom_io::{self as io, Format, Item, OpenOptions};
+use kiss_odom_io::{self as io, Format, ImuInput, Item, OpenOptions};
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -44,6 +53,9 @@ pub struct PlayOptions {
     pub lockstep: Option<String>,
     /// DDS domain.
     pub domain: u16,
+    /// Where the IMU samples come from and the ROS 2 topic to publish them on (`None`: no
+    /// IMU). With [`ImuInput::Auto`] a recording without an IMU topic publishes none.
+    pub imu: Option<(ImuInput, String)>,
 }
 
 /// Plays the recording; returns the number of clouds published.
@@ -59,14 +71,26 @@ pub fn run(
     if !(opts.period.is_finite() && opts.period > 0.0) {
         bail!("--period must be positive");
     }
-    let mut dataset = io::open(
-        &opts.path,
-        opts.format,
-        &OpenOptions {
-            topic: opts.source_topic.clone(),
-            ..OpenOptions::default()
-        },
-    )?;
+    let open = |imu: ImuInput| {
+        io::open(
+            &opts.path,
+            opts.format,
+            &OpenOptions {
+                topic: opts.source_topic.clone(),
+                imu,
+                ..OpenOptions::default()
+            },
+        )
+    };
+    let mut dataset = match &opts.imu {
+        None => open(ImuInput::Builtin)?,
+        // A recording with several IMU topics and none named: play its clouds alone.
+        Some((ImuInput::Auto, _)) => open(ImuInput::Auto).or_else(|e| {
+            writeln!(err, "warning: {e:#}; publishing no IMU samples")?;
+            open(ImuInput::Builtin)
+        })?,
+        Some((input, _)) => open(input.clone())?,
+    };
     let dp = dds::participant(opts.domain)?;
     let w: Writer<PointCloud2> = dds::writer(
         &dp,
@@ -74,6 +98,16 @@ pub fn run(
         POINTCLOUD2_TYPE,
         &dds::sensor_qos(),
     )?;
+    let imu_w: Option<(Writer<Imu>, &str)> = opts
+        .imu
+        .as_ref()
+        .map(|(_, topic)| {
+            Ok::<_, anyhow::Error>((
+                dds::writer(&dp, topic, IMU_TYPE, &dds::imu_qos())?,
+                topic.as_str(),
+            ))
+        })
+        .transpose()?;
     let stopped = || stop.load(Ordering::SeqCst);
     let wait = crate::interrupt::seconds(opts.wait);
     let mut acks = opts
@@ -102,16 +136,24 @@ pub fn run(
     }
     let mut first: Option<(f64, Instant)> = None;
     let mut sent = 0u64;
+    let mut imu_sent = 0u64;
+    let mut imu_checked = false;
     let mut next_time = 0.0;
+    // One item ahead, for the first IMU sample after a cloud's end.
+    let mut ahead = dataset.frames.next_item()?;
+    // How many of the next frame's samples went out with the cloud before.
+    let mut lead = 0;
     while !stopped() {
-        let frame = match dataset.frames.next_item()? {
+        let frame = match ahead.take() {
             None => break,
             Some(Item::Skipped { reason, .. }) => {
                 writeln!(err, "warning: {reason}")?;
+                ahead = dataset.frames.next_item()?;
                 continue;
             }
             Some(Item::Frame(f)) => f,
         };
+        ahead = dataset.frames.next_item()?;
         for w in &frame.warnings {
             writeln!(err, "warning: {w}")?;
         }
@@ -137,6 +179,30 @@ pub fn run(
                 break;
             }
             std::thread::sleep(left.min(Duration::from_millis(50)));
+        }
+        if let Some((w, topic)) = &imu_w {
+            let next = match &ahead {
+                Some(Item::Frame(f)) => f.imu.first(),
+                _ => None,
+            };
+            let samples = frame.imu.iter().skip(lead).chain(next);
+            lead = usize::from(next.is_some());
+            if !imu_checked && !frame.imu.is_empty() {
+                imu_checked = true;
+                // Discovery found the cloud reader: an IMU reader, if any, is found by now.
+                let short = wait.min(Duration::from_secs(1));
+                if !dds::wait_for_reader(w, short, &stopped) {
+                    writeln!(
+                        err,
+                        "warning: no subscriber on {topic}; publishing the IMU samples anyway"
+                    )?;
+                }
+            }
+            for s in samples {
+                w.write(Imu::of(s, "imu"), None)
+                    .map_err(|e| anyhow::anyhow!("publishing {topic}: {e:?}"))?;
+                imu_sent += 1;
+            }
         }
         let stamp = Time::from_seconds(time);
         let header = Header {
@@ -166,7 +232,11 @@ pub fn run(
     }
     // Let the event loop put the last fragments on the wire before the participant goes.
     std::thread::sleep(Duration::from_millis(500));
-    writeln!(out, "played {sent} clouds on {}", opts.points_topic)?;
+    write!(out, "played {sent} clouds on {}", opts.points_topic)?;
+    match &imu_w {
+        Some((_, topic)) => writeln!(out, ", {imu_sent} IMU samples on {topic}")?,
+        None => writeln!(out)?,
+    }
     Ok(sent)
 }
 

@@ -8,6 +8,13 @@ use crate::dataset::{Frame, FrameSource, Item, Trailer};
 use crate::imu::ImuSample;
 use anyhow::Result;
 
+/// How many of `samples` (in time order) a frame whose sweep ends at `end` (s,
+/// [`Frame::sweep_end`]) takes: those up to and including `end`. The rule of every source,
+/// and of the ROS 2 node's IMU queue.
+pub fn handed_on(samples: &[ImuSample], end: f64) -> usize {
+    samples.partition_point(|s| s.seconds() <= end)
+}
+
 /// Samples in time order and the first not yet handed on.
 #[derive(Clone, Debug, Default)]
 struct Queue {
@@ -20,7 +27,7 @@ impl Queue {
     fn until(&mut self, end: Option<f64>) -> Vec<ImuSample> {
         let rest = &self.samples[self.next..];
         let n = match end {
-            Some(end) => rest.partition_point(|s| s.seconds() <= end),
+            Some(end) => handed_on(rest, end),
             None => rest.len(),
         };
         self.next += n;

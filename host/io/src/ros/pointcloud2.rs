@@ -413,24 +413,33 @@ pub(crate) fn message_item(
         Err(e) => return skipped(e),
     };
     match decode_at_most(&cloud, max_points) {
-        Ok(d) => {
-            let name = format!("{file}:{topic}@{}", cloud.stamp);
-            let warnings = d.warnings.iter().map(|w| format!("{name}: {w}")).collect();
-            let end = sweep_end(cloud.stamp.seconds(), d.stamps.as_deref());
-            Item::Frame(Frame {
-                index,
-                name,
-                points: d.points,
-                stamps: d.stamps,
-                time: Some(cloud.stamp.seconds()),
-                warnings,
-                intensity: None,
-                sweep: None,
-                end,
-                imu: Vec::new(),
-            })
-        }
+        Ok(d) => Item::Frame(frame_of(
+            index,
+            format!("{file}:{topic}@{}", cloud.stamp),
+            cloud.stamp,
+            d,
+        )),
         Err(e) => skipped(format!("stamp {}: {e}", cloud.stamp)),
+    }
+}
+
+/// The frame of a decoded cloud stamped `stamp`, as every reader of PointCloud2 (bags, MCAP
+/// files, the ROS 2 node) makes it: its time is the stamp, its sweep ends where
+/// [`sweep_end`] says, and its warnings are prefixed with `name`.
+pub fn frame_of(index: usize, name: String, stamp: Stamp, d: Decoded) -> Frame {
+    let warnings = d.warnings.iter().map(|w| format!("{name}: {w}")).collect();
+    let end = sweep_end(stamp.seconds(), d.stamps.as_deref());
+    Frame {
+        index,
+        name,
+        points: d.points,
+        stamps: d.stamps,
+        time: Some(stamp.seconds()),
+        warnings,
+        intensity: None,
+        sweep: None,
+        end,
+        imu: Vec::new(),
     }
 }
 
