@@ -55,6 +55,11 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         bail!("{label}: not an MCAP file (no MCAP magic at the start)");
     }
     let mut input = BufReader::with_capacity(1 << 16, file);
+    // The linear reader is given the file up to its first unsound chunk only.
+    let sound = chunks::sound_until(&mut input, len);
+    input
+        .seek(SeekFrom::Start(8))
+        .with_context(|| format!("{label}: cannot read"))?;
     let mut warnings = Vec::new();
     let summary = read_summary(&mut input, len, limit).ok().flatten();
     let catalog = match &summary {
@@ -68,7 +73,7 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
                 "{label}: MCAP file has no summary (cut short or not finished); its topics were \
                  found by scanning"
             ));
-            scan(&mut input, limit)
+            scan(&mut input, limit, sound)
         }
     };
 
@@ -101,7 +106,7 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     let imu = match imu_topic {
         Some(t) => Some(read_imu(
             &mut input,
-            limit,
+            (limit, sound),
             &label,
             &t,
             &catalog,
@@ -137,6 +142,7 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     };
     let source = McapSource {
         input,
+        sound,
         reader,
         chunk: Vec::new(),
         total,
@@ -254,14 +260,15 @@ fn read_summary(
 }
 
 /// Reads the whole data section once, counting messages per channel, up to the first error.
-fn scan(input: &mut BufReader<File>, limit: u64) -> Catalog {
+fn scan(input: &mut BufReader<File>, limit: u64, sound: u64) -> Catalog {
     let mut reader = LinearReader::new_with_options(reader_options(limit));
     let mut catalog = Catalog::default();
     let mut counts: HashMap<u16, u64> = HashMap::new();
     while let Some(Ok(event)) = reader.next_event() {
         match event {
             LinearReadEvent::ReadRequest(need) => {
-                let n = input.read(reader.insert(need.min(READ_PIECE))).unwrap_or(0);
+                let n = chunks::read_within(input, reader.insert(need.min(READ_PIECE)), sound)
+                    .unwrap_or(0);
                 reader.notify_read(n);
             }
             LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data) {
@@ -293,7 +300,7 @@ fn scan(input: &mut BufReader<File>, limit: u64) -> Catalog {
 /// `warnings`.
 fn read_imu(
     input: &mut BufReader<File>,
-    limit: u64,
+    (limit, sound): (u64, u64),
     file: &str,
     topic: &str,
     catalog: &Catalog,
@@ -319,8 +326,7 @@ fn read_imu(
     while let Some(event) = reader.next_event() {
         let record = match event {
             Ok(LinearReadEvent::ReadRequest(need)) => {
-                let n = input
-                    .read(reader.insert(need.min(READ_PIECE)))
+                let n = chunks::read_within(input, reader.insert(need.min(READ_PIECE)), sound)
                     .with_context(|| format!("{file}: cannot read"))?;
                 reader.notify_read(n);
                 continue;
@@ -443,6 +449,8 @@ enum Reader {
 /// The frames of one topic of an open MCAP file.
 struct McapSource {
     input: BufReader<File>,
+    /// Where the linear reader's file ends (see [`chunks`]).
+    sound: u64,
     reader: Reader,
     /// Buffer for a chunk the indexed reader asks for.
     chunk: Vec<u8>,
@@ -550,9 +558,8 @@ impl McapSource {
                     };
                     match event {
                         LinearReadEvent::ReadRequest(need) => {
-                            let n = self
-                                .input
-                                .read(reader.insert(need.min(READ_PIECE)))
+                            let buf = reader.insert(need.min(READ_PIECE));
+                            let n = chunks::read_within(&mut self.input, buf, self.sound)
                                 .with_context(|| file.clone())?;
                             reader.notify_read(n);
                         }
@@ -610,5 +617,6 @@ impl McapSource {
     }
 }
 
+mod chunks;
 #[cfg(test)]
 mod tests;

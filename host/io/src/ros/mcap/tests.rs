@@ -438,3 +438,20 @@ fn an_imu_topic_gives_each_frame_the_samples_up_to_its_stamp_and_a_bad_message_i
         );
     }
 }
+
+/// A fuzzer's file whose uncompressed chunk holds a record longer than the chunk: the `mcap`
+/// crate's linear reader subtracts past zero there (a panic in this debug build). The reader
+/// stops at that chunk as at a file cut short.
+#[test]
+fn a_record_that_runs_past_its_chunk_ends_the_stream_with_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = include_bytes!("fuzzed/chunk-record-overruns.mcap");
+    let p = save(&dir, "overrun.mcap", bytes);
+    let mut input = BufReader::new(File::open(&p).unwrap());
+    let sound = chunks::sound_until(&mut input, bytes.len() as u64);
+    assert!(sound < bytes.len() as u64, "{sound}");
+    if let Ok(mut dataset) = open_mcap(&p, None) {
+        let (_, err) = drain(dataset.frames.as_mut());
+        assert!(err.is_some());
+    }
+}

@@ -1,0 +1,95 @@
+//! A guard in front of the `mcap` crate's linear reader: it walks an uncompressed chunk's
+//! records trusting their lengths, and a record that runs past its chunk makes it subtract past
+//! zero (a panic where overflow is checked, records read from outside the chunk where it is not).
+//! [`sound_until`] finds the first chunk whose records do not fit in it, and [`read_within`]
+//! ends the file there for the reader, which then stops as at a file cut short.
+
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+
+/// A record's opcode and length.
+const RECORD_HEADER: u64 = 1 + 8;
+/// Opcodes (the MCAP specification's).
+const CHUNK: u8 = 0x06;
+const FOOTER: u8 = 0x02;
+/// A chunk record's body before its compression string: message start and end times,
+/// uncompressed size (u64 each), uncompressed CRC (u32), the compression string's length (u32).
+const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
+
+/// The offset at which the file stops being safe for the linear reader: the start of the first
+/// uncompressed chunk whose records run past its end, else `len`. A file cut short, or a
+/// record that is not a chunk, is left to the reader to judge. Leaves `input` anywhere.
+pub fn sound_until(input: &mut BufReader<File>, len: u64) -> u64 {
+    walk(input, len).unwrap_or(len)
+}
+
+/// `input.read` into `buf`, as if the file ended at `end`.
+pub fn read_within(
+    input: &mut BufReader<File>,
+    buf: &mut [u8],
+    end: u64,
+) -> std::io::Result<usize> {
+    let room = end.saturating_sub(input.stream_position()?);
+    let n = buf.len().min(usize::try_from(room).unwrap_or(usize::MAX));
+    input.read(&mut buf[..n])
+}
+
+/// The walk; `None` where the file ends or cannot be read before anything unsound is met.
+fn walk(input: &mut BufReader<File>, len: u64) -> Option<u64> {
+    let mut at = mcap::MAGIC.len() as u64;
+    loop {
+        input.seek(SeekFrom::Start(at)).ok()?;
+        let (opcode, body) = header(input)?;
+        let next = at.checked_add(RECORD_HEADER)?.checked_add(body)?;
+        if opcode == FOOTER || next > len {
+            return None;
+        }
+        if opcode == CHUNK && !chunk_fits(input, body)? {
+            return Some(at);
+        }
+        at = next;
+    }
+}
+
+/// Whether a chunk (`input` at its body, `body` bytes long) keeps its records inside it; only
+/// uncompressed chunks are walked, compressed ones count as fitting.
+fn chunk_fits(input: &mut BufReader<File>, body: u64) -> Option<bool> {
+    let mut fixed = [0u8; CHUNK_FIXED as usize];
+    input.read_exact(&mut fixed).ok()?;
+    let compression = u64::from(u32::from_le_bytes(fixed[28..32].try_into().ok()?));
+    input.seek_relative(i64::try_from(compression).ok()?).ok()?;
+    let records = u64_at(input)?;
+    let used = CHUNK_FIXED.checked_add(compression)?.checked_add(8)?;
+    if used.checked_add(records)? > body {
+        return Some(false);
+    }
+    if compression > 0 {
+        return Some(true);
+    }
+    let mut left = records;
+    while left > 0 {
+        if left < RECORD_HEADER {
+            return Some(false);
+        }
+        let (_, inner) = header(input)?;
+        match inner.checked_add(RECORD_HEADER) {
+            Some(whole) if whole <= left => left -= whole,
+            _ => return Some(false),
+        }
+        input.seek_relative(i64::try_from(inner).ok()?).ok()?;
+    }
+    Some(true)
+}
+
+/// A record's opcode and body length at `input`.
+fn header(input: &mut BufReader<File>) -> Option<(u8, u64)> {
+    let mut op = [0u8; 1];
+    input.read_exact(&mut op).ok()?;
+    Some((op[0], u64_at(input)?))
+}
+
+fn u64_at(input: &mut BufReader<File>) -> Option<u64> {
+    let mut b = [0u8; 8];
+    input.read_exact(&mut b).ok()?;
+    Some(u64::from_le_bytes(b))
+}
