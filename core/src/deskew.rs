@@ -9,7 +9,7 @@
 use crate::geometry::{Point, Pose};
 use crate::lie::{se3_exp, se3_log, so3_exp, so3_log};
 use crate::scalar::Real;
-use nalgebra::{UnitQuaternion, Vector6};
+use nalgebra::{UnitQuaternion, Vector3, Vector6};
 
 /// Why a scan's timestamps were not used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -75,7 +75,10 @@ pub const SWEEP_KNOTS: usize = 16;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SweepRotation<T: Real> {
     /// `knots[k]`: the rotation from the axes at `s = k / SWEEP_KNOTS` to the end's.
-    knots: [UnitQuaternion<T>; SWEEP_KNOTS + 1],
+    knots: [UnitQuaternion<T>; SWEEP_KNOTS],
+    /// `steps[k]`: the rotation vector from knot `k` to knot `k + 1`, worked out once here
+    /// rather than for every point time.
+    steps: [Vector3<T>; SWEEP_KNOTS],
 }
 
 impl<T: Real> SweepRotation<T> {
@@ -83,9 +86,12 @@ impl<T: Real> SweepRotation<T> {
     /// identity, `turned[SWEEP_KNOTS]` the whole sweep's).
     pub fn from_start(turned: &[UnitQuaternion<T>; SWEEP_KNOTS + 1]) -> Self {
         let to_end = turned[SWEEP_KNOTS].inverse();
-        Self {
-            knots: turned.map(|q| to_end * q),
-        }
+        let knots: [UnitQuaternion<T>; SWEEP_KNOTS] = core::array::from_fn(|k| to_end * turned[k]);
+        let steps = core::array::from_fn(|k| {
+            let next = to_end * turned[k + 1];
+            so3_log(&(knots[k].inverse() * next)).0
+        });
+        Self { knots, steps }
     }
 
     /// The rotation from the axes at normalised time `s` to the end's; outside `[0, 1]` the
@@ -94,9 +100,7 @@ impl<T: Real> SweepRotation<T> {
         let x = s * SWEEP_KNOTS as f64;
         // In range, and 0 for NaN: `as` saturates.
         let k = (libm::floor(x) as usize).min(SWEEP_KNOTS - 1);
-        let (a, b) = (self.knots[k], self.knots[k + 1]);
-        let (step, _) = so3_log(&(a.inverse() * b));
-        a * so3_exp(&(step * T::of(x - k as f64))).0
+        self.knots[k] * so3_exp(&(self.steps[k] * T::of(x - k as f64))).0
     }
 }
 
