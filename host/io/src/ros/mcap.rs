@@ -55,17 +55,15 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
         bail!("{label}: not an MCAP file (no MCAP magic at the start)");
     }
     let mut input = BufReader::with_capacity(1 << 16, file);
-    // The linear reader is given the file up to its first unsound chunk only.
-    let sound = chunks::sound_until(&mut input, len);
-    input
-        .seek(SeekFrom::Start(8))
-        .with_context(|| format!("{label}: cannot read"))?;
+    // A linear reader is given the file up to its first unsound chunk only.
+    let mut bound = chunks::Bound::new(len);
     let mut warnings = Vec::new();
     let summary = read_summary(&mut input, len, limit).ok().flatten();
     let catalog = match &summary {
         Some(summary) if !summary.channels.is_empty() => Catalog::of(summary),
         // No summary (cut short, or written without one): learn the channels by reading once.
         _ => {
+            let sound = bound.get(&mut input);
             input
                 .seek(SeekFrom::Start(0))
                 .with_context(|| format!("{label}: cannot read"))?;
@@ -105,8 +103,8 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     .map_err(|e| anyhow!(e))?;
     let imu = match imu_topic {
         Some(t) => Some(read_imu(
-            &mut input,
-            (limit, sound),
+            (&mut input, &mut bound),
+            limit,
             &label,
             &t,
             &catalog,
@@ -130,6 +128,10 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
                 .ok()
                 .flatten()
         });
+    let sound = match indexed {
+        Some(_) => len,
+        None => bound.get(&mut input),
+    };
     input
         .seek(SeekFrom::Start(0))
         .with_context(|| format!("{label}: cannot read"))?;
@@ -299,8 +301,8 @@ fn scan(input: &mut BufReader<File>, limit: u64, sound: u64) -> Catalog {
 /// section (from its start: `input` is left anywhere), in stamp order; what went wrong goes to
 /// `warnings`.
 fn read_imu(
-    input: &mut BufReader<File>,
-    (limit, sound): (u64, u64),
+    (input, bound): (&mut BufReader<File>, &mut chunks::Bound),
+    limit: u64,
     file: &str,
     topic: &str,
     catalog: &Catalog,
@@ -317,6 +319,7 @@ fn read_imu(
             (id, wrong)
         })
         .collect();
+    let sound = bound.get(input);
     input
         .seek(SeekFrom::Start(0))
         .with_context(|| format!("{file}: cannot read"))?;

@@ -23,6 +23,26 @@ pub fn sound_until(input: &mut BufReader<File>, len: u64) -> u64 {
     walk(input, len).unwrap_or(len)
 }
 
+/// [`sound_until`], walked at most once, and only when a linear reader is about to need it.
+pub struct Bound {
+    len: u64,
+    until: Option<u64>,
+}
+
+impl Bound {
+    /// For a file of `len` bytes; nothing is read yet.
+    pub fn new(len: u64) -> Self {
+        Self { len, until: None }
+    }
+
+    /// The offset the linear reader may read up to; the first call walks the file (leaving
+    /// `input` anywhere).
+    pub fn get(&mut self, input: &mut BufReader<File>) -> u64 {
+        let len = self.len;
+        *self.until.get_or_insert_with(|| sound_until(input, len))
+    }
+}
+
 /// `input.read` into `buf`, as if the file ended at `end`.
 pub fn read_within(
     input: &mut BufReader<File>,
