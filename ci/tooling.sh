@@ -18,6 +18,8 @@
 # FUZZ_TARGETS  space-separated subset of targets (default: all of `cargo fuzz list`)
 # TOOLING_JOBS  2: Miri runs beside the other stages (its log printed after theirs); default 1
 # MIRI_TIMEOUT  seconds before Miri counts as a failure (default 900)
+# TOOLING_CLEAN 1: delete each stage's build (fuzz/target, target/miri) once it has run, for a
+#               machine short of disk (default: kept, so a second run builds nothing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -85,6 +87,11 @@ fuzz() {
   rm -rf "$scratch"
   # The targets that read paths write their input to one tmpfs file per process.
   rm -f /dev/shm/kiss-odom-fuzz-* 2>/dev/null || true
+  clean fuzz/target
+}
+
+clean() { # clean DIR: with TOOLING_CLEAN=1, the stage's build goes once it has run
+  if [ "${TOOLING_CLEAN:-0}" = 1 ]; then rm -rf "$1"; fi
 }
 
 miri() {
@@ -102,6 +109,7 @@ miri() {
     cargo +nightly miri test -p kiss-odom-core --lib --features soft-float; then
     FAILED+=("miri")
   fi
+  clean target/miri
 }
 
 run_stages() {
