@@ -376,6 +376,18 @@ fn indexed_reader(
         .filter(|(_, c)| c.topic == topic)
         .map(|(&id, _)| id)
         .collect();
+    // The mcap crate copies an uncompressed chunk into a buffer of its uncompressed size, and
+    // panics when an index says the two sizes differ: such an index is not used.
+    if let Some(c) = summary
+        .chunk_indexes
+        .iter()
+        .find(|c| c.compression.is_empty() && c.compressed_size != c.uncompressed_size)
+    {
+        bail!(
+            "the index of the chunk at byte {} gives it two sizes",
+            c.chunk_start_offset
+        );
+    }
     let mut chunks = summary.chunk_indexes.clone();
     chunks.sort_by_key(|c| c.chunk_start_offset);
     // Log times of our messages in file order, from the message indexes after each chunk.

@@ -455,3 +455,19 @@ fn a_record_that_runs_past_its_chunk_ends_the_stream_with_an_error() {
         assert!(err.is_some());
     }
 }
+
+#[test]
+fn an_index_giving_an_uncompressed_chunk_two_sizes_is_not_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = include_bytes!("fuzzed/uncompressed-chunk-sizes-differ.mcap");
+    let p = save(&dir, "sizes.mcap", bytes);
+    let summary = mcap::Summary::read(bytes).unwrap().unwrap();
+    assert!(summary
+        .chunk_indexes
+        .iter()
+        .any(|c| c.compression.is_empty() && c.compressed_size != c.uncompressed_size));
+    // Read in file order instead; the chunk is then cut short or read whole, never a panic.
+    if let Ok(mut dataset) = open_mcap(&p, None) {
+        drain(dataset.frames.as_mut());
+    }
+}
