@@ -3,7 +3,8 @@
 //! before ICP starts. [`GyroPrior`] replaces the model's rotation by the rotation the gyroscope
 //! measured over the sweep (end of the last sweep to the end of this one), keeps its
 //! translation, and hands it to the odometry as the motion to predict with
-//! ([`Odometry::set_last_delta`], kiss-icp's assignable `last_delta`). Each point is deskewed
+//! ([`Odometry::set_measured_delta`]: kiss-icp's assignable `last_delta`, gated by the adaptive
+//! threshold of measured predictions, see `threshold`). Each point is deskewed
 //! with the rotation the gyroscope measured up to its own time ([`Odometry::set_sweep_rotation`],
 //! unless [`ImuConfig::point_deskew`] is off: then at the sweep's mean rate). After the scan is
 //! registered, the rotation ICP found is compared with the gyroscope's and the difference, as a
@@ -157,7 +158,7 @@ impl<T: Real> GyroPrior<T> {
         };
         let mut delta = *odom.last_delta();
         delta.rotation = rotation;
-        if !odom.set_last_delta(delta) {
+        if !odom.set_measured_delta(delta) {
             return Prior::BadSamples;
         }
         if self.config.point_deskew {

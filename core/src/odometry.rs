@@ -34,7 +34,7 @@ use crate::registration::{Executor, Sequential};
 use crate::report::{FrameReport, HighWater};
 use crate::scalar::Real;
 use crate::storage::Storage;
-use crate::threshold::AdaptiveThreshold;
+use crate::threshold::Thresholds;
 use core::marker::PhantomData;
 
 /// KISS-ICP odometry over storage it owns or borrows (see [`crate::storage`]).
@@ -56,7 +56,7 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     config: Config<T>,
     caps: Capacities,
     map: MapState<T>,
-    threshold: AdaptiveThreshold<T>,
+    threshold: Thresholds<T>,
     last_pose: Pose<T>,
     last_delta: Pose<T>,
     /// The motion the last registered scan was deskewed with (its `last_delta` at the time).
@@ -119,8 +119,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         Ok(odom)
     }
 
-    fn fresh_threshold(config: &Config<T>) -> AdaptiveThreshold<T> {
-        AdaptiveThreshold::new(
+    fn fresh_threshold(config: &Config<T>) -> Thresholds<T> {
+        Thresholds::new(
             config.initial_threshold,
             config.min_motion_threshold,
             config.max_range,
@@ -197,6 +197,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// scan is empty: the pose becomes the prediction and the velocity is kept.
     pub fn skip_frame(&mut self) -> Pose<T> {
         self.sweep_rotation = None;
+        self.threshold.predict_with(false);
         self.last_pose *= self.last_delta;
         renormalize(&mut self.last_pose);
         self.frames += 1;
@@ -243,11 +244,23 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// (kiss-icp's assignable `last_delta`), and drops a [`Self::set_sweep_rotation`].
     /// Non-finite: refused (`false`), nothing changes.
     pub fn set_last_delta(&mut self, delta: Pose<T>) -> bool {
+        self.predict_next(delta, false)
+    }
+    /// [`Self::set_last_delta`] with a motion measured by another sensor (a gyroscope, wheel
+    /// odometry): the scan's correspondences are then gated by the adaptive threshold learnt
+    /// from the errors of measured predictions, not from the constant-velocity model's, which
+    /// are larger. Each kind keeps its own, so a sensor that drops out leaves the
+    /// constant-velocity model the threshold of its own errors.
+    pub fn set_measured_delta(&mut self, delta: Pose<T>) -> bool {
+        self.predict_next(delta, true)
+    }
+    fn predict_next(&mut self, delta: Pose<T>, measured: bool) -> bool {
         let ok = is_finite_pose(&delta);
         if ok {
             self.last_delta = delta;
             renormalize(&mut self.last_delta);
             self.sweep_rotation = None;
+            self.threshold.predict_with(measured);
         }
         ok
     }
@@ -265,9 +278,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             map.clear();
         }
     }
-    /// The threshold's current `sigma`.
+    /// The current `sigma` of the threshold that gates the next scan.
     pub fn sigma(&self) -> T {
-        self.threshold.sigma()
+        self.threshold.in_use().sigma()
     }
     /// The local map (kiss-icp's `local_map`): its points, occupancy and search. An empty
     /// view if the storage no longer holds the layout (see [`FrameError::Storage`]).

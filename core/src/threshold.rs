@@ -9,6 +9,12 @@
 //!
 //! As in the reference, the running sum starts with `tau_0^2` counted as one sample, so the
 //! first frames use `sigma = tau_0` and the seed's weight fades as real samples arrive.
+//!
+//! `sigma` models the error of the prediction. A prediction measured by another sensor (a
+//! gyroscope's rotation, see `imu`) errs far less than the constant-velocity model on the same
+//! motion, so [`Thresholds`] keeps one estimate per kind of prediction: a frame is gated by, and
+//! adds its deviation to, the estimate of the prediction it was made with. An odometry never
+//! given a measured prediction uses the constant-velocity one alone, as the reference does.
 
 use crate::geometry::Pose;
 use crate::lie::rotation_angle;
@@ -63,6 +69,54 @@ impl<T: Real> AdaptiveThreshold<T> {
     }
 }
 
+/// Eq. (7) per kind of prediction: the constant-velocity model's (Eq. (1)) and that of
+/// predictions measured elsewhere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub(crate) struct Thresholds<T> {
+    constant_velocity: AdaptiveThreshold<T>,
+    measured: AdaptiveThreshold<T>,
+    /// The next frame's prediction is a measured one.
+    next_measured: bool,
+}
+
+impl<T: Real> Thresholds<T> {
+    /// Both seeded with `tau_0`; the next prediction is the constant-velocity model's.
+    pub(crate) fn new(initial_threshold: T, min_motion: T, max_range: T) -> Self {
+        let seed = AdaptiveThreshold::new(initial_threshold, min_motion, max_range);
+        Self {
+            constant_velocity: seed,
+            measured: seed,
+            next_measured: false,
+        }
+    }
+
+    /// Says which kind of prediction the next frame is made with.
+    pub(crate) fn predict_with(&mut self, measured: bool) {
+        self.next_measured = measured;
+    }
+
+    /// The estimate of the next frame's kind of prediction.
+    pub(crate) fn in_use(&self) -> &AdaptiveThreshold<T> {
+        if self.next_measured {
+            &self.measured
+        } else {
+            &self.constant_velocity
+        }
+    }
+
+    /// Adds a frame's model deviation to the estimate it was gated by; the frame after it is
+    /// the constant-velocity model's unless a measured prediction is given again.
+    pub(crate) fn update(&mut self, deviation: &Pose<T>) {
+        if self.next_measured {
+            self.measured.update(deviation);
+        } else {
+            self.constant_velocity.update(deviation);
+        }
+        self.next_measured = false;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -88,5 +142,27 @@ mod tests {
         th.update(&dev);
         let want = ((4.0 + 0.09 + delta * delta) / 3.0f64).sqrt();
         assert!((th.sigma() - want).abs() < 1e-12);
+    }
+
+    #[test]
+    fn each_kind_of_prediction_keeps_its_own_estimate() {
+        let mut th = Thresholds::new(2.0f64, 0.1, 100.0);
+        // Measured predictions err by 0.2 m for a while.
+        for _ in 0..50 {
+            th.predict_with(true);
+            assert!(th.in_use().sigma() < 2.0 + 1e-12);
+            th.update(&Pose::translation(0.2, 0.0, 0.0));
+        }
+        let measured = th.measured.sigma();
+        assert!(measured < 0.35, "measured sigma {measured}");
+        // Then the constant-velocity model predicts: its estimate is still the seed, and the
+        // measured predictions' small errors do not gate it.
+        assert_eq!(th.in_use().sigma(), 2.0);
+        th.update(&Pose::translation(3.0, 0.0, 0.0));
+        assert!((th.in_use().sigma() - ((4.0 + 9.0) / 2.0f64).sqrt()).abs() < 1e-12);
+        assert_eq!(th.measured.sigma(), measured);
+        // A measured prediction again: its estimate is where it was left.
+        th.predict_with(true);
+        assert_eq!(th.in_use().sigma(), measured);
     }
 }

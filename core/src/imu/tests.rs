@@ -244,6 +244,56 @@ fn a_fast_uneven_turn_is_tracked_with_the_prior_and_lost_without() {
     assert!(without > 4.0 * with, "{without} vs {with}");
 }
 
+/// A sensor in the yard on a small circle (so the kept translation errs by 0.2 m each frame)
+/// while turning, with the gyroscope for `imu_frames` frames and then without: each frame's
+/// `sigma`.
+fn sigmas_through_a_dropout(imu_frames: usize) -> Vec<f64> {
+    let mut scene = vec![[0.0; 3]; 4000];
+    let n = yard(&mut scene);
+    let w = 2.0 * core::f64::consts::PI;
+    let at = |t: f64| {
+        Pose::new(
+            Vector3::new(0.5 * (w * t).sin(), 0.5 * (w * t).cos(), 0.0),
+            Vector3::new(0.0, 0.0, 0.4 * t),
+        )
+    };
+    let mut odom = odometry();
+    let mut prior = GyroPrior::new(ImuConfig::new());
+    let mut sigmas = Vec::new();
+    for k in 0..imu_frames + 2 {
+        let t1 = (k + 1) as f64 * 0.1;
+        let points: Vec<[f64; 3]> = scene[..n]
+            .iter()
+            .map(|p| {
+                let local = at(t1).inverse() * crate::geometry::Point::from(*p);
+                [local.x, local.y, local.z]
+            })
+            .collect();
+        let s = if k < imu_frames {
+            aligned(t1 - 0.1, t1, 200.0, |_| [0.0, 0.0, 0.4])
+        } else {
+            Vec::new()
+        };
+        prior.before_frame(&mut odom, &s, t1);
+        sigmas.push(odom.register_frame(&points, None).unwrap().sigma);
+        prior.after_frame(&odom);
+    }
+    sigmas
+}
+
+#[test]
+#[cfg_attr(miri, ignore = "an ICP run per frame")]
+fn after_the_imu_drops_out_the_constant_velocity_model_is_gated_by_its_own_threshold() {
+    let tau_0 = Config::<f64>::new(50.0).initial_threshold;
+    let sigmas = sigmas_through_a_dropout(12);
+    let (with, after) = (sigmas[11], sigmas[12]);
+    println!("sigma {with:.3} on the last frame with the gyroscope, {after:.3} on the first without (tau_0 {tau_0})");
+    // The measured predictions' errors were counted and brought their threshold down...
+    assert!(with < 0.5 * tau_0, "{sigmas:?}");
+    // ...and the constant-velocity model's, never used since the first frame, is still tau_0.
+    assert_eq!(after, tau_0, "{sigmas:?}");
+}
+
 #[test]
 fn each_outcome_has_its_own_report_name() {
     let all = [

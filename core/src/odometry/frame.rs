@@ -83,7 +83,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
         // Eq. (13): the model deviation is a sample of the adaptive threshold (Sec. III-D).
         let deviation = predicted.pose.inverse() * reg.pose;
-        let model_error = self.threshold.model_error(&deviation);
+        let model_error = self.threshold.in_use().model_error(&deviation);
         self.threshold.update(&deviation);
 
         // Sec. III-C: P*_merge joins the local map at T_t; voxels beyond r_max are pruned (a full
@@ -100,7 +100,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         Predicted {
             pose: self.last_pose * self.last_delta,
             last_pose: self.last_pose,
-            sigma: self.threshold.sigma(),
+            sigma: self.threshold.in_use().sigma(),
             frames: self.frames,
         }
     }
