@@ -5,7 +5,8 @@
 # 20 ms, or its samples stopping half-way. Prints markdown rows: KITTI %, ATE m, frames used.
 #
 #   bench/imu_robustness.sh     (DATA=target/imu-prior, SEED=1; drone-SEED from
-#                                bench/imu_prior.sh is reused when there)
+#                                bench/imu_prior.sh is reused when there; STOPS="25", the
+#                                times in s at which the IMU stops, one run each)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${BIN:-target/release/kiss-odom}
@@ -38,10 +39,12 @@ $B run "$d" --imu auto --imu-extrinsic 0,0,0,5,0,0 --out "$d.rot5" -q 2>/dev/nul
 row "drone $SEED" "prior, extrinsic off by 5 deg (roll)" "$d.rot5"
 $B run "$d" --imu auto --imu-time-offset 0.02 --out "$d.shift20" -q 2>/dev/null
 row "drone $SEED" "prior, clock off by 20 ms" "$d.shift20"
-# The IMU stops after 25 s: the samples of the second half are gone.
-stop="$DATA/drone-$SEED-imu-stops"
-rm -rf "$stop" && mkdir -p "$stop"
-for f in velodyne timestamps poses.txt times.txt sim.toml; do ln -s "$(realpath "$d/$f")" "$stop/$f"; done
-awk -F, 'NR == 1 || $1 < 25' "$d/imu.csv" > "$stop/imu.csv"
-$B run "$stop" --imu auto --out "$stop.run" -q 2>/dev/null
-row "drone $SEED" "prior, IMU stops at 25 s" "$stop.run"
+# The IMU stops after each of STOPS s (default: 25, half-way): the later samples are gone.
+for t in ${STOPS:-25}; do
+  stop="$DATA/drone-$SEED-imu-stops-$t"
+  rm -rf "$stop" && mkdir -p "$stop"
+  for f in velodyne timestamps poses.txt times.txt sim.toml; do ln -s "$(realpath "$d/$f")" "$stop/$f"; done
+  awk -F, -v t="$t" 'NR == 1 || $1 < t' "$d/imu.csv" > "$stop/imu.csv"
+  $B run "$stop" --imu auto --out "$stop.run" -q 2>/dev/null
+  row "drone $SEED" "prior, IMU stops at $t s" "$stop.run"
+done
