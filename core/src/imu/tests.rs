@@ -247,7 +247,7 @@ fn a_fast_uneven_turn_is_tracked_with_the_prior_and_lost_without() {
 /// A sensor in the yard on a small circle (so the kept translation errs by 0.2 m each frame)
 /// while turning, with the gyroscope for `imu_frames` frames and then without: each frame's
 /// `sigma`.
-fn sigmas_through_a_dropout(imu_frames: usize) -> Vec<f64> {
+fn sigmas_through_a_dropout(imu_frames: usize) -> (Vec<f64>, Odom) {
     let mut scene = vec![[0.0; 3]; 4000];
     let n = yard(&mut scene);
     let w = 2.0 * core::f64::consts::PI;
@@ -278,20 +278,30 @@ fn sigmas_through_a_dropout(imu_frames: usize) -> Vec<f64> {
         sigmas.push(odom.register_frame(&points, None).unwrap().sigma);
         prior.after_frame(&odom);
     }
-    sigmas
+    (sigmas, odom)
 }
 
 #[test]
 #[cfg_attr(miri, ignore = "an ICP run per frame")]
 fn after_the_imu_drops_out_the_constant_velocity_model_is_gated_by_its_own_threshold() {
     let tau_0 = Config::<f64>::new(50.0).initial_threshold;
-    let sigmas = sigmas_through_a_dropout(12);
+    let (sigmas, mut odom) = sigmas_through_a_dropout(12);
     let (with, after) = (sigmas[11], sigmas[12]);
     println!("sigma {with:.3} on the last frame with the gyroscope, {after:.3} on the first without (tau_0 {tau_0})");
     // The measured predictions' errors were counted and brought their threshold down...
     assert!(with < 0.5 * tau_0, "{sigmas:?}");
     // ...and the constant-velocity model's, never used since the first frame, is still tau_0.
     assert_eq!(after, tau_0, "{sigmas:?}");
+    // A measured prediction holds for one frame: a skipped frame or kiss-icp's assignable
+    // `last_delta` goes back to the constant-velocity model's threshold.
+    let (cv, delta) = (odom.sigma(), *odom.last_delta());
+    assert!(odom.set_measured_delta(delta));
+    // The measured predictions' threshold as the last of them left it.
+    assert!(odom.sigma() <= with && cv > with, "{} {cv}", odom.sigma());
+    odom.skip_frame();
+    assert_eq!(odom.sigma(), cv);
+    assert!(odom.set_measured_delta(delta) && odom.set_last_delta(delta));
+    assert_eq!(odom.sigma(), cv);
 }
 
 #[test]
