@@ -305,6 +305,23 @@ fn after_the_imu_drops_out_the_constant_velocity_model_is_gated_by_its_own_thres
 }
 
 #[test]
+#[cfg_attr(miri, ignore = "an ICP run per frame")]
+fn a_skipped_frame_advances_the_pose_by_the_model_and_is_counted() {
+    let (_, mut odom) = sigmas_through_a_dropout(2);
+    let (pose, delta, frames) = (*odom.last_pose(), *odom.last_delta(), odom.frames());
+    assert!(delta.translation.vector.norm() > 0.05, "{delta:?}");
+    let skipped = odom.skip_frame();
+    let want = pose * delta;
+    let off = (skipped.translation.vector - want.translation.vector).norm();
+    assert!(
+        off < 1e-12 && skipped.rotation.angle_to(&want.rotation) < 1e-12,
+        "{off}"
+    );
+    assert_eq!(*odom.last_pose(), skipped);
+    assert_eq!(odom.frames(), frames + 1);
+}
+
+#[test]
 fn each_outcome_has_its_own_report_name() {
     let all = [
         Prior::Used(3),
