@@ -98,6 +98,14 @@ pub fn kiss_odom(args: &[OsString], out: &Path) -> Run {
     }
 }
 
+/// `kiss-odom simulate --out OUT EXTRA...` in process; panics with its stderr if it fails.
+pub fn simulate(out: &Path, extra: &[&str]) {
+    let mut args: Vec<OsString> = vec!["simulate".into(), "--out".into(), out.into()];
+    args.extend(extra.iter().map(OsString::from));
+    let r = kiss_odom(&args, out);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+}
+
 /// `kiss-odom run INPUT --out OUT --quiet EXTRA...` in process.
 pub fn run(input: &Path, out: &Path, extra: &[&str]) -> Run {
     let mut args: Vec<OsString> = vec![

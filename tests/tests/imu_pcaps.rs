@@ -5,8 +5,7 @@
 //! second's samples each, and the poses come closer to the simulation's ground truth than
 //! without it.
 
-use kiss_odom_tests::{kiss_odom, run, Run};
-use std::ffi::OsString;
+use kiss_odom_tests::{run, Run};
 use std::path::Path;
 
 const FRAMES: usize = 30;
@@ -14,28 +13,24 @@ const IMU_RATE_HZ: f64 = 200.0;
 
 /// `FRAMES` frames of `profile` (seed `seed`) as `sensor`'s pcap, with an IMU at 200 Hz.
 fn simulate(dir: &Path, sensor: &str, profile: &str, seed: &str) {
-    let args: Vec<OsString> = [
-        "simulate",
-        "--out",
-        dir.to_str().unwrap(),
-        "--profile",
-        profile,
-        "--seed",
-        seed,
-        "--frames",
-        &FRAMES.to_string(),
-        "--sensor",
-        sensor,
-        "--format",
-        "pcap",
-        "--imu-rate",
-        &IMU_RATE_HZ.to_string(),
-    ]
-    .iter()
-    .map(OsString::from)
-    .collect();
-    let r = kiss_odom(&args, dir);
-    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (frames, rate) = (FRAMES.to_string(), IMU_RATE_HZ.to_string());
+    kiss_odom_tests::simulate(
+        dir,
+        &[
+            "--profile",
+            profile,
+            "--seed",
+            seed,
+            "--frames",
+            &frames,
+            "--sensor",
+            sensor,
+            "--format",
+            "pcap",
+            "--imu-rate",
+            &rate,
+        ],
+    );
 }
 
 /// ATE (m) and mean relative rotation error (rad) of a run against the simulation's poses.

@@ -3,33 +3,27 @@
 //! constant-velocity model loses, changes nothing when no sample comes, survives an IMU that
 //! stops, and flags a clock offset it cannot bridge.
 
-use kiss_odom_tests::{kiss_odom, run};
-use std::ffi::OsString;
+use kiss_odom_tests::run;
 use std::path::Path;
 
 fn simulate(dir: &Path, profile: &str, seed: &str, frames: &str) {
-    let args: Vec<OsString> = [
-        "simulate",
-        "--out",
-        dir.to_str().unwrap(),
-        "--profile",
-        profile,
-        "--seed",
-        seed,
-        "--frames",
-        frames,
-        "--beams",
-        "32",
-        "--columns",
-        "512",
-        "--imu-rate",
-        "200",
-    ]
-    .iter()
-    .map(OsString::from)
-    .collect();
-    let r = kiss_odom(&args, dir);
-    assert_eq!(r.code, 0, "{}", r.stderr);
+    kiss_odom_tests::simulate(
+        dir,
+        &[
+            "--profile",
+            profile,
+            "--seed",
+            seed,
+            "--frames",
+            frames,
+            "--beams",
+            "32",
+            "--columns",
+            "512",
+            "--imu-rate",
+            "200",
+        ],
+    );
 }
 
 #[test]

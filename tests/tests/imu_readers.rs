@@ -4,17 +4,13 @@
 //! the first; `--imu FILE` gives a bag without an IMU topic the folder's samples; a topic the
 //! file does not have is an error naming the ones it has.
 
-use kiss_odom_tests::{kiss_odom, run, Run};
-use std::ffi::OsString;
+use kiss_odom_tests::{run, Run};
 use std::path::Path;
 
 /// 30 frames of a drone flight (seed 41) into `dir`, as the folder and `format`; with an IMU
 /// at 200 Hz if `imu`.
 fn simulate(dir: &Path, format: &str, imu: bool) {
-    let mut args: Vec<&str> = vec![
-        "simulate",
-        "--out",
-        dir.to_str().unwrap(),
+    let mut args = vec![
         "--profile",
         "drone",
         "--seed",
@@ -31,9 +27,7 @@ fn simulate(dir: &Path, format: &str, imu: bool) {
     if imu {
         args.extend(["--imu-rate", "200"]);
     }
-    let args: Vec<OsString> = args.iter().map(OsString::from).collect();
-    let r = kiss_odom(&args, dir);
-    assert_eq!(r.code, 0, "{}", r.stderr);
+    kiss_odom_tests::simulate(dir, &args);
 }
 
 /// The prior was used on every frame after the first.
