@@ -199,15 +199,10 @@ impl PacketSensor {
         matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
     }
 
-    /// Whether the simulator sends this sensor's IMU samples as its IMU packets: the OS1's
-    /// and the Mid-360's.
-    pub const fn sends_imu(self) -> bool {
-        matches!(self, Self::Os1 | Self::Mid360)
-    }
-
     /// The IMU packet carrying `sample`, the `count`th, sent at trajectory time `offset` and
     /// stamped with the sample's time on the clock the sensor's lidar packets use; `None` for
-    /// a sensor whose IMU packets the simulator does not write ([`Self::sends_imu`]).
+    /// a sensor whose IMU packets the simulator does not write (all but the OS1 and the
+    /// Mid-360).
     pub fn imu_packet(self, sample: &ImuSample, offset: f64, count: u64) -> Option<Packet> {
         let ns = libm::round((sample.time + self.clock_origin_s() as f64).max(0.0) * 1e9) as u64;
         let payload = match self {
@@ -615,6 +610,23 @@ mod tests {
     use super::*;
     use crate::profile::Profile;
     use crate::simulation::SimParams;
+
+    /// Asserts that the rates and forces an IMU packet decodes to are `sample`'s within one f32
+    /// rounding (2^-24 of the value; the unit conversions, degrees and g, are f64 both ways).
+    pub(super) fn assert_imu_decodes_to(sample: &ImuSample, gyro: [f64; 3], accel: [f64; 3]) {
+        for (got, want) in gyro
+            .iter()
+            .zip(sample.gyro)
+            .chain(accel.iter().zip(sample.accel))
+        {
+            let tol = want.abs() * f64::from(f32::EPSILON);
+            println!(
+                "{want:e}: decoded {got:e}, off {:.1e} (tol {tol:.1e})",
+                got - want
+            );
+            assert!((got - want).abs() <= tol, "{got} vs {want}");
+        }
+    }
 
     /// Asserts that a frame's directions `b` do not retrace the last frame's `a`, fired at the
     /// same instants within it: under 1 % of them within 1e-3 rad.

@@ -47,18 +47,6 @@ mod tests {
         let s = p.imu().unwrap();
         let gyro = s.gyro.map(f64::from);
         let accel = s.accel_g.map(|a| f64::from(a) * GRAVITY);
-        for (got, want) in gyro
-            .iter()
-            .zip(sample.gyro)
-            .chain(accel.iter().zip(sample.accel))
-        {
-            // One f32 rounding (2^-24 of the value) and, for the acceleration, g and back.
-            let tol = want.abs() * f64::from(f32::EPSILON);
-            println!(
-                "{want:e}: decoded {got:e}, off {:.1e} (tol {tol:.1e})",
-                got - want
-            );
-            assert!((got - want).abs() <= tol, "{got} vs {want}");
-        }
+        crate::packets::tests::assert_imu_decodes_to(&sample, gyro, accel);
     }
 }

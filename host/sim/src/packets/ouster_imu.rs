@@ -40,18 +40,6 @@ mod tests {
         assert_eq!([p.sys_ts(), p.accel_ts(), p.gyro_ts()], [ns; 3]);
         let gyro = p.gyro_deg_s().map(|w| f64::from(w).to_radians());
         let accel = p.accel_g().map(|a| f64::from(a) * GRAVITY);
-        for (got, want) in gyro
-            .iter()
-            .zip(sample.gyro)
-            .chain(accel.iter().zip(sample.accel))
-        {
-            // One f32 rounding (2^-24 of the value) and the unit's f64 arithmetic.
-            let tol = want.abs() * f64::from(f32::EPSILON);
-            println!(
-                "{want:e}: decoded {got:e}, off {:.1e} (tol {tol:.1e})",
-                got - want
-            );
-            assert!((got - want).abs() <= tol, "{got} vs {want}");
-        }
+        crate::packets::tests::assert_imu_decodes_to(&sample, gyro, accel);
     }
 }
