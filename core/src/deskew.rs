@@ -86,12 +86,11 @@ impl<T: Real> SweepRotation<T> {
     /// identity, `turned[SWEEP_KNOTS]` the whole sweep's).
     pub fn from_start(turned: &[UnitQuaternion<T>; SWEEP_KNOTS + 1]) -> Self {
         let to_end = turned[SWEEP_KNOTS].inverse();
-        let knots: [UnitQuaternion<T>; SWEEP_KNOTS] = core::array::from_fn(|k| to_end * turned[k]);
-        let steps = core::array::from_fn(|k| {
-            let next = to_end * turned[k + 1];
-            so3_log(&(knots[k].inverse() * next)).0
-        });
-        Self { knots, steps }
+        let all = turned.map(|q| to_end * q);
+        Self {
+            knots: core::array::from_fn(|k| all[k]),
+            steps: core::array::from_fn(|k| so3_log(&(all[k].inverse() * all[k + 1])).0),
+        }
     }
 
     /// The rotation from the axes at normalised time `s` to the end's; outside `[0, 1]` the
