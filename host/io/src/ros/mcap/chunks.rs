@@ -4,14 +4,12 @@
 //! [`sound_until`] finds the first chunk whose records do not fit in it, and [`read_within`]
 //! ends the file there for the reader, which then stops as at a file cut short.
 
+use mcap::records::op::{CHUNK, FOOTER};
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 
 /// A record's opcode and length.
 const RECORD_HEADER: u64 = 1 + 8;
-/// Opcodes (the MCAP specification's).
-const CHUNK: u8 = 0x06;
-const FOOTER: u8 = 0x02;
 /// A chunk record's body before its compression string: message start and end times,
 /// uncompressed size (u64 each), uncompressed CRC (u32), the compression string's length (u32).
 const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
