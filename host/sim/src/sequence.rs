@@ -241,7 +241,7 @@ pub fn write(
     })
     .transpose()?;
     let mut imu_packets = ImuPackets {
-        sensor: request.sensor.filter(|s| s.sends_imu() && pcap.is_some()),
+        sensor: request.sensor.filter(|_| pcap.is_some()),
         samples: &imu_samples,
         spec: request.imu,
         start_time: params.start_time,
@@ -288,7 +288,8 @@ pub fn write(
 
 /// The IMU samples as the sensor's IMU packets, sent between its lidar packets in time order.
 struct ImuPackets<'a> {
-    /// The sensor, if it sends IMU packets and a pcap is written.
+    /// The sensor, if a pcap is written (whether it sends IMU packets is
+    /// [`PacketSensor::imu_packet`]'s to say).
     sensor: Option<PacketSensor>,
     samples: &'a [ImuSample],
     spec: Option<ImuSpec>,
