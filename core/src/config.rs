@@ -117,6 +117,11 @@ pub struct Robust<T> {
     /// The Geman-McClure scale of a registration with plane terms, over `sigma` (default
     /// [`crate::stages::PLANE_KERNEL_SCALE`], the paper's 1/3).
     pub kernel_scale: T,
+    /// A registration with plane terms also stops when its iterate comes back within `gamma`
+    /// of one of its last [`crate::stages::CYCLE_LEN`] iterates: the step changes of the plane
+    /// terms can hold it in a loop that `|dx| < gamma` never ends. `false`: the reference's
+    /// stopping rule.
+    pub cycle_stop: bool,
 }
 
 impl<T: Real> Robust<T> {
@@ -127,6 +132,7 @@ impl<T: Real> Robust<T> {
             prediction_prior: T::zero(),
             lateral_prior: T::zero(),
             kernel_scale: T::of(PLANE_KERNEL_SCALE),
+            cycle_stop: false,
         }
     }
 
@@ -141,11 +147,12 @@ impl<T: Real> Robust<T> {
         }
     }
 
-    /// The `accurate` preset's: plane terms on every frame, no motion prior (see
-    /// [`Config::accurate`]).
+    /// The `accurate` preset's: plane terms on every frame, no motion prior, the cycle stop
+    /// (see [`Config::accurate`]).
     pub fn accurate() -> Self {
         Self {
             plane_gate: T::one(),
+            cycle_stop: true,
             ..Self::new()
         }
     }
@@ -210,7 +217,8 @@ impl<T: Real> Config<T> {
     /// registered with point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
     /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
     /// voxels, with no motion prior (the priors assume a car; a
-    /// hand-held, legged or flying sensor breaks them). Its poses are not the reference's.
+    /// hand-held, legged or flying sensor breaks them), and a registration that goes round a
+    /// loop stops there ([`Robust::cycle_stop`]). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),
@@ -491,6 +499,10 @@ mod tests {
         assert_eq!(
             (a.robust.prediction_prior, a.robust.lateral_prior),
             (0.0, 0.0)
+        );
+        assert!(
+            a.robust.cycle_stop && !r.robust.cycle_stop,
+            "the preset's cycle stop only"
         );
         let back = Config {
             voxel_size: r.voxel_size,

@@ -115,7 +115,7 @@ pub mod stages {
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
         align_points_to_map, chunk_len, chunks_for, moved_points, work_words, Alignment, Chunk,
-        IcpParams, MotionPrior, PlaneChunk, CHUNK, CHUNK_LEN, MIN_POINTS, PLANARITY,
+        IcpParams, MotionPrior, PlaneChunk, CHUNK, CHUNK_LEN, CYCLE_LEN, MIN_POINTS, PLANARITY,
         PLANE_CHUNK_LEN, PLANE_KERNEL_SCALE, SYSTEM_LEN,
     };
     pub use crate::scalar::{norm_lt, sqrt_lt};

@@ -4,7 +4,8 @@
 //! points within `tau = 3 sigma` (Eq. (10)); each iteration solves the Geman-McClure weighted
 //! normal equations for a twist `dx` (Eq. (11), weight `k^2 / (k + |r|^2)^2` with
 //! `k = kernel_scale * sigma`, as the reference computes it), moves the points by `Exp(dx)`
-//! (Eq. (12)) and stops once `|dx| < gamma` or at the iteration cap. The result is
+//! (Eq. (12)) and stops once `|dx| < gamma` or at the iteration cap (with plane terms, optionally
+//! also once the iterate goes round a loop, see `cycle`). The result is
 //! `T_t = dT_icp T_{t-1} T_pred`.
 //!
 //! Determinism: the source is split into chunks of [`CHUNK`] points; each chunk's partial
@@ -16,6 +17,8 @@ pub use chunk::{
     PLANE_CHUNK_LEN,
 };
 use chunk::{load, Parts, WorkChunk, KEPT};
+use cycle::Recent;
+pub use cycle::LEN as CYCLE_LEN;
 use planes::{accumulate_plane, Cached, CACHED};
 pub use planes::{MIN_POINTS, PLANARITY, PLANE_KERNEL_SCALE};
 pub use prior::MotionPrior;
@@ -67,6 +70,10 @@ pub struct IcpParams<T: Real> {
     /// Soft terms for what the correspondences leave free (robust mode, see `prior`);
     /// `None`: none, as the reference.
     pub prior: Option<MotionPrior<T>>,
+    /// Also stop when the iterate comes back within `gamma` of one of the last
+    /// [`CYCLE_LEN`] iterates (see `cycle`); `false`: `gamma` and the cap only, as the
+    /// reference.
+    pub stop_on_cycle: bool,
 }
 
 /// Outcome of one registration.
@@ -80,7 +87,8 @@ pub struct Alignment<T: Real> {
     pub correspondences: u32,
     /// Of those, the point-to-plane ones (0 without plane terms).
     pub plane_correspondences: u32,
-    /// Whether `|dx| < gamma` was reached (false when the cap stopped it).
+    /// Whether `|dx| < gamma` was reached, or the iterate came back to an earlier one with
+    /// [`IcpParams::stop_on_cycle`] (false when the cap stopped it).
     pub converged: bool,
     /// Whether a normal-equation system could not be solved (fewer than 3 usable
     /// correspondences); the correction of that iteration is zero.
@@ -439,6 +447,7 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
             initial_guess.translation.vector,
         );
         let mut t_icp = Pose::identity();
+        let mut recent = Recent::new(t_icp);
         out.converged = false;
         for _ in 0..params.max_iterations {
             let (d, k) = (self.max_distance, self.kernel);
@@ -474,16 +483,19 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
                 estimation.rotation.to_rotation_matrix().into_inner(),
                 estimation.translation.vector,
             );
-            if dx.norm() < params.convergence_criterion {
+            let gamma = params.convergence_criterion;
+            if dx.norm() < gamma || (params.stop_on_cycle && recent.returns_to(&t_icp, gamma)) {
                 out.converged = true;
                 break;
             }
+            recent.push(t_icp);
         }
         out.pose = t_icp * initial_guess;
     }
 }
 
 mod chunk;
+mod cycle;
 mod planes;
 mod prior;
 mod system;

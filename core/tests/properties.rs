@@ -135,7 +135,7 @@ proptest! {
         let mut work = vec![0u64; work_words::<f64>(source.len(), false)];
         // The second frame of a run: identity guess, the threshold's seed sigma = 2 m, so the
         // correspondence gate is 3 sigma = 6 m and the kernel sigma = 2 m.
-        let params = IcpParams { convergence_criterion: GAMMA, max_iterations: 500, budget: None, hold: None, planes: false, prior: None };
+        let params = IcpParams { convergence_criterion: GAMMA, max_iterations: 500, budget: None, hold: None, planes: false, prior: None, stop_on_cycle: false };
         let a = align_points_to_map(
             &Sequential, &source, &mut work, &map.view(), &Pose::identity(), 6.0, 2.0, &params,
         );

@@ -69,6 +69,7 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.robust.plane_gate = T::of(pick(u, &[0.015, 0.0, 1.0, 0.5])?);
     c.robust.prediction_prior = T::of(pick(u, &[0.0, 0.01, 1e3])?);
     c.robust.lateral_prior = T::of(pick(u, &[0.0, 1.0, 1e-3])?);
+    c.robust.cycle_stop = u.arbitrary()?;
     Ok(c)
 }
 

@@ -267,6 +267,7 @@ impl Registration {
                 hold: None,
                 planes: false,
                 prior: None,
+                stop_on_cycle: false,
             },
             pool: Pool::new(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?,
         })

@@ -457,6 +457,7 @@ fn registration_converges_to_the_reference_pose() {
         hold: None,
         planes: false,
         prior: None,
+        stop_on_cycle: false,
     };
     let map = registration_map(&m, &input, input.len());
     let mut worst = (0.0f64, 0.0f64);

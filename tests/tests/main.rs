@@ -4,6 +4,7 @@
 //! subject; `interrupted_bag`, `mcap_memory` and `long_run` are binaries of their own because
 //! they need the whole process (a raised stop flag, the process's peak memory).
 
+mod accurate;
 mod bags;
 mod capture_kit;
 mod cli_bad_input;

@@ -135,6 +135,7 @@ fn a_structured_yard_gives_the_reference_pose_within_the_prediction_error() {
             hold,
             planes: false,
             prior: None,
+            stop_on_cycle: false,
         };
         align_points_to_map(
             &Sequential,

@@ -178,6 +178,7 @@ fn icp_params<T: Real>(
         hold: weak.hold,
         planes,
         prior,
+        stop_on_cycle: planes && cfg.robust.cycle_stop,
     }
 }
 
@@ -190,5 +191,29 @@ fn finite_or<T: Real>(pose: Pose<T>, prediction: Pose<T>) -> (Pose<T>, bool) {
         (pose, true)
     } else {
         (prediction, false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_registration_with_plane_terms_under_cycle_stop_stops_on_a_loop() {
+        let at = Pose::<f64>::identity();
+        let stops = |cfg: &Config<f64>, planes| {
+            icp_params(cfg, &at, &Weakness::NONE, planes, None).stop_on_cycle
+        };
+        let (accurate, robust) = (Config::accurate(100.0), Config::robust(100.0));
+        assert!(stops(&accurate, true));
+        assert!(
+            !stops(&accurate, false),
+            "the preset's registrations without planes"
+        );
+        assert!(
+            !stops(&robust, true),
+            "robust mode keeps the reference's stopping rule"
+        );
+        assert!(!stops(&Config::new(100.0), false));
     }
 }

@@ -48,6 +48,7 @@ fn params() -> IcpParams<f64> {
         hold: None,
         planes: false,
         prior: None,
+        stop_on_cycle: false,
     }
 }
 
@@ -120,6 +121,7 @@ fn the_iteration_cap_stops_icp_and_is_reported() {
         hold: None,
         planes: false,
         prior: None,
+        stop_on_cycle: false,
     };
     let a = align_points_to_map(
         &Sequential,

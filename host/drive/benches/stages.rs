@@ -166,6 +166,7 @@ fn stages(c: &mut Criterion) {
         hold: None,
         planes: false,
         prior: None,
+        stop_on_cycle: false,
     };
     g.bench_function("icp_iteration", |b| {
         b.iter(|| {
@@ -188,6 +189,7 @@ fn stages(c: &mut Criterion) {
         hold: None,
         planes: false,
         prior: None,
+        stop_on_cycle: false,
     };
     let guess = rec.guesses[UNDER_TEST];
     g.bench_function("registration", |b| {

@@ -152,6 +152,9 @@ pub struct Registration {
     /// Robust mode's Geman-McClure scale over sigma in registrations with plane terms
     /// (`Robust::kernel_scale`).
     pub plane_kernel_scale: f64,
+    /// Robust mode's cycle stop: a registration with plane terms also stops when its iterate
+    /// comes back to one of its last iterates (`Robust::cycle_stop`).
+    pub cycle_stop: bool,
     /// `reference`, `robust` or `hold`.
     pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
@@ -264,6 +267,7 @@ impl Default for Registration {
             prediction_prior: Robust::<f64>::new().prediction_prior,
             lateral_prior: Robust::<f64>::new().lateral_prior,
             plane_kernel_scale: Robust::<f64>::new().kernel_scale,
+            cycle_stop: Robust::<f64>::new().cycle_stop,
             degeneracy: DegeneracyMode::Reference,
             work_budget: None,
         }
@@ -313,6 +317,7 @@ impl Settings {
         r.prediction_prior = c.robust.prediction_prior;
         r.lateral_prior = c.robust.lateral_prior;
         r.plane_kernel_scale = c.robust.kernel_scale;
+        r.cycle_stop = c.robust.cycle_stop;
         r.degeneracy = c.degeneracy.into();
         s
     }
@@ -541,6 +546,7 @@ impl Settings {
             prediction_prior: T::of(self.registration.prediction_prior),
             lateral_prior: T::of(self.registration.lateral_prior),
             kernel_scale: T::of(self.registration.plane_kernel_scale),
+            cycle_stop: self.registration.cycle_stop,
         };
         c.degeneracy = self.registration.degeneracy.into();
         c.work_budget = self.registration.work_budget;
@@ -676,7 +682,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 28] {
+fn fields() -> [Field; 29] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -695,6 +701,7 @@ fn fields() -> [Field; 28] {
         field!(registration.prediction_prior, true),
         field!(registration.lateral_prior, true),
         field!(registration.plane_kernel_scale, true),
+        field!(registration.cycle_stop, true),
         field!(registration.degeneracy, false),
         field!(registration.work_budget, false),
         field!(capacities.scan_points, true),

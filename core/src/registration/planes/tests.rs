@@ -169,6 +169,7 @@ fn plane_terms_let_sparse_structure_move_a_corridor_s_free_axis() {
             hold: None,
             planes,
             prior: None,
+            stop_on_cycle: false,
         };
         with_map(&scene, |m| {
             let a = align_points_to_map(

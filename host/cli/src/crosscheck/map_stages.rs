@@ -316,6 +316,7 @@ fn registration_rows(
         hold: None,
         planes: false,
         prior: None,
+        stop_on_cycle: false,
     };
     let want = pose_of(&matrix_of(&read_json(&r.out)?["pose"])?);
     let mut work = vec![0u64; work_words::<f64>(source.len(), false)];
