@@ -15,8 +15,9 @@ const RECORD_HEADER: u64 = 1 + 8;
 const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
 
 /// The offset at which the file stops being safe for the linear reader: the start of the first
-/// uncompressed chunk whose records run past its end, else `len`. A file cut short, or a
-/// record that is not a chunk, is left to the reader to judge. Leaves `input` anywhere.
+/// uncompressed chunk whose records run past its end (the part of it the file holds), else
+/// `len`. A file cut short elsewhere, or a record that is not a chunk, is left to the reader to
+/// judge. Leaves `input` anywhere.
 pub fn sound_until(input: &mut BufReader<File>, len: u64) -> u64 {
     walk(input, len).unwrap_or(len)
 }
@@ -58,12 +59,17 @@ fn walk(input: &mut BufReader<File>, len: u64) -> Option<u64> {
     loop {
         input.seek(SeekFrom::Start(at)).ok()?;
         let (opcode, body) = header(input)?;
-        let next = at.checked_add(RECORD_HEADER)?.checked_add(body)?;
-        if opcode == FOOTER || next > len {
+        if opcode == FOOTER {
             return None;
         }
+        // A chunk is walked even where it claims more than the file holds: the reader reads its
+        // records up to the file's end, so one that overruns the chunk before then counts.
         if opcode == CHUNK && !chunk_fits(input, body)? {
             return Some(at);
+        }
+        let next = at.checked_add(RECORD_HEADER)?.checked_add(body)?;
+        if next > len {
+            return None;
         }
         at = next;
     }

@@ -456,6 +456,22 @@ fn a_record_that_runs_past_its_chunk_ends_the_stream_with_an_error() {
     }
 }
 
+/// The same overrun in a chunk that also claims more bytes than the file holds (a file cut
+/// short inside its last chunk): its records are still walked, so the reader stops before it.
+#[test]
+fn a_record_that_runs_past_a_chunk_cut_short_ends_the_stream_with_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = include_bytes!("fuzzed/chunk-past-file-end-record-overruns.mcap");
+    let p = save(&dir, "cut.mcap", bytes);
+    let mut input = BufReader::new(File::open(&p).unwrap());
+    let sound = chunks::sound_until(&mut input, bytes.len() as u64);
+    assert!(sound < bytes.len() as u64, "{sound}");
+    if let Ok(mut dataset) = open_mcap(&p, None) {
+        let (_, err) = drain(dataset.frames.as_mut());
+        assert!(err.is_some());
+    }
+}
+
 #[test]
 fn an_index_giving_an_uncompressed_chunk_two_sizes_is_not_used() {
     let dir = tempfile::tempdir().unwrap();
