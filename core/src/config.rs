@@ -83,6 +83,13 @@ pub struct Config<T> {
     pub degeneracy: Degeneracy,
     /// Robust mode's parameters; the other modes ignore them.
     pub robust: Robust<T>,
+    /// A run whose first scan keeps fewer points than this within range (a sparse sensor's:
+    /// a 16-beam ring scanner or a Livox) maps on GenZ-ICP's sparse-sensor map instead, voxels
+    /// [`SPARSE_VOXEL_FACTOR`] times `voxel_size` of at most [`SPARSE_POINTS_PER_VOXEL`] points
+    /// ([`Config::for_first_scan`]); 0 (the reference's) never does. The odometry decides it
+    /// at the first scan, before the map holds anything, and [`crate::Odometry::config`] then
+    /// says what it runs.
+    pub sparse_scan_points: usize,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
     /// exceed it, ICP keeps its last complete iterate and the frame is flagged
@@ -172,6 +179,20 @@ impl<T: Real> Default for Robust<T> {
     }
 }
 
+/// The `accurate` preset's [`Config::sparse_scan_points`]: 2^15, half of a 64-beam,
+/// 1024-column sweep. A sweep of a 16-beam scanner at 10 Hz holds at most 28,800 points (16 x
+/// 1,800), a Livox Mid-360's 0.1 s frame about 20,000; a 64 x 1024 sensor's 65,536 less what
+/// finds nothing within range, which over an open field (its upper beams on the sky) left
+/// 56,000 (BENCHMARKS.md, "The accurate preset").
+pub const SPARSE_SCAN_POINTS: usize = 32_768;
+
+/// The sparse-scan map's voxel over the configured one: GenZ-ICP's `outdoor` map of 0.6 m
+/// voxels against the `accurate` preset's `r_max / 200` of a 100 m sensor.
+pub const SPARSE_VOXEL_FACTOR: f64 = 1.2;
+
+/// The sparse-scan map's `N_max`: GenZ-ICP's `outdoor` map's.
+pub const SPARSE_POINTS_PER_VOXEL: u32 = 3;
+
 impl<T: Real> Config<T> {
     /// The reference defaults for a sensor with range `max_range` (voxel size `r_max / 100`).
     pub fn new(max_range: T) -> Self {
@@ -192,6 +213,7 @@ impl<T: Real> Config<T> {
             degeneracy_ratio: T::of(0.02),
             degeneracy: Degeneracy::Reference,
             robust: Robust::new(),
+            sparse_scan_points: 0,
             work_budget: None,
         }
     }
@@ -217,7 +239,8 @@ impl<T: Real> Config<T> {
     /// (up to 12 in a corridor). Every frame is
     /// registered with point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
     /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
-    /// voxels, with no motion prior (the priors assume a car; a
+    /// voxels (GenZ-ICP's sparse-sensor map when the first scan is sparse,
+    /// [`Config::sparse_scan_points`]), with no motion prior (the priors assume a car; a
     /// hand-held, legged or flying sensor breaks them), and a registration that goes round a
     /// loop stops there ([`Robust::cycle_stop`]). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
@@ -225,7 +248,22 @@ impl<T: Real> Config<T> {
             voxel_size: max_range / T::of(200.0),
             degeneracy: Degeneracy::Robust,
             robust: Robust::accurate(),
+            sparse_scan_points: SPARSE_SCAN_POINTS,
             ..Self::new(max_range)
+        }
+    }
+
+    /// This configuration for a run whose first scan kept `points` points within range: with
+    /// the sparse-scan map (see [`Config::sparse_scan_points`]) when that is fewer than
+    /// `sparse_scan_points`, else as it is.
+    pub fn for_first_scan(&self, points: usize) -> Self {
+        if points >= self.sparse_scan_points {
+            return *self;
+        }
+        Self {
+            voxel_size: self.voxel_size * T::of(SPARSE_VOXEL_FACTOR),
+            max_points_per_voxel: self.max_points_per_voxel.min(SPARSE_POINTS_PER_VOXEL),
+            ..*self
         }
     }
 
@@ -508,6 +546,7 @@ mod tests {
         let back = Config {
             voxel_size: r.voxel_size,
             robust: r.robust,
+            sparse_scan_points: r.sparse_scan_points,
             ..a
         };
         assert_eq!(back, r, "nothing else differs from robust mode");
@@ -518,5 +557,41 @@ mod tests {
         assert_eq!(ta.scan_points, t.scan_points);
         assert!(ta.merge_points > 2 * t.merge_points && ta.source_points > 2 * t.source_points);
         assert!(ta.map_voxels > 2 * t.map_voxels && ta.map_points > 2 * t.map_points);
+    }
+
+    #[test]
+    fn a_sparse_first_scan_gives_the_accurate_preset_genz_icp_s_sparse_sensor_map() {
+        let a = Config::<f64>::accurate(100.0);
+        let sparse = a.for_first_scan(SPARSE_SCAN_POINTS - 1);
+        assert_eq!(
+            (sparse.voxel_size, sparse.max_points_per_voxel),
+            (0.5 * SPARSE_VOXEL_FACTOR, 3)
+        );
+        assert!((sparse.voxel_size - 0.6).abs() < 1e-15, "GenZ-ICP's 0.6 m");
+        assert_eq!(
+            Config {
+                voxel_size: a.voxel_size,
+                max_points_per_voxel: a.max_points_per_voxel,
+                ..sparse
+            },
+            a,
+            "nothing else changes"
+        );
+        assert!(sparse.validate().is_ok());
+        assert_eq!(
+            a.for_first_scan(SPARSE_SCAN_POINTS),
+            a,
+            "the bound is strict"
+        );
+        // A map already coarser in points keeps its own N_max.
+        let two = Config {
+            max_points_per_voxel: 2,
+            ..a
+        };
+        assert_eq!(two.for_first_scan(0).max_points_per_voxel, 2);
+        // The reference's configuration never changes.
+        let n = Config::<f64>::new(100.0);
+        assert_eq!(n.sparse_scan_points, 0);
+        assert_eq!(n.for_first_scan(0), n);
     }
 }

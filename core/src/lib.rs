@@ -76,7 +76,10 @@ mod voxel;
 #[cfg(test)]
 mod testutil;
 
-pub use config::{Capacities, Config, Degeneracy, Robust, MAX_RANGE_LIMIT};
+pub use config::{
+    Capacities, Config, Degeneracy, Robust, MAX_RANGE_LIMIT, SPARSE_POINTS_PER_VOXEL,
+    SPARSE_SCAN_POINTS, SPARSE_VOXEL_FACTOR,
+};
 pub use deskew::{StampProblem, SweepRotation, SWEEP_KNOTS};
 pub use error::{ConfigError, FrameError};
 pub use geometry::{widen_pose, Point, Pose};

@@ -53,7 +53,10 @@ use core::marker::PhantomData;
 pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut [u64]> {
     storage: S,
     layout: Layout,
+    /// The configuration in use: `asked`, or its sparse-scan form from the first scan on.
     config: Config<T>,
+    /// The configuration the odometry was built with.
+    asked: Config<T>,
     caps: Capacities,
     map: MapState<T>,
     threshold: Thresholds<T>,
@@ -100,6 +103,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             layout,
             threshold: Self::fresh_threshold(&config),
             config,
+            asked: config,
             caps,
             map,
             last_pose: Pose::identity(),
@@ -131,6 +135,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// threshold's seed, frame count and high-water marks at zero. The same frames then give
     /// the same poses as on a new odometry.
     pub fn reset(&mut self) {
+        self.use_config(self.asked);
         if let Ok(mut map) = self.map_mut() {
             map.clear();
         }
@@ -145,6 +150,29 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.merge_len = 0;
         self.source_len = 0;
         self.high = HighWater::default();
+    }
+
+    /// Runs `config` from here on, with an empty map of its voxels; the caller has nothing in
+    /// the map to lose. Nothing changes when `config` is the one in use, or invalid (a voxel
+    /// grown past the largest scalar).
+    fn use_config(&mut self, config: Config<T>) {
+        if config == self.config || config.validate().is_err() {
+            return;
+        }
+        let state = MapState::new(
+            config.voxel_size,
+            config.max_range,
+            config.max_points_per_voxel,
+            self.caps.map_voxels,
+            &self.layout.map,
+        );
+        if let Some(state) = state {
+            self.map = state;
+            self.config = config;
+            if let Ok(mut map) = self.map_mut() {
+                map.clear();
+            }
+        }
     }
 
     /// Registers one scan on the calling thread. See [`Self::register_frame_with`].
@@ -323,7 +351,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         Preprocessor::with_span(lo, hi, span, &self.scan_motion, self.scan_rotation)
             .run(points, stamps, out)
     }
-    /// Parameters in use.
+    /// Parameters in use: those it was built with, or from the first scan on their
+    /// sparse-scan form (see [`Config::sparse_scan_points`]).
     pub fn config(&self) -> &Config<T> {
         &self.config
     }

@@ -324,3 +324,70 @@ fn robust_mode_needs_room_for_plane_terms_and_only_it_pays_for_them() {
     let mut fewer = vec![0u64; caps.arena_words::<f64, Exact>()];
     assert!(Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps, &mut fewer[..]).is_ok());
 }
+
+#[test]
+fn a_sparse_first_scan_sets_the_map_for_the_run_and_reset_forgets_it() {
+    // A first scan of half a street scan, then whole ones: only the first decides.
+    let all = scans();
+    let half = all[0][..all[0].len() / 2].to_vec();
+    let frames = [&half, &all[1], &all[2], &all[3]];
+    assert!(frames[1..].iter().all(|f| f.len() > half.len()));
+    let caps = Capacities {
+        plane_terms: true,
+        ..caps()
+    };
+    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let asked = Config {
+        sparse_scan_points: half.len() + 1,
+        ..Config::<f64>::accurate(RANGE)
+    };
+    let sparse = asked.for_first_scan(half.len());
+    assert!(sparse.voxel_size > asked.voxel_size && sparse.max_points_per_voxel == 3);
+    let mut odom = Odometry::<f64, Exact, _>::new(asked, caps, &mut words[..]).unwrap();
+    assert_eq!(
+        *odom.config(),
+        asked,
+        "nothing decided before the first scan"
+    );
+    let run = |odom: &mut Odometry<f64, Exact, _>| -> Vec<Pose<f64>> {
+        frames
+            .iter()
+            .map(|s| {
+                let pose = odom.register_frame(s, None).unwrap().pose;
+                assert_eq!(*odom.config(), sparse, "denser scans later change nothing");
+                pose
+            })
+            .collect()
+    };
+    let first = run(&mut odom);
+    // The map is the sparse one: its voxels, and at most its N_max points in each.
+    let map = odom.map();
+    assert_eq!(map.voxel_size(), sparse.voxel_size);
+    let mut per_voxel = std::collections::HashMap::new();
+    map.for_each_point(|k, _| *per_voxel.entry(*k).or_insert(0u32) += 1);
+    let most = per_voxel.values().copied().max().unwrap_or(0);
+    assert_eq!(most, 3, "points in the fullest voxel");
+    odom.reset();
+    assert_eq!(*odom.config(), asked);
+    assert_eq!(run(&mut odom), first, "after a reset, the same run again");
+    // A first scan of as many points as the bound keeps the map asked for.
+    let dense = Config {
+        sparse_scan_points: half.len(),
+        ..asked
+    };
+    let mut odom = Odometry::<f64, Exact, _>::new(dense, caps, &mut words[..]).unwrap();
+    for s in frames {
+        odom.register_frame(s, None).unwrap();
+        assert_eq!(*odom.config(), dense);
+    }
+    assert_eq!(odom.map().voxel_size(), dense.voxel_size);
+    // Nor does a sparse-scan map whose voxel would not be finite: the map asked for stays.
+    let huge = Config {
+        voxel_size: f64::MAX,
+        ..asked
+    };
+    assert!(huge.validate().is_ok() && huge.for_first_scan(0).validate().is_err());
+    let mut odom = Odometry::<f64, Exact, _>::new(huge, caps, &mut words[..]).unwrap();
+    let _ = odom.register_frame(&half, None);
+    assert_eq!(*odom.config(), huge);
+}

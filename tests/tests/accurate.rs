@@ -1,9 +1,9 @@
 //! The accurate preset's cycle stop on real KITTI frames: on kitti-mini 02, frame 4's
 //! registration with plane terms goes round a loop of two iterates 0.14 mm apart that
 //! `|dx| < gamma` never ends. With the stop it ends in the loop; without it (`cycle_stop =
-//! false`), it runs to the iteration cap.
+//! false`), it runs to the iteration cap. And the map it picks from the first scan's density.
 
-use kiss_odom_tests::{repo, run};
+use kiss_odom_tests::{repo, run, simulate, Run};
 
 #[test]
 fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
@@ -42,4 +42,51 @@ fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
         with.lines("poses_kitti.txt")[..4],
         without.lines("poses_kitti.txt")[..4]
     );
+}
+
+/// `summary.json`'s map: voxel size, points a voxel, and whether the sparse-scan map was taken.
+fn map_of(r: &Run) -> (f64, u64, bool) {
+    r.ok();
+    let m = r.summary()["map"].clone();
+    println!("{m}");
+    (
+        m["voxel_size"].as_f64().unwrap(),
+        m["max_points_per_voxel"].as_u64().unwrap(),
+        m["sparse_scan"].as_bool().unwrap(),
+    )
+}
+
+#[test]
+fn the_accurate_preset_maps_a_sparse_sensor_on_genz_icp_s_sparse_sensor_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vlp = tmp.path().join("vlp16");
+    let sensor = ["--frames", "3", "--seed", "5", "--profile", "urban"];
+    simulate(&vlp, &[&sensor[..], &["--sensor", "vlp16"]].concat());
+    let accurate = ["--preset", "accurate", "--threads", "1"];
+    // A 16-beam sweep (under 28,800 points): 1.2 times the preset's 0.5 m voxels, 3 points each.
+    let sparse = map_of(&run(&vlp, &tmp.path().join("a"), &accurate));
+    assert_eq!((sparse.1, sparse.2), (3, true));
+    assert!((sparse.0 - 0.6).abs() < 1e-12);
+    // The reference keeps its map whatever the scan.
+    assert_eq!(
+        map_of(&run(&vlp, &tmp.path().join("d"), &["--threads", "1"])),
+        (1.0, 20, false)
+    );
+    // A 64-beam KITTI sweep (124k points) keeps the preset's map...
+    let seq = repo().join("../shared/data/kitti-mini/sequences/02");
+    let two = [&accurate[..], &["--frames", "0..2"]].concat();
+    assert_eq!(
+        map_of(&run(&seq, &tmp.path().join("k"), &two)),
+        (0.5, 20, false)
+    );
+    // ...unless the bound, a setting, is above it.
+    let above = tmp.path().join("above.toml");
+    std::fs::write(&above, "[mapping]\nsparse_scan_points = 1000000\n").unwrap();
+    let config = ["--config", above.to_str().unwrap()];
+    let moved = map_of(&run(
+        &seq,
+        &tmp.path().join("m"),
+        &[&two[..], &config].concat(),
+    ));
+    assert_eq!((moved.1, moved.2), (3, true));
 }

@@ -67,6 +67,11 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         mut scan: Received,
     ) -> Result<FrameReport<T>, FrameError> {
         scan.usable()?;
+        if self.frames == 0 {
+            // The map's shape from the first scan's density (`Config::sparse_scan_points`),
+            // while the map is still empty.
+            self.use_config(self.asked.for_first_scan(scan.kept));
+        }
         let cfg = self.config;
         // Step 1's prediction, Eq. (1) (the scan was deskewed with it as it arrived), and step
         // 4's threshold, tau = 3 sigma_t (Eq. (7)).

@@ -131,7 +131,8 @@ pub struct PipelineArgs {
     pub config: Option<PathBuf>,
     /// The defaults every setting not given takes: `default` (kiss-icp 1.3.0's poses, bit for
     /// bit) or `accurate` (the lowest error measured: point-to-plane terms where the map is
-    /// planar on every frame, max_range / 200 voxels; 3-4 times the time on urban and KITTI
+    /// planar on every frame, max_range / 200 voxels, or 1.2 times those with 3 points each
+    /// when the first scan has fewer than 32,768 points; 3-4 times the time on urban and KITTI
     /// scans, up to 12 in a corridor); replaces
     /// the file's `[pipeline] preset` [default: default].
     #[arg(long, value_enum)]

@@ -265,6 +265,11 @@ impl Driver {
     pub fn high_water(&self) -> HighWater {
         self.engine.high_water()
     }
+    /// The map in use: voxel size (m), points a voxel, and whether a sparse first scan changed
+    /// them from the settings' (`[mapping] sparse_scan_points`).
+    pub fn map_in_use(&self) -> (f64, u32, bool) {
+        self.engine.map_in_use()
+    }
     /// Bytes of state this build would need with capacities `caps`.
     pub fn state_bytes_for(&self, caps: &Capacities) -> usize {
         self.engine.state_bytes_for(caps)

@@ -114,6 +114,9 @@ pub struct Mapping {
     pub alpha: f64,
     /// Registration-cloud voxel factor.
     pub beta: f64,
+    /// A first scan with fewer points within range maps the run on GenZ-ICP's sparse-sensor
+    /// map (`Config::sparse_scan_points`; 0: never).
+    pub sparse_scan_points: usize,
 }
 
 /// Adaptive threshold.
@@ -243,6 +246,7 @@ impl Default for Mapping {
             max_points_per_voxel: 20,
             alpha: 0.5,
             beta: 1.5,
+            sparse_scan_points: 0,
         }
     }
 }
@@ -307,6 +311,7 @@ impl Settings {
         s.mapping.max_points_per_voxel = c.max_points_per_voxel;
         s.mapping.alpha = c.alpha;
         s.mapping.beta = c.beta;
+        s.mapping.sparse_scan_points = c.sparse_scan_points;
         s.adaptive_threshold.initial_threshold = c.initial_threshold;
         s.adaptive_threshold.min_motion_th = c.min_motion_threshold;
         let r = &mut s.registration;
@@ -534,6 +539,7 @@ impl Settings {
         c.alpha = T::of(self.mapping.alpha);
         c.beta = T::of(self.mapping.beta);
         c.max_points_per_voxel = self.mapping.max_points_per_voxel;
+        c.sparse_scan_points = self.mapping.sparse_scan_points;
         c.initial_threshold = T::of(self.adaptive_threshold.initial_threshold);
         c.min_motion_threshold = T::of(self.adaptive_threshold.min_motion_th);
         c.convergence_criterion = T::of(self.registration.convergence_criterion);
@@ -683,7 +689,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 29] {
+fn fields() -> [Field; 30] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -691,6 +697,7 @@ fn fields() -> [Field; 29] {
         field!(mapping.max_points_per_voxel, false),
         field!(mapping.alpha, false),
         field!(mapping.beta, false),
+        field!(mapping.sparse_scan_points, false),
         field!(adaptive_threshold.initial_threshold, false),
         field!(adaptive_threshold.min_motion_th, false),
         field!(registration.max_num_iterations, false),

@@ -72,6 +72,9 @@ pub struct Summary {
     pub degraded_frames: BTreeMap<&'static str, usize>,
     /// Largest buffer occupancy against capacity.
     pub high_water: serde_json::Value,
+    /// The map the run ended on: `voxel_size` and `max_points_per_voxel`, and `sparse_scan`,
+    /// whether a sparse first scan gave it the sparse-scan map (`[mapping] sparse_scan_points`).
+    pub map: serde_json::Value,
     /// The smallest radius the local map had after a frame, and the first frame that had it:
     /// `max_range` and no frame while the map never filled.
     pub map_radius: MapRadius,
@@ -359,6 +362,14 @@ impl Run<'_> {
                 "map_voxels": [hw.map_voxels, c.map_voxels],
                 "map_point_slots": [hw.map_point_slots, c.map_points],
             }),
+            map: {
+                let (voxel_size, points, sparse_scan) = d.map_in_use();
+                serde_json::json!({
+                    "voxel_size": voxel_size,
+                    "max_points_per_voxel": points,
+                    "sparse_scan": sparse_scan,
+                })
+            },
             map_radius: MapRadius::of(&o.rows, s.data.max_range),
             warnings: o.warnings,
             packets: PacketTotals::of(&o.rows),
