@@ -560,6 +560,36 @@ mod tests {
     }
 
     #[test]
+    fn the_tunnel_and_tiny_settings_are_what_their_docs_say() {
+        // Robust::tunnel: plane terms on every frame, the vehicle prior 1 and the hold prior
+        // 0.01; the rest robust mode's defaults.
+        let (t, n) = (Robust::<f64>::tunnel(), Robust::<f64>::new());
+        assert_eq!(
+            (t.plane_gate, t.lateral_prior, t.prediction_prior),
+            (1.0, 1.0, 0.01)
+        );
+        let back = Robust {
+            plane_gate: n.plane_gate,
+            lateral_prior: n.lateral_prior,
+            prediction_prior: n.prediction_prior,
+            ..t
+        };
+        assert_eq!(back, n);
+        // Config::tiny: r_max 50 m, 2 m voxels of at most 10 points; the rest the reference's.
+        let (c, r) = (Config::<f64>::tiny(), Config::<f64>::new(50.0));
+        assert_eq!(
+            (c.max_range, c.voxel_size, c.max_points_per_voxel),
+            (50.0, 2.0, 10)
+        );
+        let back = Config {
+            voxel_size: r.voxel_size,
+            max_points_per_voxel: r.max_points_per_voxel,
+            ..c
+        };
+        assert_eq!(back, r);
+    }
+
+    #[test]
     fn a_sparse_first_scan_gives_the_accurate_preset_genz_icp_s_sparse_sensor_map() {
         let a = Config::<f64>::accurate(100.0);
         let sparse = a.for_first_scan(SPARSE_SCAN_POINTS - 1);
