@@ -44,15 +44,22 @@ fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
     );
 }
 
-/// `summary.json`'s map: voxel size, points a voxel, and whether the sparse-scan map was taken.
+/// `summary.json`'s map: voxel size, points a voxel, and whether the sparse-scan map was taken;
+/// a run warns (once) exactly when it was.
 fn map_of(r: &Run) -> (f64, u64, bool) {
     r.ok();
     let m = r.summary()["map"].clone();
     println!("{m}");
+    let sparse = m["sparse_scan"].as_bool().unwrap();
+    let warned = r
+        .stderr
+        .matches("fewer than [mapping] sparse_scan_points")
+        .count();
+    assert_eq!(warned, usize::from(sparse), "{}", r.stderr);
     (
         m["voxel_size"].as_f64().unwrap(),
         m["max_points_per_voxel"].as_u64().unwrap(),
-        m["sparse_scan"].as_bool().unwrap(),
+        sparse,
     )
 }
 

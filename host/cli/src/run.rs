@@ -307,6 +307,10 @@ fn frame_loop(
             }
             core_s += outcome.latency.as_secs_f64();
         }
+        // A first scan sparse enough to change the map (the accurate preset's rule) warns once.
+        if let Some(w) = driver.sparse_map_warning(&outcome) {
+            warn(record, &bar, &w);
+        }
         // A capacity rule that can change a pose warns on its first frame.
         let full = capacity.check(&outcome);
         for w in &full {

@@ -270,6 +270,27 @@ impl Driver {
     pub fn map_in_use(&self) -> (f64, u32, bool) {
         self.engine.map_in_use()
     }
+
+    /// The warning that the first registered frame, `outcome`, gave the run the sparse-scan
+    /// map: a 16-beam or Livox sensor's normal case, but also what a recording that begins
+    /// mid-sweep does to a dense sensor's run.
+    pub fn sparse_map_warning(&self, outcome: &Outcome) -> Option<String> {
+        let report = outcome.report().filter(|r| r.index == 0)?;
+        let (voxel, points, sparse) = self.map_in_use();
+        let kept = report
+            .input_points
+            .saturating_sub(report.out_of_range)
+            .saturating_sub(report.dropped.non_finite);
+        sparse.then(|| {
+            format!(
+                "{}: the first scan kept {kept} points within range, fewer than [mapping] \
+                 sparse_scan_points: the run maps on {voxel} m voxels of at most {points} \
+                 points (the sparse-sensor map); a recording that begins mid-sweep gives such \
+                 a first scan too, and sparse_scan_points = 0 keeps the configured map",
+                outcome.meta.source
+            )
+        })
+    }
     /// Bytes of state this build would need with capacities `caps`.
     pub fn state_bytes_for(&self, caps: &Capacities) -> usize {
         self.engine.state_bytes_for(caps)
