@@ -58,7 +58,9 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     // A linear reader is given the file up to its first unsound chunk only.
     let mut bound = chunks::Bound::new(len);
     let mut warnings = Vec::new();
-    let summary = read_summary(&mut input, len, limit).ok().flatten();
+    let summary = chunks::summary_sound(&mut input, len)
+        .then(|| read_summary(&mut input, len, limit).ok().flatten())
+        .flatten();
     let catalog = match &summary {
         Some(summary) if !summary.channels.is_empty() => Catalog::of(summary),
         // No summary (cut short, or written without one): learn the channels by reading once.

@@ -2,7 +2,9 @@
 //! records trusting their lengths, and a record that runs past its chunk makes it subtract past
 //! zero (a panic where overflow is checked, records read from outside the chunk where it is not).
 //! [`sound_until`] finds the first chunk whose records do not fit in it, and [`read_within`]
-//! ends the file there for the reader, which then stops as at a file cut short.
+//! ends the file there for the reader, which then stops as at a file cut short. The crate's
+//! summary reader runs a linear reader from where the footer says the summary starts, which a
+//! damaged footer can point at such a chunk: [`summary_sound`] walks from there first.
 
 use mcap::records::op::{CHUNK, FOOTER};
 use std::fs::File;
@@ -10,6 +12,10 @@ use std::io::{BufReader, Read, Seek, SeekFrom};
 
 /// A record's opcode and length.
 const RECORD_HEADER: u64 = 1 + 8;
+/// The footer record (opcode, length, summary start and summary offset start (u64 each), CRC
+/// (u32)) and the end magic.
+const FOOTER_AND_MAGIC: u64 = 1 + 8 + 8 + 8 + 4 + 8;
+
 /// A chunk record's body before its compression string: message start and end times,
 /// uncompressed size (u64 each), uncompressed CRC (u32), the compression string's length (u32).
 const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
@@ -19,7 +25,24 @@ const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
 /// `len`. A file cut short elsewhere, or a record that is not a chunk, is left to the reader to
 /// judge. Leaves `input` anywhere.
 pub fn sound_until(input: &mut BufReader<File>, len: u64) -> u64 {
-    walk(input, len).unwrap_or(len)
+    walk(input, mcap::MAGIC.len() as u64, len).unwrap_or(len)
+}
+
+/// Whether the summary section the footer points at is safe for the summary reader's linear
+/// reader: no uncompressed chunk from there on has records that run past its end. A file
+/// without a footer or summary is left to the reader to judge. Leaves `input` anywhere.
+pub fn summary_sound(input: &mut BufReader<File>, len: u64) -> bool {
+    let Some(footer) = len.checked_sub(FOOTER_AND_MAGIC) else {
+        return true;
+    };
+    let start = input
+        .seek(SeekFrom::Start(footer + RECORD_HEADER))
+        .ok()
+        .and_then(|_| u64_at(input));
+    match start {
+        Some(start) if start > 0 => walk(input, start, len).is_none(),
+        _ => true,
+    }
 }
 
 /// [`sound_until`], walked at most once, and only when a linear reader is about to need it.
@@ -53,9 +76,9 @@ pub fn read_within(
     input.read(&mut buf[..n])
 }
 
-/// The walk; `None` where the file ends or cannot be read before anything unsound is met.
-fn walk(input: &mut BufReader<File>, len: u64) -> Option<u64> {
-    let mut at = mcap::MAGIC.len() as u64;
+/// The walk from `at`; `None` where the file ends or cannot be read before anything unsound is
+/// met.
+fn walk(input: &mut BufReader<File>, mut at: u64, len: u64) -> Option<u64> {
     loop {
         input.seek(SeekFrom::Start(at)).ok()?;
         let (opcode, body) = header(input)?;

@@ -470,6 +470,28 @@ fn a_record_that_runs_past_a_chunk_cut_short_ends_the_stream_with_an_error() {
     ));
 }
 
+/// A fuzzer's file whose footer says the summary starts at an uncompressed chunk with a
+/// record longer than the chunk: the `mcap` crate's summary reader runs its linear reader from
+/// there and subtracts past zero (a panic in this debug build). The summary is not read; the
+/// file is scanned as one without a summary, up to that chunk.
+#[test]
+fn a_summary_that_starts_at_an_overrunning_chunk_is_not_read() {
+    let bytes = include_bytes!("fuzzed/summary-points-at-overrunning-chunk.mcap");
+    let dir = tempfile::tempdir().unwrap();
+    let p = save(&dir, "summary.mcap", bytes);
+    let mut input = BufReader::new(File::open(&p).unwrap());
+    assert!(!chunks::summary_sound(&mut input, bytes.len() as u64));
+    if let Ok(mut dataset) = open_mcap(&p, None) {
+        drain(dataset.frames.as_mut());
+    }
+    // A sound file with a summary passes.
+    let sound = include_bytes!("fuzzed/uncompressed-chunk-sizes-differ.mcap");
+    assert!(mcap::Summary::read(sound).unwrap().is_some());
+    let p = save(&dir, "sound.mcap", sound);
+    let mut input = BufReader::new(File::open(&p).unwrap());
+    assert!(chunks::summary_sound(&mut input, sound.len() as u64));
+}
+
 #[test]
 fn an_index_giving_an_uncompressed_chunk_two_sizes_is_not_used() {
     let dir = tempfile::tempdir().unwrap();
