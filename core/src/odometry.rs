@@ -356,6 +356,12 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     pub fn config(&self) -> &Config<T> {
         &self.config
     }
+
+    /// Whether the first scan gave this run the sparse-scan map, so that [`Self::config`]
+    /// differs from the configuration the odometry was built with.
+    pub fn sparse_scan_map(&self) -> bool {
+        self.config != self.asked
+    }
     /// Capacities in use.
     pub fn capacities(&self) -> &Capacities {
         &self.caps

@@ -360,6 +360,7 @@ fn a_sparse_first_scan_sets_the_map_for_the_run_and_reset_forgets_it() {
             .collect()
     };
     let first = run(&mut odom);
+    assert!(odom.sparse_scan_map());
     // The map is the sparse one: its voxels, and at most its N_max points in each.
     let map = odom.map();
     assert_eq!(map.voxel_size(), sparse.voxel_size);
@@ -369,6 +370,7 @@ fn a_sparse_first_scan_sets_the_map_for_the_run_and_reset_forgets_it() {
     assert_eq!(most, 3, "points in the fullest voxel");
     odom.reset();
     assert_eq!(*odom.config(), asked);
+    assert!(!odom.sparse_scan_map());
     assert_eq!(run(&mut odom), first, "after a reset, the same run again");
     // A first scan of as many points as the bound keeps the map asked for.
     let dense = Config {
@@ -381,6 +383,7 @@ fn a_sparse_first_scan_sets_the_map_for_the_run_and_reset_forgets_it() {
         assert_eq!(*odom.config(), dense);
     }
     assert_eq!(odom.map().voxel_size(), dense.voxel_size);
+    assert!(!odom.sparse_scan_map());
     // Nor does a sparse-scan map whose voxel would not be finite: the map asked for stays.
     let huge = Config {
         voxel_size: f64::MAX,

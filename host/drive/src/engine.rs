@@ -146,8 +146,6 @@ pub(crate) fn build(settings: &Settings) -> Result<Box<dyn Engine>> {
 /// gyroscope prior with its samples in that scalar.
 struct Core<T: Real, P: PointCodec<T>> {
     odom: Odometry<T, P, Box<[u64]>>,
-    /// The voxel size and points a voxel the odometry was built with.
-    built_map: (T, u32),
     points: Vec<[T; 3]>,
     prior: Option<GyroPrior<T>>,
     imu: Vec<kiss_odom_core::ImuSample<T>>,
@@ -157,9 +155,7 @@ impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
     fn new(settings: &Settings) -> Result<Self> {
         let odom = Odometry::boxed(settings.core_config::<T>()?, settings.capacities()?)
             .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
-        let c = odom.config();
         Ok(Self {
-            built_map: (c.voxel_size, c.max_points_per_voxel),
             odom,
             points: Vec::new(),
             prior: settings.imu.core::<T>()?.map(GyroPrior::new),
@@ -260,7 +256,7 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     }
     fn map_in_use(&self) -> (f64, u32, bool) {
         let c = self.odom.config();
-        let sparse = (c.voxel_size, c.max_points_per_voxel) != self.built_map;
+        let sparse = self.odom.sparse_scan_map();
         (c.voxel_size.wide(), c.max_points_per_voxel, sparse)
     }
     fn capacities(&self) -> Capacities {
