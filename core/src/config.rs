@@ -68,6 +68,15 @@ pub struct Config<T> {
     pub max_iterations: u32,
     /// Deskew scans that carry per-point timestamps (Eq. (4)).
     pub deskew: bool,
+    /// Deskew a whole scan ([`crate::Odometry::register_frame`]) a second time with the motion
+    /// its first registration found, and register it again from there: the constant-velocity
+    /// model deskews with the last sweep's motion, which is wrong where the motion changes
+    /// from one sweep to the next. Only where that registration measured every direction (its
+    /// observability not below `degeneracy_ratio`) and its motion moves a point at `r_max` by
+    /// more than `min_motion_threshold` from where the model put it; a scan pushed in pieces
+    /// ([`crate::Odometry::begin_frame`]) is deskewed once, its points not being kept. The
+    /// reference (`false`) deskews once.
+    pub redeskew: bool,
     /// Geman-McClure scale as a multiple of `sigma` (reference: 1, paper: 1/3).
     pub kernel_scale: T,
     /// Correspondences farther than `max_correspondence_factor * sigma` are rejected (3).
@@ -208,6 +217,7 @@ impl<T: Real> Config<T> {
             convergence_criterion: T::of(1e-4),
             max_iterations: 500,
             deskew: true,
+            redeskew: false,
             kernel_scale: T::one(),
             max_correspondence_factor: T::of(3.0),
             degeneracy_ratio: T::of(0.02),
@@ -241,14 +251,16 @@ impl<T: Real> Config<T> {
     /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
     /// voxels (GenZ-ICP's sparse-sensor map when the first scan is sparse,
     /// [`Config::sparse_scan_points`]), with no motion prior (the priors assume a car; a
-    /// hand-held, legged or flying sensor breaks them), and a registration that goes round a
-    /// loop stops there ([`Robust::cycle_stop`]). Its poses are not the reference's.
+    /// hand-held, legged or flying sensor breaks them), a registration that goes round a loop
+    /// stops there ([`Robust::cycle_stop`]), and a whole scan whose motion was not the model's
+    /// is deskewed again with its own ([`Config::redeskew`]). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),
             degeneracy: Degeneracy::Robust,
             robust: Robust::accurate(),
             sparse_scan_points: SPARSE_SCAN_POINTS,
+            redeskew: true,
             ..Self::new(max_range)
         }
     }
@@ -543,10 +555,16 @@ mod tests {
             a.robust.cycle_stop && !r.robust.cycle_stop,
             "the preset's cycle stop only"
         );
+        assert!(a.redeskew && !r.redeskew, "the preset's second deskew only");
+        assert!(
+            !Config::<f64>::new(80.0).redeskew,
+            "the reference deskews once"
+        );
         let back = Config {
             voxel_size: r.voxel_size,
             robust: r.robust,
             sparse_scan_points: r.sparse_scan_points,
+            redeskew: r.redeskew,
             ..a
         };
         assert_eq!(back, r, "nothing else differs from robust mode");

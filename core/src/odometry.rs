@@ -62,8 +62,10 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     threshold: Thresholds<T>,
     last_pose: Pose<T>,
     last_delta: Pose<T>,
-    /// The motion the last registered scan was deskewed with (its `last_delta` at the time).
+    /// The motion the last registered scan was deskewed with (see [`Self::scan_motion`]).
     scan_motion: Pose<T>,
+    /// The motion the scan being received is deskewed with.
+    deskew_motion: Pose<T>,
     /// The measured rotation through the next scan's sweep, if one was given.
     sweep_rotation: Option<SweepRotation<T>>,
     /// The one the last registered scan was deskewed with.
@@ -109,6 +111,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             last_pose: Pose::identity(),
             last_delta: Pose::identity(),
             scan_motion: Pose::identity(),
+            deskew_motion: Pose::identity(),
             sweep_rotation: None,
             scan_rotation: None,
             frames: 0,
@@ -144,6 +147,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.last_pose = Pose::identity();
         self.last_delta = Pose::identity();
         self.scan_motion = Pose::identity();
+        self.deskew_motion = Pose::identity();
         self.sweep_rotation = None;
         self.scan_rotation = None;
         self.frames = 0;
@@ -202,16 +206,24 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         points: &[[T; 3]],
         stamps: Option<&[f64]>,
     ) -> Result<FrameReport<T>, FrameError> {
-        let mut frame = self.begin_scan(stamps, points.len());
-        frame.push(points, stamps.filter(|s| s.len() == points.len()));
-        frame.finish_with(exec)
+        let scan = self.receive(points, stamps, self.last_delta);
+        let first = self.align(exec, scan, None)?;
+        if !self.redeskews(&first) {
+            return self.commit(first);
+        }
+        // Step 1 again: the sweep deskewed with its own motion, from its first registration.
+        let motion = self.last_pose.inverse() * first.pose();
+        let scan = self.receive(points, stamps, motion);
+        let again = self.align(exec, scan, Some(first.pose()))?;
+        self.commit(again)
     }
 
     /// Starts a scan that arrives in pieces (sensor packets), for callers that cannot hold a
     /// whole sweep: push points with [`FrameInput::push`], then register with
     /// [`FrameInput::finish`]. `span` is the sweep's first and last capture time (the
     /// reference normalises per-point times by the scan's own minimum and maximum); `None`
-    /// registers without deskewing.
+    /// registers without deskewing. Such a scan is deskewed once: a second deskew
+    /// ([`Config::redeskew`]) needs the whole scan.
     ///
     /// Dropping the [`FrameInput`] unfinished leaves the odometry as it was (pose, velocity,
     /// map, threshold, counters, the last [`Self::source`]) except [`Self::merge_cloud`]: the
@@ -245,9 +257,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         &self.last_delta
     }
     /// The motion the last registered scan was deskewed with: the constant-velocity model
-    /// (`last_delta`) as it stood before that scan was registered. Deskewing put the sensor at
-    /// fraction `s` of that sweep at `pose * Exp((s - 1) Log(scan_motion))`, turned as measured
-    /// instead if a [`Self::set_sweep_rotation`] was given for it.
+    /// (`last_delta`) as it stood before that scan was registered, or the motion its first
+    /// registration found if it was deskewed again ([`Config::redeskew`]). Deskewing put the
+    /// sensor at fraction `s` of that sweep at `pose * Exp((s - 1) Log(scan_motion))`, turned
+    /// as measured instead if a [`Self::set_sweep_rotation`] was given for it.
     pub fn scan_motion(&self) -> &Pose<T> {
         &self.scan_motion
     }

@@ -294,6 +294,9 @@ pub struct FrameReport<T: Real> {
     pub dropped: Dropped,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
+    /// Whether it was deskewed a second time, with the motion its first registration found,
+    /// and registered again ([`crate::Config::redeskew`]).
+    pub redeskewed: bool,
     /// Why timestamps were given but not used.
     pub stamp_problem: Option<StampProblem>,
 }

@@ -1,9 +1,11 @@
 //! The core's integration tests in one binary: the public API, the work budget, whole-pipeline
-//! runs on a generated street, the proptest properties and robust mode's gate.
+//! runs on a generated street, the proptest properties, robust mode's gate and the second
+//! deskew pass.
 
 mod api;
 mod budget;
 mod common;
 mod pipeline;
 mod properties;
+mod redeskew;
 mod robust_gate;

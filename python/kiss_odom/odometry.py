@@ -67,6 +67,9 @@ class FrameReport:
     map_points: int = 0
     pruned_voxels: int = 0
     deskewed: bool = False
+    #: Deskewed a second time with the motion its first registration found (the ``accurate``
+    #: preset's ``data.redeskew``).
+    redeskewed: bool = False
     stamp_problem: Optional[str] = None
     dropped: Mapping[str, int] = field(default_factory=dict)
     #: With the gyroscope prior on: ``"used"`` or why not (``"first"``, ``"no_samples"``,

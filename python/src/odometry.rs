@@ -217,6 +217,7 @@ fn report_dict<'py>(
     d.set_item("map_points", r.map_points)?;
     d.set_item("pruned_voxels", r.pruned_voxels)?;
     d.set_item("deskewed", r.deskewed)?;
+    d.set_item("redeskewed", r.redeskewed)?;
     d.set_item("stamp_problem", r.stamp_problem.map(stamp_problem_name))?;
     let dr = PyDict::new(py);
     dr.set_item("non_finite", r.dropped.non_finite)?;

@@ -1,7 +1,8 @@
 //! The accurate preset's cycle stop on real KITTI frames: on kitti-mini 02, frame 4's
 //! registration with plane terms goes round a loop of two iterates 0.14 mm apart that
 //! `|dx| < gamma` never ends. With the stop it ends in the loop; without it (`cycle_stop =
-//! false`), it runs to the iteration cap. And the map it picks from the first scan's density.
+//! false`), it runs to the iteration cap. And the map it picks from the first scan's density,
+//! and the second deskew where a scan's motion was not the model's.
 
 use kiss_odom_tests::{repo, run, simulate, Run};
 
@@ -96,4 +97,58 @@ fn the_accurate_preset_maps_a_sparse_sensor_on_genz_icp_s_sparse_sensor_map() {
         &[&two[..], &config].concat(),
     ));
     assert_eq!((moved.1, moved.2), (3, true));
+}
+
+#[test]
+fn the_accurate_preset_deskews_a_scan_again_where_the_motion_changed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fast = tmp.path().join("fast");
+    simulate(
+        &fast,
+        &["--frames", "12", "--seed", "5", "--profile", "fast"],
+    );
+    let again = |r: &Run| -> usize {
+        r.ok();
+        r.column("redeskewed")
+            .iter()
+            .filter(|v| *v == "true")
+            .count()
+    };
+    let accurate = [
+        "--preset",
+        "accurate",
+        "--threads",
+        "1",
+        "--frames",
+        "0..12",
+    ];
+    let preset = run(&fast, &tmp.path().join("a"), &accurate);
+    let once = tmp.path().join("once.toml");
+    std::fs::write(&once, "[data]\nredeskew = false\n").unwrap();
+    let config = ["--config", once.to_str().unwrap()];
+    let off = run(
+        &fast,
+        &tmp.path().join("o"),
+        &[&accurate[..], &config].concat(),
+    );
+    let default = run(&fast, &tmp.path().join("d"), &["--threads", "1"]);
+    let counts = (again(&preset), again(&off), again(&default));
+    println!("frames deskewed twice: preset, preset without, default: {counts:?}");
+    assert!(
+        counts.0 > 0 && counts.0 < 12,
+        "not the first frame, which has no map"
+    );
+    assert_eq!((counts.1, counts.2), (0, 0));
+    // Frames before the first second pass are the same; the one that has it is not.
+    let first = preset
+        .column("redeskewed")
+        .iter()
+        .position(|v| v == "true")
+        .unwrap();
+    let (p, o) = (
+        preset.lines("poses_kitti.txt"),
+        off.lines("poses_kitti.txt"),
+    );
+    assert_eq!(p[..first], o[..first]);
+    assert_ne!(p[first], o[first]);
 }

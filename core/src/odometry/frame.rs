@@ -52,6 +52,24 @@ impl Received {
     }
 }
 
+/// A scan registered, before anything of it is kept.
+pub(super) struct Aligned<T: Real> {
+    scan: Received,
+    clouds: Clouds,
+    reg: Registered<T>,
+    /// The prediction the threshold measures the registration against.
+    predicted: Pose<T>,
+    /// Registered a second time, from a first registration of the same sweep.
+    again: bool,
+}
+
+impl<T: Real> Aligned<T> {
+    /// The pose the scan registered at.
+    pub(super) fn pose(&self) -> Pose<T> {
+        self.reg.pose
+    }
+}
+
 /// Sizes of the two downsampled clouds.
 #[derive(Clone, Copy, Debug)]
 struct Clouds {
@@ -64,8 +82,21 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     pub(super) fn register<E: Executor>(
         &mut self,
         exec: &E,
-        mut scan: Received,
+        scan: Received,
     ) -> Result<FrameReport<T>, FrameError> {
+        let aligned = self.align(exec, scan, None)?;
+        self.commit(aligned)
+    }
+
+    /// Steps 2 and 4: the pose a received scan registers at, from `start` if given (a first
+    /// registration of the same sweep), else from the prediction. Nothing is kept yet (see
+    /// [`Self::commit`]) but the clouds in their buffers.
+    pub(super) fn align<E: Executor>(
+        &mut self,
+        exec: &E,
+        mut scan: Received,
+        start: Option<Pose<T>>,
+    ) -> Result<Aligned<T>, FrameError> {
         scan.usable()?;
         if self.frames == 0 {
             // The map's shape from the first scan's density (`Config::sparse_scan_points`),
@@ -76,27 +107,66 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         // Step 1's prediction, Eq. (1) (the scan was deskewed with it as it arrived), and step
         // 4's threshold, tau = 3 sigma_t (Eq. (7)).
         let predicted = self.predict();
-        let (parts, mut map) =
+        let (parts, map) =
             open::<T, P>(&self.layout, &self.caps, &mut self.storage, &mut self.map)?;
 
         // Step 2 (Sec. III-B): P*_merge in the reference's order, then P^* from it.
         let clouds = downsample(&cfg, &mut scan, parts.merge, parts.source, parts.scratch);
-        let (merge, source) = (&parts.merge[..clouds.merge], &parts.source[..clouds.source]);
+        let source = &parts.source[..clouds.source];
 
         // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
-        let reg = Step::new(&cfg, exec, source).register(&predicted, &map.view(), parts.icp);
+        let from = Predicted {
+            pose: start.unwrap_or(predicted.pose),
+            ..predicted
+        };
+        let reg = Step::new(&cfg, exec, source).register(&from, &map.view(), parts.icp);
+        Ok(Aligned {
+            scan,
+            clouds,
+            reg,
+            predicted: predicted.pose,
+            again: start.is_some(),
+        })
+    }
 
+    /// The threshold's sample, the map update and the new pose, for a registered scan.
+    pub(super) fn commit(&mut self, a: Aligned<T>) -> Result<FrameReport<T>, FrameError> {
         // Eq. (13): the model deviation is a sample of the adaptive threshold (Sec. III-D).
-        let deviation = predicted.pose.inverse() * reg.pose;
+        let deviation = a.predicted.inverse() * a.reg.pose;
         let model_error = self.threshold.in_use().model_error(&deviation);
         self.threshold.update(&deviation);
 
         // Sec. III-C: P*_merge joins the local map at T_t; voxels beyond r_max are pruned (a full
         // map gives up its farthest voxels first).
-        let update = map.update(merge, &reg.pose, parts.scratch);
+        let (parts, mut map) =
+            open::<T, P>(&self.layout, &self.caps, &mut self.storage, &mut self.map)?;
+        let merge = &parts.merge[..a.clouds.merge];
+        let update = map.update(merge, &a.reg.pose, parts.scratch);
 
         // T_t becomes the last pose; the frame's report.
-        Ok(self.conclude(&scan, &clouds, &reg, model_error, &update))
+        Ok(self.conclude(&a, model_error, &update))
+    }
+
+    /// Whether a registered whole scan is deskewed and registered again with the motion found
+    /// ([`Config::redeskew`]). It was deskewed at a constant rate and registered against a
+    /// map; the registration measured every direction (its observability is not below
+    /// `degeneracy_ratio`: a degenerate one's motion along a weak direction is not measured,
+    /// and deskewing with it bends the sweep); and its motion moves a point at `r_max` by more
+    /// than `delta_min` at the sweep's start from where the prediction put it (below that the
+    /// paper's threshold reads the deviation as no motion, Sec. III-D).
+    pub(super) fn redeskews(&self, a: &Aligned<T>) -> bool {
+        let cfg = &self.config;
+        let deviation = a.predicted.inverse() * a.reg.pose;
+        cfg.redeskew
+            && a.scan.deskews
+            && a.scan.stamp_problem.is_none()
+            && self.sweep_rotation.is_none()
+            && !a.reg.first_frame
+            && a.reg.finite
+            && a.reg
+                .observability
+                .is_some_and(|o| o >= cfg.degeneracy_ratio)
+            && self.threshold.in_use().model_error(&deviation) > cfg.min_motion_threshold
     }
 
     /// Eq. (1): the constant-velocity prediction `T_{t-1} dT_{t-1}`, with what step 4 needs to
@@ -112,17 +182,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
     /// The frame is done: `T_t` and the motion (see [`Self::advance`]), the buffers' sizes and
     /// high-water marks, and the report.
-    fn conclude(
-        &mut self,
-        scan: &Received,
-        clouds: &Clouds,
-        reg: &Registered<T>,
-        model_error: T,
-        update: &UpdateStats,
-    ) -> FrameReport<T> {
-        self.advance(reg.pose);
-        self.note(clouds);
-        let report = self.report(scan, clouds, reg, model_error, update);
+    fn conclude(&mut self, a: &Aligned<T>, model_error: T, update: &UpdateStats) -> FrameReport<T> {
+        self.advance(a.reg.pose);
+        self.note(&a.clouds);
+        let report = self.report(a, model_error, update);
         self.frames += 1;
         report
     }
@@ -130,7 +193,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// The pose becomes `T_t`; the constant-velocity model `dT_t = T_{t-1}^-1 T_t` (Eq. (1))
     /// predicts the next scan and deskews it.
     fn advance(&mut self, pose: Pose<T>) {
-        self.scan_motion = self.last_delta;
+        self.scan_motion = self.deskew_motion;
         self.scan_rotation = self.sweep_rotation.take();
         self.last_delta = self.last_pose.inverse() * pose;
         self.last_pose = pose;
@@ -149,14 +212,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     }
 
     /// The frame's report: the pose, what happened and what was dropped.
-    fn report(
-        &self,
-        scan: &Received,
-        clouds: &Clouds,
-        f: &Registered<T>,
-        model_error: T,
-        update: &UpdateStats,
-    ) -> FrameReport<T> {
+    fn report(&self, a: &Aligned<T>, model_error: T, update: &UpdateStats) -> FrameReport<T> {
+        let (scan, clouds, f) = (&a.scan, &a.clouds, &a.reg);
         let mut dropped = scan.dropped;
         dropped.map_voxels_full = update.dropped_voxels as u32;
         dropped.map_points_full = update.dropped_points as u32;
@@ -186,6 +243,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             evicted_voxels: update.evicted_voxels as u32,
             dropped,
             deskewed: scan.deskews && scan.stamp_problem.is_none(),
+            redeskewed: a.again,
             stamp_problem: scan.stamp_problem,
         }
     }

@@ -8,6 +8,7 @@ use super::Odometry;
 use crate::deskew::{StampProblem, TimeSpan};
 use crate::downsample::Dedup;
 use crate::error::FrameError;
+use crate::geometry::Pose;
 use crate::local_map::PointCodec;
 use crate::preprocess::{Drop, Preprocessor};
 use crate::registration::{Executor, Sequential};
@@ -23,14 +24,18 @@ pub struct FrameInput<'o, T: Real, P: PointCodec<T>, S: Storage> {
 }
 
 impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
-    /// A whole scan with optional per-point `stamps` for `points` points.
-    pub(super) fn begin_scan(
+    /// A whole scan with optional per-point `stamps`, received at once and deskewed with
+    /// `motion` (the sweep's, end to end).
+    pub(super) fn receive(
         &mut self,
+        points: &[[T; 3]],
         stamps: Option<&[f64]>,
-        points: usize,
-    ) -> FrameInput<'_, T, P, S> {
-        let span = Preprocessor::<T>::span(self.config.deskew, stamps, points);
-        self.begin(span)
+        motion: Pose<T>,
+    ) -> Received {
+        let span = Preprocessor::<T>::span(self.config.deskew, stamps, points.len());
+        let mut frame = self.begin(span, motion);
+        frame.push(points, stamps.filter(|s| s.len() == points.len()));
+        frame.scan
     }
 
     /// A scan arriving in pieces, whose capture times span `span`.
@@ -38,13 +43,18 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         let span = span
             .filter(|_| self.config.deskew)
             .map(|(min, max)| TimeSpan::new(min, max));
-        self.begin(span)
+        self.begin(span, self.last_delta)
     }
 
-    fn begin(&mut self, span: Option<Result<TimeSpan, StampProblem>>) -> FrameInput<'_, T, P, S> {
+    fn begin(
+        &mut self,
+        span: Option<Result<TimeSpan, StampProblem>>,
+        motion: Pose<T>,
+    ) -> FrameInput<'_, T, P, S> {
+        self.deskew_motion = motion;
         let cfg = &self.config;
         let (lo, hi) = (cfg.min_range, cfg.max_range);
-        let pre = Preprocessor::with_span(lo, hi, span, &self.last_delta, self.sweep_rotation);
+        let pre = Preprocessor::with_span(lo, hi, span, &motion, self.sweep_rotation);
         let mut scan = Received {
             stamp_problem: pre.stamp_problem(),
             deskews: pre.deskews(),

@@ -67,8 +67,9 @@ pub enum PresetName {
     #[default]
     Default,
     /// The lowest error measured here (`Config::accurate`): point-to-plane terms where the
-    /// map is planar on every frame, `r_max / 200` voxels; 3-4 times the default's time on
-    /// urban and KITTI scans, up to 12 in a corridor.
+    /// map is planar on every frame, `r_max / 200` voxels, a scan whose motion was not the
+    /// model's deskewed again with its own; 3-4 times the default's time on urban and KITTI
+    /// scans, up to 12 in a corridor.
     Accurate,
 }
 
@@ -100,6 +101,9 @@ pub struct Data {
     pub min_range: f64,
     /// Deskew scans with per-point timestamps.
     pub deskew: bool,
+    /// Deskew each scan a second time with the motion its first registration found, and
+    /// register it again (the `accurate` preset's; not the reference's).
+    pub redeskew: bool,
 }
 
 /// Local map and downsampling (the reference's `mapping` section plus alpha/beta).
@@ -235,6 +239,7 @@ impl Default for Data {
             max_range: 100.0,
             min_range: 0.0,
             deskew: true,
+            redeskew: false,
         }
     }
 }
@@ -308,6 +313,7 @@ impl Settings {
         let mut s = Self::default();
         s.pipeline.preset = preset;
         let c = s.core_defaults();
+        s.data.redeskew = c.redeskew;
         s.mapping.max_points_per_voxel = c.max_points_per_voxel;
         s.mapping.alpha = c.alpha;
         s.mapping.beta = c.beta;
@@ -545,6 +551,7 @@ impl Settings {
         c.convergence_criterion = T::of(self.registration.convergence_criterion);
         c.max_iterations = self.registration.max_num_iterations;
         c.deskew = self.data.deskew;
+        c.redeskew = self.data.redeskew;
         c.kernel_scale = T::of(self.kernel_scale());
         c.max_correspondence_factor = T::of(self.registration.max_correspondence_factor);
         c.degeneracy_ratio = T::of(self.registration.degeneracy_ratio);

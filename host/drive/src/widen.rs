@@ -37,6 +37,7 @@ pub fn widen_report<T: Real>(r: &FrameReport<T>) -> FrameReport<f64> {
         evicted_voxels: r.evicted_voxels,
         dropped: r.dropped,
         deskewed: r.deskewed,
+        redeskewed: r.redeskewed,
         stamp_problem: r.stamp_problem,
     }
 }

@@ -123,6 +123,8 @@ pub struct FrameRow {
     pub pose_latency_ms: Option<f64>,
     /// Whether the scan was deskewed.
     pub deskewed: bool,
+    /// Whether it was deskewed a second time with the motion its first registration found.
+    pub redeskewed: bool,
     /// With `--imu auto`: `used` (the gyroscope's rotation predicted and deskewed the frame),
     /// or why not (`first`, `no_samples`, `gap`, `bad_samples`); empty otherwise.
     pub imu_prior: Option<&'static str>,
@@ -188,6 +190,7 @@ impl FrameRow {
             azimuth_jumps: None,
             pose_latency_ms: None,
             deskewed: r.is_some_and(|r| r.deskewed),
+            redeskewed: r.is_some_and(|r| r.redeskewed),
             imu_prior: o.imu.map(|u| u.prior.name()),
             imu_samples: o.imu.map(|u| u.samples),
             gyro_bias_x: o.imu.map(|u| u.bias[0]),
@@ -306,7 +309,7 @@ mod tests {
             "{first}"
         );
         assert!(
-            first.ends_with(",,,,false,,,,,,,0,0,0,0,0,0,0,0,0,0,0,0"),
+            first.ends_with(",,,,false,false,,,,,,,0,0,0,0,0,0,0,0,0,0,0,0"),
             "{first}"
         );
         let second = lines.next().unwrap();

@@ -161,6 +161,7 @@ fn kiss_icps_yaml_reads_as_its_python_package_reads_it() {
             max_range: 60.0,
             min_range: 5.0,
             deskew: false,
+            redeskew: false,
         },
         adaptive_threshold: Threshold {
             initial_threshold: 1.5,
