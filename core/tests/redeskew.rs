@@ -96,6 +96,20 @@ fn a_second_deskew_follows_a_turn_rate_the_last_sweep_did_not_have() {
          ({again} of {FRAMES} frames twice; asserted: below 0.7 of once)"
     );
     assert!(e2 < 0.7 * e1, "{e2} against {e1}");
+    // The second registration starts from the first one's pose, near where it ends.
+    let iterations = |r: &[FrameReport<f64>]| -> u32 {
+        r.iter()
+            .zip(&twice)
+            .filter(|(_, t)| t.redeskewed)
+            .map(|(r, _)| r.iterations)
+            .sum()
+    };
+    let (first, second) = (iterations(&once), iterations(&twice));
+    println!(
+        "ICP iterations of the frames deskewed twice: once {first}, the second pass {second} \
+         (asserted: under half; 319 from the prediction)"
+    );
+    assert!(2 * second < first);
     assert!(once.iter().all(|r| !r.redeskewed));
     // Not the first frame (no map) nor frames whose prediction was already right.
     assert!(!twice[0].redeskewed);
