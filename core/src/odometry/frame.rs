@@ -41,6 +41,11 @@ pub(super) struct Received {
 
 impl Received {
     /// The scan can be registered: its storage held and some point survived the crop.
+    /// Whether it was deskewed: asked to be, with usable timestamps.
+    fn deskewed(&self) -> bool {
+        self.deskews && self.stamp_problem.is_none()
+    }
+
     fn usable(&self) -> Result<(), FrameError> {
         if self.storage_lost {
             Err(FrameError::Storage)
@@ -67,6 +72,11 @@ impl<T: Real> Aligned<T> {
     /// The pose the scan registered at.
     pub(super) fn pose(&self) -> Pose<T> {
         self.reg.pose
+    }
+
+    /// The model deviation, Eq. (13): the registered pose seen from the prediction.
+    fn deviation(&self) -> Pose<T> {
+        self.predicted.inverse() * self.reg.pose
     }
 }
 
@@ -132,7 +142,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// The threshold's sample, the map update and the new pose, for a registered scan.
     pub(super) fn commit(&mut self, a: Aligned<T>) -> Result<FrameReport<T>, FrameError> {
         // Eq. (13): the model deviation is a sample of the adaptive threshold (Sec. III-D).
-        let deviation = a.predicted.inverse() * a.reg.pose;
+        let deviation = a.deviation();
         let model_error = self.threshold.in_use().model_error(&deviation);
         self.threshold.update(&deviation);
 
@@ -156,17 +166,15 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// paper's threshold reads the deviation as no motion, Sec. III-D).
     pub(super) fn redeskews(&self, a: &Aligned<T>) -> bool {
         let cfg = &self.config;
-        let deviation = a.predicted.inverse() * a.reg.pose;
         cfg.redeskew
-            && a.scan.deskews
-            && a.scan.stamp_problem.is_none()
+            && a.scan.deskewed()
             && self.sweep_rotation.is_none()
             && !a.reg.first_frame
             && a.reg.finite
             && a.reg
                 .observability
                 .is_some_and(|o| o >= cfg.degeneracy_ratio)
-            && self.threshold.in_use().model_error(&deviation) > cfg.min_motion_threshold
+            && self.threshold.in_use().model_error(&a.deviation()) > cfg.min_motion_threshold
     }
 
     /// Eq. (1): the constant-velocity prediction `T_{t-1} dT_{t-1}`, with what step 4 needs to
@@ -242,7 +250,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             map_filled: update.filled,
             evicted_voxels: update.evicted_voxels as u32,
             dropped,
-            deskewed: scan.deskews && scan.stamp_problem.is_none(),
+            deskewed: scan.deskewed(),
             redeskewed: a.again,
             stamp_problem: scan.stamp_problem,
         }
