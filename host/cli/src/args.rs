@@ -132,8 +132,9 @@ pub struct PipelineArgs {
     /// The defaults every setting not given takes: `default` (kiss-icp 1.3.0's poses, bit for
     /// bit) or `accurate` (the lowest error measured: point-to-plane terms where the map is
     /// planar on every frame, max_range / 200 voxels, or 1.2 times those with 3 points each
-    /// when the first scan has fewer than 32,768 points; 3-4 times the time on urban and KITTI
-    /// scans, up to 12 in a corridor); replaces
+    /// when the first scan has fewer than 32,768 points, a scan whose motion was not the
+    /// model's deskewed again with its own; 3-4 times the time on urban and KITTI scans, up to
+    /// 12 in a corridor); replaces
     /// the file's `[pipeline] preset` [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,
