@@ -99,6 +99,17 @@ pub struct Config<T> {
     /// at the first scan, before the map holds anything, and [`crate::Odometry::config`] then
     /// says what it runs.
     pub sparse_scan_points: usize,
+    /// A registration cloud of more points than this (a dense sensor's) is made again from the
+    /// merge cloud with voxels of `beta v` scaled by its points over this number (GenZ-ICP's
+    /// adaptive voxel, from LOCUS 2.0), so ICP's work per iteration stops growing with the
+    /// scene's detail; 0 (the reference's) keeps every `beta v` voxel. Only after a
+    /// registration that measured every direction (not the first frame's, nor one flagged
+    /// [`crate::Flag::Degenerate`]): a weakly constrained scene's sparse structure is what
+    /// measures its weak directions. The points counted are those the source buffer held
+    /// (`Capacities::source_points`). A run on the sparse-scan map ([`Config::for_first_scan`])
+    /// keeps every voxel: a sparse sensor's cloud is hardly above GenZ-ICP's count, and every
+    /// point of it counts.
+    pub desired_source_points: usize,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
     /// exceed it, ICP keeps its last complete iterate and the frame is flagged
@@ -195,6 +206,13 @@ impl<T: Real> Default for Robust<T> {
 /// 56,000 (BENCHMARKS.md, "The accurate preset").
 pub const SPARSE_SCAN_POINTS: usize = 32_768;
 
+/// The `accurate` preset's [`Config::desired_source_points`]: GenZ-ICP's
+/// `desired_num_voxelized_points` in its `outdoor` and `kitti` presets. A 64-beam sweep keeps
+/// 3,700-4,600 points at `beta v` on generated streets and 6,000-12,500 on KITTI's; a 16-beam
+/// one about this many on the sparse-scan map, which keeps them all (BENCHMARKS.md, "The
+/// accurate preset").
+pub const DESIRED_SOURCE_POINTS: usize = 3_000;
+
 /// The sparse-scan map's voxel over the configured one: GenZ-ICP's `outdoor` map of 0.6 m
 /// voxels against the `accurate` preset's `r_max / 200` of a 100 m sensor.
 pub const SPARSE_VOXEL_FACTOR: f64 = 1.2;
@@ -224,6 +242,7 @@ impl<T: Real> Config<T> {
             degeneracy: Degeneracy::Reference,
             robust: Robust::new(),
             sparse_scan_points: 0,
+            desired_source_points: 0,
             work_budget: None,
         }
     }
@@ -252,22 +271,25 @@ impl<T: Real> Config<T> {
     /// voxels (GenZ-ICP's sparse-sensor map when the first scan is sparse,
     /// [`Config::sparse_scan_points`]), with no motion prior (the priors assume a car; a
     /// hand-held, legged or flying sensor breaks them), a registration that goes round a loop
-    /// stops there ([`Robust::cycle_stop`]), and a whole scan whose motion was not the model's
-    /// is deskewed again with its own ([`Config::redeskew`]). Its poses are not the reference's.
+    /// stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the model's
+    /// is deskewed again with its own ([`Config::redeskew`]), and a dense scan's registration
+    /// cloud is thinned to about [`DESIRED_SOURCE_POINTS`] where the scene measures every
+    /// direction ([`Config::desired_source_points`]; not on the sparse-scan map). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),
             degeneracy: Degeneracy::Robust,
             robust: Robust::accurate(),
             sparse_scan_points: SPARSE_SCAN_POINTS,
+            desired_source_points: DESIRED_SOURCE_POINTS,
             redeskew: true,
             ..Self::new(max_range)
         }
     }
 
     /// This configuration for a run whose first scan kept `points` points within range: with
-    /// the sparse-scan map (see [`Config::sparse_scan_points`]) when that is fewer than
-    /// `sparse_scan_points`, else as it is.
+    /// the sparse-scan map (see [`Config::sparse_scan_points`]), and every `beta v` voxel of
+    /// the registration cloud, when that is fewer than `sparse_scan_points`, else as it is.
     pub fn for_first_scan(&self, points: usize) -> Self {
         if points >= self.sparse_scan_points {
             return *self;
@@ -275,6 +297,7 @@ impl<T: Real> Config<T> {
         Self {
             voxel_size: self.voxel_size * T::of(SPARSE_VOXEL_FACTOR),
             max_points_per_voxel: self.max_points_per_voxel.min(SPARSE_POINTS_PER_VOXEL),
+            desired_source_points: 0,
             ..*self
         }
     }
@@ -556,6 +579,11 @@ mod tests {
             "the preset's cycle stop only"
         );
         assert!(a.redeskew && !r.redeskew, "the preset's second deskew only");
+        assert_eq!(
+            (a.desired_source_points, r.desired_source_points),
+            (DESIRED_SOURCE_POINTS, 0),
+            "the preset's thinned registration cloud only"
+        );
         assert!(
             !Config::<f64>::new(80.0).redeskew,
             "the reference deskews once"
@@ -564,6 +592,7 @@ mod tests {
             voxel_size: r.voxel_size,
             robust: r.robust,
             sparse_scan_points: r.sparse_scan_points,
+            desired_source_points: r.desired_source_points,
             redeskew: r.redeskew,
             ..a
         };
@@ -617,9 +646,14 @@ mod tests {
         );
         assert!((sparse.voxel_size - 0.6).abs() < 1e-15, "GenZ-ICP's 0.6 m");
         assert_eq!(
+            sparse.desired_source_points, 0,
+            "every voxel of a sparse cloud"
+        );
+        assert_eq!(
             Config {
                 voxel_size: a.voxel_size,
                 max_points_per_voxel: a.max_points_per_voxel,
+                desired_source_points: a.desired_source_points,
                 ..sparse
             },
             a,

@@ -310,16 +310,27 @@ pub fn voxel_downsample<T: Real>(
     out: &mut [[T; 3]],
     scratch: &mut [u64],
 ) -> Option<Downsampled> {
-    let mut dedup = Dedup::new(out, scratch, voxel)?;
-    for p in input {
-        dedup.push(&Point::from(*p));
-    }
-    let res = dedup.finish();
+    let res = first_per_voxel(input, voxel, out, scratch)?;
     if reference_order(&mut out[..res.kept], voxel, input.len(), scratch) {
         Some(res)
     } else {
         None
     }
+}
+
+/// The first point of `input` in each voxel of size `voxel`, into `out` in first-seen order;
+/// `None` if `scratch` cannot hold the grid.
+pub(crate) fn first_per_voxel<T: Real>(
+    input: &[[T; 3]],
+    voxel: T,
+    out: &mut [[T; 3]],
+    scratch: &mut [u64],
+) -> Option<Downsampled> {
+    let mut dedup = Dedup::new(out, scratch, voxel)?;
+    for p in input {
+        dedup.push(&Point::from(*p));
+    }
+    Some(dedup.finish())
 }
 
 #[cfg(test)]

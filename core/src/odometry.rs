@@ -71,6 +71,9 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     /// The one the last registered scan was deskewed with.
     scan_rotation: Option<SweepRotation<T>>,
     frames: u64,
+    /// The last registration measured every direction (it was not the first frame's, nor
+    /// flagged [`crate::Flag::Degenerate`]).
+    constrained: bool,
     merge_len: usize,
     source_len: usize,
     high: HighWater,
@@ -115,6 +118,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             sweep_rotation: None,
             scan_rotation: None,
             frames: 0,
+            constrained: false,
             merge_len: 0,
             source_len: 0,
             high: HighWater::default(),
@@ -151,6 +155,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.sweep_rotation = None;
         self.scan_rotation = None;
         self.frames = 0;
+        self.constrained = false;
         self.merge_len = 0;
         self.source_len = 0;
         self.high = HighWater::default();

@@ -9,7 +9,8 @@ use kiss_odom_core::stages::{
     chunks_for, preprocess, scratch_words_for, voxel_downsample, CHUNK, SYSTEM_LEN,
 };
 use kiss_odom_core::{
-    Capacities, Config, ConfigError, Exact, FrameReport, Odometry, Pose, Quantized, Storage, Words,
+    Capacities, Config, ConfigError, Exact, Flag, FrameReport, Odometry, Pose, Quantized, Storage,
+    Words,
 };
 
 const RANGE: f64 = 40.0;
@@ -393,4 +394,95 @@ fn a_sparse_first_scan_sets_the_map_for_the_run_and_reset_forgets_it() {
     let mut odom = Odometry::<f64, Exact, _>::new(huge, caps, &mut words[..]).unwrap();
     let _ = odom.register_frame(&half, None);
     assert_eq!(*odom.config(), huge);
+}
+
+#[test]
+fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_points() {
+    // A street swept while the sensor's yaw swings (without the capture times): some
+    // registrations measure every direction, some are flagged degenerate.
+    use crate::redeskew::{pose, sweeps, SWEEP};
+    let all: Vec<_> = sweeps().into_iter().map(|s| s.0).collect();
+    let caps = Capacities {
+        plane_terms: true,
+        source_points: caps().merge_points,
+        ..caps()
+    };
+    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let asked = Config {
+        desired_source_points: 0,
+        sparse_scan_points: 0,
+        ..Config::<f64>::accurate(RANGE)
+    };
+    // Each frame's pose, registration cloud, merge cloud and whether it was flagged degenerate.
+    type Run = Vec<(Pose<f64>, Vec<[f64; 3]>, Vec<[f64; 3]>, bool)>;
+    let mut run = |desired_source_points| -> Run {
+        let cfg = Config {
+            desired_source_points,
+            ..asked
+        };
+        let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps, &mut words[..]).unwrap();
+        all.iter()
+            .map(|s| {
+                let r = odom.register_frame(s, None).unwrap();
+                let degenerate = r.status.contains(Flag::Degenerate);
+                let clouds = (odom.source().to_vec(), odom.merge_cloud().to_vec());
+                (r.pose, clouds.0, clouds.1, degenerate)
+            })
+            .collect()
+    };
+    let free = run(0);
+    let most = free.iter().map(|f| f.1.len()).max().unwrap();
+    let fewest = free.iter().map(|f| f.1.len()).min().unwrap();
+    // A bound no frame reaches changes nothing, bit for bit.
+    assert_eq!(run(most), free);
+    // Below every frame's count: after a registration that measured every direction, each
+    // cloud is the merge cloud's first point per voxel of `beta v` times the points `beta v`
+    // keeps over the desired count, in the reference's order; on the first two frames and
+    // after a registration flagged degenerate, every `beta v` voxel's.
+    let desired = fewest / 2;
+    let bound = run(desired);
+    let beta_v = asked.voxel_size * asked.beta;
+    let mut scratch = vec![0u64; scratch_words_for(caps.merge_points)];
+    let mut downsample = |merge: &[[f64; 3]], voxel: f64| -> Vec<[f64; 3]> {
+        let mut out = vec![[0.0; 3]; merge.len()];
+        let k = voxel_downsample(merge, voxel, &mut out, &mut scratch)
+            .unwrap()
+            .kept;
+        out.truncate(k);
+        out
+    };
+    let mut thinned = 0;
+    for (i, (_, source, merge, _)) in bound.iter().enumerate() {
+        let every = downsample(merge, beta_v);
+        let n = every.len();
+        assert!(n > desired, "frame {i}: {n} points at beta v");
+        let expected = if i < 2 || bound[i - 1].3 {
+            every
+        } else {
+            thinned += 1;
+            let coarser = downsample(merge, beta_v * (n as f64 / desired as f64));
+            assert!(coarser.len() < n, "frame {i}: {} of {n}", coarser.len());
+            coarser
+        };
+        assert!(
+            *source == expected,
+            "frame {i}: {} points, {} expected",
+            source.len(),
+            expected.len()
+        );
+    }
+    let kept = all.len() - 2 - thinned;
+    println!("{thinned} frames thinned, {kept} after a degenerate registration");
+    assert!(thinned >= 5 && kept >= 2, "both kinds of frame");
+    assert_eq!(bound[..3], free[..3], "the first three frames are the same");
+    // The run still follows the street.
+    let worst = |r: &Run| {
+        r.iter()
+            .enumerate()
+            .map(|(i, f)| gap(&f.0, &(pose(0.0).inverse() * pose(i as f64 * SWEEP))))
+            .fold(0.0, f64::max)
+    };
+    let (b, f) = (worst(&bound), worst(&free));
+    println!("worst position error: thinned {b:.4} m, every voxel {f:.4} m (bound 2x + 1 cm)");
+    assert!(b < 2.0 * f + 0.01, "{b} against {f}");
 }

@@ -10,12 +10,12 @@ use nalgebra::{Point3, Translation3, UnitQuaternion};
 const RANGE: f64 = 40.0;
 const FRAMES: usize = 24;
 /// Seconds a sweep lasts (10 Hz).
-const SWEEP: f64 = 0.1;
+pub(crate) const SWEEP: f64 = 0.1;
 
 /// The sensor at time `t`: standing still through the first sweep (which seeds the map), then
 /// 8 m/s along the street while its yaw swings by 0.15 rad with a period of 1.2 s (a rate of
 /// up to 0.8 rad/s that changes sign every 0.6 s).
-fn pose(t: f64) -> Pose<f64> {
+pub(crate) fn pose(t: f64) -> Pose<f64> {
     let t = t.max(0.0);
     let yaw = 0.15 * (core::f64::consts::TAU * t / 1.2).sin();
     Pose::from_parts(
@@ -44,7 +44,7 @@ fn sweep(street: &[[f64; 3]], i: usize) -> (Vec<[f64; 3]>, Vec<f64>) {
     (pts, stamps)
 }
 
-fn sweeps() -> Vec<(Vec<[f64; 3]>, Vec<f64>)> {
+pub(crate) fn sweeps() -> Vec<(Vec<[f64; 3]>, Vec<f64>)> {
     let s = street(11);
     (0..FRAMES).map(|i| sweep(&s, i)).collect()
 }

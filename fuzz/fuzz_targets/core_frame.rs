@@ -71,6 +71,7 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.robust.lateral_prior = T::of(pick(u, &[0.0, 1.0, 1e-3])?);
     c.robust.cycle_stop = u.arbitrary()?;
     c.sparse_scan_points = usize::from(u.arbitrary::<u16>()? % 1024);
+    c.desired_source_points = usize::from(u.arbitrary::<u8>()? % 128);
     Ok(c)
 }
 

@@ -1,7 +1,8 @@
 //! The accurate preset's cycle stop on real KITTI frames: on kitti-mini 02, frame 4's
 //! registration with plane terms goes round a loop of two iterates 0.14 mm apart that
 //! `|dx| < gamma` never ends. With the stop it ends in the loop; without it (`cycle_stop =
-//! false`), it runs to the iteration cap. And the map it picks from the first scan's density,
+//! false`), it runs to the iteration cap (both with every voxel of the registration cloud,
+//! `desired_source_points = 0`). And the map it picks from the first scan's density,
 //! and the second deskew where a scan's motion was not the model's.
 
 use kiss_odom_tests::{repo, run, simulate, Run};
@@ -10,10 +11,17 @@ use kiss_odom_tests::{repo, run, simulate, Run};
 fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
     let seq = repo().join("../shared/data/kitti-mini/sequences/02");
     let tmp = tempfile::tempdir().unwrap();
-    let off = tmp.path().join("off.toml");
-    std::fs::write(&off, "[registration]\ncycle_stop = false\n").unwrap();
+    // Every `beta v` voxel of the registration cloud: the loop is that cloud's.
+    let full = "[mapping]\ndesired_source_points = 0\n";
+    let (on, off) = (tmp.path().join("on.toml"), tmp.path().join("off.toml"));
+    std::fs::write(&on, full).unwrap();
+    std::fs::write(&off, format!("{full}[registration]\ncycle_stop = false\n")).unwrap();
     let frames = ["--frames", "0..5", "--preset", "accurate", "--threads", "1"];
-    let with = run(&seq, &tmp.path().join("with"), &frames);
+    let with = run(
+        &seq,
+        &tmp.path().join("with"),
+        &[&frames[..], &["--config", on.to_str().unwrap()]].concat(),
+    );
     let config = ["--config", off.to_str().unwrap()];
     let without = run(
         &seq,
@@ -43,6 +51,25 @@ fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
         with.lines("poses_kitti.txt")[..4],
         without.lines("poses_kitti.txt")[..4]
     );
+    // The preset itself thins these dense scans' registration clouds to about 3,000 points
+    // from the third frame (after a registration that measured every direction).
+    let thinned = run(&seq, &tmp.path().join("thinned"), &frames);
+    thinned.ok();
+    let points = |r: &Run| -> Vec<u32> {
+        r.column("source_points")
+            .iter()
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    let (every, bound) = (points(&with), points(&thinned));
+    println!("registration cloud points: every voxel {every:?}, the preset {bound:?}");
+    assert!(every.iter().all(|&n| n > 3_000));
+    assert_eq!(
+        bound[..2],
+        every[..2],
+        "the first two frames keep every voxel"
+    );
+    assert!(bound[2..].iter().all(|&n| n <= 3_000), "{bound:?}");
 }
 
 /// `summary.json`'s map: voxel size, points a voxel, and whether the sparse-scan map was taken;

@@ -8,9 +8,9 @@ use super::layout::{Layout, Parts};
 use super::Odometry;
 use crate::config::{Capacities, Config};
 use crate::deskew::StampProblem;
-use crate::downsample::{reference_order, Dedup, Downsampled};
+use crate::downsample::{first_per_voxel, reference_order, Downsampled};
 use crate::error::FrameError;
-use crate::geometry::{Point, Pose};
+use crate::geometry::Pose;
 use crate::lie::renormalize;
 use crate::local_map::{MapMut, MapState, PointCodec, UpdateStats};
 use crate::registration::Executor;
@@ -121,7 +121,17 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             open::<T, P>(&self.layout, &self.caps, &mut self.storage, &mut self.map)?;
 
         // Step 2 (Sec. III-B): P*_merge in the reference's order, then P^* from it.
-        let clouds = downsample(&cfg, &mut scan, parts.merge, parts.source, parts.scratch);
+        // Until a registration has measured every direction, every `beta v` voxel: a weakly
+        // constrained scene's sparse structure is what measures its weak directions.
+        let desired = self.constrained.then_some(cfg.desired_source_points);
+        let clouds = downsample(
+            &cfg,
+            desired,
+            &mut scan,
+            parts.merge,
+            parts.source,
+            parts.scratch,
+        );
         let source = &parts.source[..clouds.source];
 
         // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
@@ -192,6 +202,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// high-water marks, and the report.
     fn conclude(&mut self, a: &Aligned<T>, model_error: T, update: &UpdateStats) -> FrameReport<T> {
         self.advance(a.reg.pose);
+        self.constrained = !a.reg.first_frame && !degenerate(&self.config, &a.reg);
         self.note(&a.clouds);
         let report = self.report(a, model_error, update);
         self.frames += 1;
@@ -258,31 +269,34 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 }
 
 /// Step 2 (Sec. III-B): the merge cloud, already filtered as it streamed in, is put in the
-/// reference's order; the registration cloud is its `beta v` downsampling, in the same order.
+/// reference's order; the registration cloud is its `beta v` downsampling, in the same order,
+/// with coarser voxels if that keeps more than `desired` points (see
+/// [`Config::desired_source_points`]).
 fn downsample<T: Real>(
     cfg: &Config<T>,
+    desired: Option<usize>,
     scan: &mut Received,
     merge: &mut [[T; 3]],
     source: &mut [[T; 3]],
     scratch: &mut [u64],
 ) -> Clouds {
     let alpha_v = cfg.voxel_size * cfg.alpha;
-    let beta_v = cfg.voxel_size * cfg.beta;
+    let mut source_v = cfg.voxel_size * cfg.beta;
     scan.dropped.merge_full = scan.merged.dropped as u32;
     let m = scan.merged.kept;
     reference_order(&mut merge[..m], alpha_v, scan.kept, scratch);
-    let sourced = match Dedup::new(source, scratch, beta_v) {
-        Some(mut dedup) => {
-            for p in merge[..m].iter() {
-                dedup.push(&Point::from(*p));
-            }
-            dedup.finish()
-        }
-        None => Downsampled::default(),
+    let thin = |v, out: &mut [[T; 3]], scratch: &mut [u64]| {
+        first_per_voxel(&merge[..m], v, out, scratch).unwrap_or_default()
     };
+    let mut sourced = thin(source_v, source, scratch);
+    let desired = desired.unwrap_or(0);
+    if desired > 0 && sourced.kept > desired {
+        source_v *= T::of(sourced.kept as f64 / desired as f64);
+        sourced = thin(source_v, source, scratch);
+    }
     scan.dropped.source_full = sourced.dropped as u32;
     let s = sourced.kept;
-    reference_order(&mut source[..s], beta_v, m, scratch);
+    reference_order(&mut source[..s], source_v, m, scratch);
     Clouds {
         merge: m,
         source: s,
@@ -303,6 +317,13 @@ fn open<'w, T: Real, P: PointCodec<T>>(
     let words = core::mem::take(&mut parts.map);
     let map = MapMut::of(map, &layout.map, words).map_err(|_| FrameError::Storage)?;
     Ok((parts, map))
+}
+
+/// Whether a registration left a direction unmeasured: no structured voxel near any sample (a
+/// map of one huge voxel, say) measures nothing, which is no evidence of a constrained pose
+/// either.
+fn degenerate<T: Real>(cfg: &Config<T>, f: &Registered<T>) -> bool {
+    !f.first_frame && f.observability.is_none_or(|o| o < cfg.degeneracy_ratio)
 }
 
 /// The frame's status flags.
@@ -328,12 +349,7 @@ fn status<T: Real>(
         Flag::Singular,
         !f.first_frame && (f.icp.singular || !f.finite),
     );
-    // No structured voxel near any sample (a map of one huge voxel, say) measures nothing:
-    // that is no evidence of a constrained pose either.
-    status.set(
-        Flag::Degenerate,
-        !f.first_frame && f.observability.is_none_or(|o| o < cfg.degeneracy_ratio),
-    );
+    status.set(Flag::Degenerate, degenerate(cfg, f));
     status.set(Flag::Held, f.weak.held().directions() > 0);
     status.set(Flag::Planes, f.planes);
     status.set(Flag::InvalidPoints, dropped.non_finite > 0);

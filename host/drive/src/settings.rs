@@ -121,6 +121,9 @@ pub struct Mapping {
     /// A first scan with fewer points within range maps the run on GenZ-ICP's sparse-sensor
     /// map (`Config::sparse_scan_points`; 0: never).
     pub sparse_scan_points: usize,
+    /// A registration cloud of more points is made again with coarser voxels
+    /// (`Config::desired_source_points`; 0: never).
+    pub desired_source_points: usize,
 }
 
 /// Adaptive threshold.
@@ -252,6 +255,7 @@ impl Default for Mapping {
             alpha: 0.5,
             beta: 1.5,
             sparse_scan_points: 0,
+            desired_source_points: 0,
         }
     }
 }
@@ -318,6 +322,7 @@ impl Settings {
         s.mapping.alpha = c.alpha;
         s.mapping.beta = c.beta;
         s.mapping.sparse_scan_points = c.sparse_scan_points;
+        s.mapping.desired_source_points = c.desired_source_points;
         s.adaptive_threshold.initial_threshold = c.initial_threshold;
         s.adaptive_threshold.min_motion_th = c.min_motion_threshold;
         let r = &mut s.registration;
@@ -546,6 +551,7 @@ impl Settings {
         c.beta = T::of(self.mapping.beta);
         c.max_points_per_voxel = self.mapping.max_points_per_voxel;
         c.sparse_scan_points = self.mapping.sparse_scan_points;
+        c.desired_source_points = self.mapping.desired_source_points;
         c.initial_threshold = T::of(self.adaptive_threshold.initial_threshold);
         c.min_motion_threshold = T::of(self.adaptive_threshold.min_motion_th);
         c.convergence_criterion = T::of(self.registration.convergence_criterion);
@@ -696,7 +702,7 @@ macro_rules! field {
 }
 
 /// Every setting the core gets.
-fn fields() -> [Field; 30] {
+fn fields() -> [Field; 31] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -705,6 +711,7 @@ fn fields() -> [Field; 30] {
         field!(mapping.alpha, false),
         field!(mapping.beta, false),
         field!(mapping.sparse_scan_points, false),
+        field!(mapping.desired_source_points, false),
         field!(adaptive_threshold.initial_threshold, false),
         field!(adaptive_threshold.min_motion_th, false),
         field!(registration.max_num_iterations, false),
