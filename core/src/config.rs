@@ -264,7 +264,7 @@ impl<T: Real> Config<T> {
 
     /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
     /// preset"), on ordinary scenes as well as degenerate ones (not on a bare corridor, whose
-    /// axis only a car's priors pin), at 3-4 times the default's time on urban and KITTI scans
+    /// axis only a car's priors pin), at 2-3 times the default's time on urban and KITTI scans
     /// (up to 12 in a corridor). Every frame is
     /// registered with point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
     /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`

@@ -28,14 +28,10 @@ fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
         &tmp.path().join("without"),
         &[&frames[..], &config].concat(),
     );
-    let iterations = |r: &kiss_odom_tests::Run| -> Vec<u32> {
-        r.ok();
-        r.column("iterations")
-            .iter()
-            .map(|v| v.parse().unwrap())
-            .collect()
-    };
-    let (stopped, capped) = (iterations(&with), iterations(&without));
+    let (stopped, capped) = (
+        numbers(&with, "iterations"),
+        numbers(&without, "iterations"),
+    );
     println!("iterations with the cycle stop {stopped:?}, without {capped:?}");
     assert_eq!(capped[4], 500, "without the stop, frame 4 runs to the cap");
     assert!(stopped[4] < 50, "the stop ends frame 4's loop");
@@ -51,17 +47,11 @@ fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
         with.lines("poses_kitti.txt")[..4],
         without.lines("poses_kitti.txt")[..4]
     );
-    // The preset itself thins these dense scans' registration clouds to about 3,000 points
+    // The preset itself thins these dense scans' registration clouds toward 3,000 points
     // from the third frame (after a registration that measured every direction).
     let thinned = run(&seq, &tmp.path().join("thinned"), &frames);
-    thinned.ok();
-    let points = |r: &Run| -> Vec<u32> {
-        r.column("source_points")
-            .iter()
-            .map(|v| v.parse().unwrap())
-            .collect()
-    };
-    let (every, bound) = (points(&with), points(&thinned));
+    let column = "source_points";
+    let (every, bound) = (numbers(&with, column), numbers(&thinned, column));
     println!("registration cloud points: every voxel {every:?}, the preset {bound:?}");
     assert!(every.iter().all(|&n| n > 3_000));
     assert_eq!(
@@ -70,6 +60,15 @@ fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
         "the first two frames keep every voxel"
     );
     assert!(bound[2..].iter().all(|&n| n <= 3_000), "{bound:?}");
+}
+
+/// A `frames.csv` column of a successful run, as numbers.
+fn numbers(r: &Run, column: &str) -> Vec<u32> {
+    r.ok();
+    r.column(column)
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect()
 }
 
 /// `summary.json`'s map: voxel size, points a voxel, and whether the sparse-scan map was taken;

@@ -133,8 +133,9 @@ pub struct PipelineArgs {
     /// bit) or `accurate` (the lowest error measured: point-to-plane terms where the map is
     /// planar on every frame, max_range / 200 voxels, or 1.2 times those with 3 points each
     /// when the first scan has fewer than 32,768 points, a scan whose motion was not the
-    /// model's deskewed again with its own; 3-4 times the time on urban and KITTI scans, up to
-    /// 12 in a corridor); replaces
+    /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
+    /// 3,000 points; 2-3 times the time on urban and KITTI scans, up to 12 in a
+    /// corridor); replaces
     /// the file's `[pipeline] preset` [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,

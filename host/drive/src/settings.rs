@@ -68,8 +68,9 @@ pub enum PresetName {
     Default,
     /// The lowest error measured here (`Config::accurate`): point-to-plane terms where the
     /// map is planar on every frame, `r_max / 200` voxels, a scan whose motion was not the
-    /// model's deskewed again with its own; 3-4 times the default's time on urban and KITTI
-    /// scans, up to 12 in a corridor.
+    /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
+    /// 3,000 points; 2-3 times the default's time on urban and KITTI scans, up to 12 in
+    /// a corridor.
     Accurate,
 }
 
