@@ -103,12 +103,12 @@ pub struct Config<T> {
     /// merge cloud with voxels of `beta v` scaled by its points over this number (GenZ-ICP's
     /// adaptive voxel, from LOCUS 2.0), so ICP's work per iteration stops growing with the
     /// scene's detail; 0 (the reference's) keeps every `beta v` voxel. Only after a
-    /// registration that measured every direction (not the first frame's, nor one flagged
-    /// [`crate::Flag::Degenerate`]): a weakly constrained scene's sparse structure is what
-    /// measures its weak directions. The points counted are those the source buffer held
-    /// (`Capacities::source_points`). A run on the sparse-scan map ([`Config::for_first_scan`])
-    /// keeps every voxel: a sparse sensor's cloud is hardly above GenZ-ICP's count, and every
-    /// point of it counts.
+    /// registration that measured every direction (so never on the first two frames, nor
+    /// after a frame flagged [`crate::Flag::Degenerate`]): a weakly constrained scene's sparse
+    /// structure is what measures its weak directions. The points counted are those the
+    /// source buffer held (`Capacities::source_points`). A run on the sparse-scan map
+    /// ([`Config::for_first_scan`]) keeps every voxel: a sparse sensor's cloud is hardly
+    /// above GenZ-ICP's count, and every point of it counts.
     pub desired_source_points: usize,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
@@ -273,8 +273,9 @@ impl<T: Real> Config<T> {
     /// hand-held, legged or flying sensor breaks them), a registration that goes round a loop
     /// stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the model's
     /// is deskewed again with its own ([`Config::redeskew`]), and a dense scan's registration
-    /// cloud is thinned to about [`DESIRED_SOURCE_POINTS`] where the scene measures every
-    /// direction ([`Config::desired_source_points`]; not on the sparse-scan map). Its poses are not the reference's.
+    /// cloud is thinned toward [`DESIRED_SOURCE_POINTS`] where the scene measures every
+    /// direction ([`Config::desired_source_points`]; not on the sparse-scan map). Its poses
+    /// are not the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),
