@@ -71,8 +71,8 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     /// The one the last registered scan was deskewed with.
     scan_rotation: Option<SweepRotation<T>>,
     frames: u64,
-    /// The last registration measured every direction (it was not the first frame's, nor
-    /// flagged [`crate::Flag::Degenerate`]).
+    /// The last registration measured every direction (it was not the first frame's, and its
+    /// observability was not below `degeneracy_ratio`), as the second deskew asks too.
     constrained: bool,
     merge_len: usize,
     source_len: usize,

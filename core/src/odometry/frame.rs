@@ -40,12 +40,12 @@ pub(super) struct Received {
 }
 
 impl Received {
-    /// The scan can be registered: its storage held and some point survived the crop.
     /// Whether it was deskewed: asked to be, with usable timestamps.
     fn deskewed(&self) -> bool {
         self.deskews && self.stamp_problem.is_none()
     }
 
+    /// The scan can be registered: its storage held and some point survived the crop.
     fn usable(&self) -> Result<(), FrameError> {
         if self.storage_lost {
             Err(FrameError::Storage)
@@ -123,7 +123,11 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         // Step 2 (Sec. III-B): P*_merge in the reference's order, then P^* from it.
         // Until a registration has measured every direction, every `beta v` voxel: a weakly
         // constrained scene's sparse structure is what measures its weak directions.
-        let desired = self.constrained.then_some(cfg.desired_source_points);
+        let desired = if self.constrained {
+            cfg.desired_source_points
+        } else {
+            0
+        };
         let clouds = downsample(
             &cfg,
             desired,
@@ -179,11 +183,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         cfg.redeskew
             && a.scan.deskewed()
             && self.sweep_rotation.is_none()
-            && !a.reg.first_frame
             && a.reg.finite
-            && a.reg
-                .observability
-                .is_some_and(|o| o >= cfg.degeneracy_ratio)
+            && measured_every_direction(cfg, &a.reg)
             && self.threshold.in_use().model_error(&a.deviation()) > cfg.min_motion_threshold
     }
 
@@ -202,7 +203,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// high-water marks, and the report.
     fn conclude(&mut self, a: &Aligned<T>, model_error: T, update: &UpdateStats) -> FrameReport<T> {
         self.advance(a.reg.pose);
-        self.constrained = !a.reg.first_frame && !degenerate(&self.config, &a.reg);
+        self.constrained = measured_every_direction(&self.config, &a.reg);
         self.note(&a.clouds);
         let report = self.report(a, model_error, update);
         self.frames += 1;
@@ -270,11 +271,11 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
 /// Step 2 (Sec. III-B): the merge cloud, already filtered as it streamed in, is put in the
 /// reference's order; the registration cloud is its `beta v` downsampling, in the same order,
-/// with coarser voxels if that keeps more than `desired` points (see
+/// with coarser voxels if that keeps more than `desired` points (0: never; see
 /// [`Config::desired_source_points`]).
 fn downsample<T: Real>(
     cfg: &Config<T>,
-    desired: Option<usize>,
+    desired: usize,
     scan: &mut Received,
     merge: &mut [[T; 3]],
     source: &mut [[T; 3]],
@@ -289,7 +290,6 @@ fn downsample<T: Real>(
         first_per_voxel(&merge[..m], v, out, scratch).unwrap_or_default()
     };
     let mut sourced = thin(source_v, source, scratch);
-    let desired = desired.unwrap_or(0);
     if desired > 0 && sourced.kept > desired {
         source_v *= T::of(sourced.kept as f64 / desired as f64);
         sourced = thin(source_v, source, scratch);
@@ -317,6 +317,12 @@ fn open<'w, T: Real, P: PointCodec<T>>(
     let words = core::mem::take(&mut parts.map);
     let map = MapMut::of(map, &layout.map, words).map_err(|_| FrameError::Storage)?;
     Ok((parts, map))
+}
+
+/// Whether a registration measured every direction: a frame registered against a map, with
+/// an observability not below `degeneracy_ratio`.
+fn measured_every_direction<T: Real>(cfg: &Config<T>, f: &Registered<T>) -> bool {
+    !f.first_frame && f.observability.is_some_and(|o| o >= cfg.degeneracy_ratio)
 }
 
 /// Whether a registration left a direction unmeasured: no structured voxel near any sample (a
