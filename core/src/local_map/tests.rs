@@ -295,3 +295,26 @@ fn a_full_point_pool_evicts_too_and_the_radius_grows_back_while_there_is_room() 
     }
     assert_eq!(r, 10.0);
 }
+
+#[test]
+fn the_next_occupied_slot_is_the_first_nonzero_count_from_where_the_scan_stands() {
+    let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+    let mut counts = [0u8; 77];
+    for trial in 0..200 {
+        // Sparse tables (most slots empty), a slot of every word position, and a tail shorter
+        // than a word.
+        let density = [0.02, 0.1, 0.5][trial % 3];
+        for c in counts.iter_mut() {
+            *c = if rng.next() < density {
+                1 + (rng.next() * 20.0) as u8
+            } else {
+                0
+            };
+        }
+        for from in 0..=counts.len() + 1 {
+            let want = (from..counts.len()).find(|&i| counts[i] != 0);
+            let got = super::update::next_occupied(&counts, from);
+            assert_eq!(got, want, "trial {trial}, from {from}");
+        }
+    }
+}

@@ -177,8 +177,8 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
     /// Removes voxels whose first point's squared distance from `origin` is `limit2` or more.
     pub(super) fn remove_beyond(&mut self, origin: &Point<T>, limit2: T) -> usize {
         let mut removed = 0;
-        let mut i = 0;
-        while i < self.st.slots {
+        let mut from = 0;
+        while let Some(i) = next_occupied(self.buf.counts, from) {
             // A removal shifts a later voxel into slot i: look at slot i again.
             while self.buf.counts[i] != 0 {
                 if self.first_distance2(i, origin) >= limit2 {
@@ -188,7 +188,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
                     break;
                 }
             }
-            i += 1;
+            from = i + 1;
         }
         removed
     }
@@ -289,4 +289,21 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         self.st.voxels * den < self.st.max_voxels * num
             && self.st.blocks_used * den < self.st.blocks * num
     }
+}
+
+/// The first slot at or after `from` that holds a voxel. The table is sized for the map's
+/// capacity and mostly empty, so empty slots are skipped eight at a time.
+pub(super) fn next_occupied(counts: &[u8], from: usize) -> Option<usize> {
+    let rest = counts.get(from..)?;
+    let mut words = rest.chunks_exact(8);
+    let mut at = from;
+    for word in &mut words {
+        let word = u64::from_le_bytes(word.try_into().ok()?);
+        if word != 0 {
+            return Some(at + (word.trailing_zeros() / 8) as usize);
+        }
+        at += 8;
+    }
+    let tail = words.remainder();
+    tail.iter().position(|&c| c != 0).map(|k| at + k)
 }
