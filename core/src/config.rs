@@ -105,10 +105,13 @@ pub struct Config<T> {
     /// scene's detail; 0 (the reference's) keeps every `beta v` voxel. Only after a
     /// registration that measured every direction (so never on the first two frames, nor
     /// after a frame flagged [`crate::Flag::Degenerate`]): a weakly constrained scene's sparse
-    /// structure is what measures its weak directions. The points counted are those the
-    /// source buffer held (`Capacities::source_points`). A run on the sparse-scan map
-    /// ([`Config::for_first_scan`]) keeps every voxel: a sparse sensor's cloud is hardly
-    /// above GenZ-ICP's count, and every point of it counts.
+    /// structure is what measures its weak directions. The first registration against the map
+    /// (the second frame, from a prediction standing still: the one that iterates longest)
+    /// registers the thinned cloud first, then every voxel from where that ended if it measured
+    /// every direction (not with a `work_budget`, which bounds one registration). The points
+    /// counted are those the source buffer held (`Capacities::source_points`). A run on the
+    /// sparse-scan map ([`Config::for_first_scan`]) keeps every voxel: a sparse sensor's cloud
+    /// is hardly above GenZ-ICP's count, and every point of it counts.
     pub desired_source_points: usize,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would

@@ -240,11 +240,12 @@ pub struct FrameReport<T: Real> {
     pub pose: Pose<T>,
     /// Ok, or how the frame was degraded.
     pub status: Status,
-    /// Gauss-Newton iterations completed.
+    /// Gauss-Newton iterations completed (on the first registration against the map, with
+    /// those of its start on the thinned cloud: see `Config::desired_source_points`).
     pub iterations: u32,
     /// ICP's work in units: one per correspondence query, plus one per voxel looked up and per
     /// map point compared when the query searched the map (a query that kept its last answer
-    /// costs one). Never above `Config::work_budget`.
+    /// costs one), counted as `iterations` are. Never above `Config::work_budget`.
     pub work: u64,
     /// Correspondences in the last iteration.
     pub correspondences: u32,

@@ -12,7 +12,7 @@ use crate::downsample::{first_per_voxel, reference_order, Downsampled};
 use crate::error::FrameError;
 use crate::geometry::Pose;
 use crate::lie::renormalize;
-use crate::local_map::{MapMut, MapState, PointCodec, UpdateStats};
+use crate::local_map::{MapMut, MapState, MapView, PointCodec, UpdateStats};
 use crate::registration::Executor;
 use crate::report::{Dropped, Flag, FrameReport, Status};
 use crate::scalar::Real;
@@ -117,10 +117,21 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         // Step 1's prediction, Eq. (1) (the scan was deskewed with it as it arrived), and step
         // 4's threshold, tau = 3 sigma_t (Eq. (7)).
         let predicted = self.predict();
-        let (parts, map) =
+        let (mut parts, map) =
             open::<T, P>(&self.layout, &self.caps, &mut self.storage, &mut self.map)?;
 
         // Step 2 (Sec. III-B): P*_merge in the reference's order, then P^* from it.
+        let m = order_merge(&cfg, &mut scan, parts.merge, parts.scratch);
+        let from = Predicted {
+            pose: start.unwrap_or(predicted.pose),
+            ..predicted
+        };
+        // The first registration starts far from its answer, the prediction standing still.
+        let coarse = if start.is_none() && predicted.frames == 1 {
+            coarse_start(&cfg, exec, &mut parts, m, &map.view(), &from)
+        } else {
+            None
+        };
         // Until a registration has measured every direction, every `beta v` voxel: a weakly
         // constrained scene's sparse structure is what measures its weak directions.
         let desired = if self.constrained {
@@ -128,22 +139,25 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         } else {
             0
         };
-        let clouds = downsample(
-            &cfg,
-            desired,
-            &mut scan,
-            parts.merge,
-            parts.source,
-            parts.scratch,
-        );
+        let merge = &parts.merge[..m];
+        let sourced = source_cloud(&cfg, desired, merge, parts.source, parts.scratch);
+        scan.dropped.source_full = sourced.kept.dropped as u32;
+        let clouds = Clouds {
+            merge: m,
+            source: sourced.kept.kept,
+        };
         let source = &parts.source[..clouds.source];
 
         // Step 4 (Sec. III-E, Eq. (9)-(12)): robust ICP of P^* against the local map.
         let from = Predicted {
-            pose: start.unwrap_or(predicted.pose),
-            ..predicted
+            pose: coarse.as_ref().map_or(from.pose, |c| c.pose),
+            ..from
         };
-        let reg = Step::new(&cfg, exec, source).register(&from, &map.view(), parts.icp);
+        let mut reg = Step::new(&cfg, exec, source).register(&from, &map.view(), parts.icp);
+        if let Some(c) = coarse {
+            reg.icp.iterations += c.icp.iterations;
+            reg.icp.work += c.icp.work;
+        }
         Ok(Aligned {
             scan,
             clouds,
@@ -269,38 +283,83 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     }
 }
 
-/// Step 2 (Sec. III-B): the merge cloud, already filtered as it streamed in, is put in the
-/// reference's order; the registration cloud is its `beta v` downsampling, in the same order,
-/// with coarser voxels if that keeps more than `desired` points (0: never; see
-/// [`Config::desired_source_points`]).
-fn downsample<T: Real>(
+/// Step 2 (Sec. III-B): the merge cloud, already filtered as it streamed in, put in the
+/// reference's order; its length.
+fn order_merge<T: Real>(
     cfg: &Config<T>,
-    desired: usize,
     scan: &mut Received,
     merge: &mut [[T; 3]],
-    source: &mut [[T; 3]],
     scratch: &mut [u64],
-) -> Clouds {
-    let alpha_v = cfg.voxel_size * cfg.alpha;
-    let mut source_v = cfg.voxel_size * cfg.beta;
+) -> usize {
     scan.dropped.merge_full = scan.merged.dropped as u32;
     let m = scan.merged.kept;
-    reference_order(&mut merge[..m], alpha_v, scan.kept, scratch);
-    let thin = |v, out: &mut [[T; 3]], scratch: &mut [u64]| {
-        first_per_voxel(&merge[..m], v, out, scratch).unwrap_or_default()
-    };
-    let mut sourced = thin(source_v, source, scratch);
-    if desired > 0 && sourced.kept > desired {
-        source_v *= T::of(sourced.kept as f64 / desired as f64);
-        sourced = thin(source_v, source, scratch);
+    reference_order(
+        &mut merge[..m],
+        cfg.voxel_size * cfg.alpha,
+        scan.kept,
+        scratch,
+    );
+    m
+}
+
+/// Step 4's start for a scan's first registration against the map: the registration of the
+/// thinned cloud (see [`Config::desired_source_points`]) from `from`, if the cloud was thinned
+/// and that registration measured every direction; else `None` (start at `from`). Not with a
+/// work budget, which bounds one registration.
+fn coarse_start<T: Real, P: PointCodec<T>, E: Executor>(
+    cfg: &Config<T>,
+    exec: &E,
+    parts: &mut Parts<'_, T>,
+    merge: usize,
+    map: &MapView<'_, T, P>,
+    from: &Predicted<T>,
+) -> Option<Registered<T>> {
+    if cfg.work_budget.is_some() {
+        return None;
     }
-    scan.dropped.source_full = sourced.dropped as u32;
-    let s = sourced.kept;
-    reference_order(&mut source[..s], source_v, m, scratch);
-    Clouds {
-        merge: m,
-        source: s,
+    let merge = &parts.merge[..merge];
+    let thin = source_cloud(
+        cfg,
+        cfg.desired_source_points,
+        merge,
+        parts.source,
+        parts.scratch,
+    );
+    if !thin.thinned {
+        return None;
     }
+    let step = Step::new(cfg, exec, &parts.source[..thin.kept.kept]);
+    let reg = step.register(from, map, parts.icp);
+    (reg.finite && measured_every_direction(cfg, &reg)).then_some(reg)
+}
+
+/// A registration cloud in the source buffer.
+struct Sourced {
+    kept: Downsampled,
+    /// Made with voxels coarser than `beta v`.
+    thinned: bool,
+}
+
+/// Step 2: the registration cloud, the `beta v` downsampling of `merge` in its order, with
+/// coarser voxels if that keeps more than `desired` points (0: never; see
+/// [`Config::desired_source_points`]).
+fn source_cloud<T: Real>(
+    cfg: &Config<T>,
+    desired: usize,
+    merge: &[[T; 3]],
+    source: &mut [[T; 3]],
+    scratch: &mut [u64],
+) -> Sourced {
+    let mut v = cfg.voxel_size * cfg.beta;
+    let mut thin = |v| first_per_voxel(merge, v, source, scratch).unwrap_or_default();
+    let mut kept = thin(v);
+    let thinned = desired > 0 && kept.kept > desired;
+    if thinned {
+        v *= T::of(kept.kept as f64 / desired as f64);
+        kept = thin(v);
+    }
+    reference_order(&mut source[..kept.kept], v, merge.len(), scratch);
+    Sourced { kept, thinned }
 }
 
 /// The parts of the storage a frame works in, and the map among them.
