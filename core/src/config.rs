@@ -223,6 +223,15 @@ pub const SPARSE_VOXEL_FACTOR: f64 = 1.2;
 /// The sparse-scan map's `N_max`: GenZ-ICP's `outdoor` map's.
 pub const SPARSE_POINTS_PER_VOXEL: u32 = 3;
 
+/// The sparse-scan map's `beta`: its registration cloud on the map's own voxels, where
+/// GenZ-ICP starts its adaptive source voxel (BENCHMARKS.md, "The sparse-scan map").
+pub const SPARSE_BETA: f64 = 1.0;
+
+/// The sparse-scan map's [`Robust::kernel_scale`]: below the paper's 1/3. A 16-beam sensor's
+/// neighbourhoods are often one ring's arc, whose normal is only the arc's flatter side; the
+/// tighter kernel weighs their residuals less (BENCHMARKS.md, "The sparse-scan map").
+pub const SPARSE_PLANE_KERNEL_SCALE: f64 = 0.25;
+
 impl<T: Real> Config<T> {
     /// The reference defaults for a sensor with range `max_range` (voxel size `r_max / 100`).
     pub fn new(max_range: T) -> Self {
@@ -292,8 +301,10 @@ impl<T: Real> Config<T> {
     }
 
     /// This configuration for a run whose first scan kept `points` points within range: with
-    /// the sparse-scan map (see [`Config::sparse_scan_points`]), and every `beta v` voxel of
-    /// the registration cloud, when that is fewer than `sparse_scan_points`, else as it is.
+    /// the sparse-scan map (see [`Config::sparse_scan_points`]), a registration cloud of every
+    /// voxel of the map's size ([`SPARSE_BETA`]) and the plane terms' kernel
+    /// [`SPARSE_PLANE_KERNEL_SCALE`], when that is fewer than `sparse_scan_points`, else as
+    /// it is.
     pub fn for_first_scan(&self, points: usize) -> Self {
         if points >= self.sparse_scan_points {
             return *self;
@@ -301,7 +312,12 @@ impl<T: Real> Config<T> {
         Self {
             voxel_size: self.voxel_size * T::of(SPARSE_VOXEL_FACTOR),
             max_points_per_voxel: self.max_points_per_voxel.min(SPARSE_POINTS_PER_VOXEL),
+            beta: T::of(SPARSE_BETA),
             desired_source_points: 0,
+            robust: Robust {
+                kernel_scale: T::of(SPARSE_PLANE_KERNEL_SCALE),
+                ..self.robust
+            },
             ..*self
         }
     }
@@ -654,10 +670,20 @@ mod tests {
             "every voxel of a sparse cloud"
         );
         assert_eq!(
+            (sparse.beta, sparse.robust.kernel_scale),
+            (1.0, 0.25),
+            "a registration cloud on the map's voxels, a tighter plane kernel"
+        );
+        assert_eq!(
             Config {
                 voxel_size: a.voxel_size,
                 max_points_per_voxel: a.max_points_per_voxel,
                 desired_source_points: a.desired_source_points,
+                beta: a.beta,
+                robust: Robust {
+                    kernel_scale: a.robust.kernel_scale,
+                    ..sparse.robust
+                },
                 ..sparse
             },
             a,
