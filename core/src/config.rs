@@ -276,18 +276,18 @@ impl<T: Real> Config<T> {
 
     /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
     /// preset"), on ordinary scenes as well as degenerate ones (not on a bare corridor, whose
-    /// axis only a car's priors pin), at 2-3 times the default's time on urban and KITTI scans
-    /// (up to 12 in a corridor). Every frame is
-    /// registered with point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
-    /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
-    /// voxels (GenZ-ICP's sparse-sensor map when the first scan is sparse,
-    /// [`Config::sparse_scan_points`]), with no motion prior (the priors assume a car; a
-    /// hand-held, legged or flying sensor breaks them), a registration that goes round a loop
-    /// stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the model's
-    /// is deskewed again with its own ([`Config::redeskew`]), and a dense scan's registration
-    /// cloud is thinned toward [`DESIRED_SOURCE_POINTS`] where the scene measures every
-    /// direction ([`Config::desired_source_points`]; not on the sparse-scan map). Its poses
-    /// are not the reference's.
+    /// axis only a car's priors pin), at 1.4-3 times the default's time on urban and KITTI
+    /// scans (up to 14 in a corridor). Every frame is registered with point-to-plane terms
+    /// where the map is planar (GenZ-ICP's weighting, see `registration::planes`) and
+    /// point-to-point terms elsewhere, on a map of `r_max / 200` voxels (GenZ-ICP's
+    /// sparse-sensor map when the first scan is sparse, [`Config::for_first_scan`]), with no
+    /// motion prior (the priors assume a car; a hand-held, legged or flying sensor breaks
+    /// them), a registration that goes round a loop stops there ([`Robust::cycle_stop`]), a
+    /// whole scan whose motion was not the model's is deskewed again with its own
+    /// ([`Config::redeskew`]), and a dense scan's registration cloud is thinned toward
+    /// [`DESIRED_SOURCE_POINTS`] where the scene measures every direction
+    /// ([`Config::desired_source_points`]; not on the sparse-scan map). Its poses are not the
+    /// reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),

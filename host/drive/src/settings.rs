@@ -69,7 +69,7 @@ pub enum PresetName {
     /// The lowest error measured here (`Config::accurate`): point-to-plane terms where the
     /// map is planar on every frame, `r_max / 200` voxels, a scan whose motion was not the
     /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
-    /// 3,000 points; 2-3 times the default's time on urban and KITTI scans, up to 12 in
+    /// 3,000 points; 1.4-3 times the default's time on urban and KITTI scans, up to 14 in
     /// a corridor.
     Accurate,
 }
