@@ -552,3 +552,42 @@ fn the_first_registration_starts_from_the_thinned_clouds_when_that_measured_ever
     let budget = Some(every.work * 2);
     assert_eq!(frame_1(desired, budget).0.pose, frame_1(0, budget).0.pose);
 }
+
+#[test]
+fn only_the_first_registration_is_run_twice_and_its_report_counts_both() {
+    // One iteration a registration: frame 1 runs the thinned start and every voxel, each later
+    // frame one registration.
+    let scans = scans();
+    let caps = Capacities {
+        plane_terms: true,
+        source_points: caps().merge_points,
+        ..caps()
+    };
+    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut run = |desired_source_points| -> Vec<FrameReport<f64>> {
+        let cfg = Config {
+            desired_source_points,
+            sparse_scan_points: 0,
+            max_iterations: 1,
+            ..Config::<f64>::accurate(100.0)
+        };
+        let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps, &mut words[..]).unwrap();
+        scans[..6]
+            .iter()
+            .map(|s| odom.register_frame(s, None).unwrap())
+            .collect()
+    };
+    let every = run(0);
+    let desired = every[1].correspondences as usize / 4;
+    let thinned = run(desired);
+    let iterations: Vec<u32> = thinned.iter().map(|r| r.iterations).collect();
+    println!(
+        "iterations {iterations:?}; frame 1's work {} against {} on every voxel alone",
+        thinned[1].work, every[1].work
+    );
+    assert_eq!(iterations, [0, 2, 1, 1, 1, 1]);
+    assert!(thinned[1].work > every[1].work, "both registrations' work");
+    // A cloud of exactly the desired count is not thinned, so it starts from the prediction.
+    let exact = run(every[1].source_points as usize);
+    assert_eq!((exact[1].iterations, exact[1].pose), (1, every[1].pose));
+}
