@@ -402,11 +402,7 @@ fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_po
     // registrations measure every direction, some are flagged degenerate.
     use crate::redeskew::{pose, sweeps, SWEEP};
     let all: Vec<_> = sweeps().into_iter().map(|s| s.0).collect();
-    let caps = Capacities {
-        plane_terms: true,
-        source_points: caps().merge_points,
-        ..caps()
-    };
+    let caps = plane_caps();
     let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
     let asked = Config {
         desired_source_points: 0,
@@ -487,34 +483,54 @@ fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_po
     assert!(b < 2.0 * f + 0.01, "{b} against {f}");
 }
 
-#[test]
-fn the_first_registration_starts_from_the_thinned_clouds_when_that_measured_every_direction() {
-    // The street's sensor moves 0.8 m between the first two frames and the prediction stands
-    // still: the first registration is the one that iterates longest. The preset's voxels for
-    // a 100 m sensor (0.5 m): the street's 0.3 m sampling leaves too few points for a plane in
-    // the 27 voxels around a point at 40 m's 0.2 m.
-    let scans = scans();
-    let caps = Capacities {
+/// Capacities with room for plane terms and a registration cloud as large as the merge cloud.
+fn plane_caps() -> Capacities {
+    Capacities {
         plane_terms: true,
         source_points: caps().merge_points,
         ..caps()
-    };
+    }
+}
+
+/// `scans` through the `accurate` preset for a 100 m sensor (0.5 m voxels: the street's 0.3 m
+/// sampling leaves too few points for a plane in the 27 voxels around a point at 40 m's 0.2 m),
+/// always on its own map, changed by `with`: each frame's report and the last registration
+/// cloud.
+fn accurate_on(
+    scans: &[Vec<[f64; 3]>],
+    with: impl FnOnce(Config<f64>) -> Config<f64>,
+) -> (Vec<FrameReport<f64>>, Vec<[f64; 3]>) {
+    let caps = plane_caps();
+    let cfg = with(Config {
+        sparse_scan_points: 0,
+        ..Config::<f64>::accurate(100.0)
+    });
     let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
-    let mut frame_1 = |desired_source_points, work_budget| {
-        let cfg = Config {
+    let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps, &mut words[..]).unwrap();
+    let reports = scans
+        .iter()
+        .map(|s| odom.register_frame(s, None).unwrap())
+        .collect();
+    (reports, odom.source().to_vec())
+}
+
+#[test]
+fn the_first_registration_starts_from_the_thinned_clouds_when_that_measured_every_direction() {
+    // The street's sensor moves 0.8 m between the first two frames and the prediction stands
+    // still: the first registration is the one that iterates longest.
+    let scans = scans();
+    let frame_1 = |desired_source_points, work_budget| {
+        let (reports, cloud) = accurate_on(&scans[..2], |c| Config {
             desired_source_points,
-            sparse_scan_points: 0,
             work_budget,
-            ..Config::<f64>::accurate(100.0)
-        };
-        let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps, &mut words[..]).unwrap();
-        odom.register_frame(&scans[0], None).unwrap();
-        let r = odom.register_frame(&scans[1], None).unwrap();
+            ..c
+        });
+        let r = reports[1];
         assert!(
             !r.status.contains(Flag::Degenerate),
             "a street measures every direction"
         );
-        (r, odom.source().to_vec())
+        (r, cloud)
     };
     let (every, every_cloud) = frame_1(0, None);
     let desired = every_cloud.len() / 4;
@@ -558,24 +574,13 @@ fn only_the_first_registration_is_run_twice_and_its_report_counts_both() {
     // One iteration a registration: frame 1 runs the thinned start and every voxel, each later
     // frame one registration.
     let scans = scans();
-    let caps = Capacities {
-        plane_terms: true,
-        source_points: caps().merge_points,
-        ..caps()
-    };
-    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
-    let mut run = |desired_source_points| -> Vec<FrameReport<f64>> {
-        let cfg = Config {
+    let run = |desired_source_points| {
+        let with = |c| Config {
             desired_source_points,
-            sparse_scan_points: 0,
             max_iterations: 1,
-            ..Config::<f64>::accurate(100.0)
+            ..c
         };
-        let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps, &mut words[..]).unwrap();
-        scans[..6]
-            .iter()
-            .map(|s| odom.register_frame(s, None).unwrap())
-            .collect()
+        accurate_on(&scans[..6], with).0
     };
     let every = run(0);
     let desired = every[1].correspondences as usize / 4;
