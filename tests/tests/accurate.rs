@@ -101,6 +101,20 @@ fn the_accurate_preset_maps_a_sparse_sensor_on_genz_icp_s_sparse_sensor_map() {
     let sparse = map_of(&run(&vlp, &tmp.path().join("a"), &accurate));
     assert_eq!((sparse.1, sparse.2), (3, true));
     assert!((sparse.0 - 0.6).abs() < 1e-12);
+    // The warning names the map's voxel as the core holds it, in f32 too, and the registration
+    // settings that the map puts in place of the configured ones.
+    let f32 = run(
+        &vlp,
+        &tmp.path().join("f"),
+        &[&accurate[..], &["--scalar", "f32"]].concat(),
+    );
+    map_of(&f32);
+    for said in [
+        "maps on 0.6 m voxels of at most 3 points",
+        "with beta 1 and plane_kernel_scale 0.01 (the sparse-sensor map, in place of",
+    ] {
+        assert!(f32.stderr.contains(said), "{said:?} in {}", f32.stderr);
+    }
     // The reference keeps its map whatever the scan.
     assert_eq!(
         map_of(&run(&vlp, &tmp.path().join("d"), &["--threads", "1"])),

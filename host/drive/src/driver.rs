@@ -22,7 +22,9 @@ use crate::outcome::{FrameMeta, ImuUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
-use kiss_odom_core::{Capacities, FrameError, HighWater, Prior};
+use kiss_odom_core::{
+    Capacities, FrameError, HighWater, Prior, SPARSE_BETA, SPARSE_PLANE_KERNEL_SCALE,
+};
 use kiss_odom_io::{Frame, Item};
 use nalgebra::Isometry3;
 use std::time::Duration;
@@ -281,12 +283,17 @@ impl Driver {
             .input_points
             .saturating_sub(report.out_of_range)
             .saturating_sub(report.dropped.non_finite);
+        // The core holds the voxel as its scalar: an f32 run's 0.6 is shown as 0.6, not as the
+        // f64 it widens to.
+        let voxel = voxel as f32;
         sparse.then(|| {
             format!(
                 "{}: the first scan kept {kept} points within range, fewer than [mapping] \
                  sparse_scan_points: the run maps on {voxel} m voxels of at most {points} \
-                 points (the sparse-sensor map); a recording that begins mid-sweep gives such \
-                 a first scan too, and sparse_scan_points = 0 keeps the configured map",
+                 points and registers on them with beta {SPARSE_BETA} and plane_kernel_scale \
+                 {SPARSE_PLANE_KERNEL_SCALE} (the sparse-sensor map, in place of the \
+                 configured ones); a recording that begins mid-sweep gives such a first scan \
+                 too, and sparse_scan_points = 0 keeps the configured map",
                 outcome.meta.source
             )
         })
