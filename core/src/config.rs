@@ -56,6 +56,11 @@ pub struct Config<T> {
     pub alpha: T,
     /// `beta`: the registration cloud uses voxels of `beta v` (paper: 1.5).
     pub beta: T,
+    /// Put the merge and registration clouds in the reference's order (the bucket order of
+    /// kiss-icp's hash table, rebuilt in `downsample::reference_order`), which its poses need
+    /// bit for bit. `false` keeps them in the order the scan gave their first points: the same
+    /// points, without the sort, and neighbours stay near each other in the map's memory.
+    pub reference_order: bool,
     /// `N_max`: points per map voxel (paper: 20, at most 255 here).
     pub max_points_per_voxel: u32,
     /// `tau_0`: the threshold's seed sample (paper: 2 m).
@@ -244,6 +249,7 @@ impl<T: Real> Config<T> {
             voxel_size: max_range / T::of(100.0),
             alpha: T::of(0.5),
             beta: T::of(1.5),
+            reference_order: true,
             max_points_per_voxel: 20,
             initial_threshold: T::of(2.0),
             min_motion_threshold: T::of(0.1),
@@ -279,8 +285,8 @@ impl<T: Real> Config<T> {
 
     /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
     /// preset"), on ordinary scenes as well as degenerate ones (not on a bare corridor, whose
-    /// axis only a car's priors pin), at 1.4-3 times the default's time on urban and KITTI
-    /// scans (up to 14 in a corridor). Every frame is registered with point-to-plane terms
+    /// axis only a car's priors pin), at 1.1-2.6 times the default's time on urban and KITTI
+    /// scans (up to 9 in a corridor). Every frame is registered with point-to-plane terms
     /// where the map is planar (GenZ-ICP's weighting, see `registration::planes`) and
     /// point-to-point terms elsewhere, on a map of `r_max / 200` voxels (GenZ-ICP's
     /// sparse-sensor map when the first scan is sparse, [`Config::for_first_scan`]), with no
@@ -289,8 +295,8 @@ impl<T: Real> Config<T> {
     /// whole scan whose motion was not the model's is deskewed again with its own
     /// ([`Config::redeskew`]), and a dense scan's registration cloud is thinned toward
     /// [`DESIRED_SOURCE_POINTS`] where the scene measures every direction
-    /// ([`Config::desired_source_points`]; not on the sparse-scan map). Its poses are not the
-    /// reference's.
+    /// ([`Config::desired_source_points`]; not on the sparse-scan map). Both clouds keep the
+    /// scan's order ([`Config::reference_order`] `false`). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),
@@ -299,6 +305,7 @@ impl<T: Real> Config<T> {
             sparse_scan_points: SPARSE_SCAN_POINTS,
             desired_source_points: DESIRED_SOURCE_POINTS,
             redeskew: true,
+            reference_order: false,
             ..Self::new(max_range)
         }
     }
@@ -611,12 +618,17 @@ mod tests {
             !Config::<f64>::new(80.0).redeskew,
             "the reference deskews once"
         );
+        assert!(
+            !a.reference_order && r.reference_order && Config::<f64>::new(80.0).reference_order,
+            "the preset's clouds in scan order only"
+        );
         let back = Config {
             voxel_size: r.voxel_size,
             robust: r.robust,
             sparse_scan_points: r.sparse_scan_points,
             desired_source_points: r.desired_source_points,
             redeskew: r.redeskew,
+            reference_order: r.reference_order,
             ..a
         };
         assert_eq!(back, r, "nothing else differs from robust mode");

@@ -6,7 +6,7 @@ use crate::common;
 
 use common::*;
 use kiss_odom_core::stages::{
-    chunks_for, preprocess, scratch_words_for, voxel_downsample, CHUNK, SYSTEM_LEN,
+    chunks_for, preprocess, scratch_words_for, voxel_downsample, Dedup, CHUNK, SYSTEM_LEN,
 };
 use kiss_odom_core::{
     Capacities, Config, ConfigError, Exact, Flag, FrameReport, Odometry, Pose, Quantized, Storage,
@@ -299,6 +299,63 @@ fn the_last_frame_is_available_as_kiss_icp_returns_it() {
     }
 }
 
+/// The first point of each voxel of size `v`, in the order `points` gives them.
+fn first_seen(points: &[[f64; 3]], v: f64) -> Vec<[f64; 3]> {
+    let mut out = vec![[0.0; 3]; points.len()];
+    let mut scratch = vec![0u64; scratch_words_for(points.len())];
+    let mut dedup = Dedup::new(&mut out, &mut scratch, v).unwrap();
+    points.iter().for_each(|p| dedup.push(&(*p).into()));
+    let kept = dedup.finish().kept;
+    out.truncate(kept);
+    out
+}
+
+fn sorted(mut points: Vec<[f64; 3]>) -> Vec<[f64; 3]> {
+    points.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    points
+}
+
+#[test]
+fn without_the_reference_order_both_clouds_keep_the_scan_order() {
+    let frames = scans();
+    let caps = caps();
+    let scan_order = Config {
+        reference_order: false,
+        ..Config::new(RANGE)
+    };
+    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut odom = Odometry::<f64, Exact, _>::new(scan_order, caps, &mut words[..]).unwrap();
+    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
+    let mut reference =
+        Odometry::<f64, Exact, _>::new(Config::new(RANGE), caps, &mut words[..]).unwrap();
+    let (v, mut reordered) = (scan_order.voxel_size, 0);
+    for (i, s) in frames.iter().enumerate().take(3) {
+        let t = stamps(s);
+        odom.register_frame(s, Some(&t)).unwrap();
+        reference.register_frame(s, Some(&t)).unwrap();
+        let mut deskewed = vec![[0.0; 3]; s.len()];
+        let n = odom.deskewed_scan(s, Some(&t), &mut deskewed).kept;
+        let merge = first_seen(&deskewed[..n], v * scan_order.alpha);
+        let source = first_seen(&merge, v * scan_order.beta);
+        assert!(odom.merge_cloud() == &merge[..], "frame {i}: merge cloud");
+        assert!(
+            odom.source() == &source[..],
+            "frame {i}: registration cloud"
+        );
+        // The reference's order of the same points, on the first frame (the poses part after
+        // it: the map's points came in another order).
+        if i == 0 {
+            let (ours, theirs) = (
+                odom.merge_cloud().to_vec(),
+                reference.merge_cloud().to_vec(),
+            );
+            assert_eq!(sorted(ours.clone()), sorted(theirs.clone()));
+            reordered += ours.iter().zip(&theirs).filter(|(a, b)| a != b).count();
+        }
+    }
+    assert!(reordered > 0, "the reference's order is another");
+}
+
 fn widen(p: &Pose<f32>) -> Pose<f64> {
     nalgebra::convert(*p)
 }
@@ -433,20 +490,14 @@ fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_po
     assert_eq!(run(most), free);
     // Below every frame's count: after a registration that measured every direction, each
     // cloud is the merge cloud's first point per voxel of `beta v` times the points `beta v`
-    // keeps over the desired count, in the reference's order; on the first two frames and
-    // after a registration flagged degenerate, every `beta v` voxel's.
+    // keeps over the desired count, in the merge cloud's order (the preset keeps the scan's);
+    // on the first two frames and after a registration flagged degenerate, every `beta v`
+    // voxel's.
+    assert!(!asked.reference_order);
     let desired = fewest / 2;
     let bound = run(desired);
     let beta_v = asked.voxel_size * asked.beta;
-    let mut scratch = vec![0u64; scratch_words_for(caps.merge_points)];
-    let mut downsample = |merge: &[[f64; 3]], voxel: f64| -> Vec<[f64; 3]> {
-        let mut out = vec![[0.0; 3]; merge.len()];
-        let k = voxel_downsample(merge, voxel, &mut out, &mut scratch)
-            .unwrap()
-            .kept;
-        out.truncate(k);
-        out
-    };
+    let downsample = first_seen;
     let mut thinned = 0;
     for (i, (_, source, merge, _)) in bound.iter().enumerate() {
         let every = downsample(merge, beta_v);

@@ -2,8 +2,8 @@
 //! registration with plane terms goes round a loop of two iterates 0.14 mm apart that
 //! `|dx| < gamma` never ends. With the stop it ends in the loop; without it (`cycle_stop =
 //! false`), it runs to the iteration cap (both with every voxel of the registration cloud,
-//! `desired_source_points = 0`). And the map it picks from the first scan's density,
-//! and the second deskew where a scan's motion was not the model's.
+//! `desired_source_points = 0`, in the reference's order). And the map it picks from the
+//! first scan's density, and the second deskew where a scan's motion was not the model's.
 
 use kiss_odom_tests::{repo, run, simulate, Run};
 
@@ -11,8 +11,9 @@ use kiss_odom_tests::{repo, run, simulate, Run};
 fn the_accurate_preset_stops_a_registration_that_loops_before_the_cap() {
     let seq = repo().join("../shared/data/kitti-mini/sequences/02");
     let tmp = tempfile::tempdir().unwrap();
-    // Every `beta v` voxel of the registration cloud: the loop is that cloud's.
-    let full = "[mapping]\ndesired_source_points = 0\n";
+    // Every `beta v` voxel of the registration cloud, in the reference's order: the loop is
+    // that cloud's.
+    let full = "[mapping]\ndesired_source_points = 0\nreference_order = true\n";
     let (on, off) = (tmp.path().join("on.toml"), tmp.path().join("off.toml"));
     std::fs::write(&on, full).unwrap();
     std::fs::write(&off, format!("{full}[registration]\ncycle_stop = false\n")).unwrap();

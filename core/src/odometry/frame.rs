@@ -120,7 +120,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         let (mut parts, map) =
             open::<T, P>(&self.layout, &self.caps, &mut self.storage, &mut self.map)?;
 
-        // Step 2 (Sec. III-B): P*_merge in the reference's order, then P^* from it.
+        // Step 2 (Sec. III-B): P*_merge (in the reference's order, if configured), then P^*
+        // from it.
         let m = order_merge(&cfg, &mut scan, parts.merge, parts.scratch);
         let from = Predicted {
             pose: start.unwrap_or(predicted.pose),
@@ -284,7 +285,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 }
 
 /// Step 2 (Sec. III-B): the merge cloud, already filtered as it streamed in, put in the
-/// reference's order; its length.
+/// reference's order if [`Config::reference_order`]; its length.
 fn order_merge<T: Real>(
     cfg: &Config<T>,
     scan: &mut Received,
@@ -293,12 +294,14 @@ fn order_merge<T: Real>(
 ) -> usize {
     scan.dropped.merge_full = scan.merged.dropped as u32;
     let m = scan.merged.kept;
-    reference_order(
-        &mut merge[..m],
-        cfg.voxel_size * cfg.alpha,
-        scan.kept,
-        scratch,
-    );
+    if cfg.reference_order {
+        reference_order(
+            &mut merge[..m],
+            cfg.voxel_size * cfg.alpha,
+            scan.kept,
+            scratch,
+        );
+    }
     m
 }
 
@@ -340,9 +343,9 @@ struct Sourced {
     thinned: bool,
 }
 
-/// Step 2: the registration cloud, the `beta v` downsampling of `merge` in its order, with
-/// coarser voxels if that keeps more than `desired` points (0: never; see
-/// [`Config::desired_source_points`]).
+/// Step 2: the registration cloud, the `beta v` downsampling of `merge` in its order (then in
+/// the reference's, if [`Config::reference_order`]), with coarser voxels if that keeps more
+/// than `desired` points (0: never; see [`Config::desired_source_points`]).
 fn source_cloud<T: Real>(
     cfg: &Config<T>,
     desired: usize,
@@ -358,7 +361,9 @@ fn source_cloud<T: Real>(
         v *= T::of(kept.kept as f64 / desired as f64);
         kept = thin(v);
     }
-    reference_order(&mut source[..kept.kept], v, merge.len(), scratch);
+    if cfg.reference_order {
+        reference_order(&mut source[..kept.kept], v, merge.len(), scratch);
+    }
     Sourced { kept, thinned }
 }
 

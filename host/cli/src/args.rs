@@ -134,8 +134,8 @@ pub struct PipelineArgs {
     /// planar on every frame, max_range / 200 voxels, or 1.2 times those with 3 points each
     /// when the first scan has fewer than 32,768 points, a scan whose motion was not the
     /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
-    /// 3,000 points; 1.4-3 times the time on urban and KITTI scans, up to 14 in a
-    /// corridor); replaces the file's `[pipeline] preset` [default: default].
+    /// 3,000 points, both clouds in the scan's order; 1.1-2.6 times the time on urban and
+    /// KITTI scans, up to 9 in a corridor); replaces the file's `[pipeline] preset` [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,
     /// Maximum range r_max (m) [default: 100].
