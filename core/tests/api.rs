@@ -497,17 +497,16 @@ fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_po
     let desired = fewest / 2;
     let bound = run(desired);
     let beta_v = asked.voxel_size * asked.beta;
-    let downsample = first_seen;
     let mut thinned = 0;
     for (i, (_, source, merge, _)) in bound.iter().enumerate() {
-        let every = downsample(merge, beta_v);
+        let every = first_seen(merge, beta_v);
         let n = every.len();
         assert!(n > desired, "frame {i}: {n} points at beta v");
         let expected = if i < 2 || bound[i - 1].3 {
             every
         } else {
             thinned += 1;
-            let coarser = downsample(merge, beta_v * (n as f64 / desired as f64));
+            let coarser = first_seen(merge, beta_v * (n as f64 / desired as f64));
             assert!(coarser.len() < n, "frame {i}: {} of {n}", coarser.len());
             coarser
         };

@@ -135,7 +135,8 @@ pub struct PipelineArgs {
     /// when the first scan has fewer than 32,768 points, a scan whose motion was not the
     /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
     /// 3,000 points, both clouds in the scan's order; 1.1-2.6 times the time on urban and
-    /// KITTI scans, up to 9 in a corridor); replaces the file's `[pipeline] preset` [default: default].
+    /// KITTI scans, up to 9 in a corridor); replaces the file's `[pipeline] preset`
+    /// [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,
     /// Maximum range r_max (m) [default: 100].

@@ -283,9 +283,12 @@ impl Driver {
             .input_points
             .saturating_sub(report.out_of_range)
             .saturating_sub(report.dropped.non_finite);
-        // The core holds the voxel as its scalar: an f32 run's 0.6 is shown as 0.6, not as the
-        // f64 it widens to.
-        let voxel = voxel as f32;
+        // The voxel as the core holds it, in its scalar: an f32 run's 0.6 is shown as 0.6, not
+        // as the f64 it widens to.
+        let voxel = match self.build.scalar {
+            Scalar::F32 => (voxel as f32).to_string(),
+            Scalar::F64 => voxel.to_string(),
+        };
         sparse.then(|| {
             format!(
                 "{}: the first scan kept {kept} points within range, fewer than [mapping] \
