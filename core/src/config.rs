@@ -152,6 +152,12 @@ pub struct Robust<T> {
     /// The Geman-McClure scale of a registration with plane terms, over `sigma` (default
     /// [`crate::stages::PLANE_KERNEL_SCALE`], the paper's 1/3).
     pub kernel_scale: T,
+    /// Where the motion prior acts: only in frames whose scene leaves a translation nearly
+    /// unobserved, the weakest translation of the registration cloud's point-to-plane
+    /// information at the prediction (hold mode's measurement, [`crate::FrameReport`]'s
+    /// `weak_ratios`) below this fraction of the strongest. 1 or more: in every registration
+    /// with plane terms, without the measurement.
+    pub prior_gate: T,
     /// A registration with plane terms also stops when its iterate comes back within `gamma`
     /// of one of its last [`crate::stages::CYCLE_LEN`] iterates: the step changes of the plane
     /// terms can hold it in a loop that `|dx| < gamma` never ends. `false`: the reference's
@@ -167,6 +173,7 @@ impl<T: Real> Robust<T> {
             prediction_prior: T::zero(),
             lateral_prior: T::zero(),
             kernel_scale: T::of(PLANE_KERNEL_SCALE),
+            prior_gate: T::one(),
             cycle_stop: false,
         }
     }
@@ -182,13 +189,14 @@ impl<T: Real> Robust<T> {
         }
     }
 
-    /// The `accurate` preset's: plane terms on every frame, no motion prior, the cycle stop
-    /// (see [`Config::accurate`]).
+    /// The `accurate` preset's: plane terms on every frame, the cycle stop, and the motion
+    /// prior of the tunnel setting gated at [`PRIOR_GATE`] (see [`Config::accurate`]).
     pub fn accurate() -> Self {
         Self {
             plane_gate: T::one(),
             cycle_stop: true,
-            ..Self::new()
+            prior_gate: T::of(PRIOR_GATE),
+            ..Self::tunnel()
         }
     }
 
@@ -198,6 +206,7 @@ impl<T: Real> Robust<T> {
         pos && nonneg(self.plane_gate)
             && nonneg(self.prediction_prior)
             && nonneg(self.lateral_prior)
+            && nonneg(self.prior_gate)
     }
 }
 
@@ -206,6 +215,16 @@ impl<T: Real> Default for Robust<T> {
         Self::new()
     }
 }
+
+/// The `accurate` preset's [`Robust::prior_gate`]: its motion prior acts where the weakest
+/// translation at the prediction is below a tenth of the strongest. A bare corridor leaves its
+/// axis only what the scan pattern leaks in sparsely filled voxels, and an open field its two
+/// ground directions what a few poles and trees give; they read 0.0006-0.065 and 0-0.02 of the
+/// strongest, a tunnel with sparse wall features 0.001-0.13. A street's buildings, cars and
+/// poles face every way: urban drives read 0.1-0.8 (1 % of frames below 0.2), and hand-held
+/// and drone runs through the same streets 0.09-0.9 (BENCHMARKS.md, "The motion prior where
+/// the scene leaves a translation free").
+pub const PRIOR_GATE: f64 = 0.1;
 
 /// The `accurate` preset's [`Config::sparse_scan_points`]: 2^15, half of a 64-beam,
 /// 1024-column sweep. A sweep of a 16-beam scanner at 10 Hz holds at most 28,800 points (16 x
@@ -284,19 +303,21 @@ impl<T: Real> Config<T> {
     }
 
     /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
-    /// preset"), on ordinary scenes as well as degenerate ones (not on a bare corridor, whose
-    /// axis only a car's priors pin), at 1.1-2.6 times the default's time on urban and KITTI
-    /// scans (up to 9 in a corridor). Every frame is registered with point-to-plane terms
-    /// where the map is planar (GenZ-ICP's weighting, see `registration::planes`) and
-    /// point-to-point terms elsewhere, on a map of `r_max / 200` voxels (GenZ-ICP's
-    /// sparse-sensor map when the first scan is sparse, [`Config::for_first_scan`]), with no
-    /// motion prior (the priors assume a car; a hand-held, legged or flying sensor breaks
-    /// them), a registration that goes round a loop stops there ([`Robust::cycle_stop`]), a
-    /// whole scan whose motion was not the model's is deskewed again with its own
-    /// ([`Config::redeskew`]), and a dense scan's registration cloud is thinned toward
-    /// [`DESIRED_SOURCE_POINTS`] where the scene measures every direction
-    /// ([`Config::desired_source_points`]; not on the sparse-scan map). Both clouds keep the
-    /// scan's order ([`Config::reference_order`] `false`). Its poses are not the reference's.
+    /// preset"), on ordinary scenes as well as degenerate ones, at 1.1-2.6 times the default's
+    /// time on urban and KITTI scans (2.6-2.8 in a corridor). Every frame is registered with
+    /// point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
+    /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
+    /// voxels (GenZ-ICP's sparse-sensor map when the first scan is sparse,
+    /// [`Config::for_first_scan`]); the motion prior acts only where the scene leaves a
+    /// translation nearly free ([`Robust::prior_gate`]: a corridor, a tunnel, open ground),
+    /// where its lateral term takes the sensor for a car's (a flying sensor there breaks it)
+    /// and its hold acts only along a corridor's lone free axis; a registration that goes
+    /// round a loop stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not
+    /// the model's is deskewed again with its own ([`Config::redeskew`]), and a dense scan's
+    /// registration cloud is thinned toward [`DESIRED_SOURCE_POINTS`] where the scene measures
+    /// every direction ([`Config::desired_source_points`]; not on the sparse-scan map). Both
+    /// clouds keep the scan's order ([`Config::reference_order`] `false`). Its poses are not
+    /// the reference's.
     pub fn accurate(max_range: T) -> Self {
         Self {
             voxel_size: max_range / T::of(200.0),
@@ -581,7 +602,12 @@ mod tests {
                 lateral_prior: bad,
                 ..r.robust
             });
-            for (c, name) in [(gate, "plane_gate"), (hold, "hold"), (lateral, "lateral")] {
+            let prior_gate = with(Robust {
+                prior_gate: bad,
+                ..r.robust
+            });
+            let all = [(gate, "plane_gate"), (hold, "hold"), (lateral, "lateral")];
+            for (c, name) in all.into_iter().chain([(prior_gate, "prior_gate")]) {
                 assert_eq!(c.validate(), Err(ConfigError::Threshold), "{name} {bad}");
             }
         }
@@ -596,13 +622,20 @@ mod tests {
     }
 
     #[test]
-    fn accurate_is_robust_mode_on_every_frame_on_a_finer_map_without_priors() {
+    fn accurate_is_robust_mode_on_every_frame_on_a_finer_map_with_gated_priors() {
         let (a, r) = (Config::<f64>::accurate(80.0), Config::<f64>::robust(80.0));
         assert_eq!(a.voxel_size, 0.4);
         assert!(a.robust.plane_gate >= 1.0, "every frame with plane terms");
+        let t = Robust::<f64>::tunnel();
         assert_eq!(
             (a.robust.prediction_prior, a.robust.lateral_prior),
-            (0.0, 0.0)
+            (t.prediction_prior, t.lateral_prior),
+            "the tunnel setting's priors"
+        );
+        assert_eq!(
+            (a.robust.prior_gate, r.robust.prior_gate, t.prior_gate),
+            (PRIOR_GATE, 1.0, 1.0),
+            "gated in the preset only"
         );
         assert!(
             a.robust.cycle_stop && !r.robust.cycle_stop,

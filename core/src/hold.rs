@@ -122,6 +122,9 @@ pub struct Weakness<T: Real> {
     /// Smallest over largest eigenvalue of the translation and the rotation information,
     /// `None` when nothing was measured.
     pub ratio: Option<[T; 2]>,
+    /// The translation information's middle eigenvalue over its largest: a corridor leaves
+    /// one translation weak (this is large), an open plane two (this is small too).
+    pub middle: Option<T>,
 }
 
 impl<T: Real> Weakness<T> {
@@ -129,6 +132,7 @@ impl<T: Real> Weakness<T> {
     pub const NONE: Weakness<T> = Weakness {
         hold: None,
         ratio: None,
+        middle: None,
     };
 
     /// What is held (nothing without a hold).
@@ -205,12 +209,17 @@ fn decide<T: Real>(info: &Information<T>, prediction: &Pose<T>) -> Weakness<T> {
     // Into the predicted sensor frame: both halves of a twist rotate by R^T.
     let r = prediction.rotation.to_rotation_matrix().into_inner();
     let rt = r.transpose();
-    let (t, t_ratio, t_weak) = weak_block(&(rt * info.t * r), T::of(TRANSLATION_RATIO));
-    let (w, w_ratio, w_weak) = weak_block(&(rt * info.r * r), T::of(ROTATION_RATIO));
+    let (t, [t_ratio, middle], t_weak) = weak_block(&(rt * info.t * r), T::of(TRANSLATION_RATIO));
+    let (w, [w_ratio, _], w_weak) = weak_block(&(rt * info.r * r), T::of(ROTATION_RATIO));
     let ratio = Some([t_ratio, w_ratio]);
+    let middle = Some(middle);
     let directions = t_weak + w_weak;
     if directions == 0 {
-        return Weakness { hold: None, ratio };
+        return Weakness {
+            hold: None,
+            ratio,
+            middle,
+        };
     }
     let mut body = Matrix6::identity();
     body.fixed_view_mut::<3, 3>(0, 0)
@@ -227,16 +236,17 @@ fn decide<T: Real>(info: &Information<T>, prediction: &Pose<T>) -> Weakness<T> {
     Weakness {
         hold: Some(hold_of(body, held, prediction)),
         ratio,
+        middle,
     }
 }
 
 /// The projector onto the directions of the symmetric `m` weaker than `threshold` of its
-/// strongest, the weakest over the strongest eigenvalue, and how many are weak.
-fn weak_block<T: Real>(m: &Matrix3<T>, threshold: T) -> (Matrix3<T>, T, u8) {
+/// strongest, the weakest and the middle eigenvalue over the strongest, and how many are weak.
+fn weak_block<T: Real>(m: &Matrix3<T>, threshold: T) -> (Matrix3<T>, [T; 2], u8) {
     let (values, vectors) = jacobi_eigen(*m);
     let max = values.max();
     if !(max > T::zero() && max.is_finite()) {
-        return (Matrix3::identity(), T::zero(), 3);
+        return (Matrix3::identity(), [T::zero(); 2], 3);
     }
     let mut weak = Matrix3::zeros();
     let mut count = 0;
@@ -247,7 +257,10 @@ fn weak_block<T: Real>(m: &Matrix3<T>, threshold: T) -> (Matrix3<T>, T, u8) {
             count += 1;
         }
     }
-    (weak, (values.min() / max).max(T::zero()), count)
+    let min = values.min();
+    let middle = values.iter().fold(T::zero(), |a, &v| a + v) - min - max;
+    let ratios = [min / max, middle / max].map(|x| x.max(T::zero()));
+    (weak, ratios, count)
 }
 
 /// The hold of the sensor-frame projector `body`, with its world-frame twin for ICP's steps.

@@ -77,8 +77,9 @@ mod voxel;
 mod testutil;
 
 pub use config::{
-    Capacities, Config, Degeneracy, Robust, DESIRED_SOURCE_POINTS, MAX_RANGE_LIMIT, SPARSE_BETA,
-    SPARSE_PLANE_KERNEL_SCALE, SPARSE_POINTS_PER_VOXEL, SPARSE_SCAN_POINTS, SPARSE_VOXEL_FACTOR,
+    Capacities, Config, Degeneracy, Robust, DESIRED_SOURCE_POINTS, MAX_RANGE_LIMIT, PRIOR_GATE,
+    SPARSE_BETA, SPARSE_PLANE_KERNEL_SCALE, SPARSE_POINTS_PER_VOXEL, SPARSE_SCAN_POINTS,
+    SPARSE_VOXEL_FACTOR,
 };
 pub use deskew::{StampProblem, SweepRotation, SWEEP_KNOTS};
 pub use error::{ConfigError, FrameError};

@@ -264,10 +264,11 @@ pub struct FrameReport<T: Real> {
     /// Hold mode only: the directions held at the constant-velocity prediction (none in
     /// the other modes).
     pub held: Held,
-    /// Hold mode only: weakest over strongest eigenvalue of the point-to-plane information
-    /// at the prediction, for translation and for rotation (directions below
-    /// `TRANSLATION_RATIO` and `ROTATION_RATIO` are held); `None` in the other modes, on the
-    /// first frame, or with nothing measured.
+    /// Weakest over strongest eigenvalue of the point-to-plane information at the prediction,
+    /// for translation and for rotation: in hold mode (directions below `TRANSLATION_RATIO`
+    /// and `ROTATION_RATIO` are held) and in robust mode with a `prior_gate` below 1 (the
+    /// motion prior acts where the first is below it); `None` otherwise, on the first frame,
+    /// or with nothing measured.
     pub weak_ratios: Option<[T; 2]>,
     /// Points given.
     pub input_points: u32,

@@ -78,6 +78,7 @@ fn a_well_constrained_information_holds_nothing() {
     assert_eq!(w.held(), Held::NONE);
     let [t, r] = w.ratio.unwrap();
     assert!((t - 0.3).abs() < 1e-12 && (r - 0.125).abs() < 1e-12);
+    assert!((w.middle.unwrap() - 0.8).abs() < 1e-12);
     let pose = prediction::<f64>() * Pose::translation(0.1, 0.0, 0.0);
     assert_eq!(w.apply(&prediction(), pose), pose);
 }
@@ -92,6 +93,19 @@ fn a_lone_plane_holds_the_translations_in_it_and_yaw() {
     let w = decide(&info, &Pose::identity());
     assert_eq!(w.held().axes(), 0b10_0011);
     assert_eq!(w.held().directions(), 3);
+    assert_eq!(
+        (w.ratio.unwrap()[0], w.middle),
+        (0.0, Some(0.0)),
+        "two free translations"
+    );
+}
+
+#[test]
+fn a_corridor_leaves_one_translation_weak_and_the_middle_one_strong() {
+    let w = decide(&corridor_information::<f64>(), &prediction());
+    let ([t, _], middle) = (w.ratio.unwrap(), w.middle.unwrap());
+    assert!((t - 1e-4).abs() < 1e-12 && (middle - 1.0).abs() < 1e-12);
+    assert_eq!(Weakness::<f64>::NONE.middle, None);
 }
 
 const VOXELS: usize = 3000;

@@ -11,7 +11,7 @@
 //! What the paper leaves out lives here too: the convergence floor of a finite scalar and the
 //! fallback for a non-finite ICP result.
 
-use crate::config::{Config, Degeneracy};
+use crate::config::{Config, Degeneracy, Robust};
 use crate::geometry::{Point, Pose};
 use crate::hold::{min_points, weakness, Weakness};
 use crate::local_map::{MapView, PointCodec};
@@ -75,15 +75,15 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
         let cfg = self.cfg;
         let first_frame = map.is_empty();
         // Hold mode looks for weak directions once there is a prediction: the second frame's
-        // is standing still, whatever the sensor does.
+        // is standing still, whatever the sensor does. Robust mode measures the same where its
+        // motion prior is gated on it, and holds nothing.
+        let measured = !first_frame && at.frames >= 2;
         let weak = match cfg.degeneracy {
-            Degeneracy::Hold if !first_frame && at.frames >= 2 => weakness(
-                map,
-                self.source,
-                &at.pose,
-                self.max_distance(at),
-                min_points(cfg.alpha),
-            ),
+            Degeneracy::Hold if measured => self.weakness(at, map),
+            Degeneracy::Robust if measured && gated(&cfg.robust) => Weakness {
+                hold: None,
+                ..self.weakness(at, map)
+            },
             _ => Weakness::NONE,
         };
         let robust = cfg.degeneracy == Degeneracy::Robust;
@@ -97,6 +97,16 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
         } else {
             first
         }
+    }
+
+    /// Hold mode's measurement of the scene at the prediction.
+    fn weakness<P: PointCodec<T>>(
+        &self,
+        at: &Predicted<T>,
+        map: &MapView<'_, T, P>,
+    ) -> Weakness<T> {
+        let min = min_points(self.cfg.alpha);
+        weakness(map, self.source, &at.pose, self.max_distance(at), min)
     }
 
     /// Correspondences farther than `max_correspondence_factor sigma` are rejected (Eq. (7)).
@@ -116,9 +126,9 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
     ) -> Registered<T> {
         let cfg = self.cfg;
         let (kernel, prior) = if planes {
-            let (hold, sideways) = (cfg.robust.prediction_prior, cfg.robust.lateral_prior);
-            let prior =
-                (at.frames >= 2).then(|| MotionPrior::new(&at.last_pose, &at.pose, hold, sideways));
+            let weights = prior_weights(&cfg.robust, weak).filter(|_| at.frames >= 2);
+            let prior = weights
+                .map(|(hold, sideways)| MotionPrior::new(&at.last_pose, &at.pose, hold, sideways));
             (cfg.robust.kernel_scale, prior)
         } else {
             (cfg.kernel_scale, None)
@@ -155,6 +165,32 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
             weak: *weak,
         }
     }
+}
+
+/// Whether robust mode's motion prior waits for a measurement of the scene: it has a term to
+/// add, and a gate below 1.
+fn gated<T: Real>(r: &Robust<T>) -> bool {
+    let any = r.prediction_prior > T::zero() || r.lateral_prior > T::zero();
+    any && r.prior_gate < T::one()
+}
+
+/// The motion prior's hold and lateral weights in a frame with `weak`'s measurement, `None`
+/// where it does not act. With a gate of 1 or more, both, always. Else only where the weakest
+/// translation was measured below the gate: the lateral prior there, and the hold prior only
+/// where no other translation is below it (a corridor's axis). Along an open plane's two weak
+/// translations, sparse structure still measures what a hold would overrule.
+fn prior_weights<T: Real>(r: &Robust<T>, weak: &Weakness<T>) -> Option<(T, T)> {
+    if r.prior_gate >= T::one() {
+        return Some((r.prediction_prior, r.lateral_prior));
+    }
+    weak.ratio.filter(|[t, _]| *t < r.prior_gate)?;
+    let corridor = weak.middle.is_some_and(|m| m >= r.prior_gate);
+    let hold = if corridor {
+        r.prediction_prior
+    } else {
+        T::zero()
+    };
+    Some((hold, r.lateral_prior))
 }
 
 /// ICP's stopping rule: `gamma`, but never below what the scalar can resolve where the points
@@ -197,6 +233,7 @@ fn finite_or<T: Real>(pose: Pose<T>, prediction: Pose<T>) -> (Pose<T>, bool) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::PRIOR_GATE;
 
     #[test]
     fn only_a_registration_with_plane_terms_under_cycle_stop_stops_on_a_loop() {
@@ -215,5 +252,47 @@ mod tests {
             "robust mode keeps the reference's stopping rule"
         );
         assert!(!stops(&Config::new(100.0), false));
+    }
+
+    /// A measurement with the weakest and middle translation ratios `t` and `middle`.
+    fn measured(t: f64, middle: f64) -> Weakness<f64> {
+        Weakness {
+            hold: None,
+            ratio: Some([t, 0.5]),
+            middle: Some(middle),
+        }
+    }
+
+    #[test]
+    fn the_gated_prior_acts_where_a_translation_is_free_and_holds_a_corridors_lone_axis() {
+        let preset = Config::<f64>::accurate(100.0).robust;
+        let (hold, lateral) = (preset.prediction_prior, preset.lateral_prior);
+        assert!(hold > 0.0 && lateral > 0.0 && gated(&preset));
+        let weights = |w: &Weakness<f64>| prior_weights(&preset, w);
+        assert_eq!(
+            weights(&measured(0.01, 0.6)),
+            Some((hold, lateral)),
+            "a corridor"
+        );
+        assert_eq!(
+            weights(&measured(0.01, 0.02)),
+            Some((0.0, lateral)),
+            "open ground"
+        );
+        assert_eq!(weights(&measured(0.3, 0.6)), None, "a street");
+        assert_eq!(weights(&measured(PRIOR_GATE, 0.6)), None, "the gate itself");
+        assert_eq!(weights(&Weakness::NONE), None, "nothing measured");
+        // The tunnel setting's gate of 1 needs no measurement: both terms, always.
+        let tunnel = Robust::<f64>::tunnel();
+        assert!(!gated(&tunnel));
+        let both = Some((tunnel.prediction_prior, tunnel.lateral_prior));
+        assert_eq!(prior_weights(&tunnel, &Weakness::NONE), both);
+        // Without a term to add there is nothing to gate.
+        let none = Robust {
+            prediction_prior: 0.0,
+            lateral_prior: 0.0,
+            ..preset
+        };
+        assert!(!gated(&none));
     }
 }

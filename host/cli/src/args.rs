@@ -134,8 +134,9 @@ pub struct PipelineArgs {
     /// planar on every frame, max_range / 200 voxels, or 1.2 times those with 3 points each
     /// when the first scan has fewer than 32,768 points, a scan whose motion was not the
     /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
-    /// 3,000 points, both clouds in the scan's order; 1.1-2.6 times the time on urban and
-    /// KITTI scans, up to 9 in a corridor); replaces the file's `[pipeline] preset`
+    /// 3,000 points, both clouds in the scan's order, the vehicle and hold priors only where
+    /// the scene leaves a translation free (--prior-gate 0.1); 1.1-2.6 times the time on urban
+    /// and KITTI scans, 2.6-2.8 in a corridor); replaces the file's `[pipeline] preset`
     /// [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,
@@ -176,6 +177,11 @@ pub struct PipelineArgs {
     /// then tells how far it went [default: 0].
     #[arg(long)]
     pub lateral_prior: Option<f64>,
+    /// Robust mode: the two priors act only in frames whose weakest translation, measured at
+    /// the prediction, is below this fraction of the strongest (frames.csv `weak_t`); 1: in
+    /// every frame [default: 1].
+    #[arg(long)]
+    pub prior_gate: Option<f64>,
     /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
     /// would spend more keeps its last complete iterate and is flagged `budget`. With the
     /// capacities it bounds a frame's time on a given target (the book's "Embedded and deadlines") [default:
@@ -375,6 +381,9 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     }
     if let Some(w) = p.lateral_prior {
         s.registration.lateral_prior = w;
+    }
+    if let Some(g) = p.prior_gate {
+        s.registration.prior_gate = g;
     }
     if let Some(b) = p.budget {
         s.registration.work_budget = Some(b);
