@@ -6,7 +6,9 @@
 //!   held there (`hold`).
 //! - Robust mode ([`Degeneracy::Robust`]): the reference's registration; where its observability
 //!   is below `plane_gate` (or always, with a gate of 1 or more) a registration from the
-//!   prediction with point-to-plane terms where the map is planar, and the motion prior.
+//!   prediction with point-to-plane terms where the map is planar, and the motion prior
+//!   (with a `prior_gate` below 1, only where hold mode's measurement finds a translation
+//!   nearly free).
 //!
 //! What the paper leaves out lives here too: the convergence floor of a finite scalar and the
 //! fallback for a non-finite ICP result.
