@@ -169,3 +169,46 @@ fn the_motion_prior_acts_on_frames_with_plane_terms_from_the_third_on() {
         }
     }
 }
+
+/// Robust mode on every frame with the priors `hold` and `lateral` behind `prior_gate`.
+fn gated_priors(hold: f64, lateral: f64, prior_gate: f64) -> Config<f64> {
+    let c = with_priors(robust(1.0), hold, lateral);
+    Config {
+        robust: Robust {
+            prior_gate,
+            ..c.robust
+        },
+        ..c
+    }
+}
+
+#[test]
+fn below_its_gate_the_prior_acts_where_the_measured_scene_leaves_a_translation_free() {
+    let s = scans();
+    let without = reports(robust(1.0), &s);
+    let planes_only = poses(&without);
+    assert!(
+        without.iter().all(|r| r.weak_ratios.is_none()),
+        "nothing to gate, nothing measured"
+    );
+    for (hold, lateral) in [(0.01, 0.0), (0.0, 1.0)] {
+        // A gate of 0: frames are measured once their map has full voxels, and the prior
+        // never acts.
+        let never = reports(gated_priors(hold, lateral, 0.0), &s);
+        let weak: Vec<Option<f64>> = never.iter().map(|r| r.weak_ratios.map(|w| w[0])).collect();
+        println!("hold {hold}, lateral {lateral}: weakest translation over the strongest {weak:?}");
+        assert!(weak[..2].iter().all(Option::is_none), "no velocity yet");
+        assert!(weak.iter().any(Option::is_some), "measured");
+        assert_eq!(poses(&never), planes_only, "hold {hold}, lateral {lateral}");
+    }
+    // This synthetic street's full voxels are ground and walls: it reads its weakest
+    // translation below 0.95 wherever it is measured, and the lateral prior acts there.
+    let gated = reports(gated_priors(0.0, 1.0, 0.95), &s);
+    let first = gated
+        .iter()
+        .position(|r| r.weak_ratios.is_some_and(|w| w[0] < 0.95))
+        .expect("a frame measured below the gate");
+    let p = poses(&gated);
+    assert_eq!(p[..first], planes_only[..first]);
+    assert_ne!(p[first], planes_only[first]);
+}
