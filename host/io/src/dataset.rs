@@ -148,10 +148,13 @@ pub enum Format {
     Ply,
     /// Generic layout with `.pcd` frames.
     Pcd,
-    /// ROS 1 bag with `sensor_msgs/PointCloud2`.
+    /// ROS 1 bag with `sensor_msgs/PointCloud2` (or sensor packets, Livox `CustomMsg`).
     Bag,
     /// ROS 2 MCAP with `sensor_msgs/msg/PointCloud2`.
     Mcap,
+    /// ROS 2 bag in sqlite3 storage: a folder of `metadata.yaml` and `.db3` files, or one
+    /// `.db3` file.
+    Db3,
     /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `--port`).
     Pcap,
 }

@@ -2,14 +2,16 @@
 //!
 //! `auto` picks KITTI only for the benchmark layout ([`kitti::detect`]), because KITTI scans
 //! get a correction no other data should get, and refuses a KITTI-shaped folder it cannot
-//! read as KITTI; bag, MCAP and pcap/pcapng files are recognised by extension; anything else
-//! is the generic layout with the one frame format its files show (several is refused). An
+//! read as KITTI; bag, MCAP, `.db3` and pcap/pcapng files are recognised by extension, a ROS 2
+//! sqlite3 bag's folder by its `metadata.yaml` or `.db3` files ([`db3::detect`]); anything
+//! else is the generic layout with the one frame format its files show (several is refused). An
 //! explicit format always wins. An `imu.csv` given with `--imu FILE` goes to the frames of any
 //! format by time, in place of the IMU samples the recording carries.
 
 use crate::dataset::{Dataset, Format, FrameSource, ImuInput, Item, OpenOptions, Trailer};
 use crate::folders::{generic, kitti};
 use crate::imu::{self, attach::WithImu};
+use crate::ros::db3;
 use anyhow::{bail, Result};
 use std::path::Path;
 
@@ -18,6 +20,9 @@ pub fn detect(path: &Path) -> Result<Format> {
     if !path.exists() {
         bail!("{}: no such file or folder", path.display());
     }
+    if db3::detect(path) {
+        return Ok(Format::Db3);
+    }
     if path.is_file() {
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
         return match ext.to_ascii_lowercase().as_str() {
@@ -25,8 +30,8 @@ pub fn detect(path: &Path) -> Result<Format> {
             "mcap" => Ok(Format::Mcap),
             "pcap" | "pcapng" => Ok(Format::Pcap),
             _ => bail!(
-                "{}: cannot tell the format of this file (give a folder, a .bag, an .mcap or \
-                 a .pcap)",
+                "{}: cannot tell the format of this file (give a folder, a .bag, an .mcap, a \
+                 .db3 or a .pcap)",
                 path.display()
             ),
         };
@@ -54,6 +59,7 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
         Format::Bin | Format::Ply | Format::Pcd => generic::open(path, Some(format), opts)?,
         Format::Bag => crate::ros::bag::open(path, opts)?,
         Format::Mcap => crate::ros::mcap::open(path, opts)?,
+        Format::Db3 => db3::open(path, opts)?,
         Format::Pcap => crate::capture::frames::open(path, opts)?,
         Format::Auto => bail!("{}: format detection failed", path.display()),
     };
@@ -63,10 +69,13 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
             let times = dataset.info.frame_times.clone();
             dataset.frames = Box::new(WithImu::new(dataset.frames, samples).with_times(times));
         }
-        ImuInput::Topic(topic) if !matches!(format, Format::Bag | Format::Mcap) => bail!(
-            "--imu {topic}: no such file, and {} is not a bag or MCAP file to have such a topic",
-            path.display()
-        ),
+        ImuInput::Topic(topic) if !matches!(format, Format::Bag | Format::Mcap | Format::Db3) => {
+            bail!(
+                "--imu {topic}: no such file, and {} is not a ROS bag or MCAP file to have such \
+                 a topic",
+                path.display()
+            )
+        }
         _ => {}
     }
     dataset.frames = Box::new(TimeOrder {

@@ -323,41 +323,61 @@ pub struct PcapSweeps {
 
 /// The first datagrams of a capture (up to any damage, which the decoding pass reports):
 /// whole ones by port and length, the ports of damaged ones, and what the capture could not
-/// hand on.
-struct Survey {
+/// hand on. A pcap is surveyed from its file; another recording of packets (a bag) hands its
+/// own to [`decode_beside`].
+#[derive(Clone, Debug, Default)]
+pub struct Survey {
     seen: BTreeMap<(u16, usize), u64>,
     /// Hesai protocol versions (major, minor) of the `EE FF` packets on port 2368.
     hesai: BTreeMap<(u8, u8), u64>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
+    records: usize,
+}
+
+impl Survey {
+    /// How many records a survey looks at.
+    pub const RECORDS: usize = 2000;
+
+    /// Counts one record; false once the survey has seen enough.
+    pub fn add(&mut self, record: &Record) -> bool {
+        match record {
+            Record::Datagram(d) => {
+                *self.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
+                if let (VELODYNE_PORT, [0xEE, 0xFF, major, minor, ..]) =
+                    (d.port, d.payload.as_slice())
+                {
+                    *self.hesai.entry((*major, *minor)).or_insert(0) += 1;
+                }
+            }
+            Record::Damaged { port, .. } => {
+                self.damaged.insert(*port);
+            }
+        }
+        self.records += 1;
+        self.records < Self::RECORDS
+    }
 }
 
 fn survey(path: &Path) -> Result<Survey> {
     let mut capture = pcap::open(path)?;
-    let mut s = Survey {
-        seen: BTreeMap::new(),
-        hesai: BTreeMap::new(),
-        damaged: BTreeSet::new(),
-        notes: Vec::new(),
-    };
-    for _ in 0..2000 {
-        match capture.next_record() {
-            Ok(Some(Record::Datagram(d))) => {
-                *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
-                if let (VELODYNE_PORT, [0xEE, 0xFF, major, minor, ..]) =
-                    (d.port, d.payload.as_slice())
-                {
-                    *s.hesai.entry((*major, *minor)).or_insert(0) += 1;
-                }
-            }
-            Ok(Some(Record::Damaged { port, .. })) => {
-                s.damaged.insert(port);
-            }
-            Ok(None) | Err(_) => break,
+    let mut s = Survey::default();
+    while let Ok(Some(record)) = capture.next_record() {
+        if !s.add(&record) {
+            break;
         }
     }
     s.notes = capture.counts().warnings();
     Ok(s)
+}
+
+/// What a recording other than a pcap knows beside its packets (a bag of packets).
+#[derive(Default)]
+pub struct Beside {
+    /// Its first datagrams, for telling the sensor (a pcap is surveyed from its file).
+    pub survey: Option<Survey>,
+    /// The Ouster metadata it carries, and where (`--meta` wins over it).
+    pub ouster_meta: Option<(ouster_meta::OusterMeta, String)>,
 }
 
 fn describe(s: &Survey) -> String {
@@ -400,17 +420,28 @@ pub fn decode(
     capture: Box<dyn DatagramSource>,
     opts: &SensorOptions,
 ) -> Result<PcapSweeps> {
-    let ouster = opts.meta.is_some() || opts.sensor == SensorKind::Ouster;
+    decode_beside(path, capture, opts, Beside::default())
+}
+
+/// [`decode`], for a recording that knows what `beside` says (a bag of packets).
+pub fn decode_beside(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    beside: Beside,
+) -> Result<PcapSweeps> {
+    let ouster =
+        opts.meta.is_some() || beside.ouster_meta.is_some() || opts.sensor == SensorKind::Ouster;
     if ouster {
-        let Some(meta_path) = &opts.meta else {
-            bail!(
+        let (meta, meta_path) = match (&opts.meta, beside.ouster_meta) {
+            (Some(file), _) => (ouster_meta::read(file)?, file.display().to_string()),
+            (None, Some(carried)) => carried,
+            (None, None) => bail!(
                 "{}: an Ouster recording needs the sensor's metadata JSON (--meta)",
                 path.display()
-            );
+            ),
         };
-        let meta = ouster_meta::read(meta_path)?;
-        let dec = ouster::Decoder::new(&meta.info)
-            .map_err(|e| anyhow!("{}: {e}", meta_path.display()))?;
+        let dec = ouster::Decoder::new(&meta.info).map_err(|e| anyhow!("{meta_path}: {e}"))?;
         let port = opts.port.or(meta.udp_port_lidar).unwrap_or(OUSTER_PORT);
         let name = format!(
             "Ouster {} {} ({})",
@@ -419,7 +450,7 @@ pub fn decode(
         let notes = meta
             .warnings
             .iter()
-            .map(|w| format!("{}: {w}", meta_path.display()))
+            .map(|w| format!("{meta_path}: {w}"))
             .collect();
         let mut s = sweeps(
             path,
@@ -429,6 +460,7 @@ pub fn decode(
             (port, name, notes),
         );
         s.imu_port = Some(meta.udp_port_imu.unwrap_or(OUSTER_IMU_PORT));
+        s.meta_path = Some(PathBuf::from(meta_path));
         return Ok(s);
     }
     let (decoder, port, sensor) = {
@@ -445,7 +477,10 @@ pub fn decode(
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = hesai_model(opts.sensor);
         if opts.port.is_none() && hesai.is_none() {
-            let s = survey(path)?;
+            let s = match beside.survey {
+                Some(s) => s,
+                None => survey(path)?,
+            };
             let data = s
                 .seen
                 .keys()

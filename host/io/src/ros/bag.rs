@@ -1,24 +1,21 @@
-//! ROS 1 bags (format 2.0) carrying `sensor_msgs/PointCloud2`.
+//! ROS 1 bags (format 2.0) as a [`Recording`]: `sensor_msgs/PointCloud2`, sensor packets,
+//! Livox points and IMU samples, read by [`frames`].
 //!
-//! The container (records, chunks, compression, index) is read by [`bag_records`], in place, also
-//! when the bag is cut short or was never closed; the message body, in the ROS 1 wire format,
-//! is parsed by [`message`](super::message) into a
-//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and decoded by [`pointcloud2`].
-//! Frames are the messages of one topic in receive-time order (as `rosbag play` plays them),
-//! whatever order they were written in; a bag written out of order says so in a dataset
-//! warning. A chunk is decompressed when the stream reaches it, so a bag never has to fit in
-//! memory, and [`FrameSource::seek`] is cheap. With `--imu`, the messages of its
-//! `sensor_msgs/Imu` topic (`imu_topic`) are read when it is opened.
+//! The container (records, chunks, compression, index) is read by [`bag_records`], in place,
+//! also when the bag is cut short or was never closed; the message bodies are in the ROS 1 wire
+//! format. A topic's messages are streamed in receive-time order (as `rosbag play` plays
+//! them), whatever order they were written in; a bag written out of order says so in a
+//! dataset warning. A chunk is decompressed when the stream reaches it, so a bag never has to
+//! fit in memory, and seeking is cheap.
 
-use super::bag_records;
 use super::bag_records::{Bag, MessageRef};
-use super::message::parse_ros1;
-use super::pointcloud2::{self, MessageAt};
-use super::{imu_msg, imu_topic};
-use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
-use crate::imu::{attach::WithImu, ImuSample};
+use super::frames;
+use super::pointcloud2;
+use super::recording::{Message, MessageStream, Recording};
+use crate::dataset::{Dataset, Format, OpenOptions};
 use anyhow::{anyhow, bail, Result};
 use std::collections::HashMap;
+use std::ops::ControlFlow;
 use std::path::Path;
 
 /// Connection type of the messages this reader decodes.
@@ -28,215 +25,200 @@ pub const POINTCLOUD2_TYPE: &str = "sensor_msgs/PointCloud2";
 /// sum was recorded from a different definition and cannot be parsed with this layout.
 pub const POINTCLOUD2_MD5: &str = "1158d486dd51d683ce2f1be655c3c181";
 
-/// Opens a ROS 1 bag and streams the PointCloud2 messages of `opts.topic`, or of the only
-/// PointCloud2 topic in the bag, in receive-time order.
+/// Opens a ROS 1 bag and streams the frames of `opts.topic`, or of the only PointCloud2 topic
+/// (else the only topic of sensor packets or Livox points), in receive-time order.
 pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
-    let label = path.display().to_string();
-    let limit = pointcloud2::record_limit(opts.scan_points);
-    let mut bag = Bag::open(path, limit).map_err(|e| anyhow!("{label}: {e}"))?;
-    if bag.connections.is_empty() {
-        if let Some(d) = &bag.damage {
-            bail!("{label}: damaged before its first message: {d}");
-        }
-    }
-    let topics: Vec<(String, String)> = bag
-        .connections
-        .values()
-        .map(|c| (c.topic.clone(), c.tp.clone()))
-        .collect();
-    let topic = pointcloud2::choose_topic(
-        &label,
-        &topics,
-        |t| t == POINTCLOUD2_TYPE,
-        pointcloud2::Wanted::cloud(POINTCLOUD2_TYPE),
-        opts.topic.as_deref(),
-    )
-    .map_err(|e| match &bag.damage {
-        Some(d) => anyhow!("{e}; the bag is damaged: {d}"),
-        None => anyhow!(e),
-    })?;
-    let imu_topic = imu_topic::choose(
-        &label,
-        &topics,
-        |t| t == imu_msg::ROS1_TYPE,
-        imu_msg::ROS1_TYPE,
-        &opts.imu,
-    )
-    .map_err(|e| anyhow!(e))?;
-    let ours: HashMap<u32, ConnKind> = bag
-        .connections
-        .iter()
-        .filter(|(_, c)| c.topic == topic)
-        .map(|(&id, c)| (id, ConnKind::of(c)))
-        .collect();
-    let mut plan: Vec<MessageRef> = bag
-        .messages
-        .iter()
-        .filter(|m| ours.contains_key(&m.conn))
-        .copied()
-        .collect();
-    let mut warnings = Vec::new();
-    if !bag.indexed {
-        warnings.push(format!(
-            "{label}: bag has no usable index (cut short or not closed); its chunks were found \
-             by scanning"
-        ));
-    }
-    if let Some(w) = pointcloud2::time_order(&label, &topic, &mut plan, |m| m.time) {
-        warnings.push(w);
-    }
-    let imu = imu_topic.map(|t| read_imu(&mut bag, &label, &t, &mut warnings));
-    let source = BagSource {
-        bag,
-        file: label,
-        topic,
-        ours,
-        plan,
-        next: 0,
-        max_points: opts.scan_points,
-        done: false,
-    };
-    let mut frames: Box<dyn FrameSource> = Box::new(source);
-    if let Some(samples) = imu {
-        frames = Box::new(WithImu::new(frames, samples));
-    }
-    Ok(Dataset {
-        frames,
-        info: DatasetInfo {
-            format: Some(Format::Bag),
-            warnings,
-            ..DatasetInfo::default()
-        },
-    })
+    let bag = BagRecording::open(path, pointcloud2::record_limit(opts.scan_points))?;
+    frames::open(Box::new(bag), opts)
 }
 
-/// The samples of the `sensor_msgs/Imu` messages on `topic`, read in file order, in stamp
-/// order; what went wrong goes to `warnings`.
-fn read_imu(bag: &mut Bag, file: &str, topic: &str, warnings: &mut Vec<String>) -> Vec<ImuSample> {
-    let usable: HashMap<u32, Option<String>> = bag
-        .connections
-        .iter()
-        .filter(|(_, c)| c.topic == topic)
-        .map(|(&id, c)| {
-            let wrong = (c.tp != imu_msg::ROS1_TYPE || c.md5 != imu_msg::ROS1_MD5)
-                .then(|| format!("{} with md5 {}", c.tp, c.md5));
-            (id, wrong)
-        })
-        .collect();
-    let mut refs: Vec<MessageRef> = bag
-        .messages
-        .iter()
-        .filter(|m| usable.contains_key(&m.conn))
-        .copied()
-        .collect();
-    refs.sort_by_key(|m| m.time);
-    // Numbered in receive order, read chunk by chunk.
-    let mut order: Vec<(usize, MessageRef)> = refs.into_iter().enumerate().collect();
-    order.sort_by_key(|(_, m)| (m.chunk, m.offset));
-    let mut collected = imu_topic::Collector::new(file, topic);
-    for (index, m) in order {
-        if let Some(Some(wrong)) = usable.get(&m.conn) {
-            collected.refuse(index, wrong);
-            continue;
-        }
-        match bag.message(m) {
-            Ok(body) => collected.push(index, imu_msg::parse_ros1(body)),
-            Err(e) => {
-                collected.stop(index, &e);
-                break;
+/// A connection on a topic asked for: the topic's place in the list, its type and MD5 sum.
+type Conn = (usize, String, String);
+
+/// A ROS 1 bag opened for reading.
+pub struct BagRecording {
+    bag: Bag,
+    label: String,
+    warnings: Vec<String>,
+}
+
+impl BagRecording {
+    /// Opens the bag at `path`; chunks larger than `limit` bytes are refused.
+    pub fn open(path: &Path, limit: u64) -> Result<Self> {
+        let label = path.display().to_string();
+        let bag = Bag::open(path, limit).map_err(|e| anyhow!("{label}: {e}"))?;
+        if bag.connections.is_empty() {
+            if let Some(d) = &bag.damage {
+                bail!("{label}: damaged before its first message: {d}");
             }
         }
+        let mut warnings = Vec::new();
+        if !bag.indexed {
+            warnings.push(format!(
+                "{label}: bag has no usable index (cut short or not closed); its chunks were \
+                 found by scanning"
+            ));
+        }
+        Ok(Self {
+            bag,
+            label,
+            warnings,
+        })
     }
-    collected.finish(warnings)
+
+    /// Connection ids on `topics`: the topic's place in the list, the type and its MD5 sum.
+    fn ours(&self, topics: &[String]) -> HashMap<u32, Conn> {
+        self.bag
+            .connections
+            .iter()
+            .filter_map(|(&id, c)| {
+                let topic = topics.iter().position(|t| *t == c.topic)?;
+                Some((id, (topic, c.tp.clone(), c.md5.clone())))
+            })
+            .collect()
+    }
 }
 
-/// Whether messages of a connection on the chosen topic can be decoded.
-#[derive(Clone, Debug)]
-enum ConnKind {
-    Cloud,
-    /// Another type (or another definition) published on the same topic.
-    Wrong(String),
-}
+impl Recording for BagRecording {
+    fn label(&self) -> &str {
+        &self.label
+    }
 
-impl ConnKind {
-    fn of(c: &bag_records::Connection) -> Self {
-        if c.tp != POINTCLOUD2_TYPE {
-            ConnKind::Wrong(c.tp.clone())
-        } else if c.md5 != POINTCLOUD2_MD5 {
-            ConnKind::Wrong(format!(
-                "{} with md5 {} (expected {POINTCLOUD2_MD5})",
-                c.tp, c.md5
-            ))
-        } else {
-            ConnKind::Cloud
+    fn format(&self) -> Format {
+        Format::Bag
+    }
+
+    fn ros1(&self) -> bool {
+        true
+    }
+
+    fn topics(&self) -> Vec<(String, String)> {
+        let mut out: Vec<(String, String)> = (self.bag.connections.values())
+            .map(|c| (c.topic.clone(), c.tp.clone()))
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    fn count(&self, topic: &str) -> Option<usize> {
+        let ours = self.ours(&[topic.to_string()]);
+        Some(
+            self.bag
+                .messages
+                .iter()
+                .filter(|m| ours.contains_key(&m.conn))
+                .count(),
+        )
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
+    }
+
+    fn damage(&self) -> Option<String> {
+        self.bag.damage.clone()
+    }
+
+    fn scan(
+        &mut self,
+        topics: &[String],
+        f: &mut dyn FnMut(Message<'_>) -> ControlFlow<()>,
+    ) -> Result<()> {
+        let ours = self.ours(topics);
+        let refs: Vec<MessageRef> = (self.bag.messages.iter())
+            .filter(|m| ours.contains_key(&m.conn))
+            .copied()
+            .collect();
+        for m in refs {
+            let (topic, tp, md5) = &ours[&m.conn];
+            let body = self
+                .bag
+                .message(m)
+                .map_err(|e| anyhow!("{}: {e}", self.label))?;
+            let message = Message {
+                topic: *topic,
+                time_ns: m.time,
+                data: body,
+                tp,
+                md5: Some(md5),
+                warning: None,
+            };
+            if f(message).is_break() {
+                return Ok(());
+            }
+        }
+        match &self.bag.damage {
+            Some(d) => bail!("{}: {d}", self.label),
+            None => Ok(()),
         }
     }
+
+    fn stream(self: Box<Self>, topics: &[String]) -> Result<Box<dyn MessageStream>> {
+        let ours = self.ours(topics);
+        let mut plan: Vec<MessageRef> = (self.bag.messages.iter())
+            .filter(|m| ours.contains_key(&m.conn))
+            .copied()
+            .collect();
+        let names = topics.join(", ");
+        let order = pointcloud2::time_order(&self.label, &names, &mut plan, |m| m.time);
+        Ok(Box::new(BagStream {
+            bag: self.bag,
+            file: self.label,
+            ours,
+            plan,
+            next: 0,
+            warnings: order.into_iter().collect(),
+        }))
+    }
 }
 
-/// The frames of one topic of an open bag.
-struct BagSource {
+/// The messages of some topics of an open bag, in receive-time order.
+struct BagStream {
     bag: Bag,
     file: String,
-    topic: String,
-    /// Connections on the chosen topic.
-    ours: HashMap<u32, ConnKind>,
-    /// The messages of `ours`, in receive-time order.
+    /// Connections on the topics asked for.
+    ours: HashMap<u32, Conn>,
     plan: Vec<MessageRef>,
     next: usize,
-    max_points: usize,
-    done: bool,
+    warnings: Vec<String>,
 }
 
-impl FrameSource for BagSource {
+impl MessageStream for BagStream {
     fn len_hint(&self) -> Option<usize> {
         Some(self.plan.len())
     }
 
-    fn next_item(&mut self) -> Result<Option<Item>> {
-        if self.done {
-            return Ok(None);
-        }
+    fn next_message(&mut self) -> Result<Option<Message<'_>>> {
         let Some(&m) = self.plan.get(self.next) else {
-            self.done = true;
             return match &self.bag.damage {
                 Some(d) => bail!("{}: {d}", self.file),
                 None => Ok(None),
             };
         };
-        let index = self.next;
         self.next += 1;
-        if let Some(ConnKind::Wrong(tp)) = self.ours.get(&m.conn) {
-            self.done = true;
-            bail!(
-                "{}: message {index} on {} is {tp}, not {POINTCLOUD2_TYPE}",
-                self.file,
-                self.topic
-            );
-        }
-        let at = MessageAt {
-            index,
-            file: &self.file,
-            topic: &self.topic,
-            received: m.time,
-        };
+        let (topic, tp, md5) = &self.ours[&m.conn];
         let body = match self.bag.message(m) {
             Ok(body) => body,
-            Err(e) => {
-                self.done = true;
-                bail!("{}: {e}", self.file);
-            }
+            Err(e) => bail!("{}: {e}", self.file),
         };
-        Ok(Some(pointcloud2::message_item(
-            at,
-            parse_ros1(body),
-            self.max_points,
-        )))
+        Ok(Some(Message {
+            topic: *topic,
+            time_ns: m.time,
+            data: body,
+            tp,
+            md5: Some(md5),
+            warning: None,
+        }))
     }
 
-    fn seek(&mut self, index: usize) -> bool {
-        self.next = index.min(self.plan.len());
-        self.done = false;
+    fn seek(&mut self, k: usize) -> bool {
+        self.next = k.min(self.plan.len());
         true
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
     }
 }
 

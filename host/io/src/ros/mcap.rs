@@ -1,23 +1,21 @@
-//! ROS 2 MCAP files carrying `sensor_msgs/msg/PointCloud2`.
+//! ROS 2 MCAP files as a [`Recording`]: `sensor_msgs/msg/PointCloud2`, sensor packets, Livox
+//! points and IMU samples, read by [`frames`].
 //!
 //! The container is read with the `mcap` crate's sans-io readers fed from a buffered file, so
 //! neither the file nor more than a few chunks of it have to fit in memory, and no record
 //! larger than the limit the scan capacity sets ([`pointcloud2::record_limit`]) is read. The
 //! summary at the end of the file says which topics exist and how many messages each holds;
-//! with its chunk index the messages of the chosen topic are read in log-time order (as
+//! with its chunk index the messages of the chosen topics are read in log-time order (as
 //! `ros2 bag play` plays them) whatever order they were written in, and a file written out of
 //! order says so in a dataset warning. Without a summary (a file cut short) or chunks, a linear
 //! reader streams the data section in file order and warns at the first message out of order.
-//! The message body is CDR; [`message`](super::message) parses it into a
-//! [`PointCloud2`](super::pointcloud2::PointCloud2) view and [`pointcloud2`] decodes it. With
-//! `--imu`, the messages of its `sensor_msgs/msg/Imu` topic (`imu_topic`) are read when it is
-//! opened, in one pass over the data section.
+//! The message bodies are CDR. The passes made when the file is opened (its IMU topic, the
+//! sensor's metadata) read the data section once each, in file order.
 
-use super::message::parse_cdr;
-use super::pointcloud2::{self, MessageAt};
-use super::{imu_msg, imu_topic};
-use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions};
-use crate::imu::{attach::WithImu, ImuSample};
+use super::frames;
+use super::pointcloud2;
+use super::recording::{Message, MessageStream, Recording};
+use crate::dataset::{Dataset, Format, OpenOptions};
 use anyhow::{anyhow, bail, Context, Result};
 use mcap::records::{op, Record};
 use mcap::sans_io::indexed_reader::ReadOrder;
@@ -28,9 +26,10 @@ use mcap::sans_io::{
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::ops::ControlFlow;
 use std::path::Path;
 
-/// Schema name of the messages this reader decodes.
+/// Schema name of ROS 2 point clouds.
 pub const POINTCLOUD2_SCHEMA: &str = "sensor_msgs/msg/PointCloud2";
 
 /// Message encoding of ROS 2 messages.
@@ -40,139 +39,228 @@ pub const CDR_ENCODING: &str = "cdr";
 /// order; more than this many limits' worth is read in file order instead.
 const OVERLAP_BUDGET: u64 = 4;
 
-/// Opens an MCAP file and streams the PointCloud2 messages of `opts.topic`, or of the only
-/// PointCloud2 topic in the file.
+/// Opens an MCAP file and streams the frames of `opts.topic`, or of the only PointCloud2
+/// topic (else the only topic of sensor packets or Livox points).
 pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
-    let label = path.display().to_string();
-    let limit = pointcloud2::record_limit(opts.scan_points);
-    let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
-    let len = file
-        .metadata()
-        .with_context(|| format!("{label}: cannot stat"))?
-        .len();
-    let mut magic = [0u8; 8];
-    if file.read_exact(&mut magic).is_err() || magic != mcap::MAGIC {
-        bail!("{label}: not an MCAP file (no MCAP magic at the start)");
-    }
-    let mut input = BufReader::with_capacity(1 << 16, file);
-    // A linear reader is given the file up to its first unsound chunk only.
-    let mut bound = chunks::Bound::new(len);
-    let mut warnings = Vec::new();
-    let summary = chunks::summary_sound(&mut input, len)
-        .then(|| read_summary(&mut input, len, limit).ok().flatten())
-        .flatten();
-    let catalog = match &summary {
-        Some(summary) if !summary.channels.is_empty() => Catalog::of(summary),
-        // No summary (cut short, or written without one): learn the channels by reading once.
-        _ => {
-            let sound = bound.get(&mut input);
-            input
-                .seek(SeekFrom::Start(0))
-                .with_context(|| format!("{label}: cannot read"))?;
-            warnings.push(format!(
-                "{label}: MCAP file has no summary (cut short or not finished); its topics were \
-                 found by scanning"
-            ));
-            scan(&mut input, limit, sound)
-        }
-    };
+    let file = McapRecording::open(path, pointcloud2::record_limit(opts.scan_points))?;
+    frames::open(Box::new(file), opts)
+}
 
-    let topics: Vec<(String, String)> = catalog
-        .channels
-        .values()
-        .map(|c| {
-            (
-                c.topic.clone(),
-                catalog.schema_name(c.schema_id).to_string(),
-            )
-        })
-        .collect();
-    let topic = pointcloud2::choose_topic(
-        &label,
-        &topics,
-        |s| s == POINTCLOUD2_SCHEMA,
-        pointcloud2::Wanted::cloud(POINTCLOUD2_SCHEMA),
-        opts.topic.as_deref(),
-    )
-    .map_err(|e| anyhow!(e))?;
-    let imu_topic = imu_topic::choose(
-        &label,
-        &topics,
-        |s| s == imu_msg::ROS2_SCHEMA,
-        imu_msg::ROS2_SCHEMA,
-        &opts.imu,
-    )
-    .map_err(|e| anyhow!(e))?;
-    let imu = match imu_topic {
-        Some(t) => Some(read_imu(
-            (&mut input, &mut bound),
+/// An MCAP file opened for reading.
+pub struct McapRecording {
+    input: BufReader<File>,
+    len: u64,
+    /// Where a linear reader must stop (see [`chunks`]).
+    bound: chunks::Bound,
+    limit: u64,
+    label: String,
+    summary: Option<mcap::Summary>,
+    catalog: Catalog,
+    warnings: Vec<String>,
+}
+
+impl McapRecording {
+    /// Opens the MCAP file at `path`; records larger than `limit` bytes are refused.
+    pub fn open(path: &Path, limit: u64) -> Result<Self> {
+        let label = path.display().to_string();
+        let mut file = File::open(path).with_context(|| format!("{label}: cannot open"))?;
+        let len = file
+            .metadata()
+            .with_context(|| format!("{label}: cannot stat"))?
+            .len();
+        let mut magic = [0u8; 8];
+        if file.read_exact(&mut magic).is_err() || magic != mcap::MAGIC {
+            bail!("{label}: not an MCAP file (no MCAP magic at the start)");
+        }
+        let mut input = BufReader::with_capacity(1 << 16, file);
+        // A linear reader is given the file up to its first unsound chunk only.
+        let mut bound = chunks::Bound::new(len);
+        let mut warnings = Vec::new();
+        let summary = chunks::summary_sound(&mut input, len)
+            .then(|| read_summary(&mut input, len, limit).ok().flatten())
+            .flatten();
+        let catalog = match &summary {
+            Some(summary) if !summary.channels.is_empty() => Catalog::of(summary),
+            // No summary (cut short, or written without one): learn the channels by reading once.
+            _ => {
+                let sound = bound.get(&mut input);
+                input
+                    .seek(SeekFrom::Start(0))
+                    .with_context(|| format!("{label}: cannot read"))?;
+                warnings.push(format!(
+                    "{label}: MCAP file has no summary (cut short or not finished); its topics \
+                     were found by scanning"
+                ));
+                scan(&mut input, limit, sound)
+            }
+        };
+        Ok(Self {
+            input,
+            len,
+            bound,
             limit,
-            &label,
-            &t,
-            &catalog,
-            &mut warnings,
-        )?),
-        None => None,
-    };
-    let total = catalog.counts.as_ref().map(|counts| {
-        catalog
+            label,
+            summary,
+            catalog,
+            warnings,
+        })
+    }
+}
+
+impl Recording for McapRecording {
+    fn label(&self) -> &str {
+        &self.label
+    }
+
+    fn format(&self) -> Format {
+        Format::Mcap
+    }
+
+    fn ros1(&self) -> bool {
+        false
+    }
+
+    fn topics(&self) -> Vec<(String, String)> {
+        let mut out: Vec<(String, String)> = (self.catalog.channels.values())
+            .map(|c| {
+                (
+                    c.topic.clone(),
+                    self.catalog.schema_name(c.schema_id).to_string(),
+                )
+            })
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    fn count(&self, topic: &str) -> Option<usize> {
+        let counts = self.catalog.counts.as_ref()?;
+        let ids = self
+            .catalog
             .channels
             .iter()
-            .filter(|(_, c)| c.topic == topic)
-            .map(|(id, _)| counts.get(id).copied().unwrap_or(0) as usize)
-            .sum()
-    });
-    let indexed = summary
-        .as_ref()
-        .filter(|s| !s.chunk_indexes.is_empty() && !s.channels.is_empty())
-        .and_then(|s| {
-            indexed_reader(&label, &topic, s, &mut input, limit, &mut warnings)
+            .filter(|(_, c)| c.topic == topic);
+        Some(
+            ids.map(|(id, _)| counts.get(id).copied().unwrap_or(0) as usize)
+                .sum(),
+        )
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
+    }
+
+    fn scan(
+        &mut self,
+        topics: &[String],
+        f: &mut dyn FnMut(Message<'_>) -> ControlFlow<()>,
+    ) -> Result<()> {
+        let file = self.label.clone();
+        let ours: HashMap<u16, (usize, String)> = (self.catalog.channels.iter())
+            .filter_map(|(&id, c)| {
+                let topic = topics.iter().position(|t| *t == c.topic)?;
+                Some((id, (topic, self.catalog.type_of(c))))
+            })
+            .collect();
+        let sound = self.bound.get(&mut self.input);
+        self.input
+            .seek(SeekFrom::Start(0))
+            .with_context(|| format!("{file}: cannot read"))?;
+        let mut reader = LinearReader::new_with_options(reader_options(self.limit));
+        while let Some(event) = reader.next_event() {
+            let record = match event {
+                Ok(LinearReadEvent::ReadRequest(need)) => {
+                    let buf = reader.insert(need.min(READ_PIECE));
+                    let n = chunks::read_within(&mut self.input, buf, sound)
+                        .with_context(|| format!("{file}: cannot read"))?;
+                    reader.notify_read(n);
+                    continue;
+                }
+                Ok(LinearReadEvent::Record { opcode, data }) if opcode == op::MESSAGE => {
+                    mcap::parse_record(opcode, data)
+                }
+                Ok(LinearReadEvent::Record { .. }) => continue,
+                Err(e) => Err(e),
+            };
+            match record {
+                Ok(Record::Message { header, data }) => {
+                    let Some((topic, tp)) = ours.get(&header.channel_id) else {
+                        continue;
+                    };
+                    let message = Message {
+                        topic: *topic,
+                        time_ns: header.log_time,
+                        data: &data,
+                        tp,
+                        md5: None,
+                        warning: None,
+                    };
+                    if f(message).is_break() {
+                        return Ok(());
+                    }
+                }
+                Ok(_) => {}
+                Err(e) => bail!("{file}: {e}"),
+            }
+        }
+        Ok(())
+    }
+
+    fn stream(mut self: Box<Self>, topics: &[String]) -> Result<Box<dyn MessageStream>> {
+        let label = self.label.clone();
+        let total = topics.iter().map(|t| self.count(t)).sum::<Option<usize>>();
+        let mut warnings = Vec::new();
+        let indexed = self
+            .summary
+            .as_ref()
+            .filter(|s| !s.chunk_indexes.is_empty() && !s.channels.is_empty())
+            .and_then(|s| {
+                indexed_reader(
+                    &label,
+                    topics,
+                    s,
+                    &mut self.input,
+                    self.limit,
+                    &mut warnings,
+                )
                 .ok()
                 .flatten()
-        });
-    let sound = match indexed {
-        Some(_) => len,
-        None => bound.get(&mut input),
-    };
-    input
-        .seek(SeekFrom::Start(0))
-        .with_context(|| format!("{label}: cannot read"))?;
-    let (reader, channels) = match indexed {
-        Some(reader) => (Reader::Indexed(reader), catalog.channels.clone()),
-        None => (
-            Reader::Linear(LinearReader::new_with_options(reader_options(limit))),
-            HashMap::new(),
-        ),
-    };
-    let source = McapSource {
-        input,
-        sound,
-        reader,
-        chunk: Vec::new(),
-        total,
-        done: false,
-        topic: Topic {
-            file: label,
-            name: topic,
-            schemas: catalog.schemas.clone(),
-            channels,
-            index: 0,
-            max_points: opts.scan_points,
-            latest: None,
-        },
-    };
-    let mut frames: Box<dyn FrameSource> = Box::new(source);
-    if let Some(samples) = imu {
-        frames = Box::new(WithImu::new(frames, samples));
-    }
-    Ok(Dataset {
-        frames,
-        info: DatasetInfo {
-            format: Some(Format::Mcap),
+            });
+        let sound = match indexed {
+            Some(_) => self.len,
+            None => self.bound.get(&mut self.input),
+        };
+        self.input
+            .seek(SeekFrom::Start(0))
+            .with_context(|| format!("{label}: cannot read"))?;
+        let (reader, channels) = match indexed {
+            Some(reader) => (Reader::Indexed(reader), self.catalog.channels.clone()),
+            None => (
+                Reader::Linear(LinearReader::new_with_options(reader_options(self.limit))),
+                HashMap::new(),
+            ),
+        };
+        Ok(Box::new(McapStream {
+            input: self.input,
+            sound,
+            reader,
+            chunk: Vec::new(),
+            total,
+            done: false,
             warnings,
-            ..DatasetInfo::default()
-        },
-    })
+            topics: Topics {
+                file: label,
+                names: topics.to_vec(),
+                schemas: self.catalog.schemas.clone(),
+                channels,
+                index: 0,
+                latest: None,
+                buf: Vec::new(),
+                tp: String::new(),
+            },
+        }))
+    }
 }
 
 /// Most bytes handed to the mcap reader per read. The reader asks for what a record header
@@ -234,6 +322,22 @@ impl Catalog {
 
     fn schema_name(&self, id: u16) -> &str {
         self.schemas.get(&id).map_or("", String::as_str)
+    }
+
+    /// The type of a channel's messages: its schema name, and its encoding when that is not
+    /// CDR (which no reader takes).
+    fn type_of(&self, c: &ChannelInfo) -> String {
+        type_of(self.schema_name(c.schema_id), &c.encoding)
+    }
+}
+
+/// A message type as the readers see it: the schema name, with its encoding when that is not
+/// CDR.
+fn type_of(schema: &str, encoding: &str) -> String {
+    if encoding == CDR_ENCODING {
+        schema.to_string()
+    } else {
+        format!("{schema} ({encoding})")
     }
 }
 
@@ -299,74 +403,12 @@ fn scan(input: &mut BufReader<File>, limit: u64, sound: u64) -> Catalog {
     catalog
 }
 
-/// The samples of the `sensor_msgs/msg/Imu` messages on `topic`, read in one pass over the data
-/// section (from its start: `input` is left anywhere), in stamp order; what went wrong goes to
-/// `warnings`.
-fn read_imu(
-    (input, bound): (&mut BufReader<File>, &mut chunks::Bound),
-    limit: u64,
-    file: &str,
-    topic: &str,
-    catalog: &Catalog,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<ImuSample>> {
-    let usable: HashMap<u16, Option<String>> = catalog
-        .channels
-        .iter()
-        .filter(|(_, c)| c.topic == topic)
-        .map(|(&id, c)| {
-            let schema = catalog.schema_name(c.schema_id);
-            let wrong = (schema != imu_msg::ROS2_SCHEMA || c.encoding != CDR_ENCODING)
-                .then(|| format!("{schema} ({})", c.encoding));
-            (id, wrong)
-        })
-        .collect();
-    let sound = bound.get(input);
-    input
-        .seek(SeekFrom::Start(0))
-        .with_context(|| format!("{file}: cannot read"))?;
-    let mut reader = LinearReader::new_with_options(reader_options(limit));
-    let mut collected = imu_topic::Collector::new(file, topic);
-    let mut index = 0;
-    while let Some(event) = reader.next_event() {
-        let record = match event {
-            Ok(LinearReadEvent::ReadRequest(need)) => {
-                let n = chunks::read_within(input, reader.insert(need.min(READ_PIECE)), sound)
-                    .with_context(|| format!("{file}: cannot read"))?;
-                reader.notify_read(n);
-                continue;
-            }
-            Ok(LinearReadEvent::Record { opcode, data }) if opcode == op::MESSAGE => {
-                mcap::parse_record(opcode, data)
-            }
-            Ok(LinearReadEvent::Record { .. }) => continue,
-            Err(e) => Err(e),
-        };
-        match record {
-            Ok(Record::Message { header, data }) => {
-                match usable.get(&header.channel_id) {
-                    None => continue,
-                    Some(Some(wrong)) => collected.refuse(index, wrong),
-                    Some(None) => collected.push(index, imu_msg::parse_cdr(&data)),
-                }
-                index += 1;
-            }
-            Ok(_) => {}
-            Err(e) => {
-                collected.stop(index, &e);
-                break;
-            }
-        }
-    }
-    Ok(collected.finish(warnings))
-}
-
-/// A reader of the messages of `topic` in log-time order, if the chunk index allows it within
+/// A reader of the messages of `topics` in log-time order, if the chunk index allows it within
 /// memory; warns (in `warnings`) when the file was written out of order, naming the first
 /// message out of order, and when it is but cannot be reordered.
 fn indexed_reader(
     label: &str,
-    topic: &str,
+    topics: &[String],
     summary: &mcap::Summary,
     input: &mut BufReader<File>,
     limit: u64,
@@ -375,7 +417,7 @@ fn indexed_reader(
     let ours: Vec<u16> = summary
         .channels
         .iter()
-        .filter(|(_, c)| c.topic == topic)
+        .filter(|(_, c)| topics.contains(&c.topic))
         .map(|(&id, _)| id)
         .collect();
     // The mcap crate copies an uncompressed chunk into a buffer of its uncompressed size, and
@@ -417,7 +459,7 @@ fn indexed_reader(
         times.extend(entries.into_iter().map(|(_, t)| t));
     }
     let mut order: Vec<u64> = times.clone();
-    let warning = pointcloud2::time_order(label, topic, &mut order, |t| *t);
+    let warning = pointcloud2::time_order(label, &topics.join(", "), &mut order, |t| *t);
     // Chunks overlapping in time are held together; bound how many.
     let mut spans: Vec<(u64, u64, u64)> = chunks
         .iter()
@@ -450,7 +492,7 @@ fn indexed_reader(
     warnings.extend(warning);
     let options = IndexedReaderOptions::new()
         .with_order(ReadOrder::LogTime)
-        .include_topics([topic])
+        .include_topics(topics)
         .with_record_length_limit(usize::try_from(limit).unwrap_or(usize::MAX));
     Ok(Some(IndexedReader::new_with_options(summary, options)?))
 }
@@ -459,12 +501,12 @@ fn indexed_reader(
 enum Reader {
     /// Record by record in file order.
     Linear(LinearReader),
-    /// The chosen topic's messages in log-time order, chunk by chunk.
+    /// The chosen topics' messages in log-time order, chunk by chunk.
     Indexed(IndexedReader),
 }
 
-/// The frames of one topic of an open MCAP file.
-struct McapSource {
+/// The messages of some topics of an open MCAP file.
+struct McapStream {
     input: BufReader<File>,
     /// Where the linear reader's file ends (see [`chunks`]).
     sound: u64,
@@ -473,92 +515,99 @@ struct McapSource {
     chunk: Vec<u8>,
     total: Option<usize>,
     done: bool,
-    topic: Topic,
+    warnings: Vec<String>,
+    topics: Topics,
 }
 
-/// What turns messages of the data section into items of the chosen topic.
-struct Topic {
+/// What picks the messages of the chosen topics out of the data section.
+struct Topics {
     file: String,
-    name: String,
+    names: Vec<String>,
     /// Schema names by id (from the summary, or as met in the data section).
     schemas: HashMap<u16, String>,
     /// Channels by id (from the summary, or as met in the data section).
     channels: HashMap<u16, ChannelInfo>,
+    /// The next message's place in the stream.
     index: usize,
-    max_points: usize,
     /// Latest log time and message index so far, for the order warning of linear reading.
     latest: Option<(u64, usize)>,
+    /// The message handed on last, and its type.
+    buf: Vec<u8>,
+    tp: String,
 }
 
-impl Topic {
-    /// The item of a message, `None` for a message of another topic.
-    fn item(&mut self, channel_id: u16, log_time: u64, data: &[u8]) -> Result<Option<Item>> {
+/// A message of a chosen topic: the topic's place, log time, order warning.
+type Picked = (usize, u64, Option<String>);
+
+impl Topics {
+    /// Keeps a copy of a message of a chosen topic; `None` for another topic's.
+    fn pick(&mut self, channel_id: u16, log_time: u64, data: &[u8]) -> Result<Option<Picked>> {
         let (file, index) = (&self.file, self.index);
         let Some(channel) = self.channels.get(&channel_id) else {
             bail!("{file}: message on channel {channel_id} before its channel record");
         };
-        if channel.topic != self.name {
+        let Some(topic) = self.names.iter().position(|t| *t == channel.topic) else {
             return Ok(None);
-        }
-        let topic = &self.name;
+        };
         let schema = self
             .schemas
             .get(&channel.schema_id)
             .map_or("no schema", String::as_str);
-        if schema != POINTCLOUD2_SCHEMA || channel.encoding != CDR_ENCODING {
-            bail!(
-                "{file}: message {index} on {topic} is {schema} ({}), not {POINTCLOUD2_SCHEMA} \
-                 ({CDR_ENCODING})",
-                channel.encoding
-            );
-        }
-        let at = MessageAt {
-            index,
-            file,
-            topic,
-            received: log_time,
-        };
-        let mut item = pointcloud2::message_item(at, parse_cdr(data), self.max_points);
-        match self.latest {
-            Some((t, k)) if log_time < t => {
-                if let Item::Frame(f) = &mut item {
-                    f.warnings.push(format!(
-                        "{file}: message {index} on {topic} was logged at {}, before message {k} \
-                         ({}): the file is out of time order and cannot be reordered (no chunk \
-                         index); frames are read in file order",
-                        pointcloud2::stamp_of_nanos(log_time),
-                        pointcloud2::stamp_of_nanos(t)
-                    ));
-                }
+        let tp = type_of(schema, &channel.encoding);
+        let warning = match self.latest {
+            Some((t, k)) if log_time < t => Some(format!(
+                "{file}: message {index} on {} was logged at {}, before message {k} ({}): the \
+                 file is out of time order and cannot be reordered (no chunk index); frames \
+                 are read in file order",
+                channel.topic,
+                pointcloud2::stamp_of_nanos(log_time),
+                pointcloud2::stamp_of_nanos(t)
+            )),
+            _ => {
+                self.latest = Some((log_time, index));
+                None
             }
-            _ => self.latest = Some((log_time, index)),
-        }
+        };
         self.index += 1;
-        Ok(Some(item))
+        self.buf.clear();
+        self.buf.extend_from_slice(data);
+        self.tp = tp;
+        Ok(Some((topic, log_time, warning)))
     }
 }
 
-impl FrameSource for McapSource {
+impl MessageStream for McapStream {
     fn len_hint(&self) -> Option<usize> {
         self.total
     }
 
-    fn next_item(&mut self) -> Result<Option<Item>> {
+    fn next_message(&mut self) -> Result<Option<Message<'_>>> {
         if self.done {
             return Ok(None);
         }
-        let result = self.next_frame();
-        if !matches!(result, Ok(Some(_))) {
+        let picked = self.next_picked();
+        if !matches!(picked, Ok(Some(_))) {
             self.done = true;
         }
-        result
+        Ok(picked?.map(|(topic, time_ns, warning)| Message {
+            topic,
+            time_ns,
+            data: &self.topics.buf,
+            tp: &self.topics.tp,
+            md5: None,
+            warning,
+        }))
+    }
+
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.warnings)
     }
 }
 
-impl McapSource {
-    /// Reads the data section up to the next message on the chosen topic.
-    fn next_frame(&mut self) -> Result<Option<Item>> {
-        let file = self.topic.file.clone();
+impl McapStream {
+    /// Reads the data section up to the next message on a chosen topic.
+    fn next_picked(&mut self) -> Result<Option<Picked>> {
+        let file = self.topics.file.clone();
         loop {
             match &mut self.reader {
                 Reader::Linear(reader) => {
@@ -584,10 +633,10 @@ impl McapSource {
                             let record = mcap::parse_record(opcode, data).map_err(|e| {
                                 anyhow!("{file}: bad record (opcode {opcode:#04x}): {e}")
                             })?;
-                            let topic = &mut self.topic;
+                            let topics = &mut self.topics;
                             match record {
                                 Record::Schema { header, .. } => {
-                                    topic.schemas.insert(header.id, header.name);
+                                    topics.schemas.insert(header.id, header.name);
                                 }
                                 Record::Channel(c) => {
                                     let info = ChannelInfo {
@@ -595,13 +644,13 @@ impl McapSource {
                                         schema_id: c.schema_id,
                                         encoding: c.message_encoding,
                                     };
-                                    topic.channels.insert(c.id, info);
+                                    topics.channels.insert(c.id, info);
                                 }
                                 Record::Message { header, data } => {
-                                    let item =
-                                        topic.item(header.channel_id, header.log_time, &data)?;
-                                    if item.is_some() {
-                                        return Ok(item);
+                                    let picked =
+                                        topics.pick(header.channel_id, header.log_time, &data)?;
+                                    if picked.is_some() {
+                                        return Ok(picked);
                                     }
                                 }
                                 _ => {}
@@ -623,9 +672,9 @@ impl McapSource {
                             .with_context(|| file.clone())?;
                     }
                     Some(Ok(IndexedReadEvent::Message { header, data })) => {
-                        let item = self.topic.item(header.channel_id, header.log_time, data)?;
-                        if item.is_some() {
-                            return Ok(item);
+                        let picked = self.topics.pick(header.channel_id, header.log_time, data)?;
+                        if picked.is_some() {
+                            return Ok(picked);
                         }
                     }
                 },

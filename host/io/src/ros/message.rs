@@ -5,82 +5,11 @@
 //! layouts differ only in the header: ROS 1's has a `seq` and an unsigned stamp.
 
 use super::pointcloud2::{PointCloud2, PointField, Stamp};
-
-/// How a message's bytes are laid out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Encoding {
-    /// ROS 1: little-endian, no alignment.
-    Ros1,
-    /// CDR after its encapsulation header (alignment is relative to the header's end).
-    Cdr { big_endian: bool },
-}
-
-/// Cursor over a message body.
-struct Reader<'a> {
-    buf: &'a [u8],
-    pos: usize,
-    encoding: Encoding,
-    /// Bytes before `buf` in the message (the encapsulation header), for error positions.
-    before: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
-        let bytes = self
-            .pos
-            .checked_add(n)
-            .and_then(|end| self.buf.get(self.pos..end))
-            .ok_or_else(|| {
-                format!(
-                    "message ends inside {what} (needs {n} bytes at byte {} of {})",
-                    self.pos + self.before,
-                    self.buf.len() + self.before
-                )
-            })?;
-        self.pos += n;
-        Ok(bytes)
-    }
-
-    fn u8(&mut self, what: &str) -> Result<u8, String> {
-        Ok(self.take(1, what)?[0])
-    }
-
-    fn u32(&mut self, what: &str) -> Result<u32, String> {
-        if let Encoding::Cdr { .. } = self.encoding {
-            self.pos = self.pos.next_multiple_of(4);
-        }
-        let b = self.take(4, what)?;
-        let b = [b[0], b[1], b[2], b[3]];
-        Ok(match self.encoding {
-            Encoding::Cdr { big_endian: true } => u32::from_be_bytes(b),
-            _ => u32::from_le_bytes(b),
-        })
-    }
-
-    /// A u32 length, then the bytes (in CDR the length counts a terminating NUL).
-    fn string(&mut self, what: &str) -> Result<String, String> {
-        let n = self.u32(what)? as usize;
-        let mut bytes = self.take(n, what)?;
-        if let Encoding::Cdr { .. } = self.encoding {
-            bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
-        }
-        Ok(String::from_utf8_lossy(bytes).into_owned())
-    }
-
-    /// Bytes left after the message.
-    fn rest(&self) -> usize {
-        self.buf.len() - self.pos
-    }
-}
+use super::serial::Reader;
 
 /// Parses a ROS 1 serialized `sensor_msgs/PointCloud2`.
 pub fn parse_ros1(body: &[u8]) -> Result<PointCloud2<'_>, String> {
-    let mut r = Reader {
-        buf: body,
-        pos: 0,
-        encoding: Encoding::Ros1,
-        before: 0,
-    };
+    let mut r = Reader::ros1(body);
     let _seq = r.u32("header.seq")?;
     let sec = r.u32("header.stamp")?;
     let nsec = r.u32("header.stamp")?;
@@ -89,34 +18,14 @@ pub fn parse_ros1(body: &[u8]) -> Result<PointCloud2<'_>, String> {
         nsec,
     };
     let cloud = after_stamp(&mut r, stamp)?;
-    match r.rest() {
-        0 => Ok(cloud),
-        extra => Err(format!("{extra} bytes after the end of the message")),
-    }
+    r.finish()?;
+    Ok(cloud)
 }
 
 /// Parses a CDR serialized `sensor_msgs/msg/PointCloud2` (with its encapsulation header).
 pub fn parse_cdr(body: &[u8]) -> Result<PointCloud2<'_>, String> {
-    let (header, buf) = body
-        .split_first_chunk::<4>()
-        .ok_or("message shorter than the CDR encapsulation header")?;
-    let big_endian = match header[..2] {
-        [0, 0] => true,
-        [0, 1] => false,
-        _ => {
-            return Err(format!(
-                "encapsulation {:02x}{:02x} is not plain CDR",
-                header[0], header[1]
-            ))
-        }
-    };
-    let mut r = Reader {
-        buf,
-        pos: 0,
-        encoding: Encoding::Cdr { big_endian },
-        before: header.len(),
-    };
-    let sec = r.u32("header.stamp.sec")? as i32;
+    let mut r = Reader::cdr(body)?;
+    let sec = r.i32("header.stamp.sec")?;
     let nsec = r.u32("header.stamp.nanosec")?;
     let stamp = Stamp {
         sec: i64::from(sec),
@@ -124,10 +33,8 @@ pub fn parse_cdr(body: &[u8]) -> Result<PointCloud2<'_>, String> {
     };
     let cloud = after_stamp(&mut r, stamp)?;
     // Serializers may pad the message to a multiple of 4 bytes; more is not this type.
-    match r.rest() {
-        0..=3 => Ok(cloud),
-        extra => Err(format!("{extra} bytes after the end of the message")),
-    }
+    r.finish()?;
+    Ok(cloud)
 }
 
 /// The message from `header.frame_id` on, the same fields in both generations.
@@ -135,11 +42,8 @@ fn after_stamp<'a>(r: &mut Reader<'a>, stamp: Stamp) -> Result<PointCloud2<'a>, 
     let frame_id = r.string("header.frame_id")?;
     let height = r.u32("height")?;
     let width = r.u32("width")?;
-    let n_fields = r.u32("fields")? as usize;
     // Each field takes at least 13 bytes; a larger count is garbage, not an allocation size.
-    if n_fields > r.rest() / 13 {
-        return Err(format!("{n_fields} fields cannot fit in the message"));
-    }
+    let n_fields = r.count("fields", 13)?;
     let mut fields = Vec::with_capacity(n_fields);
     for _ in 0..n_fields {
         fields.push(PointField {
@@ -152,8 +56,7 @@ fn after_stamp<'a>(r: &mut Reader<'a>, stamp: Stamp) -> Result<PointCloud2<'a>, 
     let is_bigendian = r.u8("is_bigendian")? != 0;
     let point_step = r.u32("point_step")?;
     let row_step = r.u32("row_step")?;
-    let data_len = r.u32("data")? as usize;
-    let data = r.take(data_len, "data")?;
+    let data = r.bytes("data")?;
     let is_dense = r.u8("is_dense")? != 0;
     Ok(PointCloud2 {
         stamp,

@@ -1,8 +1,10 @@
 //! Tests of `bag`.
 
 use super::*;
-use crate::dataset::ImuInput;
+use crate::dataset::{ImuInput, Item};
 use crate::ros::bag_records::MAGIC;
+use crate::ros::imu_msg;
+use crate::ros::message::parse_ros1;
 use crate::ros::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
 use std::collections::{BTreeMap, BTreeSet};
 

@@ -1,6 +1,9 @@
 //! Tests of `mcap`.
 
 use super::*;
+use crate::dataset::Item;
+use crate::ros::imu_msg;
+use crate::ros::message::parse_cdr;
 use crate::ros::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
 use crate::ros::pointcloud2::Stamp;
 use mcap::records::MessageHeader;
