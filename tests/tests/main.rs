@@ -13,6 +13,7 @@ mod crosscheck;
 mod dataset_containers;
 mod dataset_folders;
 mod dataset_process;
+mod db3_nebula;
 mod degeneracy;
 mod embedded;
 mod golden;

@@ -22,4 +22,6 @@ pub mod packet_frames;
 pub mod packets;
 pub mod pointcloud2;
 pub mod recording;
-pub mod serial;
+pub(crate) mod serial;
+#[cfg(test)]
+pub(crate) mod test_messages;

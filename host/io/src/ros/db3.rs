@@ -61,7 +61,7 @@ struct Db3File {
     /// Topic ids: name and type.
     topics: HashMap<i64, (String, String)>,
     /// The decompressed copy `conn` reads, removed when the bag is dropped.
-    _copy: Option<tempfile::TempPath>,
+    copy: Option<tempfile::TempPath>,
 }
 
 /// A sqlite3 bag opened for reading.
@@ -143,6 +143,39 @@ fn decompress_file(path: &Path) -> Result<tempfile::TempPath> {
     Ok(out.into_temp_path())
 }
 
+/// The SQLite file header: page size (1 means 65,536), the change counter, the page count
+/// and the change counter that count is valid for.
+mod header {
+    use core::ops::Range;
+    pub const MAGIC: &[u8] = b"SQLite format 3\0";
+    pub const PAGE_SIZE: Range<usize> = 16..18;
+    pub const CHANGE_COUNTER: Range<usize> = 24..28;
+    pub const PAGES: Range<usize> = 28..32;
+    pub const VALID_FOR: Range<usize> = 92..96;
+    pub const LEN: usize = 100;
+}
+
+/// Why the SQLite file `path` is shorter than its header says, if it is (cut short in a copy
+/// or a crash): SQLite reads the missing pages as zeros, so what it finds there is not there.
+fn cut_short(path: &Path) -> Option<String> {
+    let mut head = [0u8; header::LEN];
+    let mut file = std::fs::File::open(path).ok()?;
+    file.read_exact(&mut head).ok()?;
+    let len = file.metadata().ok()?.len();
+    let word = |r: std::ops::Range<usize>| u32::from_be_bytes(head[r].try_into().unwrap_or([0; 4]));
+    let page = match u16::from_be_bytes([
+        head[header::PAGE_SIZE.start],
+        head[header::PAGE_SIZE.end - 1],
+    ]) {
+        1 => 65_536,
+        n => u64::from(n),
+    };
+    let valid = word(header::CHANGE_COUNTER) == word(header::VALID_FOR);
+    let want = u64::from(word(header::PAGES)) * page;
+    (head.starts_with(header::MAGIC) && valid && len < want)
+        .then(|| format!("{len} bytes where its header says {want}: the file is cut short"))
+}
+
 fn open_file(path: &Path, compression: Compression) -> Result<Db3File> {
     let shown = path.display().to_string();
     let copy = match compression {
@@ -179,7 +212,7 @@ fn open_file(path: &Path, compression: Compression) -> Result<Db3File> {
         shown,
         conn,
         topics,
-        _copy: copy,
+        copy,
     })
 }
 
@@ -219,7 +252,14 @@ impl Db3 {
         let mut types = BTreeMap::new();
         let mut file_counts = BTreeMap::new();
         let mut damage = None;
-        for f in &files {
+        for (f, p) in files.iter().zip(&paths) {
+            let read = f.copy.as_deref().unwrap_or(p);
+            if let Some(reason) = cut_short(read) {
+                warnings.push(format!(
+                    "{}: {reason}; the messages past the cut are lost",
+                    f.shown
+                ));
+            }
             for (name, tp) in f.topics.values() {
                 if let Some(first) = types.get(name).filter(|t| *t != tp) {
                     warnings.push(format!(

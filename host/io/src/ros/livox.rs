@@ -3,8 +3,10 @@
 //!
 //! A message holds a header, `timebase` (ns, the sensor-clock time of its first point),
 //! `point_num`, and its points, each `offset_time` (ns after `timebase`), x, y, z (m, float32),
-//! `reflectivity`, `tag` and `line`. Each point's time is `timebase + offset_time`, in seconds
-//! on the sensor's clock, the clock of the IMU the driver publishes beside it (`--imu`). The
+//! `reflectivity`, `tag` and `line`. Each point's time is `timebase + offset_time` on the
+//! sensor's clock, the clock of the IMU the driver publishes beside it (`--imu`): a frame's
+//! stamps are seconds after its first message's `timebase`, and it ends (`Frame::end`) at its
+//! latest point. The
 //! drivers publish at a configurable rate (`publish_freq`, 10 Hz by default): each message is
 //! a frame, or with `--frame-period` the messages whose first points fall in one period are
 //! merged into one frame (periods counted from the first message, a message placed in the
@@ -196,18 +198,24 @@ impl LivoxFrames {
         format!("{}:{}@{}", self.file, self.topic, stamp_of_nanos(received))
     }
 
-    /// Adds a message's points to `frame`, at most `max_points` in all.
-    fn append(&self, frame: &mut Frame, msg: &CustomMsg, beyond: &mut usize) {
+    /// Adds a message's points to `frame` (whose first point was at `base` ns), at most
+    /// `max_points` in all; returns the latest point's time, ns.
+    fn append(&self, frame: &mut Frame, base: u64, msg: &CustomMsg, beyond: &mut usize) -> u64 {
         let room = self.max_points.saturating_sub(frame.points.len());
         *beyond += msg.points.len().saturating_sub(room);
         let stamps = frame.stamps.get_or_insert_with(Vec::new);
         let intensity = frame.intensity.get_or_insert_with(Vec::new);
+        let mut latest = msg.timebase;
         for p in msg.points.iter().take(room) {
             frame.points.push(p.xyz.map(f64::from));
             let ns = msg.timebase.saturating_add(u64::from(p.offset_time));
-            stamps.push(ns as f64 * 1e-9);
+            latest = latest.max(ns);
+            // Seconds after the frame's first point: exact to the nanosecond, where seconds
+            // since 1970 would keep a quarter of a microsecond.
+            stamps.push(ns.wrapping_sub(base) as i64 as f64 * 1e-9);
             intensity.push(f32::from(p.reflectivity));
         }
+        latest
     }
 }
 
@@ -250,8 +258,8 @@ impl FrameSource for LivoxFrames {
             time: Some(msg.stamp.seconds()),
             ..Frame::default()
         };
-        let mut beyond = 0;
-        self.append(&mut frame, &msg, &mut beyond);
+        let (base, mut beyond) = (msg.timebase, 0);
+        let mut latest = self.append(&mut frame, base, &msg, &mut beyond);
         while self.period_ns.is_some() {
             let next = match self.read() {
                 Ok(Some(r)) => r,
@@ -264,7 +272,9 @@ impl FrameSource for LivoxFrames {
                 }
             };
             match &next.2 {
-                Ok((m, period)) if *period == own => self.append(&mut frame, m, &mut beyond),
+                Ok((m, period)) if *period == own => {
+                    latest = latest.max(self.append(&mut frame, base, m, &mut beyond));
+                }
                 Ok(_) => {
                     self.ahead = Some(next);
                     break;
@@ -276,6 +286,8 @@ impl FrameSource for LivoxFrames {
                 )),
             }
         }
+        // The sweep's end on the sensor's clock, which the IMU shares.
+        frame.end = Some(latest as f64 * 1e-9);
         if beyond > 0 {
             frame.warnings.push(format!(
                 "{}: {} points, only the first {} read (the core's scan capacity)",

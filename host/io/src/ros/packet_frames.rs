@@ -267,3 +267,6 @@ impl DatagramSource for Datagrams {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

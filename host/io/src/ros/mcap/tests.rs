@@ -4,60 +4,11 @@ use super::*;
 use crate::dataset::Item;
 use crate::ros::imu_msg;
 use crate::ros::message::parse_cdr;
-use crate::ros::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt, RawCloud};
+use crate::ros::pointcloud2::fixture::{assert_frame_k, drain, frame, save, xyzt};
 use crate::ros::pointcloud2::Stamp;
+use crate::ros::test_messages::{cdr_body, imu_cdr};
 use mcap::records::MessageHeader;
 use std::collections::BTreeMap;
-
-/// CDR serialization of `c` written from the IDL: 4-byte encapsulation header, then every
-/// primitive aligned to its size counted from the end of that header.
-fn cdr_body(c: &RawCloud, big_endian: bool) -> Vec<u8> {
-    struct W {
-        b: Vec<u8>,
-        big: bool,
-    }
-    impl W {
-        fn u32(&mut self, v: u32) {
-            while (self.b.len() - 4) % 4 != 0 {
-                self.b.push(0);
-            }
-            let bytes = if self.big {
-                v.to_be_bytes()
-            } else {
-                v.to_le_bytes()
-            };
-            self.b.extend_from_slice(&bytes);
-        }
-        fn string(&mut self, s: &str) {
-            self.u32(s.len() as u32 + 1);
-            self.b.extend_from_slice(s.as_bytes());
-            self.b.push(0);
-        }
-    }
-    let mut w = W {
-        b: vec![0, if big_endian { 0 } else { 1 }, 0, 0],
-        big: big_endian,
-    };
-    w.u32(c.sec);
-    w.u32(c.nsec);
-    w.string(&c.frame_id);
-    w.u32(c.height);
-    w.u32(c.width);
-    w.u32(c.fields.len() as u32);
-    for f in &c.fields {
-        w.string(&f.name);
-        w.u32(f.offset);
-        w.b.push(f.datatype);
-        w.u32(f.count);
-    }
-    w.b.push(u8::from(c.is_bigendian));
-    w.u32(c.point_step);
-    w.u32(c.row_step);
-    w.u32(c.data.len() as u32);
-    w.b.extend_from_slice(&c.data);
-    w.b.push(u8::from(c.is_dense));
-    w.b
-}
 
 const STRING_SCHEMA: &str = "std_msgs/msg/String";
 
@@ -362,24 +313,6 @@ fn files_that_are_not_mcap_are_refused() {
         err.contains("not an MCAP file") && err.contains(&p.display().to_string()),
         "{err}"
     );
-}
-
-/// A little-endian CDR `sensor_msgs/msg/Imu` stamped `ns`, angular velocity (k, 0, 0), frame id
-/// `imu` (4 bytes with its NUL, which end 16 bytes after the encapsulation header: the f64 need
-/// no padding).
-fn imu_cdr(ns: u64, k: u32) -> Vec<u8> {
-    let mut b = vec![0, 1, 0, 0];
-    for v in [(ns / 1_000_000_000) as u32, (ns % 1_000_000_000) as u32, 4] {
-        b.extend(v.to_le_bytes());
-    }
-    b.extend(b"imu\0");
-    let mut block = [0.0f64; 37];
-    block[13] = f64::from(k); // angular_velocity.x
-    block[27] = 9.8; // linear_acceleration.z
-    for v in block {
-        b.extend(v.to_le_bytes());
-    }
-    b
 }
 
 #[test]
