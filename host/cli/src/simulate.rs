@@ -3,7 +3,9 @@
 //! recording).
 
 use anyhow::Result;
-use kiss_odom_sim::{Format, ImuSpec, Lidar, PacketSensor, Profile, Request, SimParams, Written};
+use kiss_odom_sim::{
+    Format, ImuSpec, Lidar, Messages, PacketSensor, Profile, Request, SimParams, Written,
+};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -67,12 +69,15 @@ pub struct SimulateArgs {
     /// What to write.
     #[arg(long, value_enum, default_value_t = Format::Generic)]
     pub format: Format,
+    /// What a ROS recording (--format bag, mcap or db3) carries.
+    #[arg(long, value_enum, default_value_t = Messages::Points)]
+    pub messages: Messages,
     /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
     /// 200), with white noise, turn-on biases that then walk, and gravity, 11, 23 and -44 mm
     /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it. With
-    /// --format bag or mcap, the samples are also in the recording as sensor_msgs/Imu on /imu;
-    /// with --format pcap and --sensor os1-64 or mid360, in packets.pcap as the sensor's own
-    /// IMU packets.
+    /// --format bag, mcap or db3, the samples are also in the recording as sensor_msgs/Imu on
+    /// /imu; with --format pcap (or --messages packets) and --sensor os1-64 or mid360, in the
+    /// packets as the sensor's own IMU packets.
     #[arg(long)]
     pub imu_rate: Option<f64>,
     /// With --imu-rate: the exact rates and forces, without noise or bias.
@@ -91,6 +96,8 @@ impl SimulateArgs {
             params: self.params(),
             sensor: self.sensor,
             format: self.format,
+            messages: self.messages,
+            messages_per_frame: 1,
             imu: self.imu_rate.map(|rate| {
                 let spec = ImuSpec::mems(rate);
                 if self.imu_exact {

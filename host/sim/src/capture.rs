@@ -25,6 +25,34 @@ pub const META_NAME: &str = "packets.json";
 /// The Hesai angle correction file's name in the output folder.
 pub const ANGLES_NAME: &str = "packets.csv";
 
+/// Where simulated packets go, in sending order: a capture ([`CaptureWriter`]) or a ROS
+/// recording of them ([`crate::ros::packet_bag`]).
+pub trait PacketSink {
+    /// One lidar packet.
+    fn write(&mut self, packet: &Packet) -> Result<()>;
+    /// One IMU packet ([`PacketSensor::imu_packet`]).
+    fn write_imu(&mut self, packet: &Packet) -> Result<()>;
+    /// The sweep's last packet has been written.
+    fn end_sweep(&mut self) -> Result<()> {
+        Ok(())
+    }
+    /// Writes what is left and closes the file.
+    fn finish(self: Box<Self>) -> Result<()>;
+}
+
+/// When a packet leaving the sensor at trajectory time `offset` (s) is captured, on a host
+/// whose clock read `clock_start` (s) at trajectory time 0 and agrees with the sensor's: ns
+/// since the epoch, to the microsecond a pcap keeps.
+pub fn capture_ns(clock_start: f64, offset: f64) -> u64 {
+    let t = Duration::from_secs_f64((clock_start + offset).max(0.0));
+    t.as_secs() * 1_000_000_000 + u64::from(t.subsec_micros()) * 1_000
+}
+
+/// The host clock's reading at trajectory time 0 for `sensor`'s packets, s.
+pub fn clock_start(sensor: PacketSensor, start_time: f64) -> f64 {
+    start_time + sensor.clock_origin_s() as f64
+}
+
 /// A pcap file being written.
 pub struct CaptureWriter {
     path: PathBuf,
@@ -67,18 +95,8 @@ impl CaptureWriter {
             imu_ports,
             source,
             // Captured on a host whose clock agrees with the sensor's.
-            start_time: start_time + sensor.clock_origin_s() as f64,
+            start_time: clock_start(sensor, start_time),
         })
-    }
-
-    /// Appends one lidar packet, stamped with the time it leaves the sensor.
-    pub fn write(&mut self, packet: &Packet) -> Result<()> {
-        self.write_to(packet, self.ports)
-    }
-
-    /// Appends one IMU packet ([`PacketSensor::imu_packet`]), to the sensor's IMU port.
-    pub fn write_imu(&mut self, packet: &Packet) -> Result<()> {
-        self.write_to(packet, self.imu_ports)
     }
 
     fn write_to(&mut self, packet: &Packet, (from, to): (u16, u16)) -> Result<()> {
@@ -89,18 +107,31 @@ impl CaptureWriter {
         builder
             .write(&mut frame, &packet.payload)
             .context("building a UDP frame")?;
-        let time = Duration::from_secs_f64((self.start_time + packet.offset).max(0.0));
+        let time = Duration::from_nanos(capture_ns(self.start_time, packet.offset));
         let record = PcapPacket::new(time, frame.len() as u32, &frame);
         self.writer
             .write_packet(&record)
             .with_context(|| format!("writing {}", self.path.display()))?;
         Ok(())
     }
+}
+
+impl PacketSink for CaptureWriter {
+    /// Appends one lidar packet, stamped with the time it leaves the sensor.
+    fn write(&mut self, packet: &Packet) -> Result<()> {
+        self.write_to(packet, self.ports)
+    }
+
+    /// Appends one IMU packet, to the sensor's IMU port.
+    fn write_imu(&mut self, packet: &Packet) -> Result<()> {
+        self.write_to(packet, self.imu_ports)
+    }
 
     /// Flushes the file.
-    pub fn finish(self) -> Result<()> {
+    fn finish(self: Box<Self>) -> Result<()> {
+        let path = self.path.clone();
         let mut w = self.writer.into_writer();
-        std::io::Write::flush(&mut w).with_context(|| format!("writing {}", self.path.display()))
+        std::io::Write::flush(&mut w).with_context(|| format!("writing {}", path.display()))
     }
 }
 

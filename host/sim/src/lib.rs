@@ -6,8 +6,8 @@
 //! swept by a multi-beam sensor ([`sensor`]) riding a smooth parametric trajectory
 //! ([`trajectory`]) of a [`Profile`]: a [`Simulation`], with an [`imu`] riding along.
 //! [`packets`] fires a real sensor's beams at its own timing and packs its UDP packets,
-//! [`capture`] writes them as a pcap, [`ros`] the frames and IMU samples as a ROS bag or MCAP
-//! file, [`writer`] the generic layout, and [`sequence`] a whole sequence. Every random draw is
+//! [`capture`] writes them as a pcap, [`ros`] the frames, packets and IMU samples as a ROS bag,
+//! MCAP file or sqlite3 bag, [`writer`] the generic layout, and [`sequence`] a whole sequence. Every random draw is
 //! keyed by indices ([`rng`]), so the bytes depend on the seed and parameters only, never on
 //! the thread count.
 
@@ -31,6 +31,6 @@ pub use packets::{PacketSensor, PacketSim};
 pub use profile::Profile;
 pub use scene::{Scene, Surface};
 pub use sensor::{Frame, Lidar};
-pub use sequence::{write, Format, Request, Written};
+pub use sequence::{write, Format, Messages, Request, Written};
 pub use simulation::{SimParams, Simulation, MAX_FRAMES};
 pub use trajectory::{PoseM, Trajectory};

@@ -1,11 +1,12 @@
 //! A whole simulated sequence written to a folder: the frames and ground truth in the generic
 //! layout ([`crate::writer`]), `sim.toml`, with [`Format::Pcap`] the same sweeps as the
-//! sensor's packets ([`crate::packets`], [`crate::capture`]), with [`Format::Bag`] or
-//! [`Format::Mcap`] the same frames and IMU samples as a ROS recording ([`crate::ros`]), and
-//! an IMU's `imu.csv` ([`crate::imu`]) if asked for. The folder appears only once
-//! complete; a stop asked for between frames leaves none.
+//! sensor's packets ([`crate::packets`], [`crate::capture`]), with [`Format::Bag`],
+//! [`Format::Mcap`] or [`Format::Db3`] a ROS recording ([`crate::ros`]) of the same frames and
+//! IMU samples, of the same packets, or of a Livox sensor's frames as its driver publishes
+//! them ([`Messages`]), and an IMU's `imu.csv` ([`crate::imu`]) if asked for. The folder
+//! appears only once complete; a stop asked for between frames leaves none.
 
-use crate::capture;
+use crate::capture::{self, PacketSink};
 use crate::imu::{self, ImuSample, ImuSpec};
 use crate::packets::{PacketSensor, PacketSim};
 use crate::profile::Profile;
@@ -36,6 +37,25 @@ pub enum Format {
     Bag,
     /// As `bag`, in the ROS 2 MCAP file `points.mcap` (CDR messages).
     Mcap,
+    /// As `mcap`, in the ROS 2 sqlite3 bag `points/` (`metadata.yaml`, `points_0.db3`).
+    Db3,
+}
+
+/// What a ROS recording (`--format bag|mcap|db3`) carries.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Messages {
+    /// Every frame as a `sensor_msgs/PointCloud2` on `/points`.
+    #[default]
+    Points,
+    /// The sensor's packets as its ROS driver records them: VelodyneScan, nebula's
+    /// PandarScan, ouster-ros' PacketMsg (with the metadata on `/ouster/metadata`), or for the
+    /// Livox sensors nebula's NebulaPackets (MCAP and db3 only); needs `--sensor`.
+    Packets,
+    /// A Livox sensor's frames (`--sensor mid360` or `avia`) as the Livox driver's `CustomMsg`
+    /// on `/livox/lidar`.
+    Livox,
 }
 
 /// Everything that decides a written sequence.
@@ -47,6 +67,11 @@ pub struct Request {
     pub sensor: Option<PacketSensor>,
     /// What to write.
     pub format: Format,
+    /// What a ROS recording carries.
+    pub messages: Messages,
+    /// A Livox `CustomMsg` recording's messages per frame (the driver's publish rate times
+    /// the frame period; at least 1).
+    pub messages_per_frame: usize,
     /// An IMU riding along, written to `imu.csv`.
     pub imu: Option<ImuSpec>,
     /// Replace a sequence already in the folder.
@@ -84,6 +109,9 @@ struct Provenance<'a> {
     sensor: &'a Lidar,
     #[serde(skip_serializing_if = "Option::is_none")]
     packets: Option<PacketSummary>,
+    /// What the ROS recording carries, if one was written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ros_messages: Option<Messages>,
     #[serde(skip_serializing_if = "Option::is_none")]
     imu: Option<ImuSummary>,
     scene: SceneSummary,
@@ -122,9 +150,11 @@ const LAYOUT: &str = "velodyne/NNNNNN.bin: f32 LE x y z intensity, sensor frame 
     times.txt: end-of-sweep times (s); packets.pcap (if written): the same sweeps as the \
     sensor's UDP packets, exact points above before range quantisation, in decoder order, \
     with an OS1's or a Mid-360's IMU samples (if written) as its IMU packets; \
-    packets.json: Ouster metadata; points.bag or points.mcap (if written): the frames as \
-    sensor_msgs/PointCloud2 on /points (x y z intensity f32, time f64 s) stamped at the sweep's \
-    end, the IMU samples as sensor_msgs/Imu on /imu; imu.csv (if written): time (s, the frames' clock plus the \
+    packets.json: Ouster metadata; points.bag, points.mcap or points/ (a ROS 2 sqlite3 bag), if \
+    written: the frames as sensor_msgs/PointCloud2 on /points (x y z intensity f32, time f64 s) \
+    stamped at the sweep's end, or the sensor's packets as its driver records them, or a Livox \
+    sensor's frames as CustomMsg on /livox/lidar (ros_messages), the IMU samples as \
+    sensor_msgs/Imu on /imu; imu.csv (if written): time (s, the frames' clock plus the \
     IMU's offset), angular rate (rad/s) and specific force (m/s^2) in the IMU's axes";
 
 /// The simulation parameters of `request`, with the rate a packet sensor rounds to.
@@ -140,6 +170,15 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
             "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128 \
              or ot128)"
         );
+    }
+    let ros = matches!(request.format, Format::Bag | Format::Mcap | Format::Db3);
+    match (request.messages, request.sensor) {
+        (Messages::Points, _) => {}
+        (_, _) if !ros => bail!("--messages is for --format bag, mcap or db3"),
+        (Messages::Packets, None) => bail!("--messages packets needs --sensor"),
+        (Messages::Livox, Some(PacketSensor::Mid360 | PacketSensor::Avia)) => {}
+        (Messages::Livox, _) => bail!("--messages livox needs --sensor mid360 or avia"),
+        (Messages::Packets, Some(_)) => {}
     }
     Ok(params)
 }
@@ -186,6 +225,8 @@ pub fn write(
                 packets_per_sweep: p.packets_per_sweep(),
                 pcap: request.format == Format::Pcap,
             }),
+        ros_messages: matches!(request.format, Format::Bag | Format::Mcap | Format::Db3)
+            .then_some(request.messages),
         imu: request.imu.map(|spec| {
             let (gyro, accel) = imu::turn_on_bias(&spec, params.seed);
             ImuSummary {
@@ -207,39 +248,63 @@ pub fn write(
         std::fs::write(&path, imu::csv(&imu_samples))
             .with_context(|| format!("writing {}", path.display()))?;
     }
-    let mut pcap = match (request.format, request.sensor) {
-        (Format::Pcap, Some(sensor)) => {
-            if sensor == PacketSensor::Os1 {
-                let path = writer.staging().join(capture::META_NAME);
-                let imu = request.imu.map(|spec| spec.extrinsic());
-                let meta = capture::ouster_metadata(params.sensor.rate_hz, imu.as_ref());
-                let meta = serde_json::to_string_pretty(&meta)?;
-                std::fs::write(&path, meta)
-                    .with_context(|| format!("writing {}", path.display()))?;
-            }
+    let container = match request.format {
+        Format::Bag => Some((ros::Container::Bag, ros::BAG_NAME)),
+        Format::Mcap => Some((ros::Container::Mcap, ros::MCAP_NAME)),
+        Format::Db3 => Some((ros::Container::Db3, ros::DB3_NAME)),
+        Format::Generic | Format::Pcap => None,
+    };
+    let packet_file = request.format == Format::Pcap || request.messages == Messages::Packets;
+    let mut pcap: Option<Box<dyn PacketSink>> = match (request.sensor, container) {
+        (Some(sensor), _) if packet_file => {
+            let meta = (sensor == PacketSensor::Os1)
+                .then(|| {
+                    let imu = request.imu.map(|spec| spec.extrinsic());
+                    let meta = capture::ouster_metadata(params.sensor.rate_hz, imu.as_ref());
+                    serde_json::to_string_pretty(&meta)
+                })
+                .transpose()?;
             if let Some(angles) = sensor.angle_file() {
                 let path = writer.staging().join(capture::ANGLES_NAME);
                 std::fs::write(&path, angles)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
-            let path = writer.staging().join(capture::PCAP_NAME);
-            Some(capture::CaptureWriter::create(
-                &path,
-                sensor,
-                params.start_time,
-            )?)
+            match container {
+                Some((c, name)) => Some(Box::new(ros::packet_bag::PacketBag::create(
+                    &writer.staging().join(name),
+                    c,
+                    sensor,
+                    params.start_time,
+                    meta,
+                )?)),
+                None => {
+                    if let Some(meta) = meta {
+                        let path = writer.staging().join(capture::META_NAME);
+                        std::fs::write(&path, meta)
+                            .with_context(|| format!("writing {}", path.display()))?;
+                    }
+                    let path = writer.staging().join(capture::PCAP_NAME);
+                    Some(Box::new(capture::CaptureWriter::create(
+                        &path,
+                        sensor,
+                        params.start_time,
+                    )?))
+                }
+            }
         }
         _ => None,
     };
-    let mut ros = match request.format {
-        Format::Bag => Some((ros::Container::Bag, ros::BAG_NAME)),
-        Format::Mcap => Some((ros::Container::Mcap, ros::MCAP_NAME)),
-        Format::Generic | Format::Pcap => None,
-    }
-    .map(|(container, name)| {
-        ros::RosWriter::create(&writer.staging().join(name), container, imu_samples.clone())
-    })
-    .transpose()?;
+    let topic = match request.messages {
+        Messages::Livox => ros::drivers::LIVOX,
+        _ => ros::CLOUD,
+    };
+    let mut ros = container
+        .filter(|_| !packet_file)
+        .map(|(container, name)| {
+            let path = writer.staging().join(name);
+            ros::RosWriter::create(&path, container, &[topic], imu_samples.clone())
+        })
+        .transpose()?;
     let mut imu_packets = ImuPackets {
         sensor: request.sensor.filter(|_| pcap.is_some()),
         samples: &imu_samples,
@@ -258,9 +323,10 @@ pub fn write(
                 let sweep = p.sweep(k);
                 if let Some(c) = pcap.as_mut() {
                     for packet in &sweep.packets {
-                        imu_packets.send_until(packet.offset, c)?;
+                        imu_packets.send_until(packet.offset, c.as_mut())?;
                         c.write(packet)?;
                     }
+                    c.end_sweep()?;
                 }
                 (sweep.frame, p.ground_truth(k))
             }
@@ -268,7 +334,19 @@ pub fn write(
         };
         points += frame.points.len();
         if let Some(r) = ros.as_mut() {
-            r.write_frame(&frame)?;
+            if request.messages == Messages::Livox {
+                let lines = if request.sensor == Some(PacketSensor::Avia) {
+                    6
+                } else {
+                    4
+                };
+                let parts = request.messages_per_frame;
+                for (ns, body) in ros::livox::custom_messages(r.encoding(), &frame, parts, lines)? {
+                    r.write_after_imu(ns, vec![(0, ns, body)])?;
+                }
+            } else {
+                r.write_frame(&frame)?;
+            }
         }
         writer.write_frame(&frame, &truth)?;
         progress(k + 1);
@@ -300,7 +378,7 @@ struct ImuPackets<'a> {
 
 impl ImuPackets<'_> {
     /// Writes the packets of the samples read up to trajectory time `until` (s).
-    fn send_until(&mut self, until: f64, capture: &mut capture::CaptureWriter) -> Result<()> {
+    fn send_until(&mut self, until: f64, capture: &mut dyn PacketSink) -> Result<()> {
         let (Some(sensor), Some(spec)) = (self.sensor, self.spec) else {
             return Ok(());
         };

@@ -11,6 +11,7 @@
 //! DIR/packets.csv            with --format pcap and a QT128 or OT128: its angle correction file
 //! DIR/points.bag             with --format bag: the frames (and IMU samples) as a ROS 1 bag
 //! DIR/points.mcap            with --format mcap: the same as a ROS 2 MCAP file
+//! DIR/points/                with --format db3: the same as a ROS 2 sqlite3 bag
 //! ```
 //!
 //! Numbers in text files are written with Rust's shortest round-trip formatting, so parsing
@@ -38,6 +39,8 @@ const OWNED_FILES: [&str; 9] = [
     crate::ros::MCAP_NAME,
 ];
 const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
+/// The sqlite3 bag's folder and the files in it.
+const OWNED_BAG: (&str, [&str; 2]) = (crate::ros::DB3_NAME, ["metadata.yaml", "points_0.db3"]);
 
 /// Shortest text that parses back to exactly `x` (exponent form for very small or large).
 pub fn fmt_f64(x: f64) -> String {
@@ -169,7 +172,9 @@ impl DatasetWriter {
     pub fn finish(mut self) -> Result<()> {
         self.poses.flush().context("writing poses.txt")?;
         self.times.flush().context("writing times.txt")?;
-        let names = OWNED_FILES.iter().chain(OWNED_DIRS.iter().rev());
+        let names = (OWNED_FILES.iter())
+            .chain([&OWNED_BAG.0])
+            .chain(OWNED_DIRS.iter().rev());
         for name in names {
             let (from, to) = (self.staging.path().join(name), self.dir.join(name));
             if !from.exists() {
@@ -191,6 +196,23 @@ fn remove_owned(dir: &Path) -> Result<()> {
             fs::remove_file(&path)
                 .with_context(|| format!("{}: cannot remove the earlier output", path.display()))?;
         }
+    }
+    let bag = dir.join(OWNED_BAG.0);
+    if bag.is_dir() {
+        for name in OWNED_BAG.1 {
+            let path = bag.join(name);
+            if path.is_file() {
+                fs::remove_file(&path).with_context(|| {
+                    format!("{}: cannot remove the earlier output", path.display())
+                })?;
+            }
+        }
+        fs::remove_dir(&bag).with_context(|| {
+            format!(
+                "{} holds files that are not the bag's; move them away or choose another --out",
+                bag.display()
+            )
+        })?;
     }
     for sub in OWNED_DIRS {
         let d = dir.join(sub);

@@ -1,4 +1,4 @@
-//! The two messages a simulated recording carries, serialized from their definitions the two
+//! The two messages a simulated recording of points carries, serialized from their definitions the two
 //! ways ROS does: ROS 1 (bags: little-endian, packed, strings without a terminator) and CDR
 //! (ROS 2: a 4-byte encapsulation header, little-endian here, each value aligned to its size
 //! from the header's end, strings with a terminating NUL).
@@ -64,8 +64,8 @@ fn point_data(frame: &Frame) -> Vec<u8> {
 }
 
 /// Appends values with ROS 1's or CDR's rules.
-struct Out {
-    bytes: Vec<u8>,
+pub(super) struct Out {
+    pub(super) bytes: Vec<u8>,
     /// Where CDR alignment counts from; `None` for ROS 1 (no alignment).
     cdr_origin: Option<usize>,
 }
@@ -86,7 +86,7 @@ impl Out {
         }
     }
 
-    fn align(&mut self, n: usize) {
+    pub(super) fn align(&mut self, n: usize) {
         if let Some(origin) = self.cdr_origin {
             while (self.bytes.len() - origin) % n != 0 {
                 self.bytes.push(0);
@@ -94,21 +94,21 @@ impl Out {
         }
     }
 
-    fn u8(&mut self, v: u8) {
+    pub(super) fn u8(&mut self, v: u8) {
         self.bytes.push(v);
     }
 
-    fn u32(&mut self, v: u32) {
+    pub(super) fn u32(&mut self, v: u32) {
         self.align(4);
         self.bytes.extend_from_slice(&v.to_le_bytes());
     }
 
-    fn f64(&mut self, v: f64) {
+    pub(super) fn f64(&mut self, v: f64) {
         self.align(8);
         self.bytes.extend_from_slice(&v.to_le_bytes());
     }
 
-    fn string(&mut self, s: &str) {
+    pub(super) fn string(&mut self, s: &str) {
         let nul = usize::from(self.cdr_origin.is_some());
         self.u32((s.len() + nul) as u32);
         self.bytes.extend_from_slice(s.as_bytes());
@@ -118,7 +118,7 @@ impl Out {
     }
 
     /// `std_msgs/Header`: ROS 1 has a `seq` first.
-    fn header(&mut self, seq: u32, stamp: Stamp, frame_id: &str) {
+    pub(super) fn header(&mut self, seq: u32, stamp: Stamp, frame_id: &str) {
         if self.cdr_origin.is_none() {
             self.u32(seq);
         }
@@ -127,7 +127,7 @@ impl Out {
         self.string(frame_id);
     }
 
-    fn bytes(&mut self, data: &[u8]) {
+    pub(super) fn bytes(&mut self, data: &[u8]) {
         self.u32(data.len() as u32);
         self.bytes.extend_from_slice(data);
     }
@@ -143,7 +143,7 @@ pub enum Encoding {
 }
 
 impl Encoding {
-    fn out(self) -> Out {
+    pub(super) fn out(self) -> Out {
         match self {
             Self::Ros1 => Out::ros1(),
             Self::Cdr => Out::cdr(),

@@ -1,0 +1,137 @@
+//! A sensor's packets as its ROS driver records them (`simulate --messages packets`): the same
+//! packets a pcap of the drive holds, stamped with the times it holds them at
+//! ([`capture_ns`]), so that a reader decodes the same frames from either.
+//!
+//! - VLP-16, VLP-32C: a `velodyne_msgs/VelodyneScan` a sweep on `/velodyne_packets`;
+//! - XT32, QT128, OT128: a `pandar_msgs/PandarScan` a sweep on `/pandar_packets` (nebula's);
+//! - OS1-64: a `PacketMsg` a packet on `/ouster/lidar_packets` and `/ouster/imu_packets`, and
+//!   the metadata JSON on `/ouster/metadata` first (ouster-ros');
+//! - Mid-360, Avia: a `nebula_msgs/NebulaPackets` a frame on `/nebula_packets`, the Mid-360's
+//!   IMU packets among them in sending order (no ROS 1 type: MCAP and db3 only).
+//!
+//! A scan message is received when its last packet was.
+
+use super::drivers::{self, Stamped};
+use super::{Container, Outgoing, RosWriter, Topic};
+use crate::capture::{capture_ns, clock_start, PacketSink};
+use crate::packets::{Packet, PacketSensor};
+use anyhow::Result;
+use std::path::Path;
+
+/// How the sensor's driver records its packets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Driver {
+    Velodyne,
+    Pandar,
+    Ouster,
+    Nebula,
+}
+
+impl Driver {
+    fn of(sensor: PacketSensor) -> Self {
+        match sensor {
+            PacketSensor::Vlp16 | PacketSensor::Vlp32c => Self::Velodyne,
+            PacketSensor::Xt32 | PacketSensor::Qt128 | PacketSensor::Ot128 => Self::Pandar,
+            PacketSensor::Os1 => Self::Ouster,
+            PacketSensor::Mid360 | PacketSensor::Avia => Self::Nebula,
+        }
+    }
+
+    fn topics(self) -> &'static [Topic] {
+        match self {
+            Self::Velodyne => &[drivers::VELODYNE],
+            Self::Pandar => &[drivers::PANDAR],
+            Self::Ouster => &[
+                drivers::OUSTER_LIDAR,
+                drivers::OUSTER_IMU,
+                drivers::OUSTER_META,
+            ],
+            Self::Nebula => &[drivers::NEBULA],
+        }
+    }
+}
+
+/// A recording of packets being written, sweep by sweep.
+pub struct PacketBag {
+    writer: RosWriter,
+    driver: Driver,
+    clock_start: f64,
+    /// This sweep's packets: capture time (ns), payload.
+    scan: Vec<(u64, Vec<u8>)>,
+    /// This sweep's Ouster messages.
+    messages: Vec<Outgoing>,
+}
+
+impl PacketBag {
+    /// Creates `path` as `container` for `sensor`'s packets; `meta`, an Ouster's metadata JSON;
+    /// `start_time` the sequence time of trajectory time 0.
+    pub fn create(
+        path: &Path,
+        container: Container,
+        sensor: PacketSensor,
+        start_time: f64,
+        meta: Option<String>,
+    ) -> Result<Self> {
+        let driver = Driver::of(sensor);
+        let mut writer = RosWriter::create(path, container, driver.topics(), Vec::new())?;
+        let clock_start = clock_start(sensor, start_time);
+        if let Some(json) = meta.filter(|_| driver == Driver::Ouster) {
+            let body = drivers::text(writer.encoding(), &json);
+            writer.write_after_imu(0, vec![(2, capture_ns(clock_start, 0.0), body)])?;
+        }
+        Ok(Self {
+            writer,
+            driver,
+            clock_start,
+            scan: Vec::new(),
+            messages: Vec::new(),
+        })
+    }
+
+    fn add(&mut self, packet: &Packet, topic: usize) {
+        let ns = capture_ns(self.clock_start, packet.offset);
+        match self.driver {
+            Driver::Ouster => {
+                let body = drivers::ouster_packet(self.writer.encoding(), &packet.payload);
+                self.messages.push((topic, ns, body));
+            }
+            _ => self.scan.push((ns, packet.payload.clone())),
+        }
+    }
+}
+
+impl PacketSink for PacketBag {
+    fn write(&mut self, packet: &Packet) -> Result<()> {
+        self.add(packet, 0);
+        Ok(())
+    }
+
+    fn write_imu(&mut self, packet: &Packet) -> Result<()> {
+        self.add(packet, 1);
+        Ok(())
+    }
+
+    fn end_sweep(&mut self) -> Result<()> {
+        let mut out = std::mem::take(&mut self.messages);
+        if let Some(&(last, _)) = self.scan.last() {
+            let packets: Vec<Stamped<'_>> = self.scan.iter().map(|(t, p)| (*t, &p[..])).collect();
+            let enc = self.writer.encoding();
+            let body = match self.driver {
+                Driver::Velodyne => drivers::velodyne_scan(enc, &packets),
+                Driver::Pandar => drivers::pandar_scan(enc, &packets),
+                _ => drivers::nebula_packets(enc, &packets),
+            };
+            out.push((0, last, body));
+        }
+        self.scan.clear();
+        match out.last() {
+            Some(&(_, last, _)) => self.writer.write_after_imu(last, out),
+            None => Ok(()),
+        }
+    }
+
+    fn finish(mut self: Box<Self>) -> Result<()> {
+        self.end_sweep()?;
+        self.writer.finish()
+    }
+}
