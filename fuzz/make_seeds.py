@@ -161,6 +161,122 @@ def container_seeds():
             shutil.copy(ROOT / "fixtures/bags" / f"{stem}{ext}", d / f"seed-{stem}{ext}")
 
 
+class Ser:
+    """ROS 1 (packed) or little-endian CDR (aligned from after its 4-byte header)."""
+
+    def __init__(self, ros1):
+        self.ros1 = ros1
+        self.b = b"" if ros1 else b"\x00\x01\x00\x00"
+
+    def align(self, k):
+        if not self.ros1:
+            self.b += b"\0" * (-(len(self.b) - 4) % k)
+
+    def put(self, fmt, v):
+        self.align(struct.calcsize(fmt))
+        self.b += struct.pack("<" + fmt, v)
+
+    def string(self, s):
+        data = s.encode() + (b"" if self.ros1 else b"\0")
+        self.put("I", len(data))
+        self.b += data
+
+    def header(self, ns):
+        if self.ros1:
+            self.put("I", 7)
+        self.put("I", ns // 10**9)
+        self.put("I", ns % 10**9)
+        self.string("lidar")
+
+
+def packet_scan(ros1, packets, fixed=None, sized=False):
+    """A header, then packets of a stamp and a fixed array or a uint8[] (and a size)."""
+    m = Ser(ros1)
+    m.header(1_700_000_000 * 10**9)
+    m.put("I", len(packets))
+    for k, p in enumerate(packets):
+        m.put("I", 1_700_000_000)
+        m.put("I", k * 1000)
+        if fixed:
+            m.b += p.ljust(fixed, b"\0")
+        else:
+            m.put("I", len(p))
+            m.b += p
+        if sized:
+            m.put("I", len(p))
+    return m.b
+
+
+def custom_msg(ros1, n, point_num=None):
+    m = Ser(ros1)
+    m.header(1_700_000_000 * 10**9)
+    m.put("Q", 1_700_000_000 * 10**9)
+    m.put("I", n if point_num is None else point_num)
+    m.b += bytes([1, 0, 0, 0])
+    m.put("I", n)
+    for i in range(n):
+        m.put("I", i * 5000)
+        for v in (1.0 + i, -0.5 * i, 0.25):
+            m.put("f", v)
+        m.b += bytes([10 * i % 256, 0, i % 4])
+    return m.b
+
+
+def driver_seeds():
+    velodyne = [bytes(range(256)) * 4 + bytes(182)] * 2
+    hesai = [b"\xee\xff\x06\x01" + bytes(1076)] * 3
+    for ros1, bit in ((True, 0), (False, 1)):
+        name = "ros1" if ros1 else "cdr"
+        put("driver_messages", f"velodyne-{name}", bytes([bit]) + packet_scan(ros1, velodyne, 1206))
+        put("driver_messages", f"pandar-{name}", bytes([2 | bit]) + packet_scan(ros1, hesai, 1500, True))
+        put("driver_messages", f"pandar-sized-{name}",
+            bytes([2 | bit]) + packet_scan(ros1, hesai, None, True))
+        ouster = Ser(ros1)
+        ouster.put("I", 48)
+        ouster.b += bytes(range(48))
+        put("driver_messages", f"ouster-{name}", bytes([6 | bit]) + ouster.b)
+        put("driver_messages", f"custom-{name}", bytes([8 | bit]) + custom_msg(ros1, 5))
+    put("driver_messages", "nebula-cdr", bytes([5]) + packet_scan(False, hesai + velodyne))
+    put("driver_messages", "custom-point-num", bytes([9]) + custom_msg(False, 3, 4))
+
+
+def db3(path, topics, messages):
+    """A ROS 2 sqlite3 bag file as rosbag2 (Humble) lays it out."""
+    import sqlite3
+    path.unlink(missing_ok=True)
+    db = sqlite3.connect(path)
+    db.executescript(
+        "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro TEXT NOT NULL);"
+        "CREATE TABLE metadata(id INTEGER PRIMARY KEY,metadata_version INTEGER NOT NULL,"
+        "metadata TEXT NOT NULL);"
+        "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
+        "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL);"
+        "CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,"
+        "timestamp INTEGER NOT NULL, data BLOB NOT NULL);"
+        "CREATE INDEX timestamp_idx ON messages (timestamp ASC);")
+    for k, (name, tp) in enumerate(topics):
+        db.execute("INSERT INTO topics VALUES (?, ?, ?, 'cdr', '')", (k + 1, name, tp))
+    for topic, ns, data in messages:
+        db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (?, ?, ?)",
+                   (topic + 1, ns, data))
+    db.commit()
+    db.close()
+
+
+def db3_seeds():
+    d = CORPUS / "db3"
+    d.mkdir(parents=True, exist_ok=True)
+    t0 = 1_700_000_000 * 10**9
+    db3(d / "seed-clouds.db3", [("/points", "sensor_msgs/msg/PointCloud2")],
+        [(0, t0 + k * 10**8, cdr_body()) for k in range(3)])
+    db3(d / "seed-livox.db3", [("/livox/lidar", "livox_ros_driver2/msg/CustomMsg")],
+        [(0, t0 + k * 10**8, custom_msg(False, 4)) for k in range(3)])
+    hesai = [b"\xee\xff\x06\x01" + bytes(1076)] * 2
+    db3(d / "seed-pandar.db3", [("/pandar_packets", "pandar_msgs/msg/PandarScan")],
+        [(0, t0, packet_scan(False, hesai, 1500, True))])
+    shutil.copy(ROOT / "fixtures/nebula-xt32/bag/xt32-sector_0.db3", d / "seed-nebula-xt32.db3")
+
+
 def core_frame_seed(kind, deskew, moves):
     """A room of about 150 points, then `moves` small motions of it (the layout the target
     reads: see fuzz_targets/core_frame.rs)."""
@@ -336,7 +452,7 @@ def capture_seeds():
 def main():
     for make in (bin_seeds, ply_seeds, pcd_seeds, timestamps_seeds, poses_seeds,
                  pointcloud2_seeds, container_seeds, core_frame_seeds, sensor_seeds,
-                 capture_seeds):
+                 capture_seeds, driver_seeds, db3_seeds):
         make()
     for d in sorted(CORPUS.iterdir()):
         print(f"{d.name}: {len(list(d.iterdir()))} seeds")

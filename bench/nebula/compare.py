@@ -24,8 +24,6 @@ from pathlib import Path
 
 import numpy as np
 
-DEBUG = False
-
 HESAI = "src/nebula_hesai/nebula_hesai/test_resources/decoder_ground_truth"
 VELODYNE = "src/nebula_velodyne/nebula_velodyne/test_resources/decoder_ground_truth"
 HESAI_CAL = "src/nebula_hesai/nebula_hesai_decoders/calibration"
@@ -195,8 +193,6 @@ def explain(ours, unmatched, config, cut, spread):
     edge = (np.abs(r - lo) < 0.01) | (np.abs(r - hi) < 0.01)
     if (fov0, fov1) != (0, 360):
         edge |= near(az, fov0) | near(az, fov1)
-    if DEBUG:
-        print("  unmatched ours: r", np.round(np.sort(r)[:: max(1, len(r) // 20)], 2))
     for c, pr, e in zip(at_cut, pair, edge):
         key = (at if c else "one of a dual pair" if pr
                else "at a range or field-of-view edge" if e else "other")

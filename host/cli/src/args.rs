@@ -53,7 +53,8 @@ pub struct InputArgs {
     /// Frames to use, `A..B` (B excluded), `A..` or `..B`, by frame index.
     #[arg(long)]
     pub frames: Option<FrameRange>,
-    /// Bag/MCAP topic (default: the only PointCloud2 topic).
+    /// Bag/MCAP/db3 topic (default: the only PointCloud2 topic, else the only topic of sensor
+    /// packets or Livox CustomMsg).
     #[arg(long)]
     pub topic: Option<String>,
     /// How to decode a sensor recording.
@@ -84,7 +85,7 @@ pub struct SensorArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub cut_angle: Option<f64>,
     /// Livox: seconds of points in a frame (the sensor has no sweep) [default: 0.1, the Livox
-    /// ROS driver's].
+    /// ROS driver's; a bag's CustomMsg: each message a frame, with this its messages merged].
     #[arg(long)]
     pub frame_period: Option<f64>,
 }

@@ -1,5 +1,5 @@
 //! `kiss-odom convert`: any recording `run` reads (a pcap of sensor packets, a bag, an MCAP
-//! file, a folder of frames) written as the generic layout, so that it can be inspected, fed
+//! file, a ROS 2 sqlite3 bag, a folder of frames) written as the generic layout, so that it can be inspected, fed
 //! to other tools (the reference's generic loader reads it) and compared point by point.
 //!
 //! Frame `k` (its identity in the recording, see [`kiss_odom_io::Frame::index`]) becomes
@@ -23,7 +23,8 @@ use std::path::{Path, PathBuf};
 /// `kiss-odom convert` arguments.
 #[derive(Debug, clap::Args)]
 pub struct ConvertArgs {
-    /// Recording: a .pcap/.pcapng (with --meta for Ouster), a .bag, an .mcap or a folder.
+    /// Recording: a .pcap/.pcapng (with --meta for Ouster), a .bag, an .mcap, a ROS 2 bag (its
+    /// folder or a .db3) or a folder.
     pub path: PathBuf,
     /// Output folder; its `velodyne/` must be empty or missing.
     #[arg(long)]

@@ -48,3 +48,35 @@ pub fn custom_messages(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_frame_splits_into_messages_of_its_points_in_turn_each_timed_from_its_first() {
+        let frame = Frame {
+            index: 0,
+            points: (0..10).map(|i| [i as f32, 0.0, 0.0, 0.5]).collect(),
+            stamps: (0..10).map(|i| 2.0 + i as f64 * 1e-3).collect(),
+            surfaces: Vec::new(),
+            end_time: 2.009,
+        };
+        let parts = custom_messages(Encoding::Ros1, &frame, 3, 4).unwrap();
+        // 3, 3 and 4 points; received at their last point's time.
+        let received: Vec<u64> = parts.iter().map(|(ns, _)| *ns).collect();
+        assert_eq!(received, [2_002_000_000, 2_005_000_000, 2_009_000_000]);
+        // The second message: header (4 + 8 + 4 + 11), timebase, point_num 3, id, rsvd,
+        // count, then 19 bytes a point: offset_time 0, 1 ms, 2 ms after 2.003 s.
+        let body = &parts[1].1;
+        let at = 27;
+        assert_eq!(body[at..at + 8], 2_003_000_000u64.to_le_bytes());
+        assert_eq!(body[at + 8..at + 12], 3u32.to_le_bytes());
+        let point = |k: usize| at + 20 + 19 * k;
+        assert_eq!(body[point(2)..point(2) + 4], 2_000_000u32.to_le_bytes());
+        // x of the first point (3.0), reflectivity 128 (0.5 of 255), line 3 % 4.
+        assert_eq!(body[point(0) + 4..point(0) + 8], 3.0f32.to_le_bytes());
+        assert_eq!(body[point(0) + 16..point(0) + 19], [128, 0, 3]);
+        assert_eq!(body.len(), point(3));
+    }
+}
