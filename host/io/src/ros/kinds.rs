@@ -47,7 +47,7 @@ const NAMES: [(&str, Kind); 13] = [
 
 /// ROS 1 MD5 sums of the layouts read, by kind (PandarScan: nebula's fixed 1,500-byte
 /// packets, and Hesai's ROS 1 drivers' `uint8[]` ones).
-const MD5: [(Kind, &str); 9] = [
+const MD5: [(Kind, &str); 8] = [
     (Kind::Cloud, "1158d486dd51d683ce2f1be655c3c181"),
     (Kind::Imu, "6a62c6daae103f4ff57a132d6f95cec2"),
     (Kind::VelodyneScan, "50804fc9533a0e579e6322c04ae70566"),
@@ -56,8 +56,6 @@ const MD5: [(Kind, &str); 9] = [
     (Kind::OusterPacket, "4f7b5949e76f86d01e96b0e33ba9b5e3"),
     (Kind::LivoxCustom, "e4d6829bdfe657cb6c21a746c86b21a6"),
     (Kind::Text, "992ce8a1687cec8c8bd883ec73ca41d1"),
-    // nebula_msgs are ROS 2 only.
-    (Kind::NebulaPackets, ""),
 ];
 
 impl Kind {
@@ -71,12 +69,12 @@ impl Kind {
     /// type is known but the sum is not a layout read.
     pub fn of_ros1(name: &str, md5: &str) -> Option<Result<Self, String>> {
         let kind = Self::of(name)?;
-        if md5 == "*" || MD5.iter().any(|(k, m)| *k == kind && *m == md5) {
+        if MD5.iter().any(|(k, m)| *k == kind && *m == md5) {
             return Some(Ok(kind));
         }
         let known: Vec<&str> = MD5
             .iter()
-            .filter(|(k, m)| *k == kind && !m.is_empty())
+            .filter(|(k, _)| *k == kind)
             .map(|(_, m)| *m)
             .collect();
         Some(Err(format!(

@@ -70,9 +70,10 @@ pub fn open(
             ports.imu = parsed.udp_port_imu;
         }
     }
+    // The first packets tell the sensor, as a pcap's do; damage is the stream's to report.
     let mut survey = Survey::default();
     let mut first = Datagrams::new(ros1, kind, ports);
-    rec.scan(&topics, &mut |m| {
+    let _ = rec.scan(&topics, &mut |m| {
         first.add(m.topic, m.time_ns, Kind::of_message(ros1, &m), m.data);
         while let Some(d) = first.queue.pop_front() {
             if !survey.add(&Record::Datagram(d)) {
@@ -80,7 +81,7 @@ pub fn open(
             }
         }
         ControlFlow::Continue(())
-    })?;
+    });
     beside.survey = Some(survey);
     let mut stream = rec.stream(&topics)?;
     warnings.extend(stream.take_warnings());
@@ -183,10 +184,11 @@ impl Datagrams {
     fn add(&mut self, topic: usize, time_ns: u64, kind: Result<Kind, String>, data: &[u8]) {
         let index = self.messages;
         self.messages += 1;
+        let wanted = self.kind.type_name(self.ros1);
         let parsed = match kind {
             Ok(k) if k == self.kind => packets::packets(k, self.ros1, data),
-            Ok(k) => Err(format!("{k:?}, not {:?}", self.kind)),
-            Err(what) => Err(format!("{what}, not {:?}", self.kind)),
+            Ok(k) => Err(format!("{}, not {wanted}", k.type_name(self.ros1))),
+            Err(what) => Err(format!("{what}, not {wanted}")),
         };
         let list = match parsed {
             Ok(list) => list,
