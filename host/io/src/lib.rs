@@ -8,7 +8,8 @@
 //! come in three families:
 //!
 //! - [`folders`]: a folder of frame files (`.bin`, `.ply`, `.pcd`), generic or KITTI layout;
-//! - [`ros`]: ROS 1 bags and ROS 2 MCAP files carrying `sensor_msgs/PointCloud2`;
+//! - [`ros`]: ROS 1 bags, ROS 2 MCAP files and ROS 2 sqlite3 bags carrying
+//!   `sensor_msgs/PointCloud2`, sensor packets (decoded as captures are) or Livox `CustomMsg`;
 //! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`.
 //!
 //! [`poses`] reads and writes trajectories (KITTI, TUM), [`metrics`] scores them against ground

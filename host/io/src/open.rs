@@ -71,8 +71,8 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
         }
         ImuInput::Topic(topic) if !matches!(format, Format::Bag | Format::Mcap | Format::Db3) => {
             bail!(
-                "--imu {topic}: no such file, and {} is not a ROS bag or MCAP file to have such \
-                 a topic",
+                "--imu {topic}: no such file, and {} is not a bag or MCAP file to have such a \
+                 topic",
                 path.display()
             )
         }
