@@ -38,22 +38,29 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Dataset> {
     frames::open(Box::new(bag), opts)
 }
 
-/// Whether `path` is a sqlite3 bag: a `.db3` file, a `metadata.yaml`, or a folder with either.
+/// Whether `path` is a sqlite3 bag: a `.db3` file, a rosbag2 `metadata.yaml`, or a folder with
+/// either.
 pub fn detect(path: &Path) -> bool {
     let is_db3 = |p: &Path| {
         let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
         let name = name.to_ascii_lowercase();
         name.ends_with(".db3") || name.ends_with(".db3.zstd")
     };
+    // Other datasets have a metadata.yaml too: only rosbag2's says what it is.
+    let is_bag_metadata = |p: &Path| {
+        let mut head = [0u8; 512];
+        let n = std::fs::File::open(p)
+            .and_then(|mut f| f.read(&mut head))
+            .unwrap_or(0);
+        String::from_utf8_lossy(&head[..n]).contains("rosbag2_bagfile_information")
+    };
     if path.is_dir() {
-        if path.join(metadata::NAME).is_file() {
-            return true;
-        }
-        return std::fs::read_dir(path)
-            .map(|d| d.flatten().any(|e| is_db3(&e.path())))
-            .unwrap_or(false);
+        return is_bag_metadata(&path.join(metadata::NAME))
+            || std::fs::read_dir(path)
+                .map(|d| d.flatten().any(|e| is_db3(&e.path())))
+                .unwrap_or(false);
     }
-    is_db3(path) || path.file_name().is_some_and(|n| n == metadata::NAME)
+    is_db3(path) || (path.file_name().is_some_and(|n| n == metadata::NAME) && is_bag_metadata(path))
 }
 
 /// A sqlite3 bag opened for reading.
