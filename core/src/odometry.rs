@@ -18,9 +18,11 @@ mod frame;
 mod icp;
 mod input;
 mod layout;
+mod rehome;
 
 pub use input::FrameInput;
 pub use layout::Layout;
+pub use rehome::WhenFull;
 
 use crate::config::Degeneracy;
 use crate::config::{Capacities, Config};
@@ -77,6 +79,9 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     merge_len: usize,
     source_len: usize,
     high: HighWater,
+    /// What a frame that would overfill a buffer does, and what the last refused one needed.
+    when_full: WhenFull,
+    needed: Capacities,
     _codec: PhantomData<P>,
 }
 
@@ -122,6 +127,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             merge_len: 0,
             source_len: 0,
             high: HighWater::default(),
+            when_full: WhenFull::Drop,
+            needed: caps,
             _codec: PhantomData,
         };
         odom.map_mut()
@@ -159,6 +166,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.merge_len = 0;
         self.source_len = 0;
         self.high = HighWater::default();
+        self.needed = self.caps;
     }
 
     /// Runs `config` from here on, with an empty map of its voxels; the caller has nothing in
@@ -181,6 +189,17 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             if let Ok(mut map) = self.map_mut() {
                 map.clear();
             }
+        }
+    }
+
+    /// The configuration a first scan keeping `kept` points maps with: `asked`'s sparse-scan
+    /// form for a sparse one (see [`Config::for_first_scan`]), if valid; else the one in use.
+    fn first_scan_config(&self, kept: usize) -> Config<T> {
+        let c = self.asked.for_first_scan(kept);
+        if c.validate().is_ok() {
+            c
+        } else {
+            self.config
         }
     }
 
@@ -211,6 +230,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         points: &[[T; 3]],
         stamps: Option<&[f64]>,
     ) -> Result<FrameReport<T>, FrameError> {
+        self.room_for(Capacities {
+            scan_points: points.len(),
+            ..rehome::nothing()
+        })?;
         let scan = self.receive(points, stamps, self.last_delta);
         let first = self.align(exec, scan, None)?;
         if !self.redeskews(&first) {

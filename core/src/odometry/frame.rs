@@ -5,6 +5,7 @@
 
 use super::icp::{Predicted, Registered, Step};
 use super::layout::{Layout, Parts};
+use super::rehome::{nothing, shortfall};
 use super::Odometry;
 use crate::config::{Capacities, Config};
 use crate::deskew::StampProblem;
@@ -59,6 +60,8 @@ impl Received {
 
 /// A scan registered, before anything of it is kept.
 pub(super) struct Aligned<T: Real> {
+    /// The configuration it was registered with.
+    cfg: Config<T>,
     scan: Received,
     clouds: Clouds,
     reg: Registered<T>,
@@ -108,12 +111,23 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         start: Option<Pose<T>>,
     ) -> Result<Aligned<T>, FrameError> {
         scan.usable()?;
-        if self.frames == 0 {
-            // The map's shape from the first scan's density (`Config::sparse_scan_points`),
-            // while the map is still empty.
-            self.use_config(self.asked.for_first_scan(scan.kept));
-        }
-        let cfg = self.config;
+        // A host that grows its storage wants the whole scan kept (see `rehome`).
+        self.room_for(Capacities {
+            scan_points: scan.input + scan.dropped.truncated as usize,
+            merge_points: if scan.merged.dropped > 0 {
+                scan.kept
+            } else {
+                0
+            },
+            ..nothing()
+        })?;
+        // The map's shape from the first scan's density (`Config::sparse_scan_points`), taken
+        // on by the map update (`commit`): until then the frame can still be refused.
+        let cfg = if self.frames == 0 {
+            self.first_scan_config(scan.kept)
+        } else {
+            self.config
+        };
         // Step 1's prediction, Eq. (1) (the scan was deskewed with it as it arrived), and step
         // 4's threshold, tau = 3 sigma_t (Eq. (7)).
         let predicted = self.predict();
@@ -143,6 +157,16 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         let merge = &parts.merge[..m];
         let sourced = source_cloud(&cfg, desired, merge, parts.source, parts.scratch);
         scan.dropped.source_full = sourced.kept.dropped as u32;
+        let need = Capacities {
+            source_points: m,
+            ..nothing()
+        };
+        if let Some(needed) = shortfall(&self.caps, self.when_full, &need) {
+            if sourced.kept.dropped > 0 {
+                self.needed = needed;
+                return Err(FrameError::Full);
+            }
+        }
         let clouds = Clouds {
             merge: m,
             source: sourced.kept.kept,
@@ -160,6 +184,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             reg.icp.work += c.icp.work;
         }
         Ok(Aligned {
+            cfg,
             scan,
             clouds,
             reg,
@@ -170,6 +195,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
 
     /// The threshold's sample, the map update and the new pose, for a registered scan.
     pub(super) fn commit(&mut self, a: Aligned<T>) -> Result<FrameReport<T>, FrameError> {
+        self.room_for(self.map_room(a.clouds.merge))?;
+        self.use_config(a.cfg);
         // Eq. (13): the model deviation is a sample of the adaptive threshold (Sec. III-D).
         let deviation = a.deviation();
         let model_error = self.threshold.in_use().model_error(&deviation);
