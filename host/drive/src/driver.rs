@@ -18,6 +18,7 @@
 //! [`Driver::deskewed_scan`] give its clouds for a viewer or a published message.
 
 use crate::engine::{self, Batch, Call, Engine};
+use crate::growth::{Growth, StateMemory};
 use crate::outcome::{FrameMeta, ImuUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
@@ -65,6 +66,7 @@ pub struct Driver {
     on_empty: OnEmpty,
     pool: Pool,
     build: Build,
+    growth: Growth,
 }
 
 /// What a driver runs, fixed when it is made.
@@ -76,9 +78,9 @@ pub struct Build {
     pub scalar: Scalar,
     /// The map point storage.
     pub storage: Storage,
-    /// The core's capacities.
+    /// The core's capacities at the start (see [`Driver::memory`] for those in use).
     pub capacities: Capacities,
-    /// Bytes of the core's state.
+    /// Bytes of the core's state at the start.
     pub state_bytes: usize,
     /// Bytes of one stored map point.
     pub map_point_bytes: usize,
@@ -89,7 +91,8 @@ impl Driver {
     /// as [`Settings::threads`] resolves them.
     pub fn new(settings: &Settings) -> Result<Self> {
         let threads = settings.threads();
-        let engine = engine::build(settings)?;
+        let limit = settings.memory_limit();
+        let engine = engine::build(settings, limit.is_some())?;
         let build = Build {
             threads,
             scalar: settings.runtime.scalar,
@@ -99,6 +102,7 @@ impl Driver {
             map_point_bytes: engine.map_point_bytes(),
         };
         Ok(Self {
+            growth: Growth::new(build.capacities, build.state_bytes, limit),
             engine,
             on_empty: OnEmpty::Advance,
             pool: Pool::new(threads)?,
@@ -144,8 +148,12 @@ impl Driver {
         stamps: Option<&[f64]>,
     ) -> Result<Outcome> {
         let sigma = self.engine.sigma();
-        let call = self.engine.register(&self.pool, points, stamps);
-        self.conclude(meta, sigma, call)
+        let moves = self.growth.memory.moves;
+        self.growth.frame = meta.index;
+        let call = self
+            .engine
+            .register(&self.pool, points, stamps, &mut self.growth);
+        self.conclude(meta, sigma, call, moves)
     }
 
     /// A frame that could not be read (`reason` names the file): the pose advances on the
@@ -163,6 +171,7 @@ impl Driver {
             input_points: 0,
             sweep: self.engine.sweep_motions(),
             imu: None,
+            moves: 0,
         }
     }
 
@@ -215,18 +224,24 @@ impl Driver {
             );
         }
         let sigma = self.engine.sigma();
-        let call = self
-            .engine
-            .register_batch(&self.pool, &frames.batch, k, stamps.as_deref());
+        let moves = self.growth.memory.moves;
+        self.growth.frame = meta.index;
+        let call = self.engine.register_batch(
+            &self.pool,
+            &frames.batch,
+            k,
+            stamps.as_deref(),
+            &mut self.growth,
+        );
         let Some(call) = call else {
             bail!("preloaded frame {k}: not in this driver's scalar");
         };
-        self.conclude(meta.clone(), sigma, call)
+        self.conclude(meta.clone(), sigma, call, moves)
     }
 
-    /// The outcome of a core call; an empty scan advances on the constant-velocity model
-    /// unless [`OnEmpty::Ignore`] was chosen.
-    fn conclude(&mut self, meta: FrameMeta, sigma: f64, call: Call) -> Result<Outcome> {
+    /// The outcome of a core call (`moves` before it); an empty scan advances on the
+    /// constant-velocity model unless [`OnEmpty::Ignore`] was chosen.
+    fn conclude(&mut self, meta: FrameMeta, sigma: f64, call: Call, moves: u64) -> Result<Outcome> {
         let step = match call.result {
             Ok(report) => Step::Registered(report),
             Err(FrameError::EmptyScan) => {
@@ -235,7 +250,7 @@ impl Driver {
                 }
                 Step::Empty
             }
-            Err(e @ FrameError::Storage) => bail!("{}: {e}", meta.source),
+            Err(e @ (FrameError::Storage | FrameError::Full)) => bail!("{}: {e}", meta.source),
         };
         Ok(Outcome {
             meta,
@@ -247,6 +262,7 @@ impl Driver {
             input_points: call.input_points,
             sweep: self.engine.sweep_motions(),
             imu: None,
+            moves: (self.growth.memory.moves - moves) as u32,
         })
     }
 
@@ -262,6 +278,15 @@ impl Driver {
     /// What this driver runs: fixed at construction.
     pub fn build(&self) -> Build {
         self.build
+    }
+    /// What the core's state used: bytes at the start, now and at the peak, the moves into
+    /// larger storage and the capacities in use.
+    pub fn memory(&self) -> StateMemory {
+        self.growth.memory
+    }
+    /// The warning that the core's state reached its memory limit, the first time it did.
+    pub fn growth_warning(&mut self) -> Option<String> {
+        self.growth.warning()
     }
     /// High-water marks of the core's buffers since start.
     pub fn high_water(&self) -> HighWater {

@@ -5,6 +5,7 @@
 //! Everything crosses the trait in `f64`: points are converted into a buffer the core reads
 //! (outside the timed call), reports and poses are widened.
 
+use crate::growth::Growth;
 use crate::outcome::SweepMotions;
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
@@ -13,7 +14,7 @@ use anyhow::Result;
 use cpu_time::ThreadTime;
 use kiss_odom_core::{
     Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, Odometry, PointCodec, Prior,
-    Quantized, Real,
+    Quantized, Real, WhenFull,
 };
 use kiss_odom_io::imu::ImuSample;
 use nalgebra::Isometry3;
@@ -76,8 +77,14 @@ host_scalar!(f32, F32);
 
 /// One build of the core, whatever its scalar and map storage.
 pub(crate) trait Engine: Send {
-    /// Registers a whole scan.
-    fn register(&mut self, pool: &Pool, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Call;
+    /// Registers a whole scan, growing the storage as `growth` allows.
+    fn register(
+        &mut self,
+        pool: &Pool,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        growth: &mut Growth,
+    ) -> Call;
     /// Registers frame `k` of a batch this engine made; `None` if it is not one.
     fn register_batch(
         &mut self,
@@ -85,6 +92,7 @@ pub(crate) trait Engine: Send {
         batch: &Batch,
         k: usize,
         stamps: Option<&[f64]>,
+        growth: &mut Growth,
     ) -> Option<Call>;
     /// Converts frames to this engine's scalar.
     fn batch(&self, frames: &mut dyn Iterator<Item = &[[f64; 3]]>) -> Batch;
@@ -107,7 +115,7 @@ pub(crate) trait Engine: Send {
     fn map_in_use(&self) -> (f64, u32, bool);
     /// Capacities in use.
     fn capacities(&self) -> Capacities;
-    /// Bytes of state, fixed at construction.
+    /// Bytes of state in use.
     fn state_bytes(&self) -> usize;
     /// Bytes of state this build would need with capacities `caps`.
     fn state_bytes_for(&self, caps: &Capacities) -> usize;
@@ -131,13 +139,18 @@ pub(crate) trait Engine: Send {
 }
 
 /// The build `settings.runtime` asks for.
-pub(crate) fn build(settings: &Settings) -> Result<Box<dyn Engine>> {
+/// The build `settings.runtime` asks for, refusing full frames if its storage is to grow.
+pub(crate) fn build(settings: &Settings, grows: bool) -> Result<Box<dyn Engine>> {
     Ok(
         match (settings.runtime.scalar, settings.runtime.map_storage) {
-            (Scalar::F64, Storage::Exact) => Box::new(Core::<f64, Exact>::new(settings)?),
-            (Scalar::F64, Storage::Quantized) => Box::new(Core::<f64, Quantized>::new(settings)?),
-            (Scalar::F32, Storage::Exact) => Box::new(Core::<f32, Exact>::new(settings)?),
-            (Scalar::F32, Storage::Quantized) => Box::new(Core::<f32, Quantized>::new(settings)?),
+            (Scalar::F64, Storage::Exact) => Box::new(Core::<f64, Exact>::new(settings, grows)?),
+            (Scalar::F64, Storage::Quantized) => {
+                Box::new(Core::<f64, Quantized>::new(settings, grows)?)
+            }
+            (Scalar::F32, Storage::Exact) => Box::new(Core::<f32, Exact>::new(settings, grows)?),
+            (Scalar::F32, Storage::Quantized) => {
+                Box::new(Core::<f32, Quantized>::new(settings, grows)?)
+            }
         },
     )
 }
@@ -152,9 +165,12 @@ struct Core<T: Real, P: PointCodec<T>> {
 }
 
 impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
-    fn new(settings: &Settings) -> Result<Self> {
-        let odom = Odometry::boxed(settings.core_config::<T>()?, settings.capacities()?)
+    fn new(settings: &Settings, grows: bool) -> Result<Self> {
+        let mut odom = Odometry::boxed(settings.core_config::<T>()?, settings.capacities()?)
             .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
+        if grows {
+            odom.set_when_full(WhenFull::Refuse);
+        }
         Ok(Self {
             odom,
             points: Vec::new(),
@@ -180,6 +196,55 @@ fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// Bytes of state of a `T`, `P` odometry with capacities `caps`.
+pub(crate) fn state_bytes_for<T: Real, P: PointCodec<T>>(caps: &Capacities) -> usize {
+    caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<T, P>>()
+}
+
+/// Zeroed words for capacities `caps`, or `None` if the allocator has not that much.
+fn words_for<T: Real, P: PointCodec<T>>(caps: &Capacities) -> Option<Box<[u64]>> {
+    let n = caps.arena_words::<T, P>();
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).ok()?;
+    v.resize(n, 0u64);
+    Some(v.into_boxed_slice())
+}
+
+/// Registers `pts`; a frame the core refuses as too large for its storage moves the odometry
+/// into larger storage, as `growth` allows, and is registered again. Where growth stops (its
+/// limit, or an allocator that has no more), the core's fixed-storage rule takes over.
+fn register_growing<T: Real, P: PointCodec<T>>(
+    odom: &mut Odometry<T, P, Box<[u64]>>,
+    pool: &Pool,
+    pts: &[[T; 3]],
+    stamps: Option<&[f64]>,
+    growth: &mut Growth,
+) -> Result<FrameReport<T>, FrameError> {
+    loop {
+        match odom.register_frame_with(pool, pts, stamps) {
+            Err(FrameError::Full) => {
+                let caps = *odom.capacities();
+                let next = growth.next(&caps, &odom.room_needed(), state_bytes_for::<T, P>);
+                let moved = next.and_then(|next| {
+                    let words = words_for::<T, P>(&next)?;
+                    odom.rehome(next, words).ok()
+                });
+                match moved {
+                    Some(o) => {
+                        *odom = o;
+                        growth.moved(*odom.capacities(), odom.state_bytes());
+                    }
+                    None => {
+                        growth.cap();
+                        odom.set_when_full(WhenFull::Drop);
+                    }
+                }
+            }
+            other => return other,
+        }
+    }
+}
+
 /// Times the core's call on already converted points.
 fn timed<T: Real>(call: impl FnOnce() -> Result<FrameReport<T>, FrameError>, n: usize) -> Call {
     let watch = Stopwatch::start();
@@ -194,10 +259,19 @@ fn timed<T: Real>(call: impl FnOnce() -> Result<FrameReport<T>, FrameError>, n: 
 }
 
 impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
-    fn register(&mut self, pool: &Pool, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Call {
+    fn register(
+        &mut self,
+        pool: &Pool,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        growth: &mut Growth,
+    ) -> Call {
         narrow(points, &mut self.points);
         let (odom, pts) = (&mut self.odom, &self.points);
-        timed(|| odom.register_frame_with(pool, pts, stamps), pts.len())
+        timed(
+            || register_growing(odom, pool, pts, stamps, growth),
+            pts.len(),
+        )
     }
 
     fn register_batch(
@@ -206,11 +280,12 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         batch: &Batch,
         k: usize,
         stamps: Option<&[f64]>,
+        growth: &mut Growth,
     ) -> Option<Call> {
         let pts = T::frames(batch)?.get(k)?;
         let odom = &mut self.odom;
         Some(timed(
-            || odom.register_frame_with(pool, pts, stamps),
+            || register_growing(odom, pool, pts, stamps, growth),
             pts.len(),
         ))
     }
@@ -266,7 +341,7 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         self.odom.state_bytes()
     }
     fn state_bytes_for(&self, caps: &Capacities) -> usize {
-        caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<T, P>>()
+        state_bytes_for::<T, P>(caps)
     }
     fn map_point_bytes(&self) -> usize {
         core::mem::size_of::<P::Stored>()
