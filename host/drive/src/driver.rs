@@ -24,7 +24,8 @@ use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
 use kiss_odom_core::{
-    Capacities, FrameError, HighWater, Prior, SPARSE_BETA, SPARSE_PLANE_KERNEL_SCALE,
+    Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior, SPARSE_BETA,
+    SPARSE_PLANE_KERNEL_SCALE,
 };
 use kiss_odom_io::{Frame, Item};
 use nalgebra::Isometry3;
@@ -119,20 +120,42 @@ impl Driver {
     /// samples predict and deskew it, its sweep ending (on the IMU's clock, the sensor's) at
     /// [`Frame::sweep_end`].
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
+        let meta = FrameMeta::of(frame);
         let stamps = frame.stamps.as_deref();
+        if self.engine.imu_bias().is_none() {
+            return self.register_points(meta, &frame.points, stamps);
+        }
         // Only with the prior on: the sweep's end costs a pass over the stamps of a folder's
         // frame.
-        let prior = match self.engine.imu_bias() {
-            Some(_) => frame
-                .sweep_end()
-                .and_then(|end| self.engine.prior_before(&frame.imu, end)),
-            None => None,
-        };
-        let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;
+        let samples: Vec<CoreImu<f64>> = frame
+            .imu
+            .iter()
+            .map(|s| CoreImu {
+                time: s.seconds(),
+                gyro: s.gyro,
+                accel: s.accel,
+            })
+            .collect();
+        self.register_with_imu(meta, &frame.points, stamps, frame.sweep_end(), &samples)
+    }
+
+    /// [`Self::register_points`] with the IMU samples that came with the scan, for the
+    /// gyroscope prior (`[imu]`), whose sweep ends at `end` (s, on the IMU's clock; `None`:
+    /// not known, and the prior does not act).
+    pub fn register_with_imu(
+        &mut self,
+        meta: FrameMeta,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        end: Option<f64>,
+        samples: &[CoreImu<f64>],
+    ) -> Result<Outcome> {
+        let prior = end.and_then(|end| self.engine.prior_before(samples, end));
+        let mut outcome = self.register_points(meta, points, stamps)?;
         let residual = self.engine.prior_after();
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
             prior: prior.unwrap_or(Prior::NoSamples),
-            samples: frame.imu.len(),
+            samples: samples.len(),
             bias,
             residual,
         });
@@ -349,8 +372,53 @@ impl Driver {
     }
     /// The last registered frame's points deskewed and cropped (sensor frame); give it the
     /// points and stamps that frame had.
-    pub fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
-        self.engine.deskewed_scan(points, stamps)
+    pub fn deskewed_scan(&mut self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
+        let mut out = Vec::new();
+        self.engine.deskewed_scan_into(points, stamps, &mut out);
+        out
+    }
+    /// [`Self::deskewed_scan`] into `out`, whose memory is reused.
+    pub fn deskewed_scan_into(
+        &mut self,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut Vec<[f64; 3]>,
+    ) {
+        self.engine.deskewed_scan_into(points, stamps, out);
+    }
+    /// The latest pose (sensor at the end of the last sweep, in the frame of the first).
+    pub fn pose(&self) -> Isometry3<f64> {
+        self.engine.pose()
+    }
+    /// Replaces the latest pose, from which the next scan is predicted (kiss-icp's assignable
+    /// `last_pose`); `false` (nothing changes) if it is not finite.
+    pub fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool {
+        self.engine.set_last_pose(pose)
+    }
+    /// Replaces the constant-velocity model (kiss-icp's assignable `last_delta`); `false`
+    /// (nothing changes) if it is not finite.
+    pub fn set_last_delta(&mut self, delta: &Isometry3<f64>) -> bool {
+        self.engine.set_last_delta(delta)
+    }
+    /// Empties the local map, keeping the poses and the threshold.
+    pub fn clear_map(&mut self) {
+        self.engine.clear_map();
+    }
+    /// Whether the local map holds no voxel.
+    pub fn map_is_empty(&self) -> bool {
+        self.engine.map_is_empty()
+    }
+    /// Frames registered or skipped so far.
+    pub fn frames(&self) -> u64 {
+        self.engine.frames()
+    }
+    /// The adaptive threshold's sigma for the next frame (m).
+    pub fn sigma(&self) -> f64 {
+        self.engine.sigma()
+    }
+    /// The gyroscope prior's bias estimate (rad/s, LiDAR axes), if it is on.
+    pub fn gyro_bias(&self) -> Option<[f64; 3]> {
+        self.engine.imu_bias()
     }
 }
 

@@ -13,10 +13,9 @@ use crate::widen::{widen, widen_report};
 use anyhow::Result;
 use cpu_time::ThreadTime;
 use kiss_odom_core::{
-    Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, Odometry, PointCodec, Prior,
-    Quantized, Real, WhenFull,
+    Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, ImuSample as CoreImu,
+    Odometry, PointCodec, Prior, Quantized, Real, WhenFull,
 };
-use kiss_odom_io::imu::ImuSample;
 use nalgebra::Isometry3;
 use std::time::{Duration, Instant};
 
@@ -76,7 +75,7 @@ host_scalar!(f64, F64);
 host_scalar!(f32, F32);
 
 /// One build of the core, whatever its scalar and map storage.
-pub(crate) trait Engine: Send {
+pub(crate) trait Engine: Send + Sync {
     /// Registers a whole scan, growing the storage as `growth` allows.
     fn register(
         &mut self,
@@ -127,10 +126,25 @@ pub(crate) trait Engine: Send {
     fn merge_cloud(&self) -> Vec<[f64; 3]>;
     /// The local map's points (world frame).
     fn map_points(&self) -> Vec<[f64; 3]>;
-    /// `points` deskewed and cropped as the last frame was.
-    fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]>;
+    /// `points` deskewed and cropped as the last frame was, into `out`.
+    fn deskewed_scan_into(
+        &mut self,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut Vec<[f64; 3]>,
+    );
+    /// Replaces the latest pose; `false` (nothing changes) if it is not finite.
+    fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool;
+    /// Replaces the constant-velocity model; `false` (nothing changes) if it is not finite.
+    fn set_last_delta(&mut self, delta: &Isometry3<f64>) -> bool;
+    /// Empties the local map, keeping poses and threshold.
+    fn clear_map(&mut self);
+    /// Whether the local map holds no voxel.
+    fn map_is_empty(&self) -> bool;
+    /// Frames registered or skipped so far.
+    fn frames(&self) -> u64;
     /// The gyroscope prior, if on, before a frame whose sweep ends at `end` (s): what it did.
-    fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior>;
+    fn prior_before(&mut self, samples: &[CoreImu<f64>], end: f64) -> Option<Prior>;
     /// The gyroscope prior after the frame (its bias learns from the registered rotation):
     /// how far ICP's rotation rate was from the gyroscope's, rad/s, if the frame used it.
     fn prior_after(&mut self) -> Option<f64>;
@@ -159,7 +173,10 @@ pub(crate) fn build(settings: &Settings, grows: bool) -> Result<Box<dyn Engine>>
 /// gyroscope prior with its samples in that scalar.
 struct Core<T: Real, P: PointCodec<T>> {
     odom: Odometry<T, P, Box<[u64]>>,
+    /// The last frame's points in `T`, and its deskewed copy: kept from frame to frame, so
+    /// their memory is already mapped.
     points: Vec<[T; 3]>,
+    deskewed: Vec<[T; 3]>,
     prior: Option<GyroPrior<T>>,
     imu: Vec<kiss_odom_core::ImuSample<T>>,
 }
@@ -174,6 +191,7 @@ impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
         Ok(Self {
             odom,
             points: Vec::new(),
+            deskewed: Vec::new(),
             prior: settings.imu.core::<T>()?.map(GyroPrior::new),
             imu: Vec::new(),
         })
@@ -187,6 +205,20 @@ fn narrow<T: Real>(points: &[[f64; 3]], out: &mut Vec<[T; 3]>) {
             .iter()
             .map(|p| [T::of(p[0]), T::of(p[1]), T::of(p[2])]),
     );
+}
+
+/// An `f64` pose in `T`, entry by entry (the core renormalises what it is given).
+fn narrow_pose<T: Real>(p: &Isometry3<f64>) -> kiss_odom_core::Pose<T> {
+    let (q, t) = (p.rotation.coords, p.translation.vector);
+    kiss_odom_core::Pose::from_parts(
+        nalgebra::Translation3::new(T::of(t.x), T::of(t.y), T::of(t.z)),
+        nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+            T::of(q.w),
+            T::of(q.x),
+            T::of(q.y),
+            T::of(q.z),
+        )),
+    )
 }
 
 fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
@@ -359,23 +391,47 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
             .for_each_point(|_, p| out.push([p.x.wide(), p.y.wide(), p.z.wide()]));
         out
     }
-    fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
-        let mut pts = Vec::new();
-        narrow(points, &mut pts);
-        let mut out = vec![[T::zero(); 3]; pts.len()];
-        let kept = self.odom.deskewed_scan(&pts, stamps, &mut out);
-        out.truncate(kept.kept);
-        wide(&out)
+    fn deskewed_scan_into(
+        &mut self,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut Vec<[f64; 3]>,
+    ) {
+        narrow(points, &mut self.points);
+        let buf = &mut self.deskewed;
+        buf.clear();
+        buf.resize(self.points.len(), [T::zero(); 3]);
+        let kept = self.odom.deskewed_scan(&self.points, stamps, buf).kept;
+        out.clear();
+        out.extend(
+            buf[..kept]
+                .iter()
+                .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
+        );
     }
-    fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior> {
+    fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool {
+        self.odom.set_last_pose(narrow_pose(pose))
+    }
+    fn set_last_delta(&mut self, delta: &Isometry3<f64>) -> bool {
+        self.odom.set_last_delta(narrow_pose(delta))
+    }
+    fn clear_map(&mut self) {
+        self.odom.clear_map();
+    }
+    fn map_is_empty(&self) -> bool {
+        self.odom.map().is_empty()
+    }
+    fn frames(&self) -> u64 {
+        self.odom.frames()
+    }
+    fn prior_before(&mut self, samples: &[CoreImu<f64>], end: f64) -> Option<Prior> {
         let prior = self.prior.as_mut()?;
         self.imu.clear();
-        self.imu
-            .extend(samples.iter().map(|s| kiss_odom_core::ImuSample {
-                time: s.seconds(),
-                gyro: s.gyro.map(T::of),
-                accel: s.accel.map(T::of),
-            }));
+        self.imu.extend(samples.iter().map(|s| CoreImu {
+            time: s.time,
+            gyro: s.gyro.map(T::of),
+            accel: s.accel.map(T::of),
+        }));
         Some(prior.before_frame(&mut self.odom, &self.imu, end))
     }
     fn prior_after(&mut self) -> Option<f64> {
