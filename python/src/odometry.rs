@@ -8,6 +8,7 @@
 
 use crate::convert;
 use kiss_odom_core::{Flag, FrameReport, ImuSample, StampProblem};
+use kiss_odom_drive::growth::trim_buffer;
 use kiss_odom_drive::settings::{PresetName, Settings};
 use kiss_odom_drive::{Driver, FrameMeta, Outcome};
 use nalgebra::Isometry3;
@@ -21,8 +22,8 @@ pub struct Odometry {
     driver: Driver,
     settings: Settings,
     /// The frame's points and its deskewed copy: kept from frame to frame so their memory is
-    /// already mapped (fresh 3 MB buffers cost page faults on every frame), up to
-    /// `scan_points` points each ([`trim`]).
+    /// already mapped (fresh 3 MB buffers cost page faults on every frame), up to the scan
+    /// capacity the run started with (`trim_buffer`).
     input: Vec<[f64; 3]>,
     deskewed: Vec<[f64; 3]>,
     /// The IMU samples `add_imu` gave since the last frame with timestamps.
@@ -31,15 +32,6 @@ pub struct Odometry {
 
 fn value_error(e: anyhow::Error) -> PyErr {
     PyValueError::new_err(kiss_odom_drive::one_line(&e))
-}
-
-/// Gives back the memory of a frame buffer beyond `keep` points (the core reads no more of a
-/// scan), so one huge frame does not hold hundreds of MB until the object goes.
-fn trim(buffer: &mut Vec<[f64; 3]>, keep: usize) {
-    if buffer.capacity() > keep {
-        buffer.clear();
-        buffer.shrink_to(keep);
-    }
 }
 
 fn stamp_problem_name(p: StampProblem) -> &'static str {
@@ -180,9 +172,9 @@ impl Odometry {
             report.set_item("imu_residual", u.residual)?;
         }
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
-        let keep = self.driver.memory().capacities.scan_points;
-        trim(&mut self.input, keep);
-        trim(&mut self.deskewed, keep);
+        let keep = self.driver.build().capacities.scan_points;
+        trim_buffer(&mut self.input, keep);
+        trim_buffer(&mut self.deskewed, keep);
         let source = match outcome.report() {
             Some(_) => self.driver.source_cloud(),
             None => Vec::new(),

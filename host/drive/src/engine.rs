@@ -5,7 +5,7 @@
 //! Everything crosses the trait in `f64`: points are converted into a buffer the core reads
 //! (outside the timed call), reports and poses are widened.
 
-use crate::growth::Growth;
+use crate::growth::{trim_buffer, Growth};
 use crate::outcome::SweepMotions;
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
@@ -177,6 +177,8 @@ struct Core<T: Real, P: PointCodec<T>> {
     /// their memory is already mapped.
     points: Vec<[T; 3]>,
     deskewed: Vec<[T; 3]>,
+    /// Points those buffers keep room for: the scan capacity the run started with.
+    keep: usize,
     prior: Option<GyroPrior<T>>,
     imu: Vec<kiss_odom_core::ImuSample<T>>,
 }
@@ -189,6 +191,7 @@ impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
             odom.set_when_full(WhenFull::Refuse);
         }
         Ok(Self {
+            keep: odom.capacities().scan_points,
             odom,
             points: Vec::new(),
             deskewed: Vec::new(),
@@ -300,10 +303,12 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     ) -> Call {
         narrow(points, &mut self.points);
         let (odom, pts) = (&mut self.odom, &self.points);
-        timed(
+        let call = timed(
             || register_growing(odom, pool, pts, stamps, growth),
             pts.len(),
-        )
+        );
+        trim_buffer(&mut self.points, self.keep);
+        call
     }
 
     fn register_batch(
@@ -408,6 +413,8 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
                 .iter()
                 .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
         );
+        trim_buffer(&mut self.points, self.keep);
+        trim_buffer(&mut self.deskewed, self.keep);
     }
     fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool {
         self.odom.set_last_pose(narrow_pose(pose))

@@ -32,6 +32,16 @@ fn mem_total(meminfo: &str) -> Option<u64> {
     kb.checked_mul(1024)
 }
 
+/// Empties a frame buffer whose capacity passed `keep` entries and gives that memory back:
+/// one huge frame does not hold its memory for the rest of the run, and frames up to `keep`
+/// points reuse theirs (a fresh buffer costs page faults on every frame).
+pub fn trim_buffer<U>(v: &mut Vec<U>, keep: usize) {
+    if v.capacity() > keep {
+        v.clear();
+        v.shrink_to(keep);
+    }
+}
+
 /// What the core's state used over a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StateMemory {
@@ -212,6 +222,16 @@ mod tests {
             (100, 300, 400, 2)
         );
         assert_eq!(m.capacities, Capacities::FULL_SCALE);
+    }
+
+    #[test]
+    fn a_buffer_past_its_size_is_emptied_and_one_within_it_kept() {
+        let mut v: Vec<u8> = vec![1; 1000];
+        trim_buffer(&mut v, 10);
+        assert!(v.is_empty() && v.capacity() <= 10 && v.capacity() < 1000);
+        let mut steady: Vec<u8> = vec![1; 10];
+        trim_buffer(&mut steady, 10);
+        assert_eq!(steady.len(), 10, "within its size: kept as it is");
     }
 
     #[test]
