@@ -9,6 +9,7 @@
 //! would have given: no step reads a capacity it has not reached (the map's search, admission
 //! and pruning find voxels by key, the clouds are as long as their points).
 
+use super::state::Buffers;
 use super::Odometry;
 use crate::config::{Capacities, Degeneracy};
 use crate::downsample::cloud_words;
@@ -35,18 +36,18 @@ pub enum WhenFull {
 impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// Chooses what a frame that would overfill a buffer does (default [`WhenFull::Drop`]).
     pub fn set_when_full(&mut self, when: WhenFull) {
-        self.when_full = when;
+        self.buffers.when_full = when;
     }
 
     /// What a frame that would overfill a buffer does.
     pub fn when_full(&self) -> WhenFull {
-        self.when_full
+        self.buffers.when_full
     }
 
     /// After [`FrameError::Full`]: the capacities in use, each raised to what the refused frame
     /// needed. Without a refusal, the capacities in use.
     pub fn room_needed(&self) -> Capacities {
-        self.needed
+        self.buffers.needed
     }
 
     /// The whole state moved into `storage`, laid out for `caps`: pose, velocity, threshold,
@@ -62,8 +63,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         if self.config.degeneracy == Degeneracy::Robust && !caps.plane_terms {
             return Err(ConfigError::PlaneTerms);
         }
-        let holds = caps.merge_points >= self.merge_len
-            && caps.source_points >= self.source_len
+        let b = &self.buffers;
+        let holds = caps.merge_points >= b.merge_len
+            && caps.source_points >= b.source_len
             && caps.map_voxels >= self.map.voxels()
             && caps.map_points.div_ceil(BLOCK) >= self.map.blocks_in_use();
         if !holds {
@@ -75,11 +77,11 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             return Err(ConfigError::ArenaTooSmall);
         }
         words[..layout.words].fill(0);
-        let old = self.storage.as_ref();
-        let n = cloud_words::<T>(self.merge_len);
-        copy_words(old, self.layout.merge, words, layout.merge, n)?;
-        let n = cloud_words::<T>(self.source_len);
-        copy_words(old, self.layout.source, words, layout.source, n)?;
+        let old = b.storage.as_ref();
+        let n = cloud_words::<T>(b.merge_len);
+        copy_words(old, b.layout.merge, words, layout.merge, n)?;
+        let n = cloud_words::<T>(b.source_len);
+        copy_words(old, b.layout.source, words, layout.source, n)?;
         let mut map = self
             .map
             .resized(caps.map_voxels, &layout.map)
@@ -91,27 +93,16 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         if !copied {
             return Err(ConfigError::Holds);
         }
+        let mut buffers = Buffers::new(storage, layout, caps, b.when_full);
+        (buffers.merge_len, buffers.source_len, buffers.high) = (b.merge_len, b.source_len, b.high);
         Ok(Odometry {
-            storage,
-            layout,
-            caps,
-            map,
-            needed: caps,
-            config: self.config,
-            asked: self.asked,
+            motion: self.motion,
+            sweep: self.sweep,
             threshold: self.threshold,
-            last_pose: self.last_pose,
-            last_delta: self.last_delta,
-            scan_motion: self.scan_motion,
-            deskew_motion: self.deskew_motion,
-            sweep_rotation: self.sweep_rotation,
-            scan_rotation: self.scan_rotation,
-            frames: self.frames,
-            constrained: self.constrained,
-            merge_len: self.merge_len,
-            source_len: self.source_len,
-            high: self.high,
-            when_full: self.when_full,
+            config: self.config,
+            map,
+            buffers,
+            strategy: self.strategy,
             _codec: core::marker::PhantomData,
         })
     }
@@ -119,13 +110,22 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// With [`WhenFull::Refuse`], refuses the frame if `need` exceeds a capacity in use,
     /// noting what it needs for [`Self::room_needed`].
     pub(super) fn room_for(&mut self, need: Capacities) -> Result<(), FrameError> {
-        match shortfall(&self.caps, self.when_full, &need) {
+        let b = &mut self.buffers;
+        match shortfall(&b.caps, b.when_full, &need) {
             Some(needed) => {
-                self.needed = needed;
+                b.needed = needed;
                 Err(FrameError::Full)
             }
             None => Ok(()),
         }
+    }
+
+    /// [`Self::room_for`] a whole scan of `points` points.
+    pub(super) fn room_for_scan(&mut self, points: usize) -> Result<(), FrameError> {
+        self.room_for(Capacities {
+            scan_points: points,
+            ..nothing()
+        })
     }
 
     /// What a map update adding `merge` points can need: a voxel and a block for each.
