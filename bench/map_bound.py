@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Bounded memory against the odometry (BENCHMARKS.md, "When the map fills").
+"""Prints BENCHMARKS.md section 13's tables "Default capacities: the map never fills" and
+"Capacities that fill" (run by bench/map_bound.sh).
 
 Two tables, each a Markdown table on stdout:
 
@@ -9,8 +10,8 @@ Two tables, each a Markdown table on stdout:
             end-to-end`, must stay within 1e-9 m).
   filled    named capacities that fill (SMALL; TINY at r_max 100 m on 16-beam drives, names
             with `vlp16`) in f64 and f32: this build (the map gives
-            up its farthest voxels), an older build with the old rule (`--old BIN`: new voxels
-            refused) and kiss-icp 1.3.0 run with max_range set to the smallest radius the map
+            up its farthest voxels), optionally another build (OLD_BIN, `-` for none: the old
+            rule refused new voxels) and kiss-icp 1.3.0 run with max_range set to the smallest radius the map
             reached, on the same frames in the same run: KITTI relative error and the worst
             per-frame position error against ground truth of each.
 
@@ -18,7 +19,7 @@ Two tables, each a Markdown table on stdout:
     python3 bench/map_bound.py filled BIN OLD_BIN PYTHON DRIVER DATASET...
 
 DATASET: a generic or KITTI folder `run` reads; `@ARGS` after it (one word, comma-separated)
-adds `run` flags, e.g. `dir@--meta,x.json`. Outputs go to $OUT (default target/map_bound).
+adds `run` flags, e.g. `dir@--meta,x.json`. Outputs go to $OUT (default target/bench/map-bound/runs).
 """
 
 import json
@@ -28,7 +29,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-OUT = Path(os.environ.get("OUT", "target/map_bound"))
+OUT = Path(os.environ.get("OUT", "target/bench/map-bound/runs"))
 
 
 def sh(*cmd, **kw):
@@ -113,7 +114,8 @@ def filled(binary, old, python, driver, datasets):
                          "--threads", "1", "-q", *extra]
                 new, was = OUT / "filled" / tag, OUT / "filled" / f"{tag}-old"
                 run = sh(binary, "run", d, "--out", new, *flags)
-                sh(old, "run", d, "--out", was, *flags)
+                if old != "-":
+                    sh(old, "run", d, "--out", was, *flags)
                 s = json.loads((new / "summary.json").read_text())
                 cfg = (new / "config.toml").read_text()
                 voxel = float(next(l.split("=")[1] for l in cfg.splitlines()
@@ -136,6 +138,9 @@ def filled(binary, old, python, driver, datasets):
                 metrics = {}
                 for name, p in (("new", new / "poses_kitti.txt"), ("old", was / "poses_kitti.txt"),
                                 ("ref", ref), ("full", full)):
+                    if name == "old" and old == "-":
+                        metrics[name] = (math.nan, math.nan)
+                        continue
                     e = json.loads(sh(binary, "eval", p, gt_path, "--json").stdout)
                     metrics[name] = (e["kitti_t_err_pct"], worst_position_error(poses(p), gt))
                 warned = "local map filled" in run.stderr

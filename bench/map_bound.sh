@@ -1,18 +1,20 @@
 #!/usr/bin/env bash
-# Bounded memory against the odometry (BENCHMARKS.md, "When the map fills"): the default
-# capacities on every shared recording and generated drive (no radius shrink, poses equal to
-# kiss-icp 1.3.0's), then SMALL and TINY, which fill, against the old rule and against
+# Reproduces BENCHMARKS.md section 13, "Default capacities: the map never fills" and
+# "Capacities that fill": the default capacities on every shared recording and generated drive
+# (no radius shrink, poses equal to kiss-icp 1.3.0's), then SMALL and TINY, which fill, against
 # kiss-icp 1.3.0 at the radius the map shrank to.
 #
-#   OLD=path/to/old/kiss-odom bench/map_bound.sh      (OLD: a build with the old full rule)
+#   KISS_ODOM_PYTHON=target/refvenv/bin/python bench/map_bound.sh
 #
-# The generated drives go to $GEN (seed 41, never tuned on; made if missing); the reference
-# comes from $KISS_ODOM_PYTHON (a venv from tests/reference/requirements.txt).
+# OLD=path/to/kiss-odom adds a column for another build on the same runs (the eviction rule
+# against one that refuses new voxels was compared that way). The generated drives go to $GEN
+# (default target/bench/map-bound; seeds 41 and 42, never tuned on; made if missing); the
+# reference comes from $KISS_ODOM_PYTHON (a venv from tests/reference/requirements.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
-GEN=${GEN:-/work/data-gen/mb}
+GEN=${GEN:-target/bench/map-bound}
 PY=${KISS_ODOM_PYTHON:?a venv with kiss-icp 1.3.0}
 DATA=../shared/data
 mkdir -p "$GEN"
@@ -38,7 +40,7 @@ python3 bench/map_bound.py defaults $B $K/01 $K/02 $K/04 $K/05 \
   $GEN/urban-500-s41 $GEN/fast-500-s41 $GEN/field-500-s41 $GEN/suburban-vlp16-500-s41 \
   $GEN/suburban-vlp16-1000-s42 || status=1
 echo
-python3 bench/map_bound.py filled $B "${OLD:?a build with the old rule}" "$PY" \
+python3 bench/map_bound.py filled $B "${OLD:--}" "$PY" \
   tests/reference/driver.py $GEN/suburban-vlp16-500-s41 $GEN/urban-vlp16-500-s41 \
   $GEN/urban-500-s41 || status=1
 exit $status
