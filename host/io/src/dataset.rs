@@ -270,6 +270,14 @@ pub enum SensorKind {
     Vlp32c,
     /// Velodyne HDL-32E.
     Hdl32e,
+    /// Velodyne VLP-32A or VLP-32B (needs its calibration file, --calibration).
+    Vlp32ab,
+    /// Velodyne HDL-64E S2 (needs its calibration file, --calibration).
+    Hdl64eS2,
+    /// Velodyne HDL-64E S3 (needs its calibration file, --calibration).
+    Hdl64eS3,
+    /// Velodyne VLS-128 / Alpha Prime (needs its calibration file, --calibration).
+    Vls128,
     /// Ouster (needs the metadata JSON).
     Ouster,
     /// Hesai PandarXT-32 (also XT16, XT32M).

@@ -405,7 +405,7 @@ impl<'a> PacketSim<'a> {
         let stamp = (start_us + libm::round(t0 * 1e6) as i64).rem_euclid(i64::from(HOUR_US));
         buf[field::TIMESTAMP].copy_from_slice(&(stamp as u32).to_le_bytes());
         buf[field::RETURN_MODE] = 0x37;
-        buf[field::PRODUCT] = self.model.product();
+        buf[field::PRODUCT] = self.model.product().unwrap_or(0);
         let last = t0
             + self
                 .model

@@ -390,6 +390,10 @@ fn sensor_flag(m: Model) -> &'static str {
         Model::PuckHiRes => "puck-hi-res",
         Model::Vlp32c => "vlp32c",
         Model::Hdl32e => "hdl32e",
+        Model::Vlp32ab => "vlp32ab",
+        Model::Hdl64eS2 => "hdl64e-s2",
+        Model::Hdl64eS3 => "hdl64e-s3",
+        Model::Vls128 => "vls128",
     }
 }
 
@@ -437,6 +441,10 @@ pub fn decode(
             SensorKind::PuckHiRes => Some(Model::PuckHiRes),
             SensorKind::Vlp32c => Some(Model::Vlp32c),
             SensorKind::Hdl32e => Some(Model::Hdl32e),
+            SensorKind::Vlp32ab => Some(Model::Vlp32ab),
+            SensorKind::Hdl64eS2 => Some(Model::Hdl64eS2),
+            SensorKind::Hdl64eS3 => Some(Model::Hdl64eS3),
+            SensorKind::Vls128 => Some(Model::Vls128),
             _ => None,
         };
         if let Some(model) = livox_model(opts.sensor) {
@@ -483,6 +491,14 @@ pub fn decode(
             .as_deref()
             .map(velodyne_calib::read)
             .transpose()?;
+        if let Some(m) = model.filter(|m| m.needs_calibration() && calibration.is_none()) {
+            bail!(
+                "{}: a Velodyne {} needs the unit's calibration file (--calibration: Velodyne's \
+                 XML or the ROS YAML)",
+                path.display(),
+                m.name()
+            );
+        }
         let config = velodyne::Config {
             model,
             calibration,
@@ -635,7 +651,14 @@ fn sweeps(
         meta_path: opts.meta.clone(),
         model_given: matches!(
             opts.sensor,
-            SensorKind::Vlp16 | SensorKind::PuckHiRes | SensorKind::Vlp32c | SensorKind::Hdl32e
+            SensorKind::Vlp16
+                | SensorKind::PuckHiRes
+                | SensorKind::Vlp32c
+                | SensorKind::Hdl32e
+                | SensorKind::Vlp32ab
+                | SensorKind::Hdl64eS2
+                | SensorKind::Hdl64eS3
+                | SensorKind::Vls128
         ),
         imu_port: None,
         report: PcapReport {
