@@ -22,6 +22,7 @@ pub mod hesai;
 pub mod livox;
 pub mod ouster;
 pub mod pose_datagram;
+pub mod robosense;
 pub mod sweep;
 mod time;
 pub mod velodyne;

@@ -6,6 +6,10 @@ stamp and 1206 data bytes) is unpacked and every packet written as an IPv4/UDP d
 port 2368 stamped with the packet's own stamp, which is what the capture reader takes.
 
     velodyne_bag_to_pcap.py BAG.db3 OUT.pcap [--first-scan N] [--scans M]
+                            [--skip-packets K] [--packets P]
+
+`--skip-packets` and `--packets` then keep P packets of the chosen scans from the K-th on
+(how the fixtures in fixtures/velodyne-nebula/ were cut).
 """
 import argparse
 import sqlite3
@@ -60,13 +64,19 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--first-scan", type=int, default=0)
     ap.add_argument("--scans", type=int, default=1 << 30)
+    ap.add_argument("--skip-packets", type=int, default=0)
+    ap.add_argument("--packets", type=int, default=1 << 30)
     a = ap.parse_args()
+    n = 0
     with open(a.out, "wb") as f:
         f.write(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1))
         for i, (stamp, data) in enumerate(scans(a.bag)):
             if not a.first_scan <= i < a.first_scan + a.scans:
                 continue
             for sec, nsec, payload in unpack_scan(data):
+                n += 1
+                if not a.skip_packets < n <= a.skip_packets + a.packets:
+                    continue
                 frame = udp_frame(payload)
                 f.write(struct.pack("<IIII", sec, nsec // 1000, len(frame), len(frame)))
                 f.write(frame)
