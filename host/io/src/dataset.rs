@@ -288,6 +288,19 @@ pub enum SensorKind {
     Pandar128,
     /// Hesai OT128 (needs its angle correction file, --calibration).
     Ot128,
+    /// Robosense RS-LiDAR-16 (angles from the recording's DIFOP packets or --calibration).
+    Rs16,
+    /// Robosense RS-LiDAR-32 (angles from the recording's DIFOP packets or --calibration).
+    Rs32,
+    /// Robosense RS-Bpearl (angles from the recording's DIFOP packets or --calibration).
+    Bpearl,
+    /// Robosense RS-Helios 5515 (angles from the recording's DIFOP packets or --calibration).
+    Helios,
+    /// Robosense RS-Helios-16P (angles from the recording's DIFOP packets or --calibration).
+    Helios16p,
+    /// Robosense RS-Ruby / RS-LiDAR-128 (angles from the recording's DIFOP packets or
+    /// --calibration).
+    Ruby,
     /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).

@@ -25,6 +25,7 @@ mod hesai128;
 mod mid360;
 mod mid360_imu;
 mod ouster_imu;
+mod robosense;
 mod xt32;
 
 use crate::imu::ImuSample;
@@ -77,6 +78,11 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "ot128"))]
     #[serde(rename = "ot128")]
     Ot128,
+    /// Robosense RS-Helios: MSOP packets (port 6699) of twelve 32-laser blocks, strongest
+    /// return, 2.5 mm ranges, and a DIFOP packet with the lasers' angles (port 7788).
+    #[cfg_attr(feature = "clap", value(name = "helios"))]
+    #[serde(rename = "helios")]
+    Helios,
 }
 
 /// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
@@ -185,6 +191,11 @@ impl PacketSensor {
             Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
             // Frames by time: any rate, read back with `--frame-period` 1 / rate.
             Self::Mid360 | Self::Avia => Ok(rate_hz),
+            Self::Helios => {
+                let packet = robosense::packet_us() * 1e-6;
+                let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
+                Ok(1.0 / (per_turn * packet))
+            }
             _ => {
                 let packet = Self::velodyne_packet_s(self.model());
                 let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
@@ -197,6 +208,15 @@ impl PacketSensor {
     /// (`Laser id,Elevation,Azimuth`); `None` for the other sensors.
     pub fn angle_file(self) -> Option<String> {
         matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
+    }
+
+    /// The device-information packet a sensor sends beside its points, with the lasers'
+    /// angles its decoder needs (the Helios's DIFOP, to port 7788); `None` for the others.
+    pub fn device_packet(self, rate_hz: f64) -> Option<Packet> {
+        (self == Self::Helios).then(|| Packet {
+            offset: 0.0,
+            payload: robosense::difop(rate_hz),
+        })
     }
 
     /// The IMU packet carrying `sample`, the `count`th, sent at trajectory time `offset` and
@@ -217,7 +237,7 @@ impl PacketSensor {
     /// with a UTC date (from 2024-01-01 00:00:00); the other sensors' clocks read sequence time.
     pub const fn clock_origin_s(self) -> i64 {
         match self {
-            Self::Xt32 | Self::Qt128 | Self::Ot128 => xt32::CLOCK_ORIGIN_S,
+            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::Helios => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
     }
@@ -234,6 +254,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Xt32 => per_period(xt32::PACKET_NS),
             PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
+            PacketSensor::Helios => libm::round(period * 1e6 / robosense::packet_us()) as u64,
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
         };
         Self {
@@ -271,6 +292,7 @@ impl<'a> PacketSim<'a> {
                 self.timed_offset(last, self.sensor.timing().points - 1)
             }
             PacketSensor::Xt32 => xt32::last_offset(last),
+            PacketSensor::Helios => self.robosense_last_offset(last),
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
@@ -299,6 +321,7 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Avia => self.avia_packet(p),
                 PacketSensor::Xt32 => self.xt32_packet(p),
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
+                PacketSensor::Helios => self.robosense_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();

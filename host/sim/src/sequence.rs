@@ -223,11 +223,12 @@ pub fn write(
                     .with_context(|| format!("writing {}", path.display()))?;
             }
             let path = writer.staging().join(capture::PCAP_NAME);
-            Some(capture::CaptureWriter::create(
-                &path,
-                sensor,
-                params.start_time,
-            )?)
+            let mut c = capture::CaptureWriter::create(&path, sensor, params.start_time)?;
+            // The device packet first: its decoder needs the angles it carries.
+            if let Some(d) = sensor.device_packet(params.sensor.rate_hz) {
+                c.write_device(&d)?;
+            }
+            Some(c)
         }
         _ => None,
     };
