@@ -16,6 +16,8 @@
 //!   pairs (`j / 2` x 2.304 us, the manual's timing table and its note that "each pair shares
 //!   the same azimuth").
 //!
+//! The manuals leave open the packet's last firing group, whose next azimuth is in the next
+//! packet: nebula takes 0 or the step before, ours the packet's mean step (`LastGroup`).
 //! Anything else is `F32Tie`: both reach an azimuth on a half hundredth and f32 rounding tips
 //! nebula's the other way.
 
@@ -41,6 +43,9 @@ pub enum Departure {
     OddBlock,
     ZeroGap,
     ChannelTiming,
+    /// The packet's last firing group, whose next azimuth is in the next packet: nebula's
+    /// gap (0, or the step before) where ours takes the packet's mean step.
+    LastGroup,
     F32Tie,
 }
 
@@ -107,12 +112,15 @@ pub fn read(model: Neb, packet: &[u8], lasers: &[Laser], resolution: f32) -> Vec
         let first = group * banks_per_group;
         let groups = blocks / banks_per_group;
         let base_m = az(first);
-        let gap_m = if group + 1 < groups {
-            (36000 + u32::from(az(first + banks_per_group)) - u32::from(base_m)) % 36000
+        // The last group's next azimuth is in the next packet: the packet's mean step.
+        let (gap_m, den) = if group + 1 < groups {
+            let next = az(first + banks_per_group);
+            ((36000 + u32::from(next) - u32::from(base_m)) % 36000, 1)
         } else if groups > 1 {
-            (36000 + u32::from(base_m) - u32::from(az(first - banks_per_group))) % 36000
+            let span = (36000 + u32::from(base_m) - u32::from(az(0))) % 36000;
+            (span, groups as u64 - 1)
         } else {
-            0
+            (0, 1)
         };
         let bank = match u16_at(packet, 100 * b) {
             0xEEFF => 0,
@@ -152,10 +160,10 @@ pub fn read(model: Neb, packet: &[u8], lasers: &[Laser], resolution: f32) -> Vec
             }
             let a_n = (a.round() as u32 % 36000) as u16;
             // The manual: exact, rounded half up to the hundredth, then the laser's offset.
-            let scaled = u64::from(base_m) * group_ticks + u64::from(gap_m) * ticks as u64;
-            let a_m = (round_div(scaled, group_ticks) % 36000) as u16;
+            let scaled = u64::from(base_m) * group_ticks * den + u64::from(gap_m) * ticks as u64;
+            let a_m = (round_div(scaled, group_ticks * den) % 36000) as u16;
             // What nebula would give interpolating as the manual.
-            let exact = scaled as f64 / group_ticks as f64 - rot_units;
+            let exact = scaled as f64 / (group_ticks * den) as f64 - rot_units;
             let a_nm = ((exact.round() as i64).rem_euclid(36000)) as u16;
             // (to f32 precision: 1.4 degrees is 139.99999 hundredths in f32 radians)
             let whole_offset = (rot_units - rot_units.round()).abs() < 1e-3;
@@ -189,6 +197,12 @@ pub fn read(model: Neb, packet: &[u8], lasers: &[Laser], resolution: f32) -> Vec
                 Departure::RoundsAfterOffset
             } else if dual && b % 2 == 1 {
                 Departure::OddBlock
+            } else if gap_n == 0.0 && gap_m != 0 && den == 1 {
+                Departure::ZeroGap
+            } else if den > 1 {
+                // The last group: nebula's gap of 0 (or the step before), where ours takes the
+                // packet's mean step.
+                Departure::LastGroup
             } else if gap_n == 0.0 && gap_m != 0 {
                 Departure::ZeroGap
             } else if model == Neb::Vlp32 && c > 0 && gap_m != 0 {

@@ -4,7 +4,7 @@
 use super::calibration::{Calibration, Config};
 use super::layout::{single_return, Blocks, Layout};
 use super::model::{Model, BANK_FLAGS, MAX_LASERS};
-use super::point::{interpolate, Beam};
+use super::point::{interpolate, Beam, Gap};
 use super::wire::{Packet, HOUR_US, UNUSED_FLAG};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
@@ -353,7 +353,8 @@ impl Decoder {
             }
         }
         let rel_s = (now - self.sweep_first_us) as f64 * 1e-6;
-        self.decode(&p, rel_s, sink);
+        let previous = (step.is_some() && lost == 0).then_some(self.last_azimuth);
+        self.decode(&p, rel_s, previous, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
@@ -371,7 +372,13 @@ impl Decoder {
     }
 
     /// Every return of a checked packet of the identified sensor.
-    fn decode<S: SweepSink>(&mut self, p: &Packet<'_>, rel_s: f64, sink: &mut S) {
+    fn decode<S: SweepSink>(
+        &mut self,
+        p: &Packet<'_>,
+        rel_s: f64,
+        previous: Option<u16>,
+        sink: &mut S,
+    ) {
         let Some(sensor) = &self.sensor else { return };
         let l = sensor.layout;
         let model = sensor.model;
@@ -380,16 +387,35 @@ impl Decoder {
         let columns_per_group: u16 = if sixteen { 2 } else { 1 };
         let mut column = self.next_column;
         let mut last_column = None;
-        let mut gap = 0;
+        let groups = l.groups();
+        // The packet's mean step, for its last group; a packet of one group (VLS-128 dual
+        // return) steps from the previous packet's, if it came just before.
+        let (first_az, last_az) = sensor.azimuth_span(p);
+        let mean = if groups > 1 {
+            Gap {
+                turn: wrap(i32::from(last_az) - i32::from(first_az)),
+                groups: (groups - 1) as u32,
+            }
+        } else {
+            Gap {
+                turn: previous.map_or(0, |a| wrap(i32::from(first_az) - i32::from(a))),
+                groups: 1,
+            }
+        };
         for g in 0..l.groups() {
             let base_az = l.group_block(g).map_or(0, |k| p.azimuth(k));
             // The manuals' precision azimuth (VLP-16 63-9243, VLP-32C 63-9325 and VLS-128
             // 63-9483, section 9.5): the rotation from this firing group's azimuth to the next
             // group's, spread over the group's firing time. The last group's next azimuth is
-            // in the next packet: it takes the gap before it, as the rate barely changes.
-            if let Some(next) = l.group_block(g + 1) {
-                gap = wrap(i32::from(p.azimuth(next)) - i32::from(base_az));
-            }
+            // in the next packet: it takes the packet's mean step (within a hundredth of a
+            // degree of the manual's, half the quantisation of a single step).
+            let gap = match l.group_block(g + 1) {
+                Some(next) => Gap {
+                    turn: wrap(i32::from(p.azimuth(next)) - i32::from(base_az)),
+                    groups: 1,
+                },
+                None => mean,
+            };
             for b in 0..model.banks() {
                 let (first_block, second_block) = match l.blocks(g, b) {
                     Blocks::Single(k) => (k, None),

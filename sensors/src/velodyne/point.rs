@@ -74,13 +74,20 @@ impl Beam {
     }
 }
 
-/// The azimuth `tick` ticks into a firing group of `group` ticks that turns `gap` hundredths
-/// of a degree from `block_az`, rounded half up to the hundredth the sensor reports (the
-/// resolution nebula, velodyne-decoder and the ROS driver also round to). Exact: integers.
-pub(super) fn interpolate(block_az: u16, gap: u32, tick: u32, group: u32) -> u16 {
-    let group = u64::from(group.max(1));
-    let scaled = u64::from(block_az) * group + u64::from(gap) * u64::from(tick);
-    let rounded = (2 * scaled + group) / (2 * group);
+/// A firing group's rotation: `turn` hundredths of a degree over `groups` firing groups.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Gap {
+    pub turn: u32,
+    pub groups: u32,
+}
+
+/// The azimuth `tick` ticks into a firing group of `group` ticks that turns `gap` from
+/// `block_az`, rounded half up to the hundredth the sensor reports (the resolution nebula,
+/// velodyne-decoder and the ROS driver also round to). Exact: integers.
+pub(super) fn interpolate(block_az: u16, gap: Gap, tick: u32, group: u32) -> u16 {
+    let den = u64::from(group.max(1)) * u64::from(gap.groups.max(1));
+    let scaled = u64::from(block_az) * den + u64::from(gap.turn) * u64::from(tick);
+    let rounded = (2 * scaled + den) / (2 * den);
     (rounded % u64::from(AZIMUTH_UNITS)) as u16
 }
 
@@ -99,11 +106,18 @@ mod tests {
 
     #[test]
     fn interpolation_rounds_exact_halves_up_and_wraps() {
+        let gap = |turn| Gap { turn, groups: 1 };
         // 20 hundredths over 48 ticks, 6 ticks in: 2.5 -> 3.
-        assert_eq!(interpolate(100, 20, 6, 48), 103);
-        assert_eq!(interpolate(100, 20, 5, 48), 102);
-        assert_eq!(interpolate(35_999, 40, 24, 48), 19);
-        assert_eq!(interpolate(500, 0, 47, 48), 500);
+        assert_eq!(interpolate(100, gap(20), 6, 48), 103);
+        assert_eq!(interpolate(100, gap(20), 5, 48), 102);
+        assert_eq!(interpolate(35_999, gap(40), 24, 48), 19);
+        assert_eq!(interpolate(500, gap(0), 47, 48), 500);
+        // A mean step: 219 hundredths over 11 groups, half a group in: 9.95 -> 10.
+        let mean = Gap {
+            turn: 219,
+            groups: 11,
+        };
+        assert_eq!(interpolate(100, mean, 24, 48), 110);
     }
 
     #[test]
