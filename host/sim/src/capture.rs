@@ -24,6 +24,8 @@ pub const PCAP_NAME: &str = "packets.pcap";
 pub const META_NAME: &str = "packets.json";
 /// The Hesai angle correction file's name in the output folder.
 pub const ANGLES_NAME: &str = "packets.csv";
+/// The Velodyne calibration (ROS YAML) beside a HDL-64E's or VLS-128's capture.
+pub const CALIBRATION_NAME: &str = "packets.yaml";
 
 /// A pcap file being written.
 pub struct CaptureWriter {

@@ -26,6 +26,7 @@ mod mid360;
 mod mid360_imu;
 mod ouster_imu;
 mod robosense;
+mod velodyne_wide;
 mod xt32;
 
 use crate::imu::ImuSample;
@@ -83,6 +84,16 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "helios"))]
     #[serde(rename = "helios")]
     Helios,
+    /// Velodyne HDL-64E S3: upper and lower blocks of 32 lasers, strongest return, 2 mm
+    /// ranges (calibration YAML beside).
+    #[cfg_attr(feature = "clap", value(name = "hdl64e-s3"))]
+    #[serde(rename = "hdl64e-s3")]
+    Hdl64e,
+    /// Velodyne VLS-128: four banks of 32 lasers, strongest return, 4 mm ranges (calibration
+    /// YAML beside).
+    #[cfg_attr(feature = "clap", value(name = "vls128"))]
+    #[serde(rename = "vls128")]
+    Vls128,
 }
 
 /// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
@@ -160,14 +171,23 @@ pub struct PacketSim<'a> {
 impl PacketSensor {
     /// Velodyne packet period (s), single return.
     fn velodyne_packet_s(model: Model) -> f64 {
-        model.group_us() * velodyne::wire::field::BLOCKS as f64 * 1e-6
+        model.packet_us(false) * 1e-6
     }
 
     fn model(self) -> Model {
         match self {
             Self::Vlp32c => Model::Vlp32c,
+            Self::Hdl64e => Model::Hdl64eS3,
+            Self::Vls128 => Model::Vls128,
             _ => Model::Vlp16,
         }
+    }
+
+    /// The Velodyne calibration file a HDL-64E or VLS-128 needs (the ROS YAML), to write
+    /// beside the capture as [`crate::capture::CALIBRATION_NAME`]; `None` for the others.
+    pub fn calibration_file(self) -> Option<String> {
+        matches!(self, Self::Hdl64e | Self::Vls128)
+            .then(|| velodyne_wide::yaml(&velodyne_wide::calibration(self.model())))
     }
 
     /// A Livox sensor's point timing (the Mid-360's for the sensors that have none).
@@ -261,7 +281,11 @@ impl<'a> PacketSim<'a> {
             sim,
             sensor,
             model,
-            calib: Calibration::nominal(model),
+            calib: if model.needs_calibration() {
+                velodyne_wide::calibration(model)
+            } else {
+                Calibration::nominal(model)
+            },
             per_sweep,
         }
     }
@@ -293,6 +317,15 @@ impl<'a> PacketSim<'a> {
             }
             PacketSensor::Xt32 => xt32::last_offset(last),
             PacketSensor::Helios => self.robosense_last_offset(last),
+            PacketSensor::Hdl64e | PacketSensor::Vls128 => {
+                let groups = velodyne::Layout {
+                    model: self.model,
+                    dual: false,
+                }
+                .groups();
+                let banks = self.model.banks();
+                self.wide_start(last) + self.model.firing_s(groups - 1, banks - 1, 31)
+            }
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
@@ -322,6 +355,7 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Xt32 => self.xt32_packet(p),
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
                 PacketSensor::Helios => self.robosense_packet(p),
+                PacketSensor::Hdl64e | PacketSensor::Vls128 => self.wide_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();
@@ -379,7 +413,7 @@ impl<'a> PacketSim<'a> {
     /// Trajectory time of Velodyne packet `p`'s timestamp: whole microseconds, as the sensor's
     /// clock counts them.
     fn packet_offset(&self, p: u64) -> f64 {
-        let us = self.model.group_us() * velodyne::wire::field::BLOCKS as f64;
+        let us = self.model.packet_us(false);
         libm::floor(p as f64 * us) * 1e-6
     }
 
