@@ -194,6 +194,13 @@ fn add(
     }
 }
 
+/// How far apart two Velodyne points may turn about the axis: one hundredth of a degree (and
+/// f32 sines). velodyne-decoder interpolates a return's azimuth with the packet's mean rotation
+/// rate, ours with the manuals' step to the next firing group (section 9.5 of the VLP-16 and
+/// VLP-32C manuals); the steps are quantised to 0.01 degree, so the two azimuths, each rounded
+/// to the hundredth, may fall a hundredth apart. Range and height are the same.
+const VELODYNE_TURN_TOL_DEG: f64 = 0.0101;
+
 /// Worst disagreements: (metres, ns).
 fn compare(
     name: &str,
@@ -205,22 +212,44 @@ fn compare(
     assert_eq!(ours.counts, counts, "{name}: point counts per sweep");
     let tol = if ouster { OUSTER_TOL_M } else { VELODYNE_TOL_M };
     let (mut worst_m, mut worst_ns) = (0.0f64, 0.0f64);
+    let (mut turned, mut worst_turn_deg, mut worst_radial) = (0usize, 0.0f64, 0.0f64);
     for r in refs {
         let Some((p, t, dcol)) = ours.points.get(&r.key()) else {
             panic!("{name}: reference point {r:?} missing from our decoding");
         };
         let d = (0..3).map(|k| (p[k] - r.xyz[k]).abs()).fold(0.0, f64::max);
-        worst_m = worst_m.max(d);
         worst_ns = worst_ns.max((t - r.t_ns).abs());
         if ouster {
             assert_eq!(*dcol, r.dcol, "{name}: destaggered column of {r:?}");
         }
+        if d <= tol || ouster {
+            worst_m = worst_m.max(d);
+            continue;
+        }
+        // Turned about the axis: the same distance from it and height, another azimuth.
+        let rho = |q: &[f64; 3]| q[0].hypot(q[1]);
+        let radial = (rho(p) - rho(&r.xyz)).abs().max((p[2] - r.xyz[2]).abs());
+        let turn = (p[0] * r.xyz[1] - p[1] * r.xyz[0])
+            .atan2(p[0] * r.xyz[0] + p[1] * r.xyz[1])
+            .to_degrees()
+            .abs();
+        assert!(
+            radial <= tol && turn <= VELODYNE_TURN_TOL_DEG,
+            "{name}: {r:?} is {d:e} m from ours {p:?}, not a turn of at most \
+             {VELODYNE_TURN_TOL_DEG} degrees ({turn} degrees, {radial:e} m off the circle)"
+        );
+        turned += 1;
+        worst_turn_deg = worst_turn_deg.max(turn);
+        worst_radial = worst_radial.max(radial);
     }
     println!(
-        "{name}: {} sweeps, {} points compared; worst |dxyz| {worst_m:.3e} m (tolerance {tol:e}), \
-         worst |dt| {worst_ns:.1} ns (tolerance {TIME_TOL_NS} ns)",
+        "{name}: {} sweeps, {} points compared; worst |dxyz| {worst_m:.3e} m (tolerance {tol:e}) \
+         on {} points, the other {turned} a turn of at most {worst_turn_deg:.4} degrees \
+         (tolerance {VELODYNE_TURN_TOL_DEG}) at the same range and height within \
+         {worst_radial:.2e} m; worst |dt| {worst_ns:.1} ns (tolerance {TIME_TOL_NS} ns)",
         counts.len(),
-        refs.len()
+        refs.len(),
+        refs.len() - turned,
     );
     assert!(worst_m <= tol, "{name}: {worst_m:e} m > {tol:e} m");
     assert!(
