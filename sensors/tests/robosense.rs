@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{feed, Log};
+use common::{feed, with, Log};
 use kiss_odom_sensors::robosense::{wire, Calibration, Config, Decoder, Model};
 use kiss_odom_sensors::{Decode, PacketError, Return};
 
@@ -132,8 +132,7 @@ fn bad_input_is_refused_with_its_reason() {
     let mut dec = decoder(model);
     let mut log = Log::default();
     // A DIFOP whose angle entries are unset (sign 0xFF): no angles.
-    let mut unset = difop(model, 0x04);
-    unset[468] = 0xFF;
+    let unset = with(&difop(model, 0x04), 468, 0xFF);
     assert_eq!(
         feed(&mut dec, &unset, &mut log),
         Err(PacketError::NoCalibration)

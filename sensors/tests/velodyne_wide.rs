@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{feed, Log};
+use common::{feed, with, Log};
 use kiss_odom_sensors::velodyne::{
     wire::field, Calibration, Config, Decoder, Laser, Model, BANK_FLAGS,
 };
@@ -146,8 +146,7 @@ fn truncated_and_corrupted_packets_are_refused_with_the_reason() {
         feed(&mut dec, &p[..1000], &mut log),
         Err(PacketError::Truncated)
     );
-    let mut bad = p.clone();
-    bad[301] = 0x12;
+    let bad = with(&p, 301, 0x12);
     assert_eq!(feed(&mut dec, &bad, &mut log), Err(PacketError::BlockFlag));
     feed(&mut dec, &p, &mut log).unwrap();
     dec.finish(&mut log);
