@@ -194,21 +194,30 @@ fn add(
     }
 }
 
-/// How far apart two Velodyne points may turn about the axis: one hundredth of a degree (and
-/// f32 sines). velodyne-decoder interpolates a return's azimuth with the packet's mean rotation
-/// rate, ours with the manuals' step to the next firing group (section 9.5 of the VLP-16 and
-/// VLP-32C manuals); the steps are quantised to 0.01 degree, so the two azimuths, each rounded
-/// to the hundredth, may fall a hundredth apart. Range and height are the same.
-const VELODYNE_TURN_TOL_DEG: f64 = 0.0101;
+/// How far apart two Velodyne points may turn about the axis: three hundredths of a degree.
+/// velodyne-decoder interpolates a return's azimuth with the packet's mean rotation rate, ours
+/// with the manuals' step to the next firing group (section 9.5 of the VLP-16 and VLP-32C
+/// manuals). On the recorded units a block's step strays up to 2.4 hundredths from the
+/// packet's mean, and a return moves by up to 0.81 of its block's step; with the two
+/// roundings to the hundredth the azimuths may fall up to three hundredths apart. Range and
+/// height are the same. The recordings rewritten to say dual return pair two real blocks a
+/// firing: their steps stray twice as far, and velodyne-decoder's rate, from the first block to
+/// the last of a packet over five firings, runs a tenth fast (the last block is a real one
+/// past the last pair's): nine hundredths.
+const VELODYNE_TURN_TOL_DEG: f64 = 0.0301;
+const VELODYNE_REWRITTEN_DUAL_TURN_TOL_DEG: f64 = 0.0901;
+
+/// The turn a recording's points may differ by ([`VELODYNE_TURN_TOL_DEG`]).
+fn turn_tol(r: &Recording) -> f64 {
+    match r.rewrite {
+        Some((_, 0x39)) => VELODYNE_REWRITTEN_DUAL_TURN_TOL_DEG,
+        _ => VELODYNE_TURN_TOL_DEG,
+    }
+}
 
 /// Worst disagreements: (metres, ns).
-fn compare(
-    name: &str,
-    ours: &Ours,
-    counts: &[usize],
-    refs: &[RefPoint],
-    ouster: bool,
-) -> (f64, f64) {
+fn compare(r: &Recording, ours: &Ours, counts: &[usize], refs: &[RefPoint]) -> (f64, f64) {
+    let (name, ouster, turn_tol) = (r.name, r.meta.is_some(), turn_tol(r));
     assert_eq!(ours.counts, counts, "{name}: point counts per sweep");
     let tol = if ouster { OUSTER_TOL_M } else { VELODYNE_TOL_M };
     let (mut worst_m, mut worst_ns) = (0.0f64, 0.0f64);
@@ -234,9 +243,9 @@ fn compare(
             .to_degrees()
             .abs();
         assert!(
-            radial <= tol && turn <= VELODYNE_TURN_TOL_DEG,
+            radial <= tol && turn <= turn_tol,
             "{name}: {r:?} is {d:e} m from ours {p:?}, not a turn of at most \
-             {VELODYNE_TURN_TOL_DEG} degrees ({turn} degrees, {radial:e} m off the circle)"
+             {turn_tol} degrees ({turn} degrees, {radial:e} m off the circle)"
         );
         turned += 1;
         worst_turn_deg = worst_turn_deg.max(turn);
@@ -245,7 +254,7 @@ fn compare(
     println!(
         "{name}: {} sweeps, {} points compared; worst |dxyz| {worst_m:.3e} m (tolerance {tol:e}) \
          on {} points, the other {turned} a turn of at most {worst_turn_deg:.4} degrees \
-         (tolerance {VELODYNE_TURN_TOL_DEG}) at the same range and height within \
+         (tolerance {turn_tol}) at the same range and height within \
          {worst_radial:.2e} m; worst |dt| {worst_ns:.1} ns (tolerance {TIME_TOL_NS} ns)",
         counts.len(),
         refs.len(),
@@ -305,7 +314,7 @@ fn decoding_equals_the_committed_reference_samples() {
             })
             .collect();
         assert!(refs.len() >= 100, "{}: sample too small", r.name);
-        compare(r.name, &decode(r), &counts_of(&g), &refs, r.meta.is_some());
+        compare(r, &decode(r), &counts_of(&g), &refs);
     }
 }
 
@@ -337,7 +346,7 @@ fn decoding_equals_ouster_sdk_and_velodyne_decoder_on_every_point() {
         .unwrap();
         let counts = counts_of(&json);
         assert_eq!(refs.len(), counts.iter().sum::<usize>());
-        compare(r.name, &decode(r), &counts, &refs, r.meta.is_some());
+        compare(r, &decode(r), &counts, &refs);
     }
 }
 

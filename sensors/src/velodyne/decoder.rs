@@ -1,7 +1,7 @@
 //! Velodyne packets to sweeps: checks, time unwrapping, loss and order detection, the cut,
 //! then each return to a point.
 
-use super::calibration::{Calibration, Config};
+use super::calibration::{Config, Laser};
 use super::layout::{single_return, Blocks, Layout};
 use super::model::{Model, BANK_FLAGS, MAX_LASERS};
 use super::point::{interpolate, Beam, Gap};
@@ -36,29 +36,51 @@ struct Sensor {
     /// another sensor's (not checked on the HDL-64E, whose two bytes are a cycling status).
     mode_byte: u8,
     product_byte: u8,
-    beams: [Beam; MAX_LASERS],
     resolution: f64,
 }
 
-impl Sensor {
-    fn new(model: Model, mode: Mode, bytes: (u8, u8), calib: &Calibration) -> Self {
-        let (mode_byte, product_byte) = bytes;
-        let mut beams = [Beam::default(); MAX_LASERS];
-        for (b, l) in beams.iter_mut().zip(calib.lasers.iter()) {
-            *b = Beam::new(l);
+/// The lasers, ready to use: from the calibration file when the decoder is made, or the
+/// model's nominal ones once a packet names it. Kept instead of the [`Calibration`] itself.
+struct Beams {
+    beams: [Beam; MAX_LASERS],
+    /// Lasers set; 0 until known.
+    count: usize,
+    /// Metres per distance unit.
+    resolution: f64,
+}
+
+impl Beams {
+    const NONE: Self = Self {
+        beams: [Beam::ZERO; MAX_LASERS],
+        count: 0,
+        resolution: 0.0,
+    };
+
+    /// Beams of `count` lasers, laser `i` being `laser(i)`.
+    fn set(&mut self, count: usize, resolution: f64, laser: impl Fn(usize) -> Laser) {
+        let count = count.min(MAX_LASERS);
+        for (i, b) in self.beams.iter_mut().enumerate().take(count) {
+            *b = Beam::new(&laser(i));
         }
         // Rings count up from the lowest laser; ties keep firing order.
-        let lasers = &calib.lasers;
-        for (i, (b, l)) in beams.iter_mut().zip(lasers.iter()).enumerate() {
-            let below = lasers
-                .iter()
-                .enumerate()
-                .filter(|&(j, m)| {
-                    m.vertical_deg < l.vertical_deg || (m.vertical_deg == l.vertical_deg && j < i)
+        for i in 0..count {
+            let v = laser(i).vertical_deg;
+            let below = (0..count)
+                .filter(|&j| {
+                    let w = laser(j).vertical_deg;
+                    w < v || (w == v && j < i)
                 })
                 .count();
-            b.ring = below as u16;
+            self.beams[i].ring = below as u16;
         }
+        self.count = count;
+        self.resolution = resolution;
+    }
+}
+
+impl Sensor {
+    fn new(model: Model, mode: Mode, bytes: (u8, u8), file_resolution: f64) -> Self {
+        let (mode_byte, product_byte) = bytes;
         Self {
             model,
             mode,
@@ -68,14 +90,13 @@ impl Sensor {
             },
             mode_byte,
             product_byte,
-            beams,
             // The VLS-128 counts 4 mm (manual 63-9483 section 9.3.1.3) whatever a calibration
             // file says: the ROS driver and nebula ignore the YAML's `distance_resolution` for
             // it too (nebula's VLS128.yaml has 0.007).
             resolution: if model == Model::Vls128 {
                 model.distance_resolution_m()
             } else {
-                calib.distance_resolution_m
+                file_resolution
             },
         }
     }
@@ -147,7 +168,7 @@ fn hdl64e_mode(p: &Packet<'_>) -> Mode {
 /// ```
 pub struct Decoder {
     config_model: Option<Model>,
-    calibration: Option<Calibration>,
+    beams: Beams,
     sensor: Option<Sensor>,
     /// Sensor time of the last packet accepted, microseconds, counted on across hours.
     last_us: Option<i64>,
@@ -177,9 +198,14 @@ impl Decoder {
             (None, _) => {}
         }
         let cut = AzimuthCut::new(config.cut_angle_deg)?;
+        let mut beams = Beams::NONE;
+        if let Some(c) = &config.calibration {
+            let at = |i: usize| c.lasers.get(i).copied().unwrap_or_default();
+            beams.set(c.lasers.len(), c.distance_resolution_m, at);
+        }
         Ok(Self {
             config_model: config.model,
-            calibration: config.calibration,
+            beams,
             sensor: None,
             last_us: None,
             last_azimuth: 0,
@@ -279,13 +305,22 @@ impl Decoder {
         } else {
             hdl64e_mode(p)
         };
-        let calib = match &self.calibration {
-            Some(c) if c.lasers.len() != model.lasers() => return Err(PacketError::OtherSensor),
-            Some(c) => c.clone(),
-            None if model.needs_calibration() => return Err(PacketError::NoCalibration),
-            None => Calibration::nominal(model),
-        };
-        let sensor = Sensor::new(model, mode, (byte, product), &calib);
+        match self.beams.count {
+            0 if model.needs_calibration() => return Err(PacketError::NoCalibration),
+            0 => {
+                let nominal = |i: usize| Laser {
+                    vertical_deg: model.vertical_deg().get(i).copied().unwrap_or(0.0),
+                    azimuth_offset_deg: model.azimuth_offset_deg(i),
+                    vertical_offset_m: model.vertical_offset_m(i),
+                    ..Laser::default()
+                };
+                let resolution = model.distance_resolution_m();
+                self.beams.set(model.lasers(), resolution, nominal);
+            }
+            n if n != model.lasers() => return Err(PacketError::OtherSensor),
+            _ => {}
+        }
+        let sensor = Sensor::new(model, mode, (byte, product), self.beams.resolution);
         sensor.flags_match(p)?;
         self.sensor = Some(sensor);
         Ok(())
@@ -434,7 +469,7 @@ impl Decoder {
                     } else {
                         (32 * b + c, column)
                     };
-                    let Some(beam) = sensor.beams.get(laser) else {
+                    let Some(beam) = self.beams.beams.get(laser) else {
                         continue;
                     };
                     let time = rel_s + model.firing_s(g, b, c);

@@ -20,6 +20,18 @@ pub(super) struct Beam {
 }
 
 impl Beam {
+    /// No laser.
+    pub(super) const ZERO: Self = Self {
+        cos_v: 0.0,
+        sin_v: 0.0,
+        offset_rad: 0.0,
+        distance_offset: 0.0,
+        vertical_offset: 0.0,
+        horizontal_offset: 0.0,
+        near: None,
+        ring: 0,
+    };
+
     pub(super) fn new(l: &Laser) -> Self {
         let v = l.vertical_deg.to_radians();
         Self {
