@@ -72,10 +72,12 @@ fn azimuth_rad(az: u16) -> f64 {
 
 impl PacketSim<'_> {
     /// Trajectory time of packet `p`'s first firing; its stamp is `lead` later, in whole
-    /// microseconds.
+    /// microseconds. The stamps begin at the lead rounded up, so the first firing is not
+    /// before the sequence starts (nor the sweep's time origin before the sensor's hour).
     pub(super) fn wide_start(&self, p: u64) -> f64 {
-        let us = libm::floor(p as f64 * self.model.packet_us(false));
-        (us - self.model.stamp_lead_us()) * 1e-6
+        let lead = self.model.stamp_lead_us();
+        let us = libm::floor(p as f64 * self.model.packet_us(false)) + libm::ceil(lead);
+        (us - lead) * 1e-6
     }
 
     pub(super) fn wide_packet(&self, p: u64) -> (Packet, Vec<Truth>) {
@@ -198,8 +200,7 @@ mod tests {
     #[test]
     fn generated_hdl64e_and_vls128_packets_decode_to_the_simulated_points() {
         for sensor in [PacketSensor::Hdl64e, PacketSensor::Vls128] {
-            // Not at the top of the hour: the VLS-128's first firing is 8.7 us before its stamp.
-            let sim = sim(sensor, 10.0, 1.0);
+            let sim = sim(sensor, 10.0, 0.0);
             let ps = PacketSim::new(&sim, sensor);
             let model = sensor.model();
             let mut dec = velodyne::Decoder::new(velodyne::Config {
