@@ -251,3 +251,80 @@ fn vls128_agrees_with_nebula_where_nebula_follows_the_manual() {
         range: (0.3, 300.0),
     });
 }
+
+#[test]
+fn a_vls128_or_helios_without_its_angles_exits_naming_what_is_missing() {
+    let sector = fixture("vls128-sector.pcap");
+    let no_file = SensorOptions {
+        sensor: SensorKind::Vls128,
+        ..SensorOptions::default()
+    };
+    let e = format!("{:#}", sweeps::read_all(&sector, &no_file).unwrap_err());
+    assert!(
+        e.contains("vls128-sector.pcap") && e.contains("VLS-128 needs the unit's calibration"),
+        "{e}"
+    );
+    // Found by its product byte, with no file: every packet refused, the reason reported.
+    let e = format!(
+        "{:#}",
+        sweeps::read_all(&sector, &SensorOptions::default()).unwrap_err()
+    );
+    assert!(
+        e.contains("none decoded") && e.contains("calibration"),
+        "{e}"
+    );
+    // A malformed calibration file: its name and what is wrong.
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.yaml");
+    std::fs::write(&bad, "lasers:\n  - {laser_id: 0, vert_correction: x}\n").unwrap();
+    let opts = SensorOptions {
+        calibration: Some(bad),
+        ..no_file.clone()
+    };
+    let e = format!("{:#}", sweeps::read_all(&sector, &opts).unwrap_err());
+    assert!(e.contains("bad.yaml"), "{e}");
+    // A Helios recording without a DIFOP packet and no angle file.
+    let helios = SensorOptions {
+        sensor: SensorKind::Helios,
+        ..SensorOptions::default()
+    };
+    let e = format!("{:#}", sweeps::read_all(&sector, &helios).unwrap_err());
+    assert!(
+        e.contains("no DIFOP packet") && e.contains("--calibration"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_second_models_packets_on_the_port_are_counted_not_decoded() {
+    // The VLP-16's packets, then the VLS-128 sector's, one port, one sender.
+    let mut datagrams = Vec::new();
+    for name in ["vlp16.pcap", "vls128-sector.pcap"] {
+        let mut cap = pcap::open(&fixture(name)).unwrap();
+        while let Some(d) = cap.next_datagram().unwrap() {
+            datagrams.push(d);
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let both = dir.path().join("both.pcap");
+    pcap::write(&both, &datagrams, 1500).unwrap();
+    let opts = SensorOptions {
+        calibration: Some(fixture("VLP16.yaml")),
+        ..SensorOptions::default()
+    };
+    let (sweeps, report) = sweeps::read_all(&both, &opts).unwrap();
+    let decoded: u32 = sweeps.iter().map(|s| s.stats.packets).sum();
+    let other = report
+        .refused
+        .get(&kiss_odom_sensors::PacketError::OtherSensor.to_string())
+        .copied()
+        .unwrap_or(0);
+    println!(
+        "VLP-16 then VLS-128 on one port: {decoded} decoded as {}, {other} refused as another \
+         sensor's; warnings: {:?}",
+        report.sensor,
+        report.warnings()
+    );
+    assert_eq!((decoded, other), (152, 80));
+    assert!(report.warnings().iter().any(|w| w.contains("another sensor")));
+}
