@@ -319,7 +319,8 @@ pub struct SensorOptions {
     pub port: Option<u16>,
     /// Ouster metadata JSON.
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), or Hesai angle correction (CSV).
+    /// Velodyne calibration (XML or YAML), Hesai angle correction (CSV), or Robosense
+    /// angle.csv.
     pub calibration: Option<PathBuf>,
     /// Livox frame period, seconds (default 0.1).
     pub frame_period_s: Option<f64>,
