@@ -274,6 +274,15 @@ def sensor_seeds():
            for p in vls]
     put("velodyne_wide_packets", "hdl64e-3-packets", bytes([1, 3]) + b"".join(b"\0\0" + p for p in hdl))
     put("robosense_packets", "helios-difop-msop", bytes([3]) + robosense_helios())
+    m1 = bytearray(1210)
+    m1[:4] = bytes([0x55, 0xAA, 0x5A, 0xA5])
+    m1[4:6] = (1).to_bytes(2, "big")
+    m1[8] = 0x04
+    for k in range(25):
+        for c in range(5):
+            at = 32 + 47 * k + 2 + 9 * c
+            m1[at : at + 6] = (2000 + c).to_bytes(2, "big") + (32768 + k).to_bytes(2, "big") + (32768 - c).to_bytes(2, "big")
+    put("robosense_packets", "m1-one-packet", bytes([0x80]) + b"\0\0" + bytes(m1))
     hesai = udp_payloads(data.parent / "hesai" / "hesai-xt32-small.pcap", 2368)[:3]
     put("hesai_packets", "xt32-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in hesai))
     qt128 = udp_payloads(ROOT / "fixtures" / "hesai-qt128" / "qt128-sector.pcap", 2368)[:3]

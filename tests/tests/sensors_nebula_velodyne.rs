@@ -326,5 +326,8 @@ fn a_second_models_packets_on_the_port_are_counted_not_decoded() {
         report.warnings()
     );
     assert_eq!((decoded, other), (152, 80));
-    assert!(report.warnings().iter().any(|w| w.contains("another sensor")));
+    assert!(report
+        .warnings()
+        .iter()
+        .any(|w| w.contains("another sensor")));
 }

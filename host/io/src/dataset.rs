@@ -301,6 +301,8 @@ pub enum SensorKind {
     /// Robosense RS-Ruby / RS-LiDAR-128 (angles from the recording's DIFOP packets or
     /// --calibration).
     Ruby,
+    /// Robosense RS-M1 (MEMS; every point carries its direction).
+    M1,
     /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).

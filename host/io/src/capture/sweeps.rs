@@ -164,6 +164,7 @@ impl PcapReport {
 enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
     Robosense(Box<robosense::Decoder>),
+    RobosenseM1(Box<robosense::m1::Decoder>),
     Ouster(Box<ouster::Decoder>),
     Hesai(Box<hesai::Decoder>),
     Livox(Box<livox::Decoder>),
@@ -178,6 +179,7 @@ impl Decoder {
             r = match self {
                 Self::Velodyne(d) => d.push(bytes, sink),
                 Self::Robosense(d) => d.push(bytes, sink),
+                Self::RobosenseM1(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
                 Self::Hesai(d) => d.push(bytes, sink),
                 Self::Livox(d) => d.push(bytes, sink),
@@ -192,6 +194,7 @@ impl Decoder {
         match self {
             Self::Velodyne(d) => d.finish(sink),
             Self::Robosense(d) => d.finish(sink),
+            Self::RobosenseM1(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
             Self::Hesai(d) => d.finish(sink),
             Self::Livox(d) => d.finish(sink),
@@ -201,6 +204,7 @@ impl Decoder {
         match self {
             Self::Velodyne(d) => *d.between_sweeps(),
             Self::Robosense(d) => *d.between_sweeps(),
+            Self::RobosenseM1(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
             Self::Hesai(d) => *d.between_sweeps(),
             Self::Livox(d) => *d.between_sweeps(),
@@ -457,6 +461,12 @@ pub fn decode(
         }
         if let Some(model) = robosense_model(opts.sensor) {
             return robosense_decoder(path, capture, opts, model);
+        }
+        if opts.sensor == SensorKind::M1 {
+            let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
+            let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
+            let name = "Robosense RS-M1".to_string();
+            return Ok(sweeps(path, capture, dec, opts, (port, name, Vec::new())));
         }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = hesai_model(opts.sensor);
@@ -800,6 +810,7 @@ impl PcapSweeps {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
             Decoder::Robosense(_) => robosense::wire::LEN,
+            Decoder::RobosenseM1(_) => robosense::m1::LEN,
             Decoder::Ouster(d) => d.layout().packet_len(),
             Decoder::Hesai(d) if d.model() == hesai::Model::Xt32 => {
                 hesai::wire::field::LEN_WITH_SEQUENCE
