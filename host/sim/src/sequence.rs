@@ -222,12 +222,18 @@ pub fn write(
                 std::fs::write(&path, angles)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
+            if let Some(text) = sensor.calibration_file() {
+                let path = writer.staging().join(capture::CALIBRATION_NAME);
+                std::fs::write(&path, text)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
             let path = writer.staging().join(capture::PCAP_NAME);
-            Some(capture::CaptureWriter::create(
-                &path,
-                sensor,
-                params.start_time,
-            )?)
+            let mut c = capture::CaptureWriter::create(&path, sensor, params.start_time)?;
+            // The device packet first: its decoder needs the angles it carries.
+            if let Some(d) = sensor.device_packet(params.sensor.rate_hz) {
+                c.write_device(&d)?;
+            }
+            Some(c)
         }
         _ => None,
     };
