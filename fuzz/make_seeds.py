@@ -235,9 +235,17 @@ def driver_seeds():
         ouster.put("I", 48)
         ouster.b += bytes(range(48))
         put("driver_messages", f"ouster-{name}", bytes([6 | bit]) + ouster.b)
-        put("driver_messages", f"custom-{name}", bytes([8 | bit]) + custom_msg(ros1, 5))
+        put("driver_messages", f"custom-{name}", bytes([12 | bit]) + custom_msg(ros1, 5))
+        msop = [b"\x55\xaa\x05\x5a" + bytes(1244)] * 2
+        put("driver_messages", f"robosense-{name}", bytes([8 | bit]) + packet_scan(ros1, msop, 1248))
+        info = Ser(ros1)
+        info.string("Helios")
+        info.put("I", 1_700_000_000)
+        info.put("I", 0)
+        info.b += b"\xa5\xff\x00\x5a\x11\x11\x55\x55" + bytes(1240)
+        put("driver_messages", f"robosense-info-{name}", bytes([10 | bit]) + info.b)
     put("driver_messages", "nebula-cdr", bytes([5]) + packet_scan(False, hesai + velodyne))
-    put("driver_messages", "custom-point-num", bytes([9]) + custom_msg(False, 3, 4))
+    put("driver_messages", "custom-point-num", bytes([13]) + custom_msg(False, 3, 4))
 
 
 def db3(path, topics, messages):
@@ -345,6 +353,33 @@ def ouster_packet(profile, beams, fid, first):
     return struct.pack("<HH", 1, fid) + bytes(28) + cols + bytes(32)
 
 
+def robosense_helios():
+    """A Helios DIFOP packet with its angles, then two MSOP packets of twelve blocks."""
+    difop = bytearray(1248)
+    difop[:8] = bytes([0xA5, 0xFF, 0x00, 0x5A, 0x11, 0x11, 0x55, 0x55])
+    difop[8:10] = (600).to_bytes(2, "big")
+    difop[300] = 0x04
+    for i in range(32):
+        v = round((-55 + 70 * i / 31) * 100)
+        difop[468 + 3 * i] = int(v < 0)
+        difop[469 + 3 * i : 471 + 3 * i] = abs(v).to_bytes(2, "big")
+    out = b"\0\0" + bytes(difop)
+    for n in range(2):
+        msop = bytearray(1248)
+        msop[:4] = bytes([0x55, 0xAA, 0x05, 0x5A])
+        msop[20:26] = (1_704_067_200).to_bytes(6, "big")
+        msop[26:30] = (n * 667).to_bytes(4, "big")
+        for k in range(12):
+            at = 42 + 100 * k
+            msop[at : at + 2] = b"\xff\xee"
+            msop[at + 2 : at + 4] = ((n * 12 + k) * 20).to_bytes(2, "big")
+            for c in range(32):
+                msop[at + 4 + 3 * c : at + 6 + 3 * c] = (2000 + 37 * c).to_bytes(2, "big")
+                msop[at + 6 + 3 * c] = 100
+        out += b"\0\0" + bytes(msop)
+    return out
+
+
 def sensor_seeds():
     data = ROOT.parent / "shared" / "data" / "sensors" / "velodyne"
     packets = udp_payloads(data / "velodyne_vlp16.pcap", 2368)[:3]
@@ -356,6 +391,22 @@ def sensor_seeds():
         body = b"".join(bytes([0]) + ouster_packet(profile, 2, fid, first)
                         for fid in (3, 4) for first in range(0, 64, 4))
         put("ouster_packets", name, head + body)
+    vls = udp_payloads(ROOT / "fixtures" / "velodyne-nebula" / "vls128-sector.pcap", 2368)[:3]
+    put("velodyne_wide_packets", "vls128-3-packets", bytes([2, 0]) + b"".join(b"\0\0" + p for p in vls))
+    # The same packets as an HDL-64E's: upper and lower blocks by turns, no product byte.
+    hdl = [bytes(b ^ (0x33 if k % 200 == 101 else 0) for k, b in enumerate(p[:1200])) + p[1200:1204] + b"\0\0"
+           for p in vls]
+    put("velodyne_wide_packets", "hdl64e-3-packets", bytes([1, 3]) + b"".join(b"\0\0" + p for p in hdl))
+    put("robosense_packets", "helios-difop-msop", bytes([3]) + robosense_helios())
+    m1 = bytearray(1210)
+    m1[:4] = bytes([0x55, 0xAA, 0x5A, 0xA5])
+    m1[4:6] = (1).to_bytes(2, "big")
+    m1[8] = 0x04
+    for k in range(25):
+        for c in range(5):
+            at = 32 + 47 * k + 2 + 9 * c
+            m1[at : at + 6] = (2000 + c).to_bytes(2, "big") + (32768 + k).to_bytes(2, "big") + (32768 - c).to_bytes(2, "big")
+    put("robosense_packets", "m1-one-packet", bytes([0x80]) + b"\0\0" + bytes(m1))
     hesai = udp_payloads(data.parent / "hesai" / "hesai-xt32-small.pcap", 2368)[:3]
     put("hesai_packets", "xt32-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in hesai))
     qt128 = udp_payloads(ROOT / "fixtures" / "hesai-qt128" / "qt128-sector.pcap", 2368)[:3]

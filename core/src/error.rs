@@ -24,6 +24,9 @@ pub enum ConfigError {
     /// Robust mode needs [`crate::Capacities::plane_terms`]: set it (or use
     /// [`crate::Capacities::ROBUST`]).
     PlaneTerms,
+    /// The capacities cannot hold what the odometry holds now (`Odometry::rehome`): give each
+    /// at least [`crate::Odometry::room_needed`]'s.
+    Holds,
 }
 
 /// Why a frame produced no pose. The odometry state is unchanged; the caller can drop the
@@ -37,6 +40,11 @@ pub enum FrameError {
     /// The storage no longer holds the layout the odometry was built with (its `AsMut` now
     /// gives fewer words than at construction). Nothing was changed; rebuild the odometry.
     Storage,
+    /// A buffer would have dropped or evicted, and the odometry was told to refuse such a frame
+    /// ([`crate::WhenFull::Refuse`]). Nothing was changed: move the odometry into storage of
+    /// [`crate::Odometry::room_needed`]'s capacities ([`crate::Odometry::rehome`]) and register
+    /// the frame again.
+    Full,
 }
 
 impl core::fmt::Display for ConfigError {
@@ -50,6 +58,7 @@ impl core::fmt::Display for ConfigError {
             Self::Capacity => "every capacity must be non-zero and below 2^30",
             Self::ArenaTooSmall => "arena shorter than Capacities::arena_words",
             Self::PlaneTerms => "robust mode needs Capacities::plane_terms",
+            Self::Holds => "the capacities cannot hold what the odometry holds now",
         };
         f.write_str(s)
     }
@@ -60,6 +69,7 @@ impl core::fmt::Display for FrameError {
         match self {
             Self::EmptyScan => f.write_str("no finite point within [min_range, max_range)"),
             Self::Storage => f.write_str("the storage shrank below the odometry's layout"),
+            Self::Full => f.write_str("a buffer is full and the odometry refuses such frames"),
         }
     }
 }

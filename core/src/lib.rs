@@ -87,7 +87,7 @@ pub use geometry::{widen_pose, Point, Pose};
 pub use hold::{Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
 pub use imu::{GyroPrior, ImuConfig, ImuSample, Prior};
 pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized};
-pub use odometry::{FrameInput, Layout, Odometry};
+pub use odometry::{FrameInput, Layout, Odometry, WhenFull};
 pub use registration::{Executor, Sequential};
 pub use report::{Dropped, Flag, FrameReport, HighWater, Status};
 pub use scalar::Real;

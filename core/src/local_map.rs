@@ -19,6 +19,7 @@
 //! [`crate::Odometry`] the regions are part of the pipeline's one storage.
 
 mod codec;
+mod copy;
 mod evict;
 mod layout;
 mod search;

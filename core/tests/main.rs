@@ -8,4 +8,5 @@ mod common;
 mod pipeline;
 mod properties;
 mod redeskew;
+mod rehome;
 mod robust_gate;

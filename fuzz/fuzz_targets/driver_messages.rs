@@ -1,6 +1,7 @@
 //! The messages sensor drivers record (`io::ros::packets::packets`: VelodyneScan, PandarScan,
-//! NebulaPackets, Ouster's PacketMsg; `io::ros::livox::parse`: Livox's CustomMsg), ROS 1 or
-//! CDR. The first byte picks the serialization (bit 0) and the message (bits 1 to 3). What
+//! NebulaPackets, Ouster's PacketMsg, RobosenseScan and RobosenseInfoPacket;
+//! `io::ros::livox::parse`: Livox's CustomMsg), ROS 1 or CDR. The first byte picks the
+//! serialization (bit 0) and the message (bits 1 to 3). What
 //! parses holds no more packets or points than its bytes can: every packet at least a stamp
 //! and a length (12 bytes), every point 19 bytes, and as many points as `point_num` says.
 #![no_main]
@@ -9,11 +10,13 @@ use kiss_odom_io::ros::kinds::Kind;
 use kiss_odom_io::ros::{livox, packets};
 use libfuzzer_sys::fuzz_target;
 
-const KINDS: [Kind; 4] = [
+const KINDS: [Kind; 6] = [
     Kind::VelodyneScan,
     Kind::PandarScan,
     Kind::NebulaPackets,
     Kind::OusterPacket,
+    Kind::RobosenseScan,
+    Kind::RobosenseInfo,
 ];
 
 fuzz_target!(|data: &[u8]| {

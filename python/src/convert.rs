@@ -4,12 +4,11 @@
 //! and non-contiguous arrays are converted; a wrong shape is a `ValueError` naming what was
 //! expected and what came.
 
-use kiss_odom_core::{Pose, Real};
-use nalgebra::{Matrix3, Matrix4, Quaternion, Translation3, UnitQuaternion};
+use kiss_odom_core::Pose;
+use nalgebra::{Matrix3, Matrix4, Translation3};
 use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use std::borrow::Cow;
 
 /// `numpy.ascontiguousarray(obj, dtype=float64)` as an n-dimensional array.
 pub fn float_array<'py>(
@@ -133,61 +132,6 @@ pub fn matrices(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Matrix4<f64>
         .chunks_exact(16)
         .map(Matrix4::from_row_slice)
         .collect())
-}
-
-/// A pose in scalar `T`.
-pub fn narrow<T: Real>(p: &Pose<f64>) -> Pose<T> {
-    let (q, t) = (p.rotation.coords, p.translation.vector);
-    Pose::from_parts(
-        Translation3::new(T::of(t.x), T::of(t.y), T::of(t.z)),
-        UnitQuaternion::new_unchecked(Quaternion::new(
-            T::of(q.w),
-            T::of(q.x),
-            T::of(q.y),
-            T::of(q.z),
-        )),
-    )
-}
-
-/// The scalars the core runs on, with the copies between them and f64 that numpy needs: none
-/// for f64 (the frame is used where it lies), a conversion for f32.
-pub trait Numpy: Real {
-    /// Points from f64.
-    fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[Self; 3]]>;
-    /// Points to f64 (f64 points are moved, not copied).
-    fn widen_points(pts: Vec<[Self; 3]>) -> Vec<[f64; 3]>;
-    /// Lets `fill` write up to `n` points and return how many it kept; leaves those in `out`
-    /// as f64 (written in place for f64).
-    fn fill(out: &mut Vec<[f64; 3]>, n: usize, fill: impl FnOnce(&mut [[Self; 3]]) -> usize);
-}
-
-impl Numpy for f64 {
-    fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[f64; 3]]> {
-        Cow::Borrowed(pts)
-    }
-    fn widen_points(pts: Vec<[f64; 3]>) -> Vec<[f64; 3]> {
-        pts
-    }
-    fn fill(out: &mut Vec<[f64; 3]>, n: usize, fill: impl FnOnce(&mut [[f64; 3]]) -> usize) {
-        out.resize(n, [0.0; 3]);
-        let kept = fill(out);
-        out.truncate(kept.min(n));
-    }
-}
-
-impl Numpy for f32 {
-    fn narrow_points(pts: &[[f64; 3]]) -> Cow<'_, [[f32; 3]]> {
-        Cow::Owned(pts.iter().map(|p| p.map(|v| v as f32)).collect())
-    }
-    fn widen_points(pts: Vec<[f32; 3]>) -> Vec<[f64; 3]> {
-        pts.iter().map(|p| p.map(f64::from)).collect()
-    }
-    fn fill(out: &mut Vec<[f64; 3]>, n: usize, fill: impl FnOnce(&mut [[f32; 3]]) -> usize) {
-        let mut tmp = vec![[0.0f32; 3]; n];
-        let kept = fill(&mut tmp).min(n);
-        out.clear();
-        out.extend(tmp[..kept].iter().map(|p| p.map(f64::from)));
-    }
 }
 
 /// Points as an Nx3 float64 array (the buffer is handed to numpy, not copied).

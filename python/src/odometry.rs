@@ -1,179 +1,37 @@
-//! `Odometry`: the core's pipeline on owned storage, the engine of `kiss_odom.KissICP`.
+//! `Odometry`: the engine of `kiss_odom.KissICP`, `kiss_odom_drive::Driver` behind Python.
 //!
 //! One object per sequence. The settings are those of `kiss-odom run` (its `Settings` as JSON;
-//! `kiss_odom.config` builds them from kiss-icp's configs, dicts and `config.toml` files), so
-//! the same frames give the same poses, bit for bit, as `run`. The frame call copies the points out of numpy, then registers, deskews and
-//! downsamples with the GIL released.
+//! `kiss_odom.config` builds them from kiss-icp's configs, dicts and `config.toml` files), and
+//! the frames go through the same driver as `run`'s, so the same frames give the same poses,
+//! bit for bit, and the map grows as `run`'s does. The frame call copies the points out of
+//! numpy, then registers, deskews and downsamples with the GIL released.
 
-use crate::convert::{self, narrow, Numpy};
-use kiss_odom_core::{
-    Exact, Flag, FrameError, FrameReport, GyroPrior, ImuSample, Odometry as Core, PointCodec,
-    Prior, Quantized, Real, StampProblem,
-};
-use kiss_odom_drive::pool::Pool;
-use kiss_odom_drive::settings::{PresetName, Scalar, Settings, Storage};
-use kiss_odom_drive::widen::{widen, widen_report};
-use nalgebra::Matrix4;
+use crate::convert;
+use kiss_odom_core::{Flag, FrameReport, ImuSample, StampProblem};
+use kiss_odom_drive::growth::trim_buffer;
+use kiss_odom_drive::settings::{PresetName, Settings};
+use kiss_odom_drive::{Driver, FrameMeta, Outcome};
+use nalgebra::Isometry3;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-type Owned<T, P> = Core<T, P, Box<[u64]>>;
-
-/// The four builds of the core a configuration can ask for.
-enum Engine {
-    F64Exact(Owned<f64, Exact>),
-    F64Quantized(Owned<f64, Quantized>),
-    F32Exact(Owned<f32, Exact>),
-    F32Quantized(Owned<f32, Quantized>),
-}
-
-/// Runs `$body` with `$o` bound to whichever build `$e` holds.
-macro_rules! each {
-    ($e:expr, $o:ident => $body:expr) => {
-        match $e {
-            Engine::F64Exact($o) => $body,
-            Engine::F64Quantized($o) => $body,
-            Engine::F32Exact($o) => $body,
-            Engine::F32Quantized($o) => $body,
-        }
-    };
-}
-
-/// What one frame call gives back besides the deskewed frame, in f64, ready for numpy.
-struct Outcome {
-    source: Vec<[f64; 3]>,
-    /// `None` for an empty scan.
-    report: Option<FrameReport<f64>>,
-}
-
 /// kiss-odom's odometry for one sequence (see `kiss_odom.KissICP` for the documented surface).
 #[pyclass(module = "kiss_odom._native")]
 pub struct Odometry {
-    engine: Engine,
-    pool: Pool,
+    driver: Driver,
     settings: Settings,
     /// The frame's points and its deskewed copy: kept from frame to frame so their memory is
-    /// already mapped (fresh 3 MB buffers cost page faults on every frame), up to
-    /// `scan_points` points each ([`trim`]).
+    /// already mapped (fresh 3 MB buffers cost page faults on every frame), up to the scan
+    /// capacity the run started with (`trim_buffer`).
     input: Vec<[f64; 3]>,
     deskewed: Vec<[f64; 3]>,
-    /// The gyroscope prior (settings `imu.enabled`) in the engine's scalar, and the samples
-    /// `add_imu` gave since the last frame.
-    prior: Option<Gyro>,
+    /// The IMU samples `add_imu` gave since the last frame with timestamps.
     imu: Vec<ImuSample<f64>>,
-}
-
-/// The gyroscope prior in the scalar of the engine.
-enum Gyro {
-    F64(GyroPrior<f64>),
-    F32(GyroPrior<f32>),
-}
-
-/// The prior's step before a frame ending at `end` (s), in `odom`'s scalar.
-fn prior_before<T: Real, P: PointCodec<T>>(
-    prior: &mut GyroPrior<T>,
-    odom: &mut Owned<T, P>,
-    samples: &[ImuSample<f64>],
-    end: f64,
-) -> Prior {
-    let s: Vec<ImuSample<T>> = samples
-        .iter()
-        .map(|s| ImuSample {
-            time: s.time,
-            gyro: s.gyro.map(T::of),
-            accel: s.accel.map(T::of),
-        })
-        .collect();
-    prior.before_frame(odom, &s, end)
-}
-
-fn build<T: Numpy, P: PointCodec<T>>(s: &Settings) -> PyResult<Owned<T, P>> {
-    let config = s.core_config::<T>().map_err(value_error)?;
-    let caps = s.capacities().map_err(value_error)?;
-    Owned::<T, P>::boxed(config, caps).map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 fn value_error(e: anyhow::Error) -> PyErr {
     PyValueError::new_err(kiss_odom_drive::one_line(&e))
-}
-
-impl Odometry {
-    fn from_settings(settings: Settings) -> PyResult<Self> {
-        let engine = match (settings.runtime.scalar, settings.runtime.map_storage) {
-            (Scalar::F64, Storage::Exact) => Engine::F64Exact(build(&settings)?),
-            (Scalar::F64, Storage::Quantized) => Engine::F64Quantized(build(&settings)?),
-            (Scalar::F32, Storage::Exact) => Engine::F32Exact(build(&settings)?),
-            (Scalar::F32, Storage::Quantized) => Engine::F32Quantized(build(&settings)?),
-        };
-        let pool = Pool::new(settings.threads()).map_err(value_error)?;
-        let prior = match settings.runtime.scalar {
-            Scalar::F64 => settings
-                .imu
-                .core()
-                .map_err(value_error)?
-                .map(|c| Gyro::F64(GyroPrior::new(c))),
-            Scalar::F32 => settings
-                .imu
-                .core()
-                .map_err(value_error)?
-                .map(|c| Gyro::F32(GyroPrior::new(c))),
-        };
-        Ok(Self {
-            engine,
-            pool,
-            settings,
-            input: Vec::new(),
-            deskewed: Vec::new(),
-            prior,
-            imu: Vec::new(),
-        })
-    }
-}
-
-/// One frame through the core: register (or, for an empty scan, advance on the
-/// constant-velocity model as `kiss-odom run` and kiss-icp do), then the deskewed frame into
-/// `deskewed`.
-fn one_frame<T: Numpy, P: PointCodec<T>>(
-    odom: &mut Owned<T, P>,
-    pool: &Pool,
-    points: &[[f64; 3]],
-    stamps: Option<&[f64]>,
-    deskewed: &mut Vec<[f64; 3]>,
-) -> Result<Outcome, FrameError> {
-    let pts = T::narrow_points(points);
-    match odom.register_frame_with(pool, &pts[..], stamps) {
-        Ok(r) => {
-            T::fill(deskewed, pts.len(), |out| {
-                odom.deskewed_scan(&pts, stamps, out).kept
-            });
-            Ok(Outcome {
-                source: T::widen_points(odom.source().to_vec()),
-                report: Some(widen_report(&r)),
-            })
-        }
-        Err(FrameError::EmptyScan) => {
-            odom.skip_frame();
-            deskewed.clear();
-            Ok(Outcome {
-                source: Vec::new(),
-                report: None,
-            })
-        }
-        Err(e) => {
-            deskewed.clear();
-            Err(e)
-        }
-    }
-}
-
-/// Gives back the memory of a frame buffer beyond `keep` points (the core reads no more of a
-/// scan), so one huge frame does not hold hundreds of MB until the object goes.
-fn trim(buffer: &mut Vec<[f64; 3]>, keep: usize) {
-    if buffer.capacity() > keep {
-        buffer.clear();
-        buffer.shrink_to(keep);
-    }
 }
 
 fn stamp_problem_name(p: StampProblem) -> &'static str {
@@ -230,44 +88,34 @@ fn report_dict<'py>(
     Ok(d)
 }
 
-fn pose_matrix<T: Real>(p: &kiss_odom_core::Pose<T>) -> Matrix4<f64> {
-    widen(p).to_homogeneous()
+fn matrix_of<'py>(
+    py: Python<'py>,
+    p: &Isometry3<f64>,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    convert::matrix_array(py, &p.to_homogeneous())
 }
 
-fn map_points<T: Real, P: PointCodec<T>>(odom: &Owned<T, P>) -> Vec<[f64; 3]> {
-    let map = odom.map();
-    let mut out = Vec::with_capacity(map.points());
-    map.for_each_point(|_, p| out.push([p.x.wide(), p.y.wide(), p.z.wide()]));
-    out
-}
-
-impl Odometry {
-    /// The gyroscope prior before a frame with `stamps` (its sweep ends at the latest): what it
-    /// did and the samples it had; `None` when the prior is off or the frame has no times.
-    fn prior_before(&mut self, stamps: Option<&[f64]>) -> Option<(Prior, usize)> {
-        self.prior.as_ref()?;
-        let end = stamps?.iter().copied().reduce(f64::max)?;
-        let samples = core::mem::take(&mut self.imu);
-        let prior = match (self.prior.as_mut()?, &mut self.engine) {
-            (Gyro::F64(p), Engine::F64Exact(o)) => prior_before(p, o, &samples, end),
-            (Gyro::F64(p), Engine::F64Quantized(o)) => prior_before(p, o, &samples, end),
-            (Gyro::F32(p), Engine::F32Exact(o)) => prior_before(p, o, &samples, end),
-            (Gyro::F32(p), Engine::F32Quantized(o)) => prior_before(p, o, &samples, end),
-            _ => return None,
-        };
-        Some((prior, samples.len()))
+/// One frame through the driver, with `samples` for the gyroscope prior when the frame has
+/// timestamps (its sweep then ends at the latest); then the deskewed frame into `deskewed`.
+fn one_frame(
+    driver: &mut Driver,
+    points: &[[f64; 3]],
+    stamps: Option<&[f64]>,
+    samples: &[ImuSample<f64>],
+    deskewed: &mut Vec<[f64; 3]>,
+) -> anyhow::Result<Outcome> {
+    let meta = FrameMeta {
+        index: driver.frames() as usize,
+        source: "frame".into(),
+        time: None,
+    };
+    let end = stamps.and_then(|s| s.iter().copied().reduce(f64::max));
+    let outcome = driver.register_with_imu(meta, points, stamps, end, samples)?;
+    match outcome.report() {
+        Some(_) => driver.deskewed_scan_into(points, stamps, deskewed),
+        None => deskewed.clear(),
     }
-
-    /// The gyroscope prior after the frame: ICP's disagreement with it (rad/s), if used.
-    fn prior_after(&mut self) -> Option<f64> {
-        match (self.prior.as_mut()?, &self.engine) {
-            (Gyro::F64(p), Engine::F64Exact(o)) => p.after_frame(o),
-            (Gyro::F64(p), Engine::F64Quantized(o)) => p.after_frame(o),
-            (Gyro::F32(p), Engine::F32Exact(o)) => p.after_frame(o).map(f64::from),
-            (Gyro::F32(p), Engine::F32Quantized(o)) => p.after_frame(o).map(f64::from),
-            _ => None,
-        }
-    }
+    Ok(outcome)
 }
 
 #[pymethods]
@@ -281,7 +129,13 @@ impl Odometry {
         let s: Settings = serde_path_to_error::deserialize(de)
             .map_err(|e| PyValueError::new_err(format!("invalid configuration: {e}")))?;
         s.validate().map_err(value_error)?;
-        Self::from_settings(s)
+        Ok(Self {
+            driver: Driver::new(&s).map_err(value_error)?,
+            settings: s,
+            input: Vec::new(),
+            deskewed: Vec::new(),
+            imu: Vec::new(),
+        })
     }
 
     /// Registers one scan: `(deskewed_frame, source, report)`. The report is a dict; for a
@@ -300,26 +154,32 @@ impl Odometry {
             _ => None,
         }
         .filter(|s| !s.is_empty());
-        let index = self.frames();
-        let prior = self.prior_before(stamps.as_deref());
-        let (engine, pool, points) = (&mut self.engine, &self.pool, &self.input);
-        let deskewed = &mut self.deskewed;
-        let out = py
-            .detach(|| each!(engine, o => one_frame(o, pool, points, stamps.as_deref(), deskewed)))
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let residual = self.prior_after();
-        let report = report_dict(py, out.report.as_ref(), index, self.input.len())?;
-        if let Some((prior, samples)) = prior {
-            report.set_item("imu_prior", prior.name())?;
-            report.set_item("imu_samples", samples)?;
-            report.set_item("gyro_bias", self.gyro_bias())?;
-            report.set_item("imu_residual", residual)?;
+        let index = self.driver.frames();
+        // The samples go to the first frame whose sweep end is known.
+        let samples = match stamps {
+            Some(_) => std::mem::take(&mut self.imu),
+            None => Vec::new(),
+        };
+        let (driver, points, deskewed) = (&mut self.driver, &self.input, &mut self.deskewed);
+        let outcome = py
+            .detach(|| one_frame(driver, points, stamps.as_deref(), &samples, deskewed))
+            .map_err(|e| PyRuntimeError::new_err(kiss_odom_drive::one_line(&e)))?;
+        let report = report_dict(py, outcome.report(), index, self.input.len())?;
+        if let (Some(u), Some(_)) = (outcome.imu, &stamps) {
+            report.set_item("imu_prior", u.prior.name())?;
+            report.set_item("imu_samples", u.samples)?;
+            report.set_item("gyro_bias", u.bias)?;
+            report.set_item("imu_residual", u.residual)?;
         }
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
-        let keep = each!(&self.engine, o => o.capacities().scan_points);
-        trim(&mut self.input, keep);
-        trim(&mut self.deskewed, keep);
-        let source = convert::points_array(py, out.source)?;
+        let keep = self.driver.build().capacities.scan_points;
+        trim_buffer(&mut self.input, keep);
+        trim_buffer(&mut self.deskewed, keep);
+        let source = match outcome.report() {
+            Some(_) => self.driver.source_cloud(),
+            None => Vec::new(),
+        };
+        let source = convert::points_array(py, source)?;
         (deskewed, source, report).into_pyobject(py)
     }
 
@@ -327,7 +187,7 @@ impl Odometry {
     /// on the clock of the frames' timestamps (plus `imu.time_offset`), `gyro` in rad/s and
     /// `accel` in m/s^2, IMU axes. The next frame uses those given since the last one.
     fn add_imu(&mut self, time: f64, gyro: [f64; 3], accel: [f64; 3]) -> PyResult<()> {
-        if self.prior.is_none() {
+        if self.driver.gyro_bias().is_none() {
             return Err(PyValueError::new_err(
                 "add_imu needs the gyroscope prior: settings imu.enabled = true",
             ));
@@ -338,83 +198,72 @@ impl Odometry {
 
     /// The gyroscope prior's bias estimate (rad/s, LiDAR axes), or `None` when it is off.
     fn gyro_bias(&self) -> Option<[f64; 3]> {
-        match self.prior.as_ref()? {
-            Gyro::F64(p) => Some(p.bias()),
-            Gyro::F32(p) => Some(p.bias().map(f64::from)),
-        }
+        self.driver.gyro_bias()
     }
 
     /// The latest pose, 4x4 (kiss-icp's `last_pose`).
     fn last_pose<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-        let m = each!(&self.engine, o => pose_matrix(o.last_pose()));
-        convert::matrix_array(py, &m)
+        matrix_of(py, &self.driver.pose())
     }
 
     /// The constant-velocity model, 4x4 (kiss-icp's `last_delta`).
     fn last_delta<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-        let m = each!(&self.engine, o => pose_matrix(o.last_delta()));
-        convert::matrix_array(py, &m)
+        matrix_of(py, &self.driver.last_delta())
     }
 
     /// Replaces the latest pose (a 4x4 rigid transform).
     fn set_last_pose(&mut self, pose: &Bound<'_, PyAny>) -> PyResult<()> {
         let p = convert::pose(pose, "last_pose")?;
-        each!(&mut self.engine, o => o.set_last_pose(narrow(&p)));
+        self.driver.set_last_pose(&p);
         Ok(())
     }
 
     /// Replaces the constant-velocity model (a 4x4 rigid transform).
     fn set_last_delta(&mut self, delta: &Bound<'_, PyAny>) -> PyResult<()> {
         let p = convert::pose(delta, "last_delta")?;
-        each!(&mut self.engine, o => o.set_last_delta(narrow(&p)));
+        self.driver.set_last_delta(&p);
         Ok(())
     }
 
     /// Every map point (world frame), Nx3.
     fn map_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-        let pts = each!(&self.engine, o => map_points(o));
-        convert::points_array(py, pts)
+        convert::points_array(py, self.driver.map_points())
     }
 
     /// Empties the local map, keeping poses and threshold.
     fn clear_map(&mut self) {
-        each!(&mut self.engine, o => o.clear_map())
+        self.driver.clear_map()
     }
 
     /// Whether the local map is empty.
     fn map_empty(&self) -> bool {
-        each!(&self.engine, o => o.map().is_empty())
+        self.driver.map_is_empty()
     }
 
     /// Back to the state of a new odometry.
     fn reset(&mut self) {
-        each!(&mut self.engine, o => o.reset());
+        self.driver.reset();
         self.imu.clear();
-        match &mut self.prior {
-            Some(Gyro::F64(p)) => p.reset(),
-            Some(Gyro::F32(p)) => p.reset(),
-            None => {}
-        }
     }
 
     /// Frames registered or skipped so far.
     fn frames(&self) -> u64 {
-        each!(&self.engine, o => o.frames())
+        self.driver.frames()
     }
 
     /// The adaptive threshold's current sigma (m).
     fn sigma(&self) -> f64 {
-        each!(&self.engine, o => o.sigma().wide())
+        self.driver.sigma()
     }
 
-    /// Bytes of state, fixed at construction.
+    /// Bytes of state now (the map grows as the sequence needs, unless capacities are given).
     fn state_bytes(&self) -> usize {
-        each!(&self.engine, o => o.state_bytes())
+        self.driver.memory().bytes
     }
 
     /// Largest occupancy of each buffer since start, against its capacity.
     fn high_water<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (hw, c) = each!(&self.engine, o => (o.high_water(), *o.capacities()));
+        let (hw, c) = (self.driver.high_water(), self.driver.memory().capacities);
         let d = PyDict::new(py);
         d.set_item("merge_points", (hw.merge_points, c.merge_points))?;
         d.set_item("source_points", (hw.source_points, c.source_points))?;

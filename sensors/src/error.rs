@@ -56,6 +56,10 @@ pub enum PacketError {
     /// metadata's (`columns_per_frame` columns a turn at its rate): its encoder angles would
     /// be wrong. Give the metadata saved with this recording.
     ColumnRate,
+    /// The packets come from a model whose angles only its unit's calibration file gives
+    /// (Velodyne HDL-64E, VLS-128, VLP-32A/B; Robosense without its DIFOP packet's angles) and
+    /// none was given: give the file (or the DIFOP port). Nothing is decoded until then.
+    NoCalibration,
     /// The packet is older than the sweep being assembled (a late or repeated packet): it is
     /// dropped and counted in `out_of_order`. Nothing to do.
     Late,
@@ -87,6 +91,7 @@ impl core::fmt::Display for PacketError {
                 "column timestamps spaced for another lidar_mode than the metadata's \
                  columns_per_frame"
             }
+            Self::NoCalibration => "a model that needs its calibration file, and none was given",
             Self::Late => "packet older than the sweep being assembled",
         })
     }

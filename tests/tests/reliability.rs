@@ -881,7 +881,9 @@ fn normal_frames_after_any_fault_return_to_normal_accuracy() {
                     r.pose
                 }
                 Err(FrameError::EmptyScan) => odom.skip_frame(),
-                Err(e @ FrameError::Storage) => panic!("{fault:?} frame {k}: {e}"),
+                Err(e @ (FrameError::Storage | FrameError::Full)) => {
+                    panic!("{fault:?} frame {k}: {e}")
+                }
             };
             assert!(finite(&pose), "{fault:?} frame {k}");
             poses.push(pose);

@@ -128,6 +128,11 @@ impl<T: Real> MapState<T> {
         }
     }
 
+    /// Point blocks in use.
+    pub(crate) fn blocks_in_use(&self) -> usize {
+        self.blocks_used
+    }
+
     /// Most voxels ever held.
     pub(crate) fn high_water_voxels(&self) -> usize {
         self.high_voxels

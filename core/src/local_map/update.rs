@@ -64,7 +64,7 @@ impl<'a, T: Real, P: PointCodec<T>> MapMut<'a, T, P> {
         self.st.limit2 = self.st.max_distance * self.st.max_distance;
     }
 
-    fn alloc_block(&mut self) -> Option<u32> {
+    pub(super) fn alloc_block(&mut self) -> Option<u32> {
         let b = self.st.free;
         if b == NONE {
             return None;

@@ -1,9 +1,9 @@
 //! A scan arriving: step 1 (deskew and crop, Sec. III-A) and the first pass of step 2 (the
 //! `alpha v` downsampling, Sec. III-B) run point by point as the scan streams in, so a sweep
 //! never needs a buffer of its own. [`FrameInput::finish`] hands the result to the rest of the
-//! frame ([`super::frame`]).
+//! frame (`steps`).
 
-use super::frame::Received;
+use super::steps::Received;
 use super::Odometry;
 use crate::deskew::{StampProblem, TimeSpan};
 use crate::downsample::Dedup;
@@ -24,9 +24,10 @@ pub struct FrameInput<'o, T: Real, P: PointCodec<T>, S: Storage> {
 }
 
 impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
-    /// A whole scan with optional per-point `stamps`, received at once and deskewed with
-    /// `motion` (the sweep's, end to end).
-    pub(super) fn receive(
+    /// Step 1 (Sec. III-A, Eq. (2)-(4)) for a whole scan with optional per-point `stamps`,
+    /// deskewed with `motion` (the sweep's, end to end), and the first pass of step 2 as its
+    /// points arrive.
+    pub(super) fn deskew(
         &mut self,
         points: &[[T; 3]],
         stamps: Option<&[f64]>,
@@ -43,7 +44,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         let span = span
             .filter(|_| self.config.deskew)
             .map(|(min, max)| TimeSpan::new(min, max));
-        self.begin(span, self.last_delta)
+        self.begin(span, self.motion.delta)
     }
 
     fn begin(
@@ -51,10 +52,10 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         span: Option<Result<TimeSpan, StampProblem>>,
         motion: Pose<T>,
     ) -> FrameInput<'_, T, P, S> {
-        self.deskew_motion = motion;
+        self.sweep.motion = motion;
         let cfg = &self.config;
         let (lo, hi) = (cfg.min_range, cfg.max_range);
-        let pre = Preprocessor::with_span(lo, hi, span, &motion, self.sweep_rotation);
+        let pre = Preprocessor::with_span(lo, hi, span, &motion, self.sweep.rotation);
         let mut scan = Received {
             stamp_problem: pre.stamp_problem(),
             deskews: pre.deskews(),
@@ -62,7 +63,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         };
         // Clears the first pass's grid (scratch only: the last merge cloud stays readable until
         // a point of this scan replaces it).
-        match self.layout.split::<T>(&self.caps, self.storage.as_mut()) {
+        let b = &mut self.buffers;
+        match b.layout.split::<T>(&b.caps, b.storage.as_mut()) {
             Ok(parts) => {
                 let alpha_v = cfg.voxel_size * cfg.alpha;
                 scan.merged = Dedup::new(parts.merge, parts.scratch, alpha_v)
@@ -86,7 +88,12 @@ impl<T: Real, P: PointCodec<T>, S: Storage> FrameInput<'_, T, P, S> {
     /// the report says so.
     pub fn push(&mut self, points: &[[T; 3]], stamps: Option<&[f64]>) {
         let scan = &mut self.scan;
-        let room = self.odom.caps.scan_points.saturating_sub(scan.input);
+        let room = self
+            .odom
+            .buffers
+            .caps
+            .scan_points
+            .saturating_sub(scan.input);
         let used = points.len().min(room);
         scan.dropped.truncated += (points.len() - used) as u32;
         scan.input += used;
@@ -100,7 +107,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> FrameInput<'_, T, P, S> {
             _ => None,
         };
         let odom = &mut *self.odom;
-        let Ok(parts) = odom.layout.split::<T>(&odom.caps, odom.storage.as_mut()) else {
+        let b = &mut odom.buffers;
+        let Ok(parts) = b.layout.split::<T>(&b.caps, b.storage.as_mut()) else {
             scan.storage_lost = true;
             return;
         };
@@ -126,7 +134,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> FrameInput<'_, T, P, S> {
         scan.merged = dedup.finish();
         if scan.kept > 0 {
             // The merge buffer now holds this scan's points, not the last scan's cloud.
-            odom.merge_len = 0;
+            b.merge_len = 0;
         }
     }
 
@@ -138,6 +146,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> FrameInput<'_, T, P, S> {
     /// Registers the scan, running the correspondence search on `exec`. Returns
     /// [`FrameError::EmptyScan`], with the odometry untouched, when no point was usable.
     pub fn finish_with<E: Executor>(self, exec: &E) -> Result<FrameReport<T>, FrameError> {
-        self.odom.register(exec, self.scan)
+        let r = self.odom.register(exec, self.scan, None)?;
+        self.odom.update(r)
     }
 }

@@ -37,7 +37,13 @@ impl Layout {
         let mut c = Carver::new();
         let merge = c.take(cloud_words::<T>(caps.merge_points));
         let source = c.take(cloud_words::<T>(caps.source_points));
-        let scratch = c.take(scratch_words_for(caps.merge_points));
+        // Either downsampling's grid is sized by its output buffer.
+        let largest = if caps.merge_points > caps.source_points {
+            caps.merge_points
+        } else {
+            caps.source_points
+        };
+        let scratch = c.take(scratch_words_for(largest));
         let icp = c.take(work_words::<T>(caps.source_points, caps.plane_terms));
         let map = MapLayout::carve(
             caps.map_voxels,

@@ -72,12 +72,14 @@ pub struct SensorArgs {
     /// Ouster metadata JSON (as `ouster-cli` saves it beside a recording); Ouster needs it.
     #[arg(long)]
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV); without one,
-    /// the model's published angles (the QT128, Pandar128 and OT128 have none: they need it).
+    /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV), Robosense
+    /// angle.csv; without one, the model's published angles (the QT128, Pandar128, OT128,
+    /// HDL-64E, VLS-128 and VLP-32A/B have none: they need it; a Robosense takes the
+    /// recording's DIFOP packet).
     #[arg(long)]
     pub calibration: Option<PathBuf>,
     /// UDP port of the sensor's data packets [default: Velodyne and Hesai 2368, Ouster the
-    /// metadata's lidar port, else 7502, Livox 56001].
+    /// metadata's lidar port, else 7502, Livox 56001, Robosense 6699].
     #[arg(long)]
     pub port: Option<u16>,
     /// Velodyne and Hesai: azimuth (degrees) where one sweep ends and the next begins [default: a full
@@ -272,9 +274,15 @@ pub struct CoreArgs {
     /// bytes a point].
     #[arg(long, value_enum)]
     pub storage: Option<Storage>,
-    /// Capacity preset of the core's buffers [default: full].
+    /// Fixed capacities of the core's buffers, as a board has them: they never grow, and a
+    /// full map gives up its farthest voxels [default: none: sized from the configuration,
+    /// growing as the run needs up to --memory-limit].
     #[arg(long, value_enum)]
     pub capacities: Option<Preset>,
+    /// Bytes the core's state may grow to without --capacities (e.g. 512M, 8G; K, M, G, T are
+    /// powers of 1024) [default: a quarter of the machine's memory].
+    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
+    pub memory_limit: Option<u64>,
     /// Worker threads for the correspondence search, 0 = all cores, at most the machine's
     /// cores; results are identical for any count [default: the settings' (all cores)].
     #[arg(long)]
@@ -415,7 +423,39 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     if let Some(t) = c.threads {
         s.runtime.threads = t;
     }
+    if let Some(m) = c.memory_limit {
+        if !s.grows() {
+            bail!("--memory-limit: fixed capacities never grow (leave out --capacities)");
+        }
+        s.runtime.memory_limit = Some(m);
+    }
     s.validate()
+}
+
+/// A size in bytes: a number with an optional K, M, G or T (powers of 1024; `B`, `iB` and
+/// lower case accepted).
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let t = t
+        .strip_suffix("iB")
+        .or_else(|| t.strip_suffix('B'))
+        .unwrap_or(t);
+    let (digits, shift) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
+        Some('K') => (&t[..t.len() - 1], 10),
+        Some('M') => (&t[..t.len() - 1], 20),
+        Some('G') => (&t[..t.len() - 1], 30),
+        Some('T') => (&t[..t.len() - 1], 40),
+        _ => (t, 0),
+    };
+    let n: f64 = digits
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text}: not a size (e.g. 512M, 8G)"))?;
+    let bytes = n * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("{text}: not a size of at least one byte"));
+    }
+    Ok(bytes as u64)
 }
 
 /// Refuses settings the reference would not share: it takes only the range, voxel size and
@@ -520,7 +560,16 @@ mod tests {
         )
         .unwrap();
         assert_eq!((s.data.max_range, s.runtime.threads), (50.0, 2));
+        assert_eq!(parse_size("512M"), Ok(512 << 20));
+        assert_eq!(parse_size("1.5GiB"), Ok(3 << 29));
+        assert_eq!(parse_size("4096"), Ok(4096));
+        assert!(parse_size("lots").is_err() && parse_size("0").is_err());
+        let s = resolve(&["--memory-limit", "2G"], Some(1)).unwrap();
+        assert_eq!(s.memory_limit(), Some(2 << 30));
+        let e = resolve(&["--capacities", "small", "--memory-limit", "2G"], Some(1));
+        assert!(format!("{:#}", e.unwrap_err()).contains("never grow"));
         let s = resolve(&["--no-deskew", "--capacities", "small"], Some(1)).unwrap();
+        assert_eq!(s.memory_limit(), None);
         assert!(!s.data.deskew && s.runtime.threads == 1);
         assert_eq!(s.capacities, Capacities::SMALL.into());
         let s = resolve(&[], None).unwrap();

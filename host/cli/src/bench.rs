@@ -167,7 +167,7 @@ fn run_ours(settings: &Settings, frames: &Preloaded) -> Result<OurRun> {
 
 /// Our memory figures after a run: fixed, and what capacities at the high-water marks need.
 fn memory(driver: &Driver, max_input_points: usize) -> Memory {
-    let caps = driver.build().capacities;
+    let caps = driver.memory().capacities;
     let stored = driver.build().map_point_bytes;
     let hw = driver.high_water();
     let hw_caps = Capacities {
@@ -179,7 +179,7 @@ fn memory(driver: &Driver, max_input_points: usize) -> Memory {
         plane_terms: caps.plane_terms,
     };
     Memory {
-        state_bytes: driver.build().state_bytes,
+        state_bytes: driver.memory().bytes,
         state_high_water_bytes: hw_caps
             .validate()
             .ok()

@@ -37,6 +37,9 @@ pub enum Command {
     Crosscheck(crate::crosscheck::CrosscheckArgs),
     /// Time kiss-odom against the reference on preloaded frames.
     Bench(crate::bench::BenchArgs),
+    /// The smallest fixed capacities that held a run, and their bytes of state on each target
+    /// (to size firmware from a recording).
+    Size(crate::size::SizeArgs),
     /// ROS 2 node over DDS: PointCloud2 in, odometry and /tf out (or --play a recording).
     #[cfg(feature = "ros2")]
     Ros2(crate::ros2::Ros2Args),
@@ -71,6 +74,7 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
         Command::Simulate(a) => crate::simulate::execute(&a),
         Command::Crosscheck(a) => crate::crosscheck::execute(&a, err),
         Command::Bench(a) => crate::bench::execute(&a, err),
+        Command::Size(a) => crate::size::execute(&a, err),
         #[cfg(feature = "ros2")]
         Command::Ros2(a) => crate::ros2::execute(&a, err),
     };

@@ -24,5 +24,6 @@ pub mod replay;
 pub mod ros2;
 pub mod run;
 pub mod simulate;
+pub mod size;
 pub mod stats;
 pub mod viz;

@@ -311,8 +311,12 @@ fn frame_loop(
         if let Some(w) = driver.sparse_map_warning(&outcome) {
             warn(record, &bar, &w);
         }
+        // Growth stopped by the memory limit warns once, before what the fixed rule then does.
+        if let Some(w) = driver.growth_warning() {
+            warn(record, &bar, &w);
+        }
         // A capacity rule that can change a pose warns on its first frame.
-        let full = capacity.check(&outcome);
+        let full = capacity.check(&outcome, &driver.memory().capacities);
         for w in &full {
             warn(record, &bar, w);
         }

@@ -6,8 +6,8 @@ use crate::outcome::Outcome;
 use kiss_odom_core::{Capacities, Flag, FrameReport};
 
 /// What to tell a user whose buffers are too small.
-const REMEDY: &str = "give larger --capacities (or none: they are then sized from the \
-                      configuration), a larger --voxel-size or a smaller --max-range";
+const REMEDY: &str = "give larger --capacities (or none: they then grow with the run up to \
+                      --memory-limit), a larger --voxel-size or a smaller --max-range";
 
 /// The rules already warned about in this run, for a core with those capacities and range.
 #[derive(Clone, Copy, Debug)]
@@ -33,8 +33,10 @@ impl CapacityWarnings {
         }
     }
 
-    /// The warnings `outcome` raises for the first time in this run.
-    pub fn check(&mut self, outcome: &Outcome) -> Vec<String> {
+    /// The warnings `outcome` raises for the first time in this run, whose core has the
+    /// capacities `caps` now (they grow on a host: see `growth`).
+    pub fn check(&mut self, outcome: &Outcome, caps: &Capacities) -> Vec<String> {
+        self.caps = *caps;
         let (caps, max_range) = (self.caps, self.max_range);
         let Some(r) = outcome.report() else {
             return Vec::new();

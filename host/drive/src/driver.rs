@@ -18,12 +18,14 @@
 //! [`Driver::deskewed_scan`] give its clouds for a viewer or a published message.
 
 use crate::engine::{self, Batch, Call, Engine};
+use crate::growth::{Growth, StateMemory};
 use crate::outcome::{FrameMeta, ImuUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
 use kiss_odom_core::{
-    Capacities, FrameError, HighWater, Prior, SPARSE_BETA, SPARSE_PLANE_KERNEL_SCALE,
+    Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior, SPARSE_BETA,
+    SPARSE_PLANE_KERNEL_SCALE,
 };
 use kiss_odom_io::{Frame, Item};
 use nalgebra::Isometry3;
@@ -65,6 +67,7 @@ pub struct Driver {
     on_empty: OnEmpty,
     pool: Pool,
     build: Build,
+    growth: Growth,
 }
 
 /// What a driver runs, fixed when it is made.
@@ -76,9 +79,9 @@ pub struct Build {
     pub scalar: Scalar,
     /// The map point storage.
     pub storage: Storage,
-    /// The core's capacities.
+    /// The core's capacities at the start (see [`Driver::memory`] for those in use).
     pub capacities: Capacities,
-    /// Bytes of the core's state.
+    /// Bytes of the core's state at the start.
     pub state_bytes: usize,
     /// Bytes of one stored map point.
     pub map_point_bytes: usize,
@@ -89,7 +92,8 @@ impl Driver {
     /// as [`Settings::threads`] resolves them.
     pub fn new(settings: &Settings) -> Result<Self> {
         let threads = settings.threads();
-        let engine = engine::build(settings)?;
+        let limit = settings.memory_limit();
+        let engine = engine::build(settings, limit.is_some())?;
         let build = Build {
             threads,
             scalar: settings.runtime.scalar,
@@ -99,6 +103,7 @@ impl Driver {
             map_point_bytes: engine.map_point_bytes(),
         };
         Ok(Self {
+            growth: Growth::new(build.capacities, build.state_bytes, limit),
             engine,
             on_empty: OnEmpty::Advance,
             pool: Pool::new(threads)?,
@@ -115,20 +120,42 @@ impl Driver {
     /// samples predict and deskew it, its sweep ending (on the IMU's clock, the sensor's) at
     /// [`Frame::sweep_end`].
     pub fn register(&mut self, frame: &Frame) -> Result<Outcome> {
+        let meta = FrameMeta::of(frame);
         let stamps = frame.stamps.as_deref();
+        if self.engine.imu_bias().is_none() {
+            return self.register_points(meta, &frame.points, stamps);
+        }
         // Only with the prior on: the sweep's end costs a pass over the stamps of a folder's
         // frame.
-        let prior = match self.engine.imu_bias() {
-            Some(_) => frame
-                .sweep_end()
-                .and_then(|end| self.engine.prior_before(&frame.imu, end)),
-            None => None,
-        };
-        let mut outcome = self.register_points(FrameMeta::of(frame), &frame.points, stamps)?;
+        let samples: Vec<CoreImu<f64>> = frame
+            .imu
+            .iter()
+            .map(|s| CoreImu {
+                time: s.seconds(),
+                gyro: s.gyro,
+                accel: s.accel,
+            })
+            .collect();
+        self.register_with_imu(meta, &frame.points, stamps, frame.sweep_end(), &samples)
+    }
+
+    /// [`Self::register_points`] with the IMU samples that came with the scan, for the
+    /// gyroscope prior (`[imu]`), whose sweep ends at `end` (s, on the IMU's clock; `None`:
+    /// not known, and the prior does not act).
+    pub fn register_with_imu(
+        &mut self,
+        meta: FrameMeta,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        end: Option<f64>,
+        samples: &[CoreImu<f64>],
+    ) -> Result<Outcome> {
+        let prior = end.and_then(|end| self.engine.prior_before(samples, end));
+        let mut outcome = self.register_points(meta, points, stamps)?;
         let residual = self.engine.prior_after();
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
             prior: prior.unwrap_or(Prior::NoSamples),
-            samples: frame.imu.len(),
+            samples: samples.len(),
             bias,
             residual,
         });
@@ -144,8 +171,12 @@ impl Driver {
         stamps: Option<&[f64]>,
     ) -> Result<Outcome> {
         let sigma = self.engine.sigma();
-        let call = self.engine.register(&self.pool, points, stamps);
-        self.conclude(meta, sigma, call)
+        let moves = self.growth.memory.moves;
+        self.growth.frame = meta.index;
+        let call = self
+            .engine
+            .register(&self.pool, points, stamps, &mut self.growth);
+        self.conclude(meta, sigma, call, moves)
     }
 
     /// A frame that could not be read (`reason` names the file): the pose advances on the
@@ -163,6 +194,7 @@ impl Driver {
             input_points: 0,
             sweep: self.engine.sweep_motions(),
             imu: None,
+            moves: 0,
         }
     }
 
@@ -215,18 +247,24 @@ impl Driver {
             );
         }
         let sigma = self.engine.sigma();
-        let call = self
-            .engine
-            .register_batch(&self.pool, &frames.batch, k, stamps.as_deref());
+        let moves = self.growth.memory.moves;
+        self.growth.frame = meta.index;
+        let call = self.engine.register_batch(
+            &self.pool,
+            &frames.batch,
+            k,
+            stamps.as_deref(),
+            &mut self.growth,
+        );
         let Some(call) = call else {
             bail!("preloaded frame {k}: not in this driver's scalar");
         };
-        self.conclude(meta.clone(), sigma, call)
+        self.conclude(meta.clone(), sigma, call, moves)
     }
 
-    /// The outcome of a core call; an empty scan advances on the constant-velocity model
-    /// unless [`OnEmpty::Ignore`] was chosen.
-    fn conclude(&mut self, meta: FrameMeta, sigma: f64, call: Call) -> Result<Outcome> {
+    /// The outcome of a core call (`moves` before it); an empty scan advances on the
+    /// constant-velocity model unless [`OnEmpty::Ignore`] was chosen.
+    fn conclude(&mut self, meta: FrameMeta, sigma: f64, call: Call, moves: u64) -> Result<Outcome> {
         let step = match call.result {
             Ok(report) => Step::Registered(report),
             Err(FrameError::EmptyScan) => {
@@ -235,7 +273,7 @@ impl Driver {
                 }
                 Step::Empty
             }
-            Err(e @ FrameError::Storage) => bail!("{}: {e}", meta.source),
+            Err(e @ (FrameError::Storage | FrameError::Full)) => bail!("{}: {e}", meta.source),
         };
         Ok(Outcome {
             meta,
@@ -247,6 +285,7 @@ impl Driver {
             input_points: call.input_points,
             sweep: self.engine.sweep_motions(),
             imu: None,
+            moves: (self.growth.memory.moves - moves) as u32,
         })
     }
 
@@ -262,6 +301,15 @@ impl Driver {
     /// What this driver runs: fixed at construction.
     pub fn build(&self) -> Build {
         self.build
+    }
+    /// What the core's state used: bytes at the start, now and at the peak, the moves into
+    /// larger storage and the capacities in use.
+    pub fn memory(&self) -> StateMemory {
+        self.growth.memory
+    }
+    /// The warning that the core's state reached its memory limit, the first time it did.
+    pub fn growth_warning(&mut self) -> Option<String> {
+        self.growth.warning()
     }
     /// High-water marks of the core's buffers since start.
     pub fn high_water(&self) -> HighWater {
@@ -324,8 +372,53 @@ impl Driver {
     }
     /// The last registered frame's points deskewed and cropped (sensor frame); give it the
     /// points and stamps that frame had.
-    pub fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
-        self.engine.deskewed_scan(points, stamps)
+    pub fn deskewed_scan(&mut self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
+        let mut out = Vec::new();
+        self.engine.deskewed_scan_into(points, stamps, &mut out);
+        out
+    }
+    /// [`Self::deskewed_scan`] into `out`, whose memory is reused.
+    pub fn deskewed_scan_into(
+        &mut self,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut Vec<[f64; 3]>,
+    ) {
+        self.engine.deskewed_scan_into(points, stamps, out);
+    }
+    /// The latest pose (sensor at the end of the last sweep, in the frame of the first).
+    pub fn pose(&self) -> Isometry3<f64> {
+        self.engine.pose()
+    }
+    /// Replaces the latest pose, from which the next scan is predicted (kiss-icp's assignable
+    /// `last_pose`); `false` (nothing changes) if it is not finite.
+    pub fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool {
+        self.engine.set_last_pose(pose)
+    }
+    /// Replaces the constant-velocity model (kiss-icp's assignable `last_delta`); `false`
+    /// (nothing changes) if it is not finite.
+    pub fn set_last_delta(&mut self, delta: &Isometry3<f64>) -> bool {
+        self.engine.set_last_delta(delta)
+    }
+    /// Empties the local map, keeping the poses and the threshold.
+    pub fn clear_map(&mut self) {
+        self.engine.clear_map();
+    }
+    /// Whether the local map holds no voxel.
+    pub fn map_is_empty(&self) -> bool {
+        self.engine.map_is_empty()
+    }
+    /// Frames registered or skipped so far.
+    pub fn frames(&self) -> u64 {
+        self.engine.frames()
+    }
+    /// The adaptive threshold's sigma for the next frame (m).
+    pub fn sigma(&self) -> f64 {
+        self.engine.sigma()
+    }
+    /// The gyroscope prior's bias estimate (rad/s, LiDAR axes), if it is on.
+    pub fn gyro_bias(&self) -> Option<[f64; 3]> {
+        self.engine.imu_bias()
     }
 }
 

@@ -5,6 +5,7 @@
 //! Everything crosses the trait in `f64`: points are converted into a buffer the core reads
 //! (outside the timed call), reports and poses are widened.
 
+use crate::growth::{trim_buffer, Growth};
 use crate::outcome::SweepMotions;
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
@@ -12,10 +13,9 @@ use crate::widen::{widen, widen_report};
 use anyhow::Result;
 use cpu_time::ThreadTime;
 use kiss_odom_core::{
-    Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, Odometry, PointCodec, Prior,
-    Quantized, Real,
+    Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, ImuSample as CoreImu,
+    Odometry, PointCodec, Prior, Quantized, Real, WhenFull,
 };
-use kiss_odom_io::imu::ImuSample;
 use nalgebra::Isometry3;
 use std::time::{Duration, Instant};
 
@@ -75,9 +75,15 @@ host_scalar!(f64, F64);
 host_scalar!(f32, F32);
 
 /// One build of the core, whatever its scalar and map storage.
-pub(crate) trait Engine: Send {
-    /// Registers a whole scan.
-    fn register(&mut self, pool: &Pool, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Call;
+pub(crate) trait Engine: Send + Sync {
+    /// Registers a whole scan, growing the storage as `growth` allows.
+    fn register(
+        &mut self,
+        pool: &Pool,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        growth: &mut Growth,
+    ) -> Call;
     /// Registers frame `k` of a batch this engine made; `None` if it is not one.
     fn register_batch(
         &mut self,
@@ -85,6 +91,7 @@ pub(crate) trait Engine: Send {
         batch: &Batch,
         k: usize,
         stamps: Option<&[f64]>,
+        growth: &mut Growth,
     ) -> Option<Call>;
     /// Converts frames to this engine's scalar.
     fn batch(&self, frames: &mut dyn Iterator<Item = &[[f64; 3]]>) -> Batch;
@@ -107,7 +114,7 @@ pub(crate) trait Engine: Send {
     fn map_in_use(&self) -> (f64, u32, bool);
     /// Capacities in use.
     fn capacities(&self) -> Capacities;
-    /// Bytes of state, fixed at construction.
+    /// Bytes of state in use.
     fn state_bytes(&self) -> usize;
     /// Bytes of state this build would need with capacities `caps`.
     fn state_bytes_for(&self, caps: &Capacities) -> usize;
@@ -119,10 +126,25 @@ pub(crate) trait Engine: Send {
     fn merge_cloud(&self) -> Vec<[f64; 3]>;
     /// The local map's points (world frame).
     fn map_points(&self) -> Vec<[f64; 3]>;
-    /// `points` deskewed and cropped as the last frame was.
-    fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]>;
+    /// `points` deskewed and cropped as the last frame was, into `out`.
+    fn deskewed_scan_into(
+        &mut self,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut Vec<[f64; 3]>,
+    );
+    /// Replaces the latest pose; `false` (nothing changes) if it is not finite.
+    fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool;
+    /// Replaces the constant-velocity model; `false` (nothing changes) if it is not finite.
+    fn set_last_delta(&mut self, delta: &Isometry3<f64>) -> bool;
+    /// Empties the local map, keeping poses and threshold.
+    fn clear_map(&mut self);
+    /// Whether the local map holds no voxel.
+    fn map_is_empty(&self) -> bool;
+    /// Frames registered or skipped so far.
+    fn frames(&self) -> u64;
     /// The gyroscope prior, if on, before a frame whose sweep ends at `end` (s): what it did.
-    fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior>;
+    fn prior_before(&mut self, samples: &[CoreImu<f64>], end: f64) -> Option<Prior>;
     /// The gyroscope prior after the frame (its bias learns from the registered rotation):
     /// how far ICP's rotation rate was from the gyroscope's, rad/s, if the frame used it.
     fn prior_after(&mut self) -> Option<f64>;
@@ -131,13 +153,18 @@ pub(crate) trait Engine: Send {
 }
 
 /// The build `settings.runtime` asks for.
-pub(crate) fn build(settings: &Settings) -> Result<Box<dyn Engine>> {
+/// The build `settings.runtime` asks for, refusing full frames if its storage is to grow.
+pub(crate) fn build(settings: &Settings, grows: bool) -> Result<Box<dyn Engine>> {
     Ok(
         match (settings.runtime.scalar, settings.runtime.map_storage) {
-            (Scalar::F64, Storage::Exact) => Box::new(Core::<f64, Exact>::new(settings)?),
-            (Scalar::F64, Storage::Quantized) => Box::new(Core::<f64, Quantized>::new(settings)?),
-            (Scalar::F32, Storage::Exact) => Box::new(Core::<f32, Exact>::new(settings)?),
-            (Scalar::F32, Storage::Quantized) => Box::new(Core::<f32, Quantized>::new(settings)?),
+            (Scalar::F64, Storage::Exact) => Box::new(Core::<f64, Exact>::new(settings, grows)?),
+            (Scalar::F64, Storage::Quantized) => {
+                Box::new(Core::<f64, Quantized>::new(settings, grows)?)
+            }
+            (Scalar::F32, Storage::Exact) => Box::new(Core::<f32, Exact>::new(settings, grows)?),
+            (Scalar::F32, Storage::Quantized) => {
+                Box::new(Core::<f32, Quantized>::new(settings, grows)?)
+            }
         },
     )
 }
@@ -146,18 +173,28 @@ pub(crate) fn build(settings: &Settings) -> Result<Box<dyn Engine>> {
 /// gyroscope prior with its samples in that scalar.
 struct Core<T: Real, P: PointCodec<T>> {
     odom: Odometry<T, P, Box<[u64]>>,
+    /// The last frame's points in `T`, and its deskewed copy: kept from frame to frame, so
+    /// their memory is already mapped.
     points: Vec<[T; 3]>,
+    deskewed: Vec<[T; 3]>,
+    /// Points those buffers keep room for: the scan capacity the run started with.
+    keep: usize,
     prior: Option<GyroPrior<T>>,
     imu: Vec<kiss_odom_core::ImuSample<T>>,
 }
 
 impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
-    fn new(settings: &Settings) -> Result<Self> {
-        let odom = Odometry::boxed(settings.core_config::<T>()?, settings.capacities()?)
+    fn new(settings: &Settings, grows: bool) -> Result<Self> {
+        let mut odom = Odometry::boxed(settings.core_config::<T>()?, settings.capacities()?)
             .map_err(|e| anyhow::anyhow!("cannot build the odometry: {e}"))?;
+        if grows {
+            odom.set_when_full(WhenFull::Refuse);
+        }
         Ok(Self {
+            keep: odom.capacities().scan_points,
             odom,
             points: Vec::new(),
+            deskewed: Vec::new(),
             prior: settings.imu.core::<T>()?.map(GyroPrior::new),
             imu: Vec::new(),
         })
@@ -173,11 +210,74 @@ fn narrow<T: Real>(points: &[[f64; 3]], out: &mut Vec<[T; 3]>) {
     );
 }
 
+/// An `f64` pose in `T`, entry by entry (the core renormalises what it is given).
+fn narrow_pose<T: Real>(p: &Isometry3<f64>) -> kiss_odom_core::Pose<T> {
+    let (q, t) = (p.rotation.coords, p.translation.vector);
+    kiss_odom_core::Pose::from_parts(
+        nalgebra::Translation3::new(T::of(t.x), T::of(t.y), T::of(t.z)),
+        nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+            T::of(q.w),
+            T::of(q.x),
+            T::of(q.y),
+            T::of(q.z),
+        )),
+    )
+}
+
 fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
     points
         .iter()
         .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()])
         .collect()
+}
+
+/// Bytes of state of a `T`, `P` odometry with capacities `caps`.
+pub(crate) fn state_bytes_for<T: Real, P: PointCodec<T>>(caps: &Capacities) -> usize {
+    caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<T, P>>()
+}
+
+/// Zeroed words for capacities `caps`, or `None` if the allocator has not that much.
+fn words_for<T: Real, P: PointCodec<T>>(caps: &Capacities) -> Option<Box<[u64]>> {
+    let n = caps.arena_words::<T, P>();
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).ok()?;
+    v.resize(n, 0u64);
+    Some(v.into_boxed_slice())
+}
+
+/// Registers `pts`; a frame the core refuses as too large for its storage moves the odometry
+/// into larger storage, as `growth` allows, and is registered again. Where growth stops (its
+/// limit, or an allocator that has no more), the core's fixed-storage rule takes over.
+fn register_growing<T: Real, P: PointCodec<T>>(
+    odom: &mut Odometry<T, P, Box<[u64]>>,
+    pool: &Pool,
+    pts: &[[T; 3]],
+    stamps: Option<&[f64]>,
+    growth: &mut Growth,
+) -> Result<FrameReport<T>, FrameError> {
+    loop {
+        match odom.register_frame_with(pool, pts, stamps) {
+            Err(FrameError::Full) => {
+                let caps = *odom.capacities();
+                let next = growth.next(&caps, &odom.room_needed(), state_bytes_for::<T, P>);
+                let moved = next.and_then(|next| {
+                    let words = words_for::<T, P>(&next)?;
+                    odom.rehome(next, words).ok()
+                });
+                match moved {
+                    Some(o) => {
+                        *odom = o;
+                        growth.moved(*odom.capacities(), odom.state_bytes());
+                    }
+                    None => {
+                        growth.cap();
+                        odom.set_when_full(WhenFull::Drop);
+                    }
+                }
+            }
+            other => return other,
+        }
+    }
 }
 
 /// Times the core's call on already converted points.
@@ -194,10 +294,21 @@ fn timed<T: Real>(call: impl FnOnce() -> Result<FrameReport<T>, FrameError>, n: 
 }
 
 impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
-    fn register(&mut self, pool: &Pool, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Call {
+    fn register(
+        &mut self,
+        pool: &Pool,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        growth: &mut Growth,
+    ) -> Call {
         narrow(points, &mut self.points);
         let (odom, pts) = (&mut self.odom, &self.points);
-        timed(|| odom.register_frame_with(pool, pts, stamps), pts.len())
+        let call = timed(
+            || register_growing(odom, pool, pts, stamps, growth),
+            pts.len(),
+        );
+        trim_buffer(&mut self.points, self.keep);
+        call
     }
 
     fn register_batch(
@@ -206,11 +317,12 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         batch: &Batch,
         k: usize,
         stamps: Option<&[f64]>,
+        growth: &mut Growth,
     ) -> Option<Call> {
         let pts = T::frames(batch)?.get(k)?;
         let odom = &mut self.odom;
         Some(timed(
-            || odom.register_frame_with(pool, pts, stamps),
+            || register_growing(odom, pool, pts, stamps, growth),
             pts.len(),
         ))
     }
@@ -266,7 +378,7 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         self.odom.state_bytes()
     }
     fn state_bytes_for(&self, caps: &Capacities) -> usize {
-        caps.arena_words::<T, P>() * 8 + core::mem::size_of::<Odometry<T, P>>()
+        state_bytes_for::<T, P>(caps)
     }
     fn map_point_bytes(&self) -> usize {
         core::mem::size_of::<P::Stored>()
@@ -284,23 +396,49 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
             .for_each_point(|_, p| out.push([p.x.wide(), p.y.wide(), p.z.wide()]));
         out
     }
-    fn deskewed_scan(&self, points: &[[f64; 3]], stamps: Option<&[f64]>) -> Vec<[f64; 3]> {
-        let mut pts = Vec::new();
-        narrow(points, &mut pts);
-        let mut out = vec![[T::zero(); 3]; pts.len()];
-        let kept = self.odom.deskewed_scan(&pts, stamps, &mut out);
-        out.truncate(kept.kept);
-        wide(&out)
+    fn deskewed_scan_into(
+        &mut self,
+        points: &[[f64; 3]],
+        stamps: Option<&[f64]>,
+        out: &mut Vec<[f64; 3]>,
+    ) {
+        narrow(points, &mut self.points);
+        let buf = &mut self.deskewed;
+        buf.clear();
+        buf.resize(self.points.len(), [T::zero(); 3]);
+        let kept = self.odom.deskewed_scan(&self.points, stamps, buf).kept;
+        out.clear();
+        out.extend(
+            buf[..kept]
+                .iter()
+                .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
+        );
+        trim_buffer(&mut self.points, self.keep);
+        trim_buffer(&mut self.deskewed, self.keep);
     }
-    fn prior_before(&mut self, samples: &[ImuSample], end: f64) -> Option<Prior> {
+    fn set_last_pose(&mut self, pose: &Isometry3<f64>) -> bool {
+        self.odom.set_last_pose(narrow_pose(pose))
+    }
+    fn set_last_delta(&mut self, delta: &Isometry3<f64>) -> bool {
+        self.odom.set_last_delta(narrow_pose(delta))
+    }
+    fn clear_map(&mut self) {
+        self.odom.clear_map();
+    }
+    fn map_is_empty(&self) -> bool {
+        self.odom.map().is_empty()
+    }
+    fn frames(&self) -> u64 {
+        self.odom.frames()
+    }
+    fn prior_before(&mut self, samples: &[CoreImu<f64>], end: f64) -> Option<Prior> {
         let prior = self.prior.as_mut()?;
         self.imu.clear();
-        self.imu
-            .extend(samples.iter().map(|s| kiss_odom_core::ImuSample {
-                time: s.seconds(),
-                gyro: s.gyro.map(T::of),
-                accel: s.accel.map(T::of),
-            }));
+        self.imu.extend(samples.iter().map(|s| CoreImu {
+            time: s.time,
+            gyro: s.gyro.map(T::of),
+            accel: s.accel.map(T::of),
+        }));
         Some(prior.before_frame(&mut self.odom, &self.imu, end))
     }
     fn prior_after(&mut self) -> Option<f64> {

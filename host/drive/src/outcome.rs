@@ -81,6 +81,8 @@ pub struct Outcome {
     pub sweep: SweepMotions,
     /// What the gyroscope prior did, when it is on.
     pub imu: Option<ImuUse>,
+    /// Moves of the core's state into larger storage this frame took (see `growth`).
+    pub moves: u32,
 }
 
 /// What the gyroscope prior did for a frame.

@@ -220,6 +220,10 @@ pub struct Runtime {
     /// Worker threads for the correspondence search (0 = all cores). Results do not depend on
     /// it.
     pub threads: usize,
+    /// Bytes the core's state may grow to when no capacity is given (see
+    /// `kiss_odom_drive::growth`); absent: a quarter of the machine's memory.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub memory_limit: Option<u64>,
 }
 
 /// All settings of a run.
@@ -317,6 +321,7 @@ impl Default for Runtime {
             scalar: Scalar::F64,
             map_storage: Storage::Exact,
             threads: 0,
+            memory_limit: None,
         }
     }
 }
@@ -511,13 +516,32 @@ impl Settings {
         self
     }
 
-    /// The TOML text of these settings, with the voxel size and capacities made explicit (an
-    /// omitted kernel scale stays omitted).
+    /// The TOML text of these settings, with the voxel size made explicit, and the capacities
+    /// too when they were given (left out, they grow: see [`Self::memory_limit`]); an omitted
+    /// kernel scale stays omitted.
     pub fn to_toml(&self) -> Result<String> {
         let mut s = self.clone();
         s.mapping.voxel_size = Some(self.voxel_size());
-        s.capacities = self.caps().into();
+        if !self.grows() {
+            s.capacities = self.caps().into();
+        }
         Ok(toml::to_string(&s)?)
+    }
+
+    /// Whether the core's storage grows: no capacity is given, so they start sized from the
+    /// configuration and a frame that would overfill one moves the core into larger storage.
+    pub fn grows(&self) -> bool {
+        self.capacities == Caps::default()
+    }
+
+    /// The bytes the core's state may grow to: `[runtime] memory_limit`, or a quarter of the
+    /// machine's memory; `None` when capacities are given, which never grow.
+    pub fn memory_limit(&self) -> Option<u64> {
+        self.grows().then(|| {
+            self.runtime
+                .memory_limit
+                .unwrap_or_else(crate::growth::default_limit)
+        })
     }
 
     /// `v`: explicit, or the preset's: `max_range / 100` as in the paper (`accurate`:

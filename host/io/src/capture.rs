@@ -9,5 +9,6 @@ pub mod hesai_calib;
 pub mod ouster_meta;
 pub mod pcap;
 pub mod reassembly;
+pub mod robosense_calib;
 pub mod sweeps;
 pub mod velodyne_calib;

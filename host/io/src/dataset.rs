@@ -273,6 +273,14 @@ pub enum SensorKind {
     Vlp32c,
     /// Velodyne HDL-32E.
     Hdl32e,
+    /// Velodyne VLP-32A or VLP-32B (needs its calibration file, --calibration).
+    Vlp32ab,
+    /// Velodyne HDL-64E S2 (needs its calibration file, --calibration).
+    Hdl64eS2,
+    /// Velodyne HDL-64E S3 (needs its calibration file, --calibration).
+    Hdl64eS3,
+    /// Velodyne VLS-128 / Alpha Prime (needs its calibration file, --calibration).
+    Vls128,
     /// Ouster (needs the metadata JSON).
     Ouster,
     /// Hesai PandarXT-32 (also XT16, XT32M).
@@ -283,6 +291,21 @@ pub enum SensorKind {
     Pandar128,
     /// Hesai OT128 (needs its angle correction file, --calibration).
     Ot128,
+    /// Robosense RS-LiDAR-16 (angles from the recording's DIFOP packets or --calibration).
+    Rs16,
+    /// Robosense RS-LiDAR-32 (angles from the recording's DIFOP packets or --calibration).
+    Rs32,
+    /// Robosense RS-Bpearl (angles from the recording's DIFOP packets or --calibration).
+    Bpearl,
+    /// Robosense RS-Helios 5515 (angles from the recording's DIFOP packets or --calibration).
+    Helios,
+    /// Robosense RS-Helios-16P (angles from the recording's DIFOP packets or --calibration).
+    Helios16p,
+    /// Robosense RS-Ruby / RS-LiDAR-128 (angles from the recording's DIFOP packets or
+    /// --calibration).
+    Ruby,
+    /// Robosense RS-M1 (MEMS; every point carries its direction).
+    M1,
     /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).
@@ -301,7 +324,8 @@ pub struct SensorOptions {
     pub port: Option<u16>,
     /// Ouster metadata JSON.
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), or Hesai angle correction (CSV).
+    /// Velodyne calibration (XML or YAML), Hesai angle correction (CSV), or Robosense
+    /// angle.csv.
     pub calibration: Option<PathBuf>,
     /// Livox frame period, seconds (default 0.1).
     pub frame_period_s: Option<f64>,

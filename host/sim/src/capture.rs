@@ -24,6 +24,8 @@ pub const PCAP_NAME: &str = "packets.pcap";
 pub const META_NAME: &str = "packets.json";
 /// The Hesai angle correction file's name in the output folder.
 pub const ANGLES_NAME: &str = "packets.csv";
+/// The Velodyne calibration (ROS YAML) beside a HDL-64E's or VLS-128's capture.
+pub const CALIBRATION_NAME: &str = "packets.yaml";
 
 /// Where simulated packets go, in sending order: a capture ([`CaptureWriter`]) or a ROS
 /// recording of them ([`crate::ros::packet_bag`]).
@@ -32,6 +34,8 @@ pub trait PacketSink {
     fn write(&mut self, packet: &Packet) -> Result<()>;
     /// One IMU packet ([`PacketSensor::imu_packet`]).
     fn write_imu(&mut self, packet: &Packet) -> Result<()>;
+    /// One device-information packet ([`PacketSensor::device_packet`]).
+    fn write_device(&mut self, packet: &Packet) -> Result<()>;
     /// The sweep's last packet has been written.
     fn end_sweep(&mut self) -> Result<()> {
         Ok(())
@@ -85,6 +89,8 @@ impl CaptureWriter {
             PacketSensor::Mid360 => ((56300, 56301), (56400, 56401), [192, 168, 1, 160]),
             // A Livox SDK 1 sensor sends its points to the host's port 56001.
             PacketSensor::Avia => ((65000, 56001), (65000, 56001), [192, 168, 1, 150]),
+            // Robosense: points to 6699, device information (DIFOP) to 7788.
+            PacketSensor::Helios => ((6699, 6699), (7788, 7788), [192, 168, 1, 200]),
             // Velodyne and Hesai.
             _ => ((2368, 2368), (2368, 2368), [192, 168, 1, 201]),
         };
@@ -124,6 +130,12 @@ impl PacketSink for CaptureWriter {
 
     /// Appends one IMU packet, to the sensor's IMU port.
     fn write_imu(&mut self, packet: &Packet) -> Result<()> {
+        self.write_to(packet, self.imu_ports)
+    }
+
+    /// Appends one device-information packet, to the port the sensor sends it to (the
+    /// Robosense DIFOP port; the IMU port of the others).
+    fn write_device(&mut self, packet: &Packet) -> Result<()> {
         self.write_to(packet, self.imu_ports)
     }
 

@@ -50,8 +50,9 @@ pub enum Messages {
     #[default]
     Points,
     /// The sensor's packets as its ROS driver records them: VelodyneScan, nebula's
-    /// PandarScan, ouster-ros' PacketMsg (with the metadata on `/ouster/metadata`), or for the
-    /// Livox sensors nebula's NebulaPackets (MCAP and db3 only); needs `--sensor`.
+    /// PandarScan, ouster-ros' PacketMsg (with the metadata on `/ouster/metadata`), nebula's
+    /// RobosenseScan (with its DIFOP packet; MCAP and db3 only), or for the Livox sensors
+    /// nebula's NebulaPackets (MCAP and db3 only); needs `--sensor`.
     Packets,
     /// A Livox sensor's frames (`--sensor mid360` or `avia`) as the Livox driver's `CustomMsg`
     /// on `/livox/lidar`.
@@ -269,14 +270,19 @@ pub fn write(
                 std::fs::write(&path, angles)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
-            match container {
-                Some((c, name)) => Some(Box::new(ros::packet_bag::PacketBag::create(
+            if let Some(text) = sensor.calibration_file() {
+                let path = writer.staging().join(capture::CALIBRATION_NAME);
+                std::fs::write(&path, text)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            let mut sink: Box<dyn PacketSink> = match container {
+                Some((c, name)) => Box::new(ros::packet_bag::PacketBag::create(
                     &writer.staging().join(name),
                     c,
                     sensor,
                     params.start_time,
                     meta,
-                )?)),
+                )?),
                 None => {
                     if let Some(meta) = meta {
                         let path = writer.staging().join(capture::META_NAME);
@@ -284,13 +290,18 @@ pub fn write(
                             .with_context(|| format!("writing {}", path.display()))?;
                     }
                     let path = writer.staging().join(capture::PCAP_NAME);
-                    Some(Box::new(capture::CaptureWriter::create(
+                    Box::new(capture::CaptureWriter::create(
                         &path,
                         sensor,
                         params.start_time,
-                    )?))
+                    )?)
                 }
+            };
+            // The device packet first: its decoder needs the angles it carries.
+            if let Some(d) = sensor.device_packet(params.sensor.rate_hz) {
+                sink.write_device(&d)?;
             }
+            Some(sink)
         }
         _ => None,
     };

@@ -62,8 +62,12 @@ pub struct Summary {
     pub latency_ms: Latency,
     /// Peak resident memory of the process (bytes), if the OS tells.
     pub peak_rss_bytes: Option<u64>,
-    /// Bytes of the core's state (fixed at start).
+    /// Bytes of the core's state at the end.
     pub state_bytes: usize,
+    /// What the core's state used: bytes at the start, at the end and at the peak, the moves
+    /// into larger storage, the limit growth stops at (`None`: fixed capacities) and the frame
+    /// that reached it.
+    pub state: StateSummary,
     /// Frames that could not be read (their pose is the constant-velocity prediction).
     pub skipped_frames: usize,
     /// Frames with no usable point (their pose is the prediction).
@@ -92,6 +96,36 @@ pub struct Summary {
     pub input: serde_json::Value,
     /// Metrics against ground truth, when it exists.
     pub metrics: Option<serde_json::Value>,
+}
+
+/// `summary.json`'s `state`: see [`Summary::state`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct StateSummary {
+    /// Bytes at the start.
+    pub start_bytes: usize,
+    /// Bytes at the end.
+    pub end_bytes: usize,
+    /// The most bytes held.
+    pub peak_bytes: usize,
+    /// Moves into larger storage.
+    pub moves: u64,
+    /// The limit growth stops at; `None` for fixed capacities.
+    pub limit_bytes: Option<u64>,
+    /// The frame (its index) at which growth reached the limit, if it did.
+    pub limit_reached_at: Option<usize>,
+}
+
+impl StateSummary {
+    fn of(m: &kiss_odom_drive::StateMemory) -> Self {
+        Self {
+            start_bytes: m.start_bytes,
+            end_bytes: m.bytes,
+            peak_bytes: m.peak_bytes,
+            moves: m.moves,
+            limit_bytes: m.limit,
+            limit_reached_at: m.capped_at,
+        }
+    }
 }
 
 /// The smallest radius of the local map over a run (`summary.json`'s `map_radius`).
@@ -339,7 +373,8 @@ impl Run<'_> {
         }
         let count = |k: RowKind| o.rows.iter().filter(|r| r.outcome == k).count();
         let d = self.driver;
-        let (hw, c) = (d.high_water(), d.build().capacities);
+        let memory = d.memory();
+        let (hw, c) = (d.high_water(), memory.capacities);
         let s = self.settings;
         Summary {
             frames: o.rows.len(),
@@ -352,11 +387,16 @@ impl Run<'_> {
             },
             latency_ms: Latency::of(lat.clone()).unwrap_or_default(),
             peak_rss_bytes: crate::memory::peak_rss_bytes(),
-            state_bytes: d.build().state_bytes,
+            state_bytes: memory.bytes,
+            state: StateSummary::of(&memory),
             skipped_frames: count(RowKind::Skipped),
             empty_frames: count(RowKind::Empty),
             degraded_frames: degraded,
             high_water: serde_json::json!({
+                "scan_points": [
+                    o.rows.iter().filter_map(|r| r.input_points).max().unwrap_or(0),
+                    c.scan_points
+                ],
                 "merge_points": [hw.merge_points, c.merge_points],
                 "source_points": [hw.source_points, c.source_points],
                 "map_voxels": [hw.map_voxels, c.map_voxels],
@@ -381,6 +421,7 @@ impl Run<'_> {
                 "format": self.info.format,
                 "kitti_correction": self.info.kitti_correction,
                 "ground_truth": self.info.ground_truth_path.as_ref().map(|p| p.display().to_string()),
+                "plane_terms": c.plane_terms,
                 "scalar": s.runtime.scalar,
                 "map_storage": s.runtime.map_storage,
                 "threads": d.build().threads,
@@ -391,16 +432,31 @@ impl Run<'_> {
     }
 }
 
+/// The state's size as the summary line gives it: fixed, or grown in moves.
+fn state_line(s: &StateSummary) -> String {
+    let mib = |b: usize| b as f64 / (1 << 20) as f64;
+    match s.moves {
+        0 => format!("{:.1} MiB", mib(s.end_bytes)),
+        n => format!(
+            "{:.1} MiB (grew from {:.1} MiB in {n} move{}, peak {:.1} MiB)",
+            mib(s.end_bytes),
+            mib(s.start_bytes),
+            if n == 1 { "" } else { "s" },
+            mib(s.peak_bytes)
+        ),
+    }
+}
+
 /// The two lines `run` prints.
 pub(super) fn print_summary(s: &Summary) {
     println!(
-        "{} frames, {:.1} Hz in the core (p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms), state {:.1} MiB",
+        "{} frames, {:.1} Hz in the core (p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms), state {}",
         s.frames,
         s.hz,
         s.latency_ms.p50,
         s.latency_ms.p99,
         s.latency_ms.max,
-        s.state_bytes as f64 / (1 << 20) as f64
+        state_line(&s.state)
     );
     if let Some(l) = s.pose_latency_ms {
         println!(

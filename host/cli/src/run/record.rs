@@ -78,6 +78,9 @@ pub struct FrameRow {
     pub map_radius: Option<f64>,
     /// Map voxels evicted, farthest first, to make room in this frame.
     pub evicted_voxels: Option<u32>,
+    /// Moves of the core's state into larger storage this frame took (a host run whose
+    /// capacities grow; see the book's outputs chapter).
+    pub state_moves: u32,
     /// Points given.
     pub input_points: Option<usize>,
     /// Merge cloud points.
@@ -169,6 +172,7 @@ impl FrameRow {
             map_points: r.map(|r| r.map_points),
             map_radius: r.map(|r| r.map_radius),
             evicted_voxels: r.map(|r| r.evicted_voxels),
+            state_moves: o.moves,
             input_points: (kind != RowKind::Skipped).then_some(o.input_points),
             merge_points: r.map(|r| r.merge_points),
             source_points: r.map(|r| r.source_points),
@@ -290,6 +294,7 @@ mod tests {
             input_points: 0,
             sweep: Default::default(),
             imu: None,
+            moves: 0,
         };
         let mut row = FrameRow::of(&skipped);
         let mut csv = csv::Writer::from_writer(Vec::new());

@@ -198,3 +198,5 @@ fn a_driver_can_move_to_another_thread() {
     fn send<T: Send>() {}
     send::<Driver>(); // bindings and batch runs hold one per worker
 }
+
+mod growth;

@@ -21,10 +21,11 @@
 //! capacity), however long the sensor takes to end it.
 
 use super::pcap::{self, Capture, Datagram, Record};
-use super::{hesai_calib, ouster_meta, velodyne_calib};
+use super::{hesai_calib, ouster_meta, robosense_calib, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
 use crate::imu::ImuSample;
 use anyhow::{anyhow, bail, Result};
+use kiss_odom_sensors::robosense;
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
     hesai, livox, ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart,
@@ -162,6 +163,8 @@ impl PcapReport {
 
 enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
+    Robosense(Box<robosense::Decoder>),
+    RobosenseM1(Box<robosense::m1::Decoder>),
     Ouster(Box<ouster::Decoder>),
     Hesai(Box<hesai::Decoder>),
     Livox(Box<livox::Decoder>),
@@ -175,6 +178,8 @@ impl Decoder {
         for _ in 0..2 {
             r = match self {
                 Self::Velodyne(d) => d.push(bytes, sink),
+                Self::Robosense(d) => d.push(bytes, sink),
+                Self::RobosenseM1(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
                 Self::Hesai(d) => d.push(bytes, sink),
                 Self::Livox(d) => d.push(bytes, sink),
@@ -188,6 +193,8 @@ impl Decoder {
     fn finish(&mut self, sink: &mut Collect) {
         match self {
             Self::Velodyne(d) => d.finish(sink),
+            Self::Robosense(d) => d.finish(sink),
+            Self::RobosenseM1(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
             Self::Hesai(d) => d.finish(sink),
             Self::Livox(d) => d.finish(sink),
@@ -196,6 +203,8 @@ impl Decoder {
     fn between_sweeps(&self) -> SweepStats {
         match self {
             Self::Velodyne(d) => *d.between_sweeps(),
+            Self::Robosense(d) => *d.between_sweeps(),
+            Self::RobosenseM1(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
             Self::Hesai(d) => *d.between_sweeps(),
             Self::Livox(d) => *d.between_sweeps(),
@@ -378,6 +387,9 @@ pub struct Beside {
     pub survey: Option<Survey>,
     /// The Ouster metadata it carries, and where (`--meta` wins over it).
     pub ouster_meta: Option<(ouster_meta::OusterMeta, String)>,
+    /// A device-information packet it carries (a Robosense DIFOP: the lasers' angles), and
+    /// where (`--calibration` wins over it).
+    pub device: Option<(Vec<u8>, String)>,
 }
 
 fn describe(s: &Survey) -> String {
@@ -410,6 +422,10 @@ fn sensor_flag(m: Model) -> &'static str {
         Model::PuckHiRes => "puck-hi-res",
         Model::Vlp32c => "vlp32c",
         Model::Hdl32e => "hdl32e",
+        Model::Vlp32ab => "vlp32ab",
+        Model::Hdl64eS2 => "hdl64e-s2",
+        Model::Hdl64eS3 => "hdl64e-s3",
+        Model::Vls128 => "vls128",
     }
 }
 
@@ -430,10 +446,14 @@ pub fn decode_beside(
     opts: &SensorOptions,
     beside: Beside,
 ) -> Result<PcapSweeps> {
-    let ouster =
-        opts.meta.is_some() || beside.ouster_meta.is_some() || opts.sensor == SensorKind::Ouster;
+    let Beside {
+        survey: surveyed,
+        ouster_meta: carried_meta,
+        device,
+    } = beside;
+    let ouster = opts.meta.is_some() || carried_meta.is_some() || opts.sensor == SensorKind::Ouster;
     if ouster {
-        let (meta, meta_path) = match (&opts.meta, beside.ouster_meta) {
+        let (meta, meta_path) = match (&opts.meta, carried_meta) {
             (Some(file), _) => (ouster_meta::read(file)?, file.display().to_string()),
             (None, Some(carried)) => carried,
             (None, None) => bail!(
@@ -469,15 +489,28 @@ pub fn decode_beside(
             SensorKind::PuckHiRes => Some(Model::PuckHiRes),
             SensorKind::Vlp32c => Some(Model::Vlp32c),
             SensorKind::Hdl32e => Some(Model::Hdl32e),
+            SensorKind::Vlp32ab => Some(Model::Vlp32ab),
+            SensorKind::Hdl64eS2 => Some(Model::Hdl64eS2),
+            SensorKind::Hdl64eS3 => Some(Model::Hdl64eS3),
+            SensorKind::Vls128 => Some(Model::Vls128),
             _ => None,
         };
         if let Some(model) = livox_model(opts.sensor) {
             return livox_decoder(path, capture, opts, model, opts.port);
         }
+        if let Some(model) = robosense_model(opts.sensor) {
+            return robosense_decoder(path, capture, opts, (model, device));
+        }
+        if opts.sensor == SensorKind::M1 {
+            let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
+            let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
+            let name = "Robosense RS-M1".to_string();
+            return Ok(sweeps(path, capture, dec, opts, (port, name, Vec::new())));
+        }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = hesai_model(opts.sensor);
         if opts.port.is_none() && hesai.is_none() {
-            let s = match beside.survey {
+            let s = match surveyed {
                 Some(s) => s,
                 None => survey(path)?,
             };
@@ -518,6 +551,14 @@ pub fn decode_beside(
             .as_deref()
             .map(velodyne_calib::read)
             .transpose()?;
+        if let Some(m) = model.filter(|m| m.needs_calibration() && calibration.is_none()) {
+            bail!(
+                "{}: a Velodyne {} needs the unit's calibration file (--calibration: Velodyne's \
+                 XML or the ROS YAML)",
+                path.display(),
+                m.name()
+            );
+        }
         let config = velodyne::Config {
             model,
             calibration,
@@ -621,6 +662,70 @@ fn livox_decoder(
 
 /// The Hesai decoder for `model`, with the angle correction file if one is given (the
 /// 128-channel models need one).
+/// The Robosense model `--sensor` names.
+fn robosense_model(kind: SensorKind) -> Option<robosense::Model> {
+    Some(match kind {
+        SensorKind::Rs16 => robosense::Model::Rs16,
+        SensorKind::Rs32 => robosense::Model::Rs32,
+        SensorKind::Bpearl => robosense::Model::Bpearl,
+        SensorKind::Helios => robosense::Model::Helios,
+        SensorKind::Helios16p => robosense::Model::Helios16p,
+        SensorKind::Ruby => robosense::Model::Ruby,
+        _ => return None,
+    })
+}
+
+/// A Robosense recording: MSOP packets on port 6699, the angles from `--calibration`
+/// (`angle.csv`) or the recording's first DIFOP packet; without either, exit with both named.
+fn robosense_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    (model, device): (robosense::Model, Option<(Vec<u8>, String)>),
+) -> Result<PcapSweeps> {
+    // A bag carries the DIFOP packet on a topic of its own; a pcap is searched for it.
+    let carried =
+        device.map(
+            |(payload, from)| match robosense_calib::from_payload(&payload, model) {
+                Some(angles) => angles.map_err(|e| anyhow!("{from}: {e}")),
+                None => Err(anyhow!("{from}: not a DIFOP packet")),
+            },
+        );
+    let calibration = match (opts.calibration.as_deref(), carried) {
+        (Some(csv), _) => robosense_calib::read(csv, model)?,
+        (None, Some(angles)) => angles?,
+        (None, None) => match path
+            .is_file()
+            .then(|| robosense_calib::from_capture(path, model))
+            .transpose()?
+            .flatten()
+        {
+            Some(c) => c,
+            None => bail!(
+                "{}: a {} needs its laser angles: the recording has no DIFOP packet (port \
+                 {}); give the unit's angle.csv with --calibration",
+                path.display(),
+                model.name(),
+                robosense_calib::DIFOP_PORT
+            ),
+        },
+    };
+    let config = robosense::Config {
+        model,
+        calibration: Some(calibration),
+        cut_angle_deg: opts.cut_angle_deg,
+    };
+    let dec = robosense::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
+    Ok(sweeps(
+        path,
+        capture,
+        Decoder::Robosense(Box::new(dec)),
+        opts,
+        (port, format!("Robosense {}", model.name()), Vec::new()),
+    ))
+}
+
 fn hesai_decoder(
     path: &Path,
     capture: Box<dyn DatagramSource>,
@@ -670,7 +775,14 @@ fn sweeps(
         meta_path: opts.meta.clone(),
         model_given: matches!(
             opts.sensor,
-            SensorKind::Vlp16 | SensorKind::PuckHiRes | SensorKind::Vlp32c | SensorKind::Hdl32e
+            SensorKind::Vlp16
+                | SensorKind::PuckHiRes
+                | SensorKind::Vlp32c
+                | SensorKind::Hdl32e
+                | SensorKind::Vlp32ab
+                | SensorKind::Hdl64eS2
+                | SensorKind::Hdl64eS3
+                | SensorKind::Vls128
         ),
         imu_port: None,
         report: PcapReport {
@@ -748,6 +860,8 @@ impl PcapSweeps {
     fn data_len(&self) -> usize {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
+            Decoder::Robosense(_) => robosense::wire::LEN,
+            Decoder::RobosenseM1(_) => robosense::m1::LEN,
             Decoder::Ouster(d) => d.layout().packet_len(),
             Decoder::Hesai(d) if d.model() == hesai::Model::Xt32 => {
                 hesai::wire::field::LEN_WITH_SEQUENCE

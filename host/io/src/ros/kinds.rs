@@ -21,6 +21,11 @@ pub enum Kind {
     /// `ouster_sensor_msgs/PacketMsg` (ROS 2) or `ouster_ros/PacketMsg` (ROS 1): one Ouster
     /// lidar or IMU packet.
     OusterPacket,
+    /// `robosense_msgs/RobosenseScan` (nebula): Robosense MSOP packets.
+    RobosenseScan,
+    /// `robosense_msgs/RobosenseInfoPacket` (nebula): a Robosense DIFOP packet (the lasers'
+    /// angles) and the model's name.
+    RobosenseInfo,
     /// `livox_ros_driver/CustomMsg`, `livox_ros_driver2/CustomMsg`: Livox points with
     /// per-point times.
     LivoxCustom,
@@ -29,7 +34,7 @@ pub enum Kind {
 }
 
 /// Type names (ROS 1 spelling) of each kind.
-const NAMES: [(&str, Kind); 13] = [
+const NAMES: [(&str, Kind); 15] = [
     ("sensor_msgs/PointCloud2", Kind::Cloud),
     ("sensor_msgs/Imu", Kind::Imu),
     ("velodyne_msgs/VelodyneScan", Kind::VelodyneScan),
@@ -38,6 +43,8 @@ const NAMES: [(&str, Kind); 13] = [
     ("ouster_sensor_msgs/PacketMsg", Kind::OusterPacket),
     ("ouster_ros/PacketMsg", Kind::OusterPacket),
     ("ouster_msgs/PacketMsg", Kind::OusterPacket),
+    ("robosense_msgs/RobosenseScan", Kind::RobosenseScan),
+    ("robosense_msgs/RobosenseInfoPacket", Kind::RobosenseInfo),
     ("livox_ros_driver/CustomMsg", Kind::LivoxCustom),
     ("livox_ros_driver2/CustomMsg", Kind::LivoxCustom),
     ("livox_ros2_driver/CustomMsg", Kind::LivoxCustom),
@@ -112,14 +119,19 @@ impl Kind {
 
     /// Whether its messages become frames (points, or packets decoded into sweeps).
     pub fn is_frames(self) -> bool {
-        !matches!(self, Self::Imu | Self::Text)
+        !matches!(self, Self::Imu | Self::Text | Self::RobosenseInfo)
     }
 
     /// Whether its messages carry sensor packets.
     pub fn is_packets(self) -> bool {
         matches!(
             self,
-            Self::VelodyneScan | Self::PandarScan | Self::NebulaPackets | Self::OusterPacket
+            Self::VelodyneScan
+                | Self::PandarScan
+                | Self::NebulaPackets
+                | Self::OusterPacket
+                | Self::RobosenseScan
+                | Self::RobosenseInfo
         )
     }
 }

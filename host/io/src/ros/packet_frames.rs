@@ -8,9 +8,12 @@
 //!
 //! An Ouster's IMU packets come from the topic beside its lidar packets' (`.../imu_packets`),
 //! its metadata from the `std_msgs/String` topic ouster-ros records it on (`.../metadata`)
-//! unless `--meta` gives a file. `NebulaPackets` carry any sensor's packets: each goes to the
-//! port its sensor sends that packet to (a Livox Mid-360's IMU packets to their own). A message
-//! that does not parse is skipped, counted and named in one warning when the stream ends.
+//! unless `--meta` gives a file. A Robosense's DIFOP packets (the lasers' angles) and its
+//! model's name come from nebula's `.../robosense_info_packets` beside its MSOP packets, unless
+//! `--calibration` and `--sensor` say. `NebulaPackets` carry any sensor's packets: each goes to
+//! the port its sensor sends that packet to (a Livox Mid-360's IMU packets to their own). A
+//! message that does not parse is skipped, counted and named in one warning when the stream
+//! ends.
 
 use super::kinds::Kind;
 use super::packets::{self, Packet};
@@ -18,9 +21,10 @@ use super::recording::{MessageStream, Recording};
 use crate::capture::frames::SweepFrames;
 use crate::capture::ouster_meta;
 use crate::capture::pcap::{Datagram, Record};
+use crate::capture::robosense_calib::{DIFOP_PORT, MSOP_PORT};
 use crate::capture::sweeps::{self, Beside, DatagramSource, Survey, LIVOX2_PORT, LIVOX_PORT};
 use crate::capture::sweeps::{OUSTER_IMU_PORT, OUSTER_PORT, VELODYNE_PORT};
-use crate::dataset::{FrameSource, OpenOptions};
+use crate::dataset::{FrameSource, OpenOptions, SensorKind};
 use anyhow::{anyhow, bail, Result};
 use kiss_odom_sensors::livox;
 use std::collections::VecDeque;
@@ -43,7 +47,9 @@ pub fn open(
     let ros1 = rec.ros1();
     let all = rec.topics();
     let mut topics = vec![topic.to_string()];
+    let mut kinds = vec![kind];
     let mut beside = Beside::default();
+    let mut sensor = opts.sensor.clone();
     let mut ports = Ports {
         lidar: opts.sensor.port,
         imu: None,
@@ -51,6 +57,7 @@ pub fn open(
     if kind == Kind::OusterPacket {
         if let Some(imu) = sibling(&all, topic, "imu_packets", Kind::OusterPacket) {
             topics.push(imu);
+            kinds.push(Kind::OusterPacket);
         }
         if opts.sensor.meta.is_none() {
             let meta = sibling(&all, topic, "metadata", Kind::Text).or_else(|| only_metadata(&all));
@@ -70,9 +77,28 @@ pub fn open(
             ports.imu = parsed.udp_port_imu;
         }
     }
+    if kind == Kind::RobosenseScan {
+        let info = sibling(&all, topic, "robosense_info_packets", Kind::RobosenseInfo);
+        if let Some(info) = info {
+            let (model, difop, where_) = read_robosense_info(rec.as_mut(), &info)?;
+            if sensor.sensor == SensorKind::Auto {
+                sensor.sensor = robosense_kind(&model).ok_or_else(|| {
+                    anyhow!("{where_}: lidar_model {model:?} is not a model read: name it with --sensor")
+                })?;
+            }
+            beside.device = Some((difop, where_));
+            topics.push(info);
+            kinds.push(Kind::RobosenseInfo);
+        } else if sensor.sensor == SensorKind::Auto {
+            bail!(
+                "{label}: Robosense packets on {topic} and no robosense_info_packets topic beside \
+                 them: name the model with --sensor (and its angle.csv with --calibration)"
+            );
+        }
+    }
     // The first packets tell the sensor, as a pcap's do; damage is the stream's to report.
     let mut survey = Survey::default();
-    let mut first = Datagrams::new(ros1, kind, ports);
+    let mut first = Datagrams::new(ros1, &kinds, ports);
     let _ = rec.scan(&topics, &mut |m| {
         first.add(m.topic, m.time_ns, Kind::of_message(ros1, &m), m.data);
         while let Some(d) = first.queue.pop_front() {
@@ -85,8 +111,8 @@ pub fn open(
     beside.survey = Some(survey);
     let mut stream = rec.stream(&topics)?;
     warnings.extend(stream.take_warnings());
-    let source = Datagrams::new(ros1, kind, ports).over(stream);
-    let decoded = sweeps::decode_beside(Path::new(&label), Box::new(source), &opts.sensor, beside)?;
+    let source = Datagrams::new(ros1, &kinds, ports).over(stream);
+    let decoded = sweeps::decode_beside(Path::new(&label), Box::new(source), &sensor, beside)?;
     Ok(Box::new(SweepFrames::new(
         decoded,
         &label,
@@ -140,6 +166,33 @@ fn read_metadata(
     }
 }
 
+/// The first message on `topic` (nebula's `RobosenseInfoPacket`): the model's name, its DIFOP
+/// packet, and where it came from.
+fn read_robosense_info(rec: &mut dyn Recording, topic: &str) -> Result<(String, Vec<u8>, String)> {
+    let (label, ros1) = (rec.label().to_string(), rec.ros1());
+    let mut info = None;
+    rec.scan(&[topic.to_string()], &mut |m| {
+        info = Some(packets::robosense_info(ros1, m.data).map(|(n, p)| (n, p.data.to_vec())));
+        ControlFlow::Break(())
+    })?;
+    let where_ = format!("{label}:{topic}");
+    match info {
+        None => bail!("{where_}: no message: give the unit's angle.csv with --calibration"),
+        Some(Err(e)) => bail!("{where_}: not a RobosenseInfoPacket: {e}"),
+        Some(Ok((model, difop))) => Ok((model, difop, where_)),
+    }
+}
+
+/// The `--sensor` of a Robosense model as nebula names it.
+fn robosense_kind(model: &str) -> Option<SensorKind> {
+    let model = model.to_ascii_lowercase();
+    Some(match model.as_str() {
+        "helios" => SensorKind::Helios,
+        m if m.starts_with("bpearl") => SensorKind::Bpearl,
+        _ => return None,
+    })
+}
+
 /// Where the sensor sends its packets; `None` for its usual port.
 #[derive(Clone, Copy, Debug)]
 struct Ports {
@@ -150,7 +203,8 @@ struct Ports {
 /// Packet messages as the datagrams a capture would hold.
 struct Datagrams {
     ros1: bool,
-    kind: Kind,
+    /// What each topic carries, by its place in the stream's list.
+    kinds: Vec<Kind>,
     ports: Ports,
     stream: Option<Box<dyn MessageStream>>,
     queue: VecDeque<Datagram>,
@@ -161,10 +215,10 @@ struct Datagrams {
 }
 
 impl Datagrams {
-    fn new(ros1: bool, kind: Kind, ports: Ports) -> Self {
+    fn new(ros1: bool, kinds: &[Kind], ports: Ports) -> Self {
         Self {
             ros1,
-            kind,
+            kinds: kinds.to_vec(),
             ports,
             stream: None,
             queue: VecDeque::new(),
@@ -180,13 +234,14 @@ impl Datagrams {
     }
 
     /// Queues the datagrams of message `data` of the `topic`-th topic (0: the lidar packets,
-    /// 1: an Ouster's IMU packets), received at `time_ns`.
+    /// 1: an Ouster's IMU packets or a Robosense's DIFOP packets), received at `time_ns`.
     fn add(&mut self, topic: usize, time_ns: u64, kind: Result<Kind, String>, data: &[u8]) {
         let index = self.messages;
         self.messages += 1;
-        let wanted = self.kind.type_name(self.ros1);
+        let expected = self.kinds.get(topic).copied().unwrap_or(Kind::Text);
+        let wanted = expected.type_name(self.ros1);
         let parsed = match kind {
-            Ok(k) if k == self.kind => packets::packets(k, self.ros1, data),
+            Ok(k) if k == expected => packets::packets(k, self.ros1, data),
             Ok(k) => Err(format!("{}, not {wanted}", k.type_name(self.ros1))),
             Err(what) => Err(format!("{what}, not {wanted}")),
         };
@@ -213,9 +268,11 @@ impl Datagrams {
     /// The port the sensor sends this packet to.
     fn port(&self, topic: usize, data: &[u8]) -> u16 {
         let lidar = self.ports.lidar;
-        match self.kind {
+        match self.kinds.get(topic).copied().unwrap_or(Kind::Text) {
             Kind::OusterPacket if topic == 1 => self.ports.imu.unwrap_or(OUSTER_IMU_PORT),
             Kind::OusterPacket => lidar.unwrap_or(OUSTER_PORT),
+            Kind::RobosenseInfo => DIFOP_PORT,
+            Kind::RobosenseScan => lidar.unwrap_or(MSOP_PORT),
             Kind::NebulaPackets => {
                 if livox::sdk1::Packet::new_checked(data).is_ok() {
                     lidar.unwrap_or(LIVOX_PORT)

@@ -8,7 +8,9 @@
 //!   bytes are the packet), some drivers' a `uint8[]`: the layout the message's length fits;
 //! - `nebula_msgs/NebulaPackets` (nebula, any sensor): a header, then packets of a stamp and
 //!   a `uint8[]`;
-//! - Ouster's `PacketMsg` (ouster-ros): one packet, a `uint8[] buf`, no stamp of its own.
+//! - Ouster's `PacketMsg` (ouster-ros): one packet, a `uint8[] buf`, no stamp of its own;
+//! - `robosense_msgs/RobosenseScan` (nebula): a header, then packets of a stamp and a fixed
+//!   `uint8[1248]`; `RobosenseInfoPacket`: the model's name and one such packet (a DIFOP).
 //!
 //! Every length and count is checked against the message before it is used; what does not
 //! parse is an error naming the field, for the caller to count.
@@ -21,6 +23,9 @@ pub const VELODYNE_PACKET: usize = 1206;
 
 /// The bytes of nebula's `PandarPacket.data`.
 pub const PANDAR_PACKET: usize = 1500;
+
+/// The bytes of nebula's `RobosensePacket.data`.
+pub const ROBOSENSE_PACKET: usize = 1248;
 
 /// One packet of a message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,6 +44,8 @@ pub fn packets(kind: Kind, ros1: bool, body: &[u8]) -> Result<Vec<Packet<'_>>, S
         Kind::NebulaPackets => scan(ros1, body, Layout::Sized(false)),
         Kind::PandarScan => scan(ros1, body, Layout::Fixed(PANDAR_PACKET, true))
             .or_else(|fixed| scan(ros1, body, Layout::Sized(true)).map_err(|_| fixed)),
+        Kind::RobosenseScan => scan(ros1, body, Layout::Fixed(ROBOSENSE_PACKET, false)),
+        Kind::RobosenseInfo => robosense_info(ros1, body).map(|(_, p)| vec![p]),
         Kind::OusterPacket => {
             let mut r = Reader::of(ros1, body)?;
             let data = r.bytes("buf")?;
@@ -50,6 +57,18 @@ pub fn packets(kind: Kind, ros1: bool, body: &[u8]) -> Result<Vec<Packet<'_>>, S
         }
         other => Err(format!("{other:?} messages carry no packets")),
     }
+}
+
+/// A `robosense_msgs/RobosenseInfoPacket`: the model's name and its DIFOP packet.
+pub fn robosense_info(ros1: bool, body: &[u8]) -> Result<(String, Packet<'_>), String> {
+    let mut r = Reader::of(ros1, body)?;
+    let model = r.string("lidar_model")?;
+    let stamp = r.time("packet.stamp")?;
+    let data = r.take(ROBOSENSE_PACKET, "packet.data")?;
+    r.finish()?;
+    let stamp_ns = (stamp.sec >= 0 && stamp.nsec < 1_000_000_000)
+        .then(|| stamp.sec as u64 * 1_000_000_000 + u64::from(stamp.nsec));
+    Ok((model, Packet { stamp_ns, data }))
 }
 
 /// How a packet's data is laid out after its stamp.

@@ -311,3 +311,26 @@ pub fn imu_cdr(ns: u64, k: u32) -> Vec<u8> {
     }
     b
 }
+
+/// nebula's `robosense_msgs/RobosenseScan`: each packet a stamp and a `uint8[1248]`.
+pub fn robosense_scan(stamp: u64, packets: &[(u64, Vec<u8>)]) -> Vec<u8> {
+    let mut o = Out::new(false);
+    o.header(stamp);
+    o.u32(packets.len() as u32);
+    for (t, data) in packets {
+        o.time(*t);
+        let mut fixed = data.clone();
+        fixed.resize(1248, 0);
+        o.raw(&fixed);
+    }
+    o.bytes
+}
+
+/// nebula's `robosense_msgs/RobosenseInfoPacket`: the model's name and one packet.
+pub fn robosense_info(model: &str, (t, data): (u64, &[u8])) -> Vec<u8> {
+    let mut o = Out::new(false);
+    o.string(model);
+    o.time(t);
+    o.raw(data);
+    o.bytes
+}

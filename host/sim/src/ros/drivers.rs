@@ -76,6 +76,35 @@ pub fn nebula_packets(enc: Encoding, packets: &[Stamped<'_>]) -> Vec<u8> {
     o.bytes
 }
 
+/// The bytes of nebula's `RobosensePacket.data`.
+const ROBOSENSE_PACKET: usize = 1248;
+
+/// `robosense_msgs/RobosenseScan` (nebula): each packet a stamp and a `uint8[1248]`; stamped
+/// with its first packet.
+pub fn robosense_scan(enc: Encoding, packets: &[Stamped<'_>]) -> Vec<u8> {
+    let mut o = enc.out();
+    header(&mut o, packets.first().map_or(0, |p| p.0), "robosense");
+    o.u32(packets.len() as u32);
+    for (ns, data) in packets {
+        time(&mut o, *ns);
+        let mut fixed = data.to_vec();
+        fixed.resize(ROBOSENSE_PACKET, 0);
+        o.bytes.extend_from_slice(&fixed);
+    }
+    o.bytes
+}
+
+/// `robosense_msgs/RobosenseInfoPacket` (nebula): the model's name and a DIFOP packet.
+pub fn robosense_info(enc: Encoding, model: &str, (ns, data): Stamped<'_>) -> Vec<u8> {
+    let mut o = enc.out();
+    o.string(model);
+    time(&mut o, ns);
+    let mut fixed = data.to_vec();
+    fixed.resize(ROBOSENSE_PACKET, 0);
+    o.bytes.extend_from_slice(&fixed);
+    o.bytes
+}
+
 /// Ouster's `PacketMsg`: one packet, no stamp.
 pub fn ouster_packet(enc: Encoding, data: &[u8]) -> Vec<u8> {
     let mut o = enc.out();
@@ -157,6 +186,24 @@ pub const NEBULA: Topic = Topic {
     name: "/nebula_packets",
     ros1: "",
     ros2: "nebula_msgs/msg/NebulaPackets",
+    md5: "",
+    definition: "",
+};
+
+/// nebula's Robosense MSOP packets (ROS 2 only).
+pub const ROBOSENSE: Topic = Topic {
+    name: "/robosense_packets",
+    ros1: "",
+    ros2: "robosense_msgs/msg/RobosenseScan",
+    md5: "",
+    definition: "",
+};
+
+/// nebula's Robosense DIFOP packets (ROS 2 only).
+pub const ROBOSENSE_INFO: Topic = Topic {
+    name: "/robosense_info_packets",
+    ros1: "",
+    ros2: "robosense_msgs/msg/RobosenseInfoPacket",
     md5: "",
     definition: "",
 };

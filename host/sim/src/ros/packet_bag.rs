@@ -2,10 +2,14 @@
 //! packets a pcap of the drive holds, stamped with the times it holds them at
 //! ([`capture_ns`]), so that a reader decodes the same frames from either.
 //!
-//! - VLP-16, VLP-32C: a `velodyne_msgs/VelodyneScan` a sweep on `/velodyne_packets`;
+//! - VLP-16, VLP-32C, HDL-64E S3, VLS-128: a `velodyne_msgs/VelodyneScan` a sweep on
+//!   `/velodyne_packets`;
 //! - XT32, QT128, OT128: a `pandar_msgs/PandarScan` a sweep on `/pandar_packets` (nebula's);
 //! - OS1-64: a `PacketMsg` a packet on `/ouster/lidar_packets` and `/ouster/imu_packets`, and
 //!   the metadata JSON on `/ouster/metadata` first (ouster-ros');
+//! - RS-Helios: a `robosense_msgs/RobosenseScan` a sweep on `/robosense_packets`, its DIFOP
+//!   packet (with the model's name) on `/robosense_info_packets` first (nebula's; MCAP and db3
+//!   only);
 //! - Mid-360, Avia: a `nebula_msgs/NebulaPackets` a frame on `/nebula_packets`, the Mid-360's
 //!   IMU packets among them in sending order (no ROS 1 type: MCAP and db3 only).
 //!
@@ -24,15 +28,20 @@ enum Driver {
     Velodyne,
     Pandar,
     Ouster,
+    Robosense,
     Nebula,
 }
 
 impl Driver {
     fn of(sensor: PacketSensor) -> Self {
         match sensor {
-            PacketSensor::Vlp16 | PacketSensor::Vlp32c => Self::Velodyne,
+            PacketSensor::Vlp16
+            | PacketSensor::Vlp32c
+            | PacketSensor::Hdl64e
+            | PacketSensor::Vls128 => Self::Velodyne,
             PacketSensor::Xt32 | PacketSensor::Qt128 | PacketSensor::Ot128 => Self::Pandar,
             PacketSensor::Os1 => Self::Ouster,
+            PacketSensor::Helios => Self::Robosense,
             PacketSensor::Mid360 | PacketSensor::Avia => Self::Nebula,
         }
     }
@@ -46,6 +55,7 @@ impl Driver {
                 drivers::OUSTER_IMU,
                 drivers::OUSTER_META,
             ],
+            Self::Robosense => &[drivers::ROBOSENSE, drivers::ROBOSENSE_INFO],
             Self::Nebula => &[drivers::NEBULA],
         }
     }
@@ -111,6 +121,14 @@ impl PacketSink for PacketBag {
         Ok(())
     }
 
+    /// A Robosense's DIFOP packet, as nebula records it with the model's name.
+    fn write_device(&mut self, packet: &Packet) -> Result<()> {
+        let ns = capture_ns(self.clock_start, packet.offset);
+        let body = drivers::robosense_info(self.writer.encoding(), "Helios", (ns, &packet.payload));
+        self.messages.push((1, ns, body));
+        Ok(())
+    }
+
     fn end_sweep(&mut self) -> Result<()> {
         let mut out = std::mem::take(&mut self.messages);
         if let Some(&(last, _)) = self.scan.last() {
@@ -119,6 +137,7 @@ impl PacketSink for PacketBag {
             let body = match self.driver {
                 Driver::Velodyne => drivers::velodyne_scan(enc, &packets),
                 Driver::Pandar => drivers::pandar_scan(enc, &packets),
+                Driver::Robosense => drivers::robosense_scan(enc, &packets),
                 _ => drivers::nebula_packets(enc, &packets),
             };
             out.push((0, last, body));

@@ -48,7 +48,7 @@ fn ouster_packets_need_the_metadata_their_bag_carries_or_a_file() {
 fn nebula_packets_go_to_the_port_their_sensor_sends_them_to() {
     let d = Datagrams::new(
         false,
-        Kind::NebulaPackets,
+        &[Kind::NebulaPackets],
         Ports {
             lidar: None,
             imu: None,
@@ -58,7 +58,7 @@ fn nebula_packets_go_to_the_port_their_sensor_sends_them_to() {
     assert_eq!(d.port(0, &[0; 1206]), VELODYNE_PORT);
     let given = Datagrams::new(
         false,
-        Kind::NebulaPackets,
+        &[Kind::NebulaPackets],
         Ports {
             lidar: Some(2369),
             imu: None,
@@ -68,7 +68,7 @@ fn nebula_packets_go_to_the_port_their_sensor_sends_them_to() {
     // A message that is not NebulaPackets is counted and named once.
     let mut d = Datagrams::new(
         false,
-        Kind::NebulaPackets,
+        &[Kind::NebulaPackets],
         Ports {
             lidar: None,
             imu: None,

@@ -69,6 +69,11 @@ fn damaged_messages_are_errors_naming_the_field_never_a_panic() {
         (Kind::PandarScan, msg::pandar_scan(false, 5, &h)),
         (Kind::NebulaPackets, msg::nebula_packets(5, &some(2, 100))),
         (Kind::OusterPacket, msg::ouster_packet(false, &[1; 48])),
+        (Kind::RobosenseScan, msg::robosense_scan(5, &some(2, 1248))),
+        (
+            Kind::RobosenseInfo,
+            msg::robosense_info("RS", (5, &[3; 1248])),
+        ),
     ] {
         for cut in 0..body.len() {
             assert!(
