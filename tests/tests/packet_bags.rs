@@ -168,12 +168,7 @@ fn a_bag_of_packets_decodes_to_the_frames_of_a_pcap_of_the_same_packets() {
 #[test]
 fn an_ouster_bag_decodes_with_its_own_metadata_or_the_file_given() {
     let tmp = tempfile::tempdir().unwrap();
-    let case = Case {
-        sensor: "os1-64",
-        format: "bag",
-        imu: true,
-        frames: "2",
-    };
+    let case = case("os1-64", "bag", true, "2");
     let (pcap_dir, bag_dir) = (tmp.path().join("pcap"), tmp.path().join("bag"));
     simulate(&pcap_dir, &case, "pcap");
     simulate(&bag_dir, &case, "bag");
