@@ -13,11 +13,15 @@
 
 mod decoder;
 mod firetimes;
+mod identify;
 mod model;
+mod timing;
 pub mod wire;
 pub mod wire128;
+pub mod wire_fixed;
 
 pub use decoder::{Decoder, GAP_NS};
+pub use identify::identify;
 pub use model::{
     point_offset_ns, Calibration, Config, Firing, Model, ReturnMode, CHANNELS, CHANNEL_NS,
     DISTANCE_UNIT_M, FIRING_NS, MAX_CHANNELS, PANDAR128_NEAR_M,

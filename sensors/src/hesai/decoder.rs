@@ -5,7 +5,7 @@ use super::model::{
     Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS, PANDAR128_NEAR_M,
 };
 use super::wire::Packet;
-use super::wire128;
+use super::{wire128, wire_fixed};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     lost_in_step, Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd,
@@ -33,15 +33,19 @@ struct Beam {
 enum View<'a> {
     Xt32(Packet<'a>),
     Wide(wire128::Packet<'a>),
+    Fixed(wire_fixed::Packet<'a>),
 }
 
 impl<'a> View<'a> {
     /// Checks `bytes` as a packet of `model`'s protocol.
     fn new_checked(model: Model, bytes: &'a [u8]) -> Result<Self, PacketError> {
+        if let Some((format, _)) = model.fixed() {
+            return wire_fixed::Packet::new_checked(format, bytes).map(Self::Fixed);
+        }
         let version = match model {
             Model::Xt32 => return Packet::new_checked(bytes).map(Self::Xt32),
             Model::Qt128 => wire128::VERSION_QT,
-            Model::Pandar128 | Model::Ot128 => wire128::VERSION_128,
+            _ => wire128::VERSION_128,
         };
         let p = wire128::Packet::new_checked(bytes)?;
         if p.version() != version {
@@ -49,46 +53,65 @@ impl<'a> View<'a> {
         }
         Ok(Self::Wide(p))
     }
-    fn returns(&self) -> u8 {
+    /// The header's return count, where it states the mode's: the XT32M's capture says 3
+    /// whatever its mode, and the 40P, 64 and AT128 have none or leave it to the mode byte
+    /// (as nebula reads them).
+    fn returns(&self, model: Model) -> Option<u8> {
         match self {
-            Self::Xt32(p) => p.returns(),
-            Self::Wide(p) => p.returns(),
+            Self::Xt32(p) => Some(p.returns()),
+            Self::Wide(p) => Some(p.returns()),
+            Self::Fixed(p) if matches!(model, Model::Xt16 | Model::PandarQT64) => {
+                p.header_returns()
+            }
+            Self::Fixed(_) => None,
+        }
+    }
+    /// Metres per distance unit.
+    fn distance_unit_m(&self) -> f64 {
+        match self {
+            Self::Fixed(p) => f64::from(p.distance_unit_mm()) * 1e-3,
+            _ => DISTANCE_UNIT_M,
         }
     }
     fn return_mode(&self) -> u8 {
         match self {
             Self::Xt32(p) => p.return_mode(),
             Self::Wide(p) => p.return_mode(),
+            Self::Fixed(p) => p.return_mode(),
         }
     }
     fn azimuth(&self, k: usize) -> u16 {
         match self {
             Self::Xt32(p) => p.azimuth(k),
             Self::Wide(p) => p.azimuth(k),
+            Self::Fixed(p) => p.azimuth(k),
         }
     }
     fn channel(&self, k: usize, c: usize) -> (u16, u8) {
         match self {
             Self::Xt32(p) => p.channel(k, c),
             Self::Wide(p) => p.channel(k, c),
+            Self::Fixed(p) => p.channel(k, c),
         }
     }
     fn unix_ns(&self) -> Option<u64> {
         match self {
             Self::Xt32(p) => p.unix_ns(),
             Self::Wide(p) => p.unix_ns(),
+            Self::Fixed(p) => p.unix_ns(),
         }
     }
     fn udp_sequence(&self) -> Option<u32> {
         match self {
             Self::Xt32(p) => p.udp_sequence(),
             Self::Wide(p) => p.udp_sequence(),
+            Self::Fixed(p) => p.udp_sequence(),
         }
     }
     /// Block `k`'s firing state, for a mode of `returns` returns.
     fn firing(&self, k: usize, returns: usize) -> Firing {
         match self {
-            Self::Xt32(_) => Firing {
+            Self::Xt32(_) | Self::Fixed(_) => Firing {
                 returns,
                 ..Firing::default()
             },
@@ -143,6 +166,10 @@ impl Decoder {
     /// must have one entry per channel of the model, and only the XT32 may go without.
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         let model = config.model;
+        if model == Model::At128 {
+            // Its angles come from the mirror-frame correction file, not per-channel ones.
+            return Err(ConfigError::Calibration);
+        }
         let calibration = config
             .calibration
             .or(model.nominal_calibration())
@@ -195,7 +222,9 @@ impl Decoder {
             };
         }
         let mode = ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?;
-        if mode.returns() != usize::from(p.returns()) {
+        if p.returns(self.model)
+            .is_some_and(|r| usize::from(r) != mode.returns())
+        {
             return Err(PacketError::UnknownReturnMode);
         }
         self.mode = Some((mode, byte));
@@ -282,13 +311,14 @@ impl Decoder {
         let returns = mode.returns();
         let base = t as i64 - self.sweep_start_ns as i64;
         let channels = self.model.channels();
+        let unit_m = p.distance_unit_m();
         for firing in 0..self.model.blocks() / returns {
             let block = firing * returns;
             let azimuth = f64::from(p.azimuth(block)) * 0.01;
             let state = p.firing(block, returns);
             for (c, beam) in self.beams.iter().enumerate().take(channels) {
                 let mut emit = |raw: (u16, u8), ret| {
-                    let near = f64::from(raw.0) * DISTANCE_UNIT_M < PANDAR128_NEAR_M;
+                    let near = f64::from(raw.0) * unit_m < PANDAR128_NEAR_M;
                     let offset = self
                         .model
                         .point_offset_ns(block, c, &Firing { near, ..state });
@@ -299,7 +329,12 @@ impl Decoder {
                         ret,
                         intensity: u16::from(raw.1),
                     };
-                    self.asm.push(sink, point(beam, raw.0, azimuth), time, meta);
+                    self.asm.push(
+                        sink,
+                        point(beam, f64::from(raw.0) * unit_m, azimuth),
+                        time,
+                        meta,
+                    );
                 };
                 let first = p.channel(block, c);
                 match mode {
@@ -345,8 +380,7 @@ impl Decode for Decoder {
 
 /// A return in the sensor frame: x forward (azimuth 0), y left, z up (the ROS convention; the
 /// azimuth turns clockwise seen from above).
-fn point(beam: &Beam, raw: u16, block_azimuth_deg: f64) -> [f64; 3] {
-    let d = f64::from(raw) * DISTANCE_UNIT_M;
+fn point(beam: &Beam, d: f64, block_azimuth_deg: f64) -> [f64; 3] {
     let theta = (block_azimuth_deg + beam.azimuth_deg).to_radians();
     let xy = d * beam.cos_e;
     [

@@ -326,8 +326,9 @@ pub struct PcapSweeps {
 /// hand on.
 struct Survey {
     seen: BTreeMap<(u16, usize), u64>,
-    /// Hesai protocol versions (major, minor) of the `EE FF` packets on port 2368.
-    hesai: BTreeMap<(u8, u8), u64>,
+    /// Hesai models of the packets on port 2368, by their first bytes
+    /// ([`hesai::identify`]).
+    hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
 }
@@ -344,10 +345,8 @@ fn survey(path: &Path) -> Result<Survey> {
         match capture.next_record() {
             Ok(Some(Record::Datagram(d))) => {
                 *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
-                if let (VELODYNE_PORT, [0xEE, 0xFF, major, minor, ..]) =
-                    (d.port, d.payload.as_slice())
-                {
-                    *s.hesai.entry((*major, *minor)).or_insert(0) += 1;
+                if let (VELODYNE_PORT, Some(model)) = (d.port, hesai::identify(&d.payload)) {
+                    s.hesai.entry(model.name()).or_insert((model, 0)).1 += 1;
                 }
             }
             Ok(Some(Record::Damaged { port, .. })) => {
@@ -504,17 +503,11 @@ pub fn decode(
     ))
 }
 
-/// The Hesai model whose protocol most `EE FF` packets on port 2368 announce. Protocol 1.4
-/// is taken for an OT128: the Pandar128 sends the same packets and differs in firing times
-/// only (`--sensor pandar128`).
+/// The Hesai model most packets on port 2368 come from ([`hesai::identify`]). Protocol 1.4 is
+/// taken for an OT128: the Pandar128 sends the same packets and differs in firing times only
+/// (`--sensor pandar128`).
 fn hesai_in(s: &Survey) -> Option<hesai::Model> {
-    let (&version, _) = s.hesai.iter().max_by_key(|(_, n)| **n)?;
-    match version {
-        hesai::wire::VERSION => Some(hesai::Model::Xt32),
-        hesai::wire128::VERSION_QT => Some(hesai::Model::Qt128),
-        hesai::wire128::VERSION_128 => Some(hesai::Model::Ot128),
-        _ => None,
-    }
+    s.hesai.values().max_by_key(|(_, n)| *n).map(|(m, _)| *m)
 }
 
 /// The Hesai model `--sensor` names, if it names one.
@@ -524,6 +517,12 @@ fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
         SensorKind::Qt128 => Some(hesai::Model::Qt128),
         SensorKind::Pandar128 => Some(hesai::Model::Pandar128),
         SensorKind::Ot128 => Some(hesai::Model::Ot128),
+        SensorKind::Xt16 => Some(hesai::Model::Xt16),
+        SensorKind::Xt32m => Some(hesai::Model::Xt32m),
+        SensorKind::Pandar40p => Some(hesai::Model::Pandar40P),
+        SensorKind::Pandar64 => Some(hesai::Model::Pandar64),
+        SensorKind::Qt64 => Some(hesai::Model::PandarQT64),
+        SensorKind::At128 => Some(hesai::Model::At128),
         _ => None,
     }
 }
@@ -718,6 +717,9 @@ impl PcapSweeps {
                 hesai::wire::field::LEN_WITH_SEQUENCE
             }
             // The lengths the sensors send by default: QT128C2X 1127 bytes, 1.4 861 bytes.
+            Decoder::Hesai(d) if d.model().fixed_format().is_some() => {
+                d.model().fixed_format().map_or(0, |f| f.default_len())
+            }
             Decoder::Hesai(d) if d.model() == hesai::Model::Qt128 => {
                 hesai::wire128::packet_len(hesai::wire128::VERSION_QT, 0x1D)
             }
