@@ -246,6 +246,10 @@ def sensor_seeds():
     put("hesai_packets", "qt128-3-packets", bytes([1 << 1 | 8]) + b"".join(b"\0\0" + p for p in qt128))
     put("hesai_packets", "ot128-4-packets", bytes([3 << 1]) + b"".join(
         b"\0\0" + hesai_1_4_packet(k) for k in range(4)))
+    for k, model in enumerate(["40p", "64", "qt64", "xt16", "xt32m"]):
+        pkts = udp_payloads(ROOT / "fixtures" / "hesai-nebula" / f"{model}.pcap", 2368)[:3]
+        put("hesai_fixed_packets", f"{model}-3-packets",
+            bytes([k << 1]) + b"".join(b"\0\0" + p for p in pkts))
     livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]
     put("livox_packets", "tele15-6-packets",
         bytes([0]) + b"".join(struct.pack("<H", 0x8000 | len(p)) + p for p in livox))

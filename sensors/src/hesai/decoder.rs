@@ -212,16 +212,18 @@ impl Decoder {
         self.mode.map(|(m, _)| m)
     }
 
+    /// The packet's return mode: the one the first packet fixed, which every packet's mode
+    /// byte must repeat (else another sensor's) and its header's return count agree with
+    /// (else the header is damaged).
     fn identify(&mut self, p: &View<'_>) -> Result<ReturnMode, PacketError> {
         let byte = p.return_mode();
-        if let Some((mode, b)) = self.mode {
-            return if b == byte {
-                Ok(mode)
-            } else {
-                Err(PacketError::OtherSensor)
-            };
-        }
-        let mode = ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?;
+        let mode = match self.mode {
+            Some((mode, b)) if b == byte => mode,
+            Some(_) => return Err(PacketError::OtherSensor),
+            None => {
+                ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?
+            }
+        };
         if p.returns(self.model)
             .is_some_and(|r| usize::from(r) != mode.returns())
         {
