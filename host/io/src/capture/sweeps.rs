@@ -522,7 +522,6 @@ fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
         SensorKind::Pandar40p => Some(hesai::Model::Pandar40P),
         SensorKind::Pandar64 => Some(hesai::Model::Pandar64),
         SensorKind::Qt64 => Some(hesai::Model::PandarQT64),
-        SensorKind::At128 => Some(hesai::Model::At128),
         _ => None,
     }
 }
@@ -592,6 +591,14 @@ fn hesai_decoder(
     model: hesai::Model,
     port: u16,
 ) -> Result<PcapSweeps> {
+    if model == hesai::Model::At128 {
+        bail!(
+            "{}: packets of a {}: its angles come from the mirror-frame correction file (.dat), \
+             which this reader does not decode",
+            path.display(),
+            model.name()
+        );
+    }
     let calibration = match opts.calibration.as_deref() {
         Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
         None if model.nominal_calibration().is_none() => bail!(
