@@ -43,7 +43,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 8] = [
+const CASES: [Case; 13] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -96,6 +96,37 @@ const CASES: [Case; 8] = [
         azimuth_rad: 0.0,
         clock_origin_s: PacketSensor::Ot128.clock_origin_s(),
     },
+    // The fixed-layout Hesai models, as the QT128.
+    Case {
+        sensor: "xt16",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Xt16.clock_origin_s(),
+    },
+    Case {
+        sensor: "xt32m",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Xt32m.clock_origin_s(),
+    },
+    Case {
+        sensor: "pandar40p",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Pandar40p.clock_origin_s(),
+    },
+    Case {
+        sensor: "pandar64",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Pandar64.clock_origin_s(),
+    },
+    Case {
+        sensor: "qt64",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Qt64.clock_origin_s(),
+    },
 ];
 
 impl Case {
@@ -113,9 +144,12 @@ impl Case {
         matches!(self.sensor, "mid360" | "xt32" | "avia")
     }
     /// Whether `run` finds the recording by its packets and needs the angle correction file
-    /// `simulate` wrote beside it (the 128-channel Hesai sensors).
+    /// `simulate` wrote beside it (the Hesai sensors but the XT32).
     fn needs_angles(&self) -> bool {
-        matches!(self.sensor, "qt128" | "ot128")
+        matches!(
+            self.sensor,
+            "qt128" | "ot128" | "xt16" | "xt32m" | "pandar40p" | "pandar64" | "qt64"
+        )
     }
     /// Whether `dump_generated.py`'s references decode the format (velodyne-decoder and
     /// ouster-sdk; the copper-rs parsers of the XT32 and the Avia have their own test).

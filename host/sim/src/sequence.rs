@@ -137,8 +137,8 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
     }
     if request.format == Format::Pcap && request.sensor.is_none() {
         bail!(
-            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128 \
-             or ot128)"
+            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128, \
+             ot128, xt16, xt32m, pandar40p, pandar64 or qt64)"
         );
     }
     Ok(params)
