@@ -35,7 +35,9 @@ pub const BLOCK_START: [u8; 2] = [0xFF, 0xEE];
 pub enum Date {
     /// Year, month, day, hour, minute, second, the year counted from this year.
     Civil(u16),
-    /// A zero byte, then seconds since the Unix epoch, 5 bytes big-endian (AT128).
+    /// A zero byte, then seconds since the Unix epoch, 5 bytes big-endian (AT128: nebula's
+    /// `SecondsSinceEpoch`); a nonzero first byte is the civil date of the other models, year
+    /// counted from 1900 (Hesai's SDK 2.0, `HS_LIDAR_TAIL_ST_V3::GetMicroLidarTimeU64`).
     EpochSeconds,
 }
 
@@ -373,8 +375,9 @@ impl<'a> Packet<'a> {
                 d[0] = year;
                 utc_ns(&d, us)
             }
+            Date::EpochSeconds if date[0] != 0 => utc_ns(date, us),
             Date::EpochSeconds => {
-                if date[0] != 0 || us >= 1_000_000 {
+                if us >= 1_000_000 {
                     return None;
                 }
                 let s = date[1..].iter().fold(0u64, |s, &b| (s << 8) | u64::from(b));
