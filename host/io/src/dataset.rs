@@ -284,6 +284,8 @@ pub enum SensorKind {
     Pandar64,
     /// Hesai PandarQT64 (needs its angle correction file, --calibration).
     Qt64,
+    /// Hesai PandarAT128 (needs its angle correction file, the .dat, --calibration).
+    At128,
     /// Hesai PandarQT128 (needs its angle correction file, --calibration).
     Qt128,
     /// Hesai Pandar128 (needs its angle correction file, --calibration).
@@ -308,7 +310,7 @@ pub struct SensorOptions {
     pub port: Option<u16>,
     /// Ouster metadata JSON.
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), or Hesai angle correction (CSV).
+    /// Velodyne calibration (XML or YAML), or Hesai angle correction (CSV; AT128: .dat).
     pub calibration: Option<PathBuf>,
     /// Livox frame period, seconds (default 0.1).
     pub frame_period_s: Option<f64>,

@@ -21,7 +21,7 @@
 //! capacity), however long the sensor takes to end it.
 
 use super::pcap::{self, Capture, Datagram, Record};
-use super::{hesai_calib, ouster_meta, velodyne_calib};
+use super::{hesai_at128, hesai_calib, ouster_meta, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
 use crate::imu::ImuSample;
 use anyhow::{anyhow, bail, Result};
@@ -164,6 +164,8 @@ enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
     Ouster(Box<ouster::Decoder>),
     Hesai(Box<hesai::Decoder>),
+    /// The PandarAT128: its angles from the mirror-frame correction.
+    HesaiAt128(Box<hesai::Decoder<hesai::MirrorAngles>>),
     Livox(Box<livox::Decoder>),
 }
 
@@ -177,6 +179,7 @@ impl Decoder {
                 Self::Velodyne(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
                 Self::Hesai(d) => d.push(bytes, sink),
+                Self::HesaiAt128(d) => d.push(bytes, sink),
                 Self::Livox(d) => d.push(bytes, sink),
             };
             if r != Ok(Pushed::Again) {
@@ -190,6 +193,7 @@ impl Decoder {
             Self::Velodyne(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
             Self::Hesai(d) => d.finish(sink),
+            Self::HesaiAt128(d) => d.finish(sink),
             Self::Livox(d) => d.finish(sink),
         }
     }
@@ -198,6 +202,7 @@ impl Decoder {
             Self::Velodyne(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
             Self::Hesai(d) => *d.between_sweeps(),
+            Self::HesaiAt128(d) => *d.between_sweeps(),
             Self::Livox(d) => *d.between_sweeps(),
         }
     }
@@ -522,6 +527,7 @@ fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
         SensorKind::Pandar40p => Some(hesai::Model::Pandar40P),
         SensorKind::Pandar64 => Some(hesai::Model::Pandar64),
         SensorKind::Qt64 => Some(hesai::Model::PandarQT64),
+        SensorKind::At128 => Some(hesai::Model::At128),
         _ => None,
     }
 }
@@ -592,12 +598,7 @@ fn hesai_decoder(
     port: u16,
 ) -> Result<PcapSweeps> {
     if model == hesai::Model::At128 {
-        bail!(
-            "{}: packets of a {}: its angles come from the mirror-frame correction file (.dat), \
-             which this reader does not decode",
-            path.display(),
-            model.name()
-        );
+        return at128_decoder(path, capture, opts, port);
     }
     let calibration = match opts.calibration.as_deref() {
         Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
@@ -623,6 +624,39 @@ fn hesai_decoder(
         decoder,
         opts,
         (port, sensor, Vec::new()),
+    ))
+}
+
+/// The PandarAT128 decoder with its angle correction file (`.dat`, [`hesai_at128`]).
+fn at128_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    port: u16,
+) -> Result<PcapSweeps> {
+    let name = hesai::Model::At128.name();
+    let Some(dat) = opts.calibration.as_deref() else {
+        bail!(
+            "{}: packets of a {name}: give its angle correction file (the .dat the sensor \
+             hands out and Hesai ships) with --calibration",
+            path.display()
+        );
+    };
+    if opts.cut_angle_deg.is_some() {
+        bail!(
+            "{}: packets of a {name}: its sweeps are its mirror frames, so --cut-angle does not \
+             apply",
+            path.display()
+        );
+    }
+    let correction = hesai_at128::read(dat)?;
+    let dec = hesai::Decoder::at128(&correction).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    Ok(sweeps(
+        path,
+        capture,
+        Decoder::HesaiAt128(Box::new(dec)),
+        opts,
+        (port, name.to_string(), Vec::new()),
     ))
 }
 
@@ -731,6 +765,7 @@ impl PcapSweeps {
                 hesai::wire128::packet_len(hesai::wire128::VERSION_QT, 0x1D)
             }
             Decoder::Hesai(_) => hesai::wire128::packet_len(hesai::wire128::VERSION_128, 0x07),
+            Decoder::HesaiAt128(_) => hesai::wire_fixed::PANDARAT128.default_len(),
             // The SDKs' default data types: SDK 1's 2, SDK 2's 1 (96 points, the Mid-360's).
             Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
                 livox::sdk2::packet_len(1, livox::sdk2::MID360_POINTS).unwrap_or(0)
