@@ -20,6 +20,7 @@
 //! (`packets/ouster_imu.rs`, `packets/mid360_imu.rs`), one a sample, stamped on the clock of
 //! their lidar packets.
 
+mod at128;
 mod avia;
 mod hesai128;
 mod hesai_fixed;
@@ -102,6 +103,11 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "qt64"))]
     #[serde(rename = "qt64")]
     Qt64,
+    /// Hesai PandarAT128, protocol 4.3, strongest return, 10 frames a second of 600 packets
+    /// (its angle correction file, the `.dat`, beside).
+    #[cfg_attr(feature = "clap", value(name = "at128"))]
+    #[serde(rename = "at128")]
+    At128,
 }
 
 impl PacketSensor {
@@ -218,6 +224,8 @@ impl PacketSensor {
             Self::Xt32 => Err("an XT32 runs at 5, 10 or 20 Hz (--rate-hz)".into()),
             Self::Qt128 | Self::Ot128 if rate_hz == hesai128::RATE_HZ => Ok(rate_hz),
             Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
+            Self::At128 if rate_hz == at128::RATE_HZ => Ok(rate_hz),
+            Self::At128 => Err("an AT128 runs at 10 frames a second (--rate-hz)".into()),
             s if s.hesai_fixed() && rate_hz == hesai_fixed::RATE_HZ => Ok(rate_hz),
             s if s.hesai_fixed() => {
                 Err("the simulated Hesai sensors run at 10 Hz (--rate-hz)".into())
@@ -241,6 +249,12 @@ impl PacketSensor {
         matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
     }
 
+    /// The PandarAT128's angle correction file (the `.dat`, version 1.5), which its decoder
+    /// needs; `None` for the other sensors.
+    pub fn correction_file(self) -> Option<Vec<u8>> {
+        (self == Self::At128).then(at128::correction_file)
+    }
+
     /// The IMU packet carrying `sample`, the `count`th, sent at trajectory time `offset` and
     /// stamped with the sample's time on the clock the sensor's lidar packets use; `None` for
     /// a sensor whose IMU packets the simulator does not write (all but the OS1 and the
@@ -259,7 +273,7 @@ impl PacketSensor {
     /// with a UTC date (from 2024-01-01 00:00:00); the other sensors' clocks read sequence time.
     pub const fn clock_origin_s(self) -> i64 {
         match self {
-            Self::Xt32 | Self::Qt128 | Self::Ot128 => xt32::CLOCK_ORIGIN_S,
+            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::At128 => xt32::CLOCK_ORIGIN_S,
             s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
@@ -277,6 +291,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Xt32 => per_period(xt32::PACKET_NS),
             PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
             s if s.hesai_fixed() => per_period(hesai_fixed::packet_ns(sensor)),
+            PacketSensor::At128 => at128::PACKETS_PER_FRAME,
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
         };
@@ -318,6 +333,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Xt32 => xt32::last_offset(last),
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
             s if s.hesai_fixed() => hesai_fixed::last_offset(s, last),
+            PacketSensor::At128 => at128::last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
                 self.packet_offset(last) + self.model.firing_time_s(n, 31)
@@ -346,6 +362,7 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Xt32 => self.xt32_packet(p),
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
                 s if s.hesai_fixed() => self.hesai_fixed_packet(p),
+                PacketSensor::At128 => self.at128_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();

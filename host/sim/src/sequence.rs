@@ -222,6 +222,11 @@ pub fn write(
                 std::fs::write(&path, angles)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
+            if let Some(dat) = sensor.correction_file() {
+                let path = writer.staging().join(capture::CORRECTION_NAME);
+                std::fs::write(&path, dat)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
             let path = writer.staging().join(capture::PCAP_NAME);
             Some(capture::CaptureWriter::create(
                 &path,

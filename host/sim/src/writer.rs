@@ -26,13 +26,14 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 9] = [
+const OWNED_FILES: [&str; 10] = [
     "poses.txt",
     "times.txt",
     "sim.toml",
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
+    crate::capture::CORRECTION_NAME,
     crate::imu::CSV_NAME,
     crate::ros::BAG_NAME,
     crate::ros::MCAP_NAME,
