@@ -35,6 +35,7 @@ mod sensors_bad_input;
 mod sensors_capture;
 mod sensors_hesai;
 mod sensors_hesai128;
+mod sensors_hesai_at128;
 mod sensors_hesai_fixed_bad;
 mod sensors_hesai_nebula;
 mod sensors_imu;
