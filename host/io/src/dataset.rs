@@ -280,8 +280,20 @@ pub enum SensorKind {
     Vls128,
     /// Ouster (needs the metadata JSON).
     Ouster,
-    /// Hesai PandarXT-32 (also XT16, XT32M).
+    /// Hesai PandarXT-32.
     Xt32,
+    /// Hesai PandarXT-16 (nominal angles built in; --calibration for the unit's own).
+    Xt16,
+    /// Hesai PandarXT32M (needs its angle correction file, --calibration).
+    Xt32m,
+    /// Hesai Pandar40P (needs its angle correction file, --calibration).
+    Pandar40p,
+    /// Hesai Pandar64 (needs its angle correction file, --calibration).
+    Pandar64,
+    /// Hesai PandarQT64 (needs its angle correction file, --calibration).
+    Qt64,
+    /// Hesai PandarAT128 (needs its angle correction file, the .dat, --calibration).
+    At128,
     /// Hesai PandarQT128 (needs its angle correction file, --calibration).
     Qt128,
     /// Hesai Pandar128 (needs its angle correction file, --calibration).
@@ -321,8 +333,8 @@ pub struct SensorOptions {
     pub port: Option<u16>,
     /// Ouster metadata JSON.
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), Hesai angle correction (CSV), or Robosense
-    /// angle.csv.
+    /// Velodyne calibration (XML or YAML), Hesai angle correction (CSV; AT128: .dat), or
+    /// Robosense angle.csv.
     pub calibration: Option<PathBuf>,
     /// Livox frame period, seconds (default 0.1).
     pub frame_period_s: Option<f64>,

@@ -137,8 +137,8 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
     }
     if request.format == Format::Pcap && request.sensor.is_none() {
         bail!(
-            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128 \
-             or ot128)"
+            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128, \
+             ot128, xt16, xt32m, pandar40p, pandar64 or qt64)"
         );
     }
     Ok(params)
@@ -225,6 +225,11 @@ pub fn write(
             if let Some(text) = sensor.calibration_file() {
                 let path = writer.staging().join(capture::CALIBRATION_NAME);
                 std::fs::write(&path, text)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            if let Some(dat) = sensor.correction_file() {
+                let path = writer.staging().join(capture::CORRECTION_NAME);
+                std::fs::write(&path, dat)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
             let path = writer.staging().join(capture::PCAP_NAME);
