@@ -3,7 +3,9 @@
 //! recording).
 
 use anyhow::Result;
-use kiss_odom_sim::{Format, ImuSpec, Lidar, PacketSensor, Profile, Request, SimParams, Written};
+use kiss_odom_sim::{
+    Format, ImuSpec, Layout, Lidar, PacketSensor, Profile, Request, SimParams, Written,
+};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -67,6 +69,12 @@ pub struct SimulateArgs {
     /// What to write.
     #[arg(long, value_enum, default_value_t = Format::Generic)]
     pub format: Format,
+    /// Write a public dataset's own layout instead, with its ground truth in that dataset's
+    /// convention (read it back with `run --format` of the same name; mulran and ncd store
+    /// whole 64 x 1024 scans, so --beams and --columns are set to those; helipr writes all
+    /// four of its LiDARs, chosen with `run --sequence`).
+    #[arg(long, value_enum, default_value_t = Layout::Generic)]
+    pub layout: Layout,
     /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
     /// 200), with white noise, turn-on biases that then walk, and gravity, 11, 23 and -44 mm
     /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it. With
@@ -91,6 +99,7 @@ impl SimulateArgs {
             params: self.params(),
             sensor: self.sensor,
             format: self.format,
+            layout: self.layout,
             imu: self.imu_rate.map(|rate| {
                 let spec = ImuSpec::mems(rate);
                 if self.imu_exact {
