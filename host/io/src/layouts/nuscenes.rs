@@ -9,18 +9,22 @@
 //!
 //! `--sequence N` names the scene `scene-000N`. As the loader: the scene's `LIDAR_TOP` sweeps
 //! from its first sample's key frame along the `next` links; each pose is the ego pose times
-//! the LiDAR's calibration, stored as float32, then re-based to the first. The loader does the
-//! re-basing in float32 arithmetic (`np.linalg.inv` of a float32 matrix); it is done here in
-//! float64 on the same float32 values and rounded to float32, which differs from the loader by
-//! float32 rounding (about 1e-7 of the poses' distance from the first). kiss-icp reads only the
-//! `v1.0-mini` tables' `mini_train` scenes; any version folder and scene are read here. No
-//! per-point times.
+//! the LiDAR's calibration, stored as float32, then re-based to the first in float32 as numpy
+//! does it ([`rebase_f32`]: the inverse in float64 rounded to float32, the product a float32
+//! `sgemm`). The poses are about a kilometre from the map's origin, so each float32 rounding
+//! there is about 1e-4 m: the re-basing is replicated to the bit, with the fused multiply-adds
+//! of the BLAS kernel OpenBLAS picks on x86-64 CPUs since Haswell and on ARM; where kiss-icp's
+//! OpenBLAS rounds each product instead (its SSE kernels, on a CPU it does not recognise) its
+//! ground truth differs from this by a few float32 steps (up to about 5e-4 m at 2 km).
+//! kiss-icp reads only the `v1.0-mini` tables' `mini_train` scenes; any version folder and
+//! scene are read here. No per-point times.
 
-use super::rotation::{quaternion_matrix, rigid, to_f32};
+use super::rotation::{quaternion_matrix, rebase_f32, rigid, to_f32, F32Products};
 use super::scans::read_f32_bin;
 use super::{Layout, Scan, Truth};
 use crate::dataset::Format;
 use anyhow::{bail, Context, Result};
+use nalgebra::Matrix4;
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -140,6 +144,34 @@ fn scene<'a>(scenes: &'a [SceneRec], sequence: Option<&str>, dir: &Path) -> Resu
 
 /// Opens the scene `sequence` names in the nuScenes data root `root`.
 pub fn layout(root: &Path, sequence: Option<&str>) -> Result<Layout> {
+    let scene = walk(root, sequence)?;
+    let matrices = rebase_f32(&scene.poses, F32Products::Fused, "the first LiDAR pose")?;
+    Ok(Layout {
+        format: Format::Nuscenes,
+        scans: scene.scans,
+        read: Box::new(|path, max| read_f32_bin(path, 5, max)),
+        truth: Truth {
+            path: scene.tables.join("ego_pose.json"),
+            matrices,
+        },
+        warnings: Vec::new(),
+    })
+}
+
+/// The LiDAR's global poses of the scene `sequence` names (`ego C`, each entry rounded to
+/// float32 as the loader stores them), before the re-basing [`layout`] does.
+pub fn global_poses(root: &Path, sequence: Option<&str>) -> Result<Vec<Matrix4<f64>>> {
+    Ok(walk(root, sequence)?.poses)
+}
+
+/// A scene's sweeps along the `next` links.
+struct Scene {
+    tables: PathBuf,
+    scans: Vec<Scan>,
+    poses: Vec<Matrix4<f64>>,
+}
+
+fn walk(root: &Path, sequence: Option<&str>) -> Result<Scene> {
     let Some(dir) = tables_dir(root) else {
         bail!(
             "{}: no v1.0-mini/scene.json (nor one other v1.0-* table folder)",
@@ -222,16 +254,9 @@ pub fn layout(root: &Path, sequence: Option<&str>) -> Result<Layout> {
             )
         })?;
     }
-    let first = super::rotation::inverse(&matrices[0], "the first LiDAR pose")?;
-    let matrices = matrices.iter().map(|p| to_f32(&(first * p))).collect();
-    Ok(Layout {
-        format: Format::Nuscenes,
+    Ok(Scene {
+        tables: dir,
         scans,
-        read: Box::new(|path, max| read_f32_bin(path, 5, max)),
-        truth: Truth {
-            path: dir.join("ego_pose.json"),
-            matrices,
-        },
-        warnings: Vec::new(),
+        poses: matrices,
     })
 }
