@@ -58,6 +58,11 @@ pub struct SimulateArgs {
     /// Sequence time of the first point (s); every timestamp is offset by it.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub start_time: f64,
+    /// Start this many seconds into the drive (0 to 600): the same route and motion, entered
+    /// moving rather than from the standing start (e.g. 8 s puts the urban profile under seed 0
+    /// in its first turn).
+    #[arg(long, default_value_t = 0.0)]
+    pub lead_in: f64,
     /// A real sensor's beams, firing timing and packets instead of the generic sensor (whose
     /// --beams, --columns and --fov-* flags are then ignored); --rate-hz is rounded to the
     /// sensor's (a whole number of packets per turn; 10 or 20 Hz for the OS1, 5, 10 or 20 Hz
@@ -71,8 +76,9 @@ pub struct SimulateArgs {
     pub format: Format,
     /// Write a public dataset's own layout instead, with its ground truth in that dataset's
     /// convention (read it back with `run --format` of the same name; mulran and ncd store
-    /// whole 64 x 1024 scans, so --beams and --columns are set to those; helipr writes all
-    /// four of its LiDARs, chosen with `run --sequence`).
+    /// whole 64 x 1024 Ouster scans, so take at most 64 --beams and 1024 --columns, fewer
+    /// leaving rows and columns empty; helipr writes all four of its LiDARs, chosen with `run
+    /// --sequence`).
     #[arg(long, value_enum, default_value_t = Layout::Generic)]
     pub layout: Layout,
     /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
@@ -118,6 +124,7 @@ impl SimulateArgs {
             seed: self.seed,
             frames: self.frames,
             start_time: self.start_time,
+            lead_in: self.lead_in,
             sensor: Lidar {
                 beams: self.beams,
                 columns: self.columns,

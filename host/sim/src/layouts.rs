@@ -54,7 +54,8 @@ pub enum Layout {
 }
 
 impl Layout {
-    /// Whether the layout stores whole 64 x 1024 Ouster scans (the sensor is set to that).
+    /// Whether the layout stores whole 64 x 1024 Ouster scans ([`OUSTER_GRID`]; the sensor
+    /// may have fewer beams and columns, not more).
     pub fn ouster_grid(self) -> bool {
         matches!(self, Layout::Mulran | Layout::Ncd)
     }
@@ -203,12 +204,15 @@ pub fn stamp(start: u64, seconds: f64, per_second: f64) -> u64 {
     start.saturating_add((seconds * per_second).round().max(0.0) as u64)
 }
 
+/// Rows and columns of the Ouster OS1-64 scans MulRan and Newer College store.
+pub const OUSTER_GRID: (u32, u32) = (64, 1024);
+
 /// A frame's points as a column-major 64 x 1024 grid, as an Ouster OS1-64 writes them: each
 /// column's returns in its first rows, zeros (no return) after; a point's column from its
-/// capture time.
+/// capture time (a sensor with fewer columns leaves the columns between its firings empty).
 pub fn ouster_grid(sim: &Simulation, frame: &Frame) -> Vec<[f32; 4]> {
-    const H: usize = 64;
-    const W: usize = 1024;
+    const H: usize = OUSTER_GRID.0 as usize;
+    const W: usize = OUSTER_GRID.1 as usize;
     let mut grid = vec![[0.0f32; 4]; H * W];
     let mut rows = vec![0usize; W];
     let start = sim.params().start_time;

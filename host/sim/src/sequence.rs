@@ -82,6 +82,8 @@ struct Provenance<'a> {
     seed: u64,
     frames: u64,
     start_time: f64,
+    #[serde(skip_serializing_if = "is_zero")]
+    lead_in: f64,
     /// What the files mean, for a reader without this source at hand.
     layout: &'static str,
     sensor: &'a Lidar,
@@ -148,10 +150,18 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
                     .unwrap_or("?")
             );
         }
-        if request.layout.ouster_grid() {
-            // The layout stores whole OS1-64 scans: 64 beams, 1024 columns.
-            params.sensor.beams = 64;
-            params.sensor.columns = 1024;
+        let (rows, columns) = layouts::OUSTER_GRID;
+        if request.layout.ouster_grid()
+            && (params.sensor.beams > rows || params.sensor.columns > columns)
+        {
+            // Each beam is a row of the OS1-64's grid and each column one of its firings.
+            bail!(
+                "--layout {}: the scans are {rows} x {columns} Ouster grids: at most {rows} \
+                 --beams and {columns} --columns (fewer leave rows and columns without returns)",
+                serde_json::to_value(request.layout)?
+                    .as_str()
+                    .unwrap_or("?")
+            );
         }
     }
     if request.format == Format::Pcap && request.sensor.is_none() {
@@ -198,6 +208,7 @@ pub fn write(
         seed: params.seed,
         frames: params.frames,
         start_time: params.start_time,
+        lead_in: params.lead_in,
         layout: LAYOUT,
         sensor: &params.sensor,
         packets: packets
@@ -326,6 +337,7 @@ fn write_layout(
         seed: params.seed,
         frames: params.frames,
         start_time: params.start_time,
+        lead_in: params.lead_in,
         layout: request.layout,
         sensor: &params.sensor,
     };
@@ -361,8 +373,15 @@ struct LayoutProvenance<'a> {
     seed: u64,
     frames: u64,
     start_time: f64,
+    #[serde(skip_serializing_if = "is_zero")]
+    lead_in: f64,
     layout: Layout,
     sensor: &'a Lidar,
+}
+
+/// `sim.toml` records a lead-in only when there is one.
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// The IMU samples as the sensor's IMU packets, sent between its lidar packets in time order.
