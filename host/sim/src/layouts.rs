@@ -17,6 +17,8 @@ pub mod mulran;
 pub mod ncd;
 pub mod nclt;
 pub mod nuscenes;
+#[cfg(test)]
+mod tests;
 
 use crate::sensor::Frame;
 use crate::simulation::Simulation;
