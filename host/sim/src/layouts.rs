@@ -36,20 +36,20 @@ pub enum Layout {
     /// kiss-odom's generic layout (velodyne/, timestamps/, poses.txt, times.txt).
     #[default]
     Generic,
-    /// MulRan: Ouster/<ns>.bin (a 64 x 1024 grid), global_pose.csv.
+    /// MulRan: `Ouster/<ns>.bin` (a 64 x 1024 grid), `global_pose.csv`.
     Mulran,
-    /// NCLT: 2012-01-08/velodyne_sync/<us>.bin, ground_truth/groundtruth_2012-01-08.csv.
+    /// NCLT: `2012-01-08/velodyne_sync/<us>.bin`, `ground_truth/groundtruth_2012-01-08.csv`.
     Nclt,
-    /// Newer College: raw_format/ouster_scan/cloud_<s>_<ns>.pcd (64 x 1024),
-    /// ground_truth/registered_poses.csv.
+    /// Newer College: `raw_format/ouster_scan/cloud_<s>_<ns>.pcd` (64 x 1024),
+    /// `ground_truth/registered_poses.csv`.
     Ncd,
-    /// HeLiPR: LiDAR/{Ouster,Velodyne,Avia,Aeva}/<ns>.bin, LiDAR_GT/global_<sensor>_gt.txt.
+    /// HeLiPR: `LiDAR/{Ouster,Velodyne,Avia,Aeva}/<ns>.bin`, `LiDAR_GT/global_<sensor>_gt.txt`.
     Helipr,
-    /// Boreas: lidar/<us>.bin, applanix/lidar_poses.csv.
+    /// Boreas: `lidar/<us>.bin`, `applanix/lidar_poses.csv`.
     Boreas,
     /// nuScenes: v1.0-mini/*.json, samples/ and sweeps/LIDAR_TOP/*.pcd.bin (scene-0061).
     Nuscenes,
-    /// Apollo-SouthBay: pcds/<n>.pcd, poses/gt_poses.txt.
+    /// Apollo-SouthBay: `pcds/<n>.pcd`, `poses/gt_poses.txt`.
     Apollo,
     /// KITTI raw: 2011_10_03/2011_10_03_drive_0027_sync/ (odometry sequence 00), OXTS poses.
     KittiRaw,
