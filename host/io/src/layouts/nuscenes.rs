@@ -12,14 +12,15 @@
 //! the LiDAR's calibration, stored as float32, then re-based to the first in float32 as numpy
 //! does it ([`rebase_f32`]: the inverse in float64 rounded to float32, the product a float32
 //! `sgemm`). The poses are about a kilometre from the map's origin, so each float32 rounding
-//! there is about 1e-4 m: the re-basing is replicated to the bit, with the fused multiply-adds
-//! of the BLAS kernel OpenBLAS picks on x86-64 CPUs since Haswell and on ARM; where kiss-icp's
-//! OpenBLAS rounds each product instead (its SSE kernels, on a CPU it does not recognise) its
-//! ground truth differs from this by a few float32 steps (up to about 5e-4 m at 2 km).
+//! there is about 1e-4 m: the arithmetic is replicated to the bit, with the fused
+//! multiply-adds of the BLAS kernel OpenBLAS picks on x86-64 CPUs since Haswell
+//! ([`Products`]); where kiss-icp's OpenBLAS rounds each product instead (its SSE kernels, on
+//! a CPU it does not recognise) its ground truth differs from this by a few float32 steps (up
+//! to about 5e-4 m at 2 km).
 //! kiss-icp reads only the `v1.0-mini` tables' `mini_train` scenes; any version folder and
 //! scene are read here. No per-point times.
 
-use super::rotation::{quaternion_matrix, rebase_f32, rigid, to_f32, F32Products};
+use super::rotation::{product, quaternion_matrix_summed, rebase_f32, rigid, to_f32, Products};
 use super::scans::read_f32_bin;
 use super::{Layout, Scan, Truth};
 use crate::dataset::Format;
@@ -144,8 +145,8 @@ fn scene<'a>(scenes: &'a [SceneRec], sequence: Option<&str>, dir: &Path) -> Resu
 
 /// Opens the scene `sequence` names in the nuScenes data root `root`.
 pub fn layout(root: &Path, sequence: Option<&str>) -> Result<Layout> {
-    let scene = walk(root, sequence)?;
-    let matrices = rebase_f32(&scene.poses, F32Products::Fused, "the first LiDAR pose")?;
+    let scene = walk(root, sequence, Products::Fused)?;
+    let matrices = rebase_f32(&scene.poses, Products::Fused, "the first LiDAR pose")?;
     Ok(Layout {
         format: Format::Nuscenes,
         scans: scene.scans,
@@ -159,9 +160,15 @@ pub fn layout(root: &Path, sequence: Option<&str>) -> Result<Layout> {
 }
 
 /// The LiDAR's global poses of the scene `sequence` names (`ego C`, each entry rounded to
-/// float32 as the loader stores them), before the re-basing [`layout`] does.
-pub fn global_poses(root: &Path, sequence: Option<&str>) -> Result<Vec<Matrix4<f64>>> {
-    Ok(walk(root, sequence)?.poses)
+/// float32 as the loader stores them), before the re-basing [`layout`] does, with numpy's
+/// matrix products (pyquaternion's rotation matrices, `ego @ C`) summed as `products` says
+/// ([`layout`]: fused).
+pub fn global_poses(
+    root: &Path,
+    sequence: Option<&str>,
+    products: Products,
+) -> Result<Vec<Matrix4<f64>>> {
+    Ok(walk(root, sequence, products)?.poses)
 }
 
 /// A scene's sweeps along the `next` links.
@@ -171,7 +178,7 @@ struct Scene {
     poses: Vec<Matrix4<f64>>,
 }
 
-fn walk(root: &Path, sequence: Option<&str>) -> Result<Scene> {
+fn walk(root: &Path, sequence: Option<&str>, products: Products) -> Result<Scene> {
     let Some(dir) = tables_dir(root) else {
         bail!(
             "{}: no v1.0-mini/scene.json (nor one other v1.0-* table folder)",
@@ -227,10 +234,16 @@ fn walk(root: &Path, sequence: Option<&str>) -> Result<Scene> {
             )
         })?;
         let [w, x, y, z] = cs.rotation;
-        let car_to_velo = rigid(&quaternion_matrix(w, x, y, z), cs.translation);
+        let car_to_velo = rigid(
+            &quaternion_matrix_summed(w, x, y, z, products),
+            cs.translation,
+        );
         let [w, x, y, z] = ego.rotation;
-        let pose_car = rigid(&quaternion_matrix(w, x, y, z), ego.translation);
-        matrices.push(to_f32(&(pose_car * car_to_velo)));
+        let pose_car = rigid(
+            &quaternion_matrix_summed(w, x, y, z, products),
+            ego.translation,
+        );
+        matrices.push(to_f32(&product(&pose_car, &car_to_velo, products)));
         scans.push(Scan {
             path: root.join(&sd.filename),
             time: Some(sd.timestamp as f64 * 1e-6),
