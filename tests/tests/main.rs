@@ -19,6 +19,7 @@ mod golden;
 mod imu_pcaps;
 mod imu_prior;
 mod imu_readers;
+mod layouts;
 mod listen_poses;
 mod live;
 mod metrics;

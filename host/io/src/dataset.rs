@@ -154,6 +154,23 @@ pub enum Format {
     Mcap,
     /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `--port`).
     Pcap,
+    /// MulRan sequence (`Ouster/`, `global_pose.csv`).
+    Mulran,
+    /// NCLT date folder (`velodyne_sync/`, `../ground_truth/`).
+    Nclt,
+    /// Newer College sequence (`raw_format/ouster_scan/`, `ground_truth/`).
+    Ncd,
+    /// HeLiPR sequence (`LiDAR/<sensor>/`, `LiDAR_GT/`); the sensor is `--sequence`.
+    Helipr,
+    /// Boreas sequence (`lidar/`, `applanix/`).
+    Boreas,
+    /// nuScenes data root (`v1.0-mini/`); the scene is `--sequence`.
+    Nuscenes,
+    /// Apollo-SouthBay sequence (`pcds/`, `poses/`).
+    Apollo,
+    /// KITTI raw data root (`2011_10_03/...`); the odometry sequence is `--sequence`.
+    #[serde(rename = "kitti-raw")]
+    KittiRaw,
 }
 
 /// Everything known about a dataset besides its frames.
@@ -210,6 +227,9 @@ pub struct OpenOptions {
     pub sensor: SensorOptions,
     /// Where the frames' IMU samples come from.
     pub imu: ImuInput,
+    /// Which sequence of a dataset folder that holds several (`--sequence`): HeLiPR's sensor,
+    /// a nuScenes scene number, a KITTI raw odometry sequence.
+    pub sequence: Option<String>,
 }
 
 /// Where the frames' IMU samples come from (`--imu`).
@@ -232,6 +252,7 @@ impl Default for OpenOptions {
         Self {
             topic: None,
             imu: ImuInput::Builtin,
+            sequence: None,
             sensor: SensorOptions::default(),
             scan_points: kiss_odom_core::Capacities::FULL_SCALE.scan_points,
         }
