@@ -5,12 +5,14 @@
 //! never has to fit in memory and no frame costs more than the scan capacity
 //! ([`OpenOptions::scan_points`]) whatever its file says. [`open()`] picks the reader and
 //! [`Selection`] keeps the frames of a [`FrameRange`]. The readers
-//! come in three families:
+//! come in four families:
 //!
 //! - [`folders`]: a folder of frame files (`.bin`, `.ply`, `.pcd`), generic or KITTI layout;
 //! - [`ros`]: ROS 1 bags, ROS 2 MCAP files and ROS 2 sqlite3 bags carrying
 //!   `sensor_msgs/PointCloud2`, sensor packets (decoded as captures are) or Livox `CustomMsg`;
-//! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`.
+//! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`;
+//! - [`layouts`]: the public datasets' own layouts (MulRan, NCLT, Newer College, HeLiPR,
+//!   Boreas, nuScenes, Apollo, KITTI raw), read as kiss-icp's dataloaders read them.
 //!
 //! [`poses`] reads and writes trajectories (KITTI, TUM), [`metrics`] scores them against ground
 //! truth as kiss-icp does, [`imu`] holds the IMU samples sensor captures carry beside their
@@ -21,6 +23,7 @@ pub mod capture;
 pub mod dataset;
 pub mod folders;
 pub mod imu;
+pub mod layouts;
 pub mod metrics;
 pub mod open;
 pub mod pose;

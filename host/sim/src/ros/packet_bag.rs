@@ -4,7 +4,8 @@
 //!
 //! - VLP-16, VLP-32C, HDL-64E S3, VLS-128: a `velodyne_msgs/VelodyneScan` a sweep on
 //!   `/velodyne_packets`;
-//! - XT32, QT128, OT128: a `pandar_msgs/PandarScan` a sweep on `/pandar_packets` (nebula's);
+//! - the Hesai models (XT16, XT32, XT32M, Pandar40P, Pandar64, QT64, QT128, OT128, AT128): a
+//!   `pandar_msgs/PandarScan` a sweep on `/pandar_packets` (nebula's);
 //! - OS1-64: a `PacketMsg` a packet on `/ouster/lidar_packets` and `/ouster/imu_packets`, and
 //!   the metadata JSON on `/ouster/metadata` first (ouster-ros');
 //! - RS-Helios: a `robosense_msgs/RobosenseScan` a sweep on `/robosense_packets`, its DIFOP
@@ -39,7 +40,15 @@ impl Driver {
             | PacketSensor::Vlp32c
             | PacketSensor::Hdl64e
             | PacketSensor::Vls128 => Self::Velodyne,
-            PacketSensor::Xt32 | PacketSensor::Qt128 | PacketSensor::Ot128 => Self::Pandar,
+            PacketSensor::Xt32
+            | PacketSensor::Qt128
+            | PacketSensor::Ot128
+            | PacketSensor::Xt16
+            | PacketSensor::Xt32m
+            | PacketSensor::Pandar40p
+            | PacketSensor::Pandar64
+            | PacketSensor::Qt64
+            | PacketSensor::At128 => Self::Pandar,
             PacketSensor::Os1 => Self::Ouster,
             PacketSensor::Helios => Self::Robosense,
             PacketSensor::Mid360 | PacketSensor::Avia => Self::Nebula,
