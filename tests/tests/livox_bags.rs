@@ -135,6 +135,7 @@ fn messages_published_faster_than_the_frames_merge_back_with_a_frame_period() {
         messages: Messages::Livox,
         messages_per_frame: 5,
         imu: None,
+        layout: kiss_odom_sim::Layout::Generic,
         overwrite: false,
     };
     kiss_odom_sim::write(&request, &dir, &|| false, &mut |_| {}).unwrap();
@@ -153,4 +154,33 @@ fn messages_published_faster_than_the_frames_merge_back_with_a_frame_period() {
         "merged frames' point times within {worst:.1e} s of the simulator's, tolerance 1e-9 s"
     );
     assert!(worst <= 1e-9);
+}
+
+#[test]
+fn several_messages_a_frame_are_refused_for_anything_but_livox_messages() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (messages, per_frame, refused) in [
+        (Messages::Points, 3, true),
+        (Messages::Packets, 3, true),
+        (Messages::Livox, 0, true),
+        (Messages::Livox, 3, false),
+    ] {
+        let request = Request {
+            params: SimParams::new(Profile::Handheld, 9, 1),
+            sensor: Some(PacketSensor::Mid360),
+            format: kiss_odom_sim::Format::Mcap,
+            messages,
+            messages_per_frame: per_frame,
+            imu: None,
+            layout: kiss_odom_sim::Layout::Generic,
+            overwrite: true,
+        };
+        let out = kiss_odom_sim::write(&request, &tmp.path().join("sim"), &|| false, &mut |_| {});
+        let said = out.as_ref().err().map(|e| format!("{e:#}"));
+        println!("{messages:?}, {per_frame} a frame: {said:?}");
+        assert_eq!(said.is_some(), refused);
+        if let Some(e) = said {
+            assert!(e.contains("--messages-per-frame"), "{e}");
+        }
+    }
 }

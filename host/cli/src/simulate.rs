@@ -77,6 +77,10 @@ pub struct SimulateArgs {
     /// What a ROS recording (--format bag, mcap or db3) carries.
     #[arg(long, value_enum, default_value_t = Messages::Points)]
     pub messages: Messages,
+    /// With --messages livox: the Livox driver's messages per frame (its publish_freq times
+    /// the frame period; read the recording back with --frame-period to merge them).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    pub messages_per_frame: u16,
     /// Write a public dataset's own layout instead, with its ground truth in that dataset's
     /// convention (read it back with `run --format` of the same name; mulran and ncd store
     /// whole 64 x 1024 Ouster scans, so take at most 64 --beams and 1024 --columns, fewer
@@ -109,7 +113,7 @@ impl SimulateArgs {
             sensor: self.sensor,
             format: self.format,
             messages: self.messages,
-            messages_per_frame: 1,
+            messages_per_frame: usize::from(self.messages_per_frame),
             layout: self.layout,
             imu: self.imu_rate.map(|rate| {
                 let spec = ImuSpec::mems(rate);

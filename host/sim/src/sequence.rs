@@ -210,6 +210,11 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
         (Messages::Livox, _) => bail!("--messages livox needs --sensor mid360 or avia"),
         (Messages::Packets, Some(_)) => {}
     }
+    if request.messages_per_frame == 0
+        || (request.messages_per_frame > 1 && request.messages != Messages::Livox)
+    {
+        bail!("--messages-per-frame is at least 1, and above 1 only with --messages livox");
+    }
     Ok(params)
 }
 
