@@ -29,7 +29,7 @@ const fn case(sensor: &'static str, format: &'static str, imu: bool, frames: &'s
     }
 }
 
-const CASES: [Case; 11] = [
+const CASES: [Case; 17] = [
     case("vlp16", "bag", false, "2"),
     case("vlp32c", "mcap", false, "2"),
     Case {
@@ -41,6 +41,12 @@ const CASES: [Case; 11] = [
     case("xt32", "db3", false, "2"),
     case("qt128", "mcap", false, "2"),
     case("ot128", "bag", false, "1"),
+    case("xt16", "mcap", false, "2"),
+    case("xt32m", "bag", false, "1"),
+    case("pandar40p", "db3", false, "1"),
+    case("pandar64", "bag", false, "1"),
+    case("qt64", "mcap", false, "1"),
+    case("at128", "db3", false, "1"),
     Case {
         read_as: SensorKind::Helios,
         ..case("helios", "db3", false, "2")
@@ -110,9 +116,11 @@ fn a_bag_of_packets_decodes_to_the_frames_of_a_pcap_of_the_same_packets() {
         let _ = std::fs::remove_dir_all(&bag_dir);
         simulate(&pcap_dir, case, "pcap");
         simulate(&bag_dir, case, case.format);
-        // A QT128's, OT128's, HDL-64E's or VLS-128's calibration is beside the pcap and the
-        // bag; the bag carries an Ouster's metadata and a Robosense's DIFOP packet itself.
-        let calibration = |dir: &Path| file_in(dir, &["packets.csv", "packets.yaml"]);
+        // A Hesai's angle file (an AT128's .dat), an HDL-64E's or VLS-128's calibration is
+        // beside the pcap and the bag; the bag carries an Ouster's metadata and a Robosense's
+        // DIFOP packet itself.
+        let calibration =
+            |dir: &Path| file_in(dir, &["packets.csv", "packets.yaml", "packets.dat"]);
         let (from_pcap, pcap_warnings) = frames(
             &pcap_dir.join("packets.pcap"),
             SensorOptions {
