@@ -6,7 +6,7 @@
 #
 #   ci/tooling.sh [props] [fuzz] [miri]     (default: all three)
 #
-# FUZZ_SECONDS  seconds of exploration per fuzz target (default 60; 20 targets, so about 20
+# FUZZ_SECONDS  seconds of exploration per fuzz target (default 60; 21 targets, so about 21
 #               minutes), after a replay of the committed corpus, which must pass
 # FUZZ_STRICT   1: new findings of the exploration fail the run too (default: reported)
 #

@@ -46,6 +46,17 @@ MODELS = [
     ("Hesai OT128", f"{HESAI}/ot128/1730271167765338806", f"{HESAI}/ot128/1730271167863837186.pcd",
      f"{HESAI_CAL}/Pandar128E4X.csv", ["--cut-angle", "0", "--sensor", "ot128"],
      (0.3, 300.0, 0, 360, 0.1)),
+    ("Hesai Pandar40P", f"{HESAI}/40p/1673400149412331409", f"{HESAI}/40p/1673400149711850138.pcd",
+     f"{HESAI_CAL}/Pandar40P.csv", ["--cut-angle", "0"], (0.3, 200.0, 0, 360, 0.1)),
+    ("Hesai Pandar64", f"{HESAI}/64/1673403880599376836", f"{HESAI}/64/1673403880898440686.pcd",
+     f"{HESAI_CAL}/Pandar64.csv", ["--cut-angle", "0"], (0.3, 200.0, 0, 360, 0.1)),
+    ("Hesai PandarQT64", f"{HESAI}/qt64/1673401195788312575",
+     f"{HESAI}/qt64/1673401196087570870.pcd", f"{HESAI_CAL}/PandarQT64.csv",
+     ["--cut-angle", "0"], (0.1, 60.0, 0, 360, 0.1)),
+    # Nebula cuts the AT128's scans at 150 degrees and keeps 30 to 150 degrees of azimuth.
+    ("Hesai PandarAT128", f"{HESAI}/at128/1679653308406038376",
+     f"{HESAI}/at128/1679653308704927652.pcd", f"{HESAI_CAL}/PandarAT128.dat",
+     ["--cut-angle", "150"], (1.0, 180.0, 30, 150, 0.1)),
     # Their clouds cover every azimuth whatever cloud_min_angle and cloud_max_angle say.
     ("Velodyne VLP-16", f"{VELODYNE}/vlp16/1673400471837873222",
      f"{VELODYNE}/vlp16/1673400472138016708.pcd", f"{VELODYNE_CAL}/VLP16.yaml",
