@@ -9,6 +9,7 @@ mod bags;
 mod capture_kit;
 mod cli_bad_input;
 mod common;
+mod configuration_doc;
 mod crosscheck;
 mod dataset_containers;
 mod dataset_folders;
