@@ -51,5 +51,6 @@ mod sensors_simulated;
 mod signals;
 mod simulate;
 mod threads;
+mod user_files;
 mod view;
 mod work_budget;

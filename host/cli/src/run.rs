@@ -10,7 +10,8 @@
 //! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
 //! every case the outputs hold the frames processed so far (pose files and the plot only when
 //! a frame was registered), written atomically, and no output of an earlier run stays beside
-//! them.
+//! them; a file in the output folder that no earlier command wrote (a hand-written
+//! `config.toml`, the data set's own) refuses the run before anything is removed.
 
 mod files;
 pub mod observe;
@@ -25,6 +26,7 @@ use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::Flag;
 use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, PriorWarnings, Step};
+use kiss_odom_io::write::outputs::Earlier;
 use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
 use nalgebra::Isometry3;
 use observe::{Observer, Seen};
@@ -52,8 +54,9 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
 /// and `live` with a socket for a dataset and a watcher that prints its poses.
 ///
 /// Every argument is checked and every input read before any file is removed: a run refused
-/// for its arguments changes nothing, and a `--config` inside the output folder is read
-/// before the folder's old outputs go. An input that cannot be opened refuses the run after
+/// for its arguments, or for a file in the output folder that is not an earlier command's
+/// output, changes nothing, and a `--config` inside the output folder is read before the
+/// folder's old outputs go. An input that cannot be opened refuses the run after
 /// those are removed, writing nothing; once it is open, `summary.json` is written however the
 /// run ends.
 pub(crate) fn execute_on(
@@ -70,10 +73,12 @@ pub(crate) fn execute_on(
     for name in OUTPUTS {
         kiss_odom_io::write::refuse_input(&args.run.out.join(name), &inputs[1..3])?;
     }
+    // Only the files an earlier command wrote there are replaced; any other refuses the run.
+    let earlier = Earlier::check(&args.run.out, &OUTPUTS)?;
     let mut driver = Driver::new(&settings)?;
     let opened = open(&args.common.open_options(settings.capacities()?.scan_points));
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
-    kiss_odom_io::write::remove_stale(&args.run.out, &OUTPUTS)?;
+    earlier.remove()?;
     for path in crate::viz::files(&args.view) {
         kiss_odom_io::write::remove_stale_file(path)?;
     }
