@@ -16,7 +16,8 @@
 //! A sweep the recording ends in ([`SweepEnd::Finished`]) with fewer packets than the whole
 //! sweeps before it is not a frame: registering part of a turn (or of a Livox frame's period)
 //! gives a pose that is off, so it is dropped, with a warning giving its packets and a whole
-//! sweep's. A recording of one sweep, or one whose sweeps never ended whole, keeps it.
+//! sweep's; its packets go in the trailer's, so the totals still count them. A recording of
+//! one sweep, or one whose sweeps never ended whole, keeps it.
 
 use super::sweeps::{self, PcapSweeps};
 use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions, Trailer};
@@ -61,14 +62,15 @@ impl SweepFrames {
         let mut warnings: Vec<String> = (self.sweeps.report().warnings().iter())
             .map(|w| format!("{file}: {w}"))
             .collect();
-        if let Some((w, stats)) = self.dropped.take() {
+        let dropped = self.dropped.take().map(|(w, stats)| {
             warnings.insert(0, w);
             add_refusals(&mut after, &stats);
-        }
+            after.packets = after.packets.saturating_add(stats.packets);
+        });
         let refused = after.lost_packets + after.out_of_order + after.bad_packets;
         Trailer {
             warnings,
-            packets: (refused + after.other_sensor > 0).then_some(after),
+            packets: (refused + after.other_sensor > 0 || dropped.is_some()).then_some(after),
         }
     }
 }

@@ -184,3 +184,21 @@ fn an_open_frame_at_the_end_of_the_recording_is_dropped_with_a_warning() {
         t.warnings
     );
 }
+
+#[test]
+fn auto_on_a_given_port_decodes_a_hesai_recording_as_its_model() {
+    // The PandarXT-16 scan of nebula's tests (its nominal angles are built in).
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/hesai-nebula/xt16.pcap");
+    let opts = SensorOptions {
+        port: Some(2368),
+        ..SensorOptions::default()
+    };
+    let mut s = decode(&file, Box::new(pcap::open(&file).unwrap()), &opts).unwrap();
+    for sweep in s.by_ref() {
+        sweep.unwrap();
+    }
+    let r = s.report();
+    println!("{}: {} of {} decoded", r.sensor, r.decoded, r.on_port);
+    assert_eq!(r.sensor, hesai::Model::Xt16.name());
+    assert!(r.decoded > 0 && r.refused.is_empty(), "{:?}", r.refused);
+}
