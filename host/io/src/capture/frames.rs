@@ -14,7 +14,7 @@
 //! its error.
 //!
 //! A sweep the recording ends in ([`SweepEnd::Finished`]) with fewer packets than the whole
-//! sweeps before it is not a frame: registering part of a turn (or of a Livox frame's period)
+//! sweeps before it (under 98 % of the most they held) is not a frame: registering part of a turn (or of a Livox frame's period)
 //! gives a pose that is off, so it is dropped, with a warning giving its packets and a whole
 //! sweep's; its packets go in the trailer's, so the totals still count them. A recording of
 //! one sweep, or one whose sweeps never ended whole, keeps it.
@@ -112,7 +112,9 @@ impl FrameSource for SweepFrames {
         if matches!(stats.end, SweepEnd::Complete | SweepEnd::NextFrame) {
             self.whole_packets = self.whole_packets.max(stats.packets);
         }
-        if stats.end == SweepEnd::Finished && stats.packets < self.whole_packets {
+        // Whole sweeps differ by a packet or two where the turn falls between packets.
+        let short = u64::from(stats.packets) * 50 < u64::from(self.whole_packets) * 49;
+        if stats.end == SweepEnd::Finished && short {
             self.dropped = Some((
                 format!(
                     "{}#{}: the recording ends in this sweep, {} packet(s) into it (a whole one \
