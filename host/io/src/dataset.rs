@@ -110,7 +110,8 @@ impl Item {
 pub struct Trailer {
     /// Warnings naming the source: to print, count and, under `--strict`, refuse.
     pub warnings: Vec<String>,
-    /// Sensor packets refused or lost after the last sweep, for the packet totals.
+    /// Sensor packets refused or lost after the last sweep, and those of an open sweep at the
+    /// end that was not made a frame (`packets`), for the packet totals.
     pub packets: Option<SweepStats>,
 }
 
