@@ -93,8 +93,8 @@ pub struct Stopped {
     pub poses: String,
 }
 
-/// Starts a node on `domain` with default parameters, `threads` core threads (None = all), and
-/// its poses written to `dir/poses.txt`.
+/// Starts a node on `domain` with default parameters, taking a cloud at most every `min_period`,
+/// its poses written to `dir/node_poses.txt`.
 pub fn start_node(domain: u16, dir: &Path, min_period: Duration) -> Node {
     start_node_with(domain, dir, min_period, NodeParams::default())
 }
