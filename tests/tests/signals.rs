@@ -172,8 +172,8 @@ fn an_interrupted_simulate_leaves_no_data_set() {
 
 #[test]
 fn help_into_a_pipe_whose_reader_has_gone_ends_without_a_panic() {
-    // `kiss-odom run --help | head -1`: the reader is gone before the help is written. The help
-    // used to go through `print!`, which panics (exit 101, a backtrace) when the write fails.
+    // `kiss-odom run --help | head -1`: the reader is gone before the help is written. Written
+    // with `print!`, the help would panic (exit 101, a backtrace) when the write fails.
     let (reader, writer) = std::io::pipe().expect("a pipe");
     drop(reader);
     let out = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
