@@ -68,23 +68,17 @@ def ground_truth(dataset):
 TOL_TRANSLATION_M = 0.01
 
 
-def reference_rss(python, driver, d, tag):
-    """kiss-icp 1.3.0's peak RSS (bytes) over dataset `d` (a folder), or None for a capture:
-    its own `driver.py pipeline` in a process of its own."""
+def reference_rss(python, d, tag):
+    """kiss-icp 1.3.0's peak RSS (bytes) over dataset `d` (a folder; None for a capture),
+    streamed frame by frame as its own pipeline streams them (bench/kiss_icp_rss.py)."""
     if not d.is_dir():
         return None
     cfg = (OUT / "defaults" / tag / "config.toml").read_text()
     value = lambda key: next(l.split("=")[1].strip() for l in cfg.splitlines()
                              if l.startswith(key + " "))
-    fmt = "kitti" if (d / "calib.txt").exists() else "generic"
-    ref = OUT / "defaults" / tag / "ref_poses.txt"
-    wrapper = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, "
-               "capture_output=True); print(resource.getrusage(resource.RUSAGE_CHILDREN)"
-               ".ru_maxrss)")
-    out = sh(sys.executable, "-c", wrapper, python, driver, "pipeline", "--dataset", d,
-             "--format", fmt, "--max-range", value("max_range"), "--voxel-size",
-             value("voxel_size"), "--out", ref)
-    return int(out.stdout.strip()) * 1024
+    out = sh(python, Path(__file__).with_name("kiss_icp_rss.py"), d, value("max_range"),
+             value("voxel_size"))
+    return int(out.stdout.strip())
 
 
 def defaults(binary, python, driver, datasets):
@@ -109,7 +103,7 @@ def defaults(binary, python, driver, datasets):
         voxels, start_caps = s["high_water"]["map_voxels"][0], start_map_voxels(out)
         good = s["map_radius"]["frame"] is None and lost == 0 and worst <= TOL_TRANSLATION_M
         ok &= good
-        ref = reference_rss(python, driver, d, tag)
+        ref = reference_rss(python, d, tag)
         print(f"| {tag} | {s['frames']} | {mib(st['start_bytes'])} / {mib(st['peak_bytes'])} "
               f"({st['moves']}) | {voxels} ({voxels / start_caps:.2f}x) | {lost} | "
               f"{worst:.2e}{'' if good else ' **FAIL**'} | {mib(s['peak_rss_bytes'])} / "

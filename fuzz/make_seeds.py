@@ -289,6 +289,12 @@ def sensor_seeds():
     put("hesai_packets", "qt128-3-packets", bytes([1 << 1 | 8]) + b"".join(b"\0\0" + p for p in qt128))
     put("hesai_packets", "ot128-4-packets", bytes([3 << 1]) + b"".join(
         b"\0\0" + hesai_1_4_packet(k) for k in range(4)))
+    for k, model in enumerate(["40p", "64", "qt64", "xt16", "xt32m"]):
+        pkts = udp_payloads(ROOT / "fixtures" / "hesai-nebula" / f"{model}.pcap", 2368)[:3]
+        put("hesai_fixed_packets", f"{model}-3-packets",
+            bytes([k << 1]) + b"".join(b"\0\0" + p for p in pkts))
+    put("hesai_fixed_packets", "at128-4-packets", bytes([5 << 1]) + b"".join(
+        b"\0\0" + hesai_at128_packet(k) for k in range(4)))
     livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]
     put("livox_packets", "tele15-6-packets",
         bytes([0]) + b"".join(struct.pack("<H", 0x8000 | len(p)) + p for p in livox))
@@ -307,6 +313,20 @@ def hesai_1_4_packet(k):
     tail = bytes(9) + struct.pack("<HBBH", 0b0110 << 12, 2, 0x39, 600)
     tail += bytes([124, 10, 30, 7, 36, 29]) + struct.pack("<IB", 55 * k, 0x42)
     return head + blocks + bytes(4 + 17) + tail + struct.pack("<I", k) + bytes(22 + 4)
+
+
+def hesai_at128_packet(k):
+    """A PandarAT128 (protocol 4.3) packet of 1086 bytes, single strongest return: the k-th
+    after motor angle 40 degrees, 0.1 degree (two firings) a packet, in the fuzz target's
+    frame 0; the last packet steps into frame 1 (motor 140 degrees on)."""
+    head = bytes([0xEE, 0xFF, 4, 3, 0, 0, 128, 2, 0, 4, 1, 1])
+    motor = (40 * 25_600 + 2_560 * k) if k < 3 else 150 * 25_600
+    blocks = b"".join(struct.pack("<HB", (motor + 1_280 * b) >> 8, (motor + 1_280 * b) & 0xFF)
+                      + b"".join(struct.pack("<HBB", 800 + c + 9 * b, c, 0) for c in range(128))
+                      for b in range(2))
+    tail = bytes(18) + struct.pack("<HIBB", 200, 83 * k, 0x37, 0x42)
+    tail += bytes([0]) + (1_704_067_200).to_bytes(5, "big") + struct.pack("<I", k) + bytes(4)
+    return head + blocks + bytes(4) + tail
 
 
 def livox_sdk2_packets():

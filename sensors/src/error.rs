@@ -38,6 +38,9 @@ pub enum PacketError {
     /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
     /// Hesai one is none of the six modes, or disagrees with the header's return count.
     UnknownReturnMode,
+    /// The Hesai return-mode byte is triple return (0x3D, the XT32M's first, last and
+    /// strongest in three blocks): not decoded. Set the sensor to a single or dual return mode.
+    TripleReturn,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
     /// or an Ouster column whose measurement id is beyond the frame): two sensors on one
     /// port. Filter by source address, or give each sensor its own port.
@@ -80,6 +83,10 @@ impl core::fmt::Display for PacketError {
             Self::Timestamp => "a timestamp of one hour or more",
             Self::UnknownModel => "unknown model (Velodyne product byte, Hesai header)",
             Self::UnknownReturnMode => "unknown return-mode byte",
+            Self::TripleReturn => {
+                "triple return (0x3D) is not decoded: set the sensor to a single or dual return \
+                 mode"
+            }
             Self::OtherSensor => "packet of another sensor than the sweep's",
             Self::PacketType => "not a point data packet",
             Self::MetadataMismatch => "initialisation id or serial differs from the metadata",

@@ -9,8 +9,9 @@
 //! its interpolation each round to it; a Hesai point is cast along its block's reported
 //! azimuth plus its channel's offset); times within 1 us; the same point count per sweep (a
 //! Livox frame: its 0.1 s of packets). The XT32 and the Livox sensors are decoded with no
-//! options, as `run` finds them, the QT128 and OT128 with the angle correction file written
-//! beside. The reference test runs `tests/sensors/dump_generated.py` with the Python in
+//! options, as `run` finds them, the other Hesai sensors with the angle correction file written
+//! beside (the AT128's `.dat`). A Hesai point must also lie on the exact point's ray but for
+//! the ground truth's f32 rounding: the simulator casts along the ray the decoder computes. The reference test runs `tests/sensors/dump_generated.py` with the Python in
 //! `KISS_ODOM_SENSOR_PYTHON` (velodyne-decoder 3.1.0, ouster-sdk 1.0.1) and prints SKIP
 //! without it; the copper-rs parsers (cu-hesai, cu-livox) decode the generated XT32 and Avia
 //! packets with `KISS_ODOM_COPPER_DUMP` (`tests/copper/compare.sh`).
@@ -44,7 +45,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 11] = [
+const CASES: [Case; 17] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -116,6 +117,44 @@ const CASES: [Case; 11] = [
         azimuth_rad: 0.0,
         clock_origin_s: 0,
     },
+    // The fixed-layout Hesai models, as the QT128.
+    Case {
+        sensor: "xt16",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Xt16.clock_origin_s(),
+    },
+    Case {
+        sensor: "xt32m",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Xt32m.clock_origin_s(),
+    },
+    Case {
+        sensor: "pandar40p",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Pandar40p.clock_origin_s(),
+    },
+    Case {
+        sensor: "pandar64",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Pandar64.clock_origin_s(),
+    },
+    Case {
+        sensor: "qt64",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Qt64.clock_origin_s(),
+    },
+    // Each channel along the direction its mirror-frame correction gives (the .dat beside).
+    Case {
+        sensor: "at128",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::At128.clock_origin_s(),
+    },
 ];
 
 impl Case {
@@ -126,6 +165,11 @@ impl Case {
     fn tolerance(&self, r: f64) -> f64 {
         self.unit_m / 2.0 + r * self.azimuth_rad + SLACK_M
     }
+    /// Whether the simulator casts along the very ray the decoder computes (the Hesai
+    /// sensors: block azimuth and channel angles, or the AT128's mirror-frame correction).
+    fn exact_rays(&self) -> bool {
+        self.sensor == "xt32" || self.needs_angles()
+    }
     /// Whether `run` finds the recording and cuts its sweeps as the simulator does with no
     /// options: Livox frames by port, packet length and the decoder's default 0.1 s; the XT32
     /// by its packets, sweeps by azimuth coverage.
@@ -133,9 +177,12 @@ impl Case {
         matches!(self.sensor, "mid360" | "xt32" | "avia")
     }
     /// Whether `run` finds the recording by its packets and needs the angle correction file
-    /// `simulate` wrote beside it (the 128-channel Hesai sensors).
+    /// `simulate` wrote beside it (the Hesai sensors but the XT32).
     fn needs_angles(&self) -> bool {
-        matches!(self.sensor, "qt128" | "ot128")
+        matches!(
+            self.sensor,
+            "qt128" | "ot128" | "xt16" | "xt32m" | "pandar40p" | "pandar64" | "qt64" | "at128"
+        )
     }
     /// Whether `dump_generated.py`'s references decode the format (velodyne-decoder and
     /// ouster-sdk; the copper-rs parsers of the XT32 and the Avia have their own test).
@@ -163,8 +210,13 @@ impl Case {
             };
         }
         if self.needs_angles() {
+            let file = if self.sensor == "at128" {
+                "packets.dat"
+            } else {
+                "packets.csv"
+            };
             SensorOptions {
-                calibration: Some(dir.join("packets.csv")),
+                calibration: Some(dir.join(file)),
                 ..SensorOptions::default()
             }
         } else if self.found_as_is() {
@@ -235,14 +287,21 @@ fn truth(dir: &Path, k: usize) -> Vec<([f64; 3], f64)> {
         .collect()
 }
 
-/// Worst disagreement seen: metres, fraction of the tolerance, seconds.
+/// Worst disagreement seen: metres, fraction of the tolerance, seconds; and how far the exact
+/// point lies from the decoded ray (metres, fraction of the ground truth's f32 rounding).
 #[derive(Default)]
 struct Worst {
     m: f64,
     ratio: f64,
     s: f64,
     points: usize,
+    off_ray_m: f64,
+    off_ray_ratio: f64,
 }
+
+/// The ground truth's f32 rounding, relative: at most 2^-24 of each coordinate, so of the
+/// point's range (5.96e-8, rounded up).
+const F32_ROUNDING: f64 = 6.0e-8;
 
 impl Worst {
     fn add(&mut self, case: &Case, got: [f64; 3], exact: [f64; 3], dt: f64) {
@@ -255,6 +314,17 @@ impl Worst {
         self.ratio = self.ratio.max(d / case.tolerance(r));
         self.s = self.s.max(dt.abs());
         self.points += 1;
+        // |exact x got| / |got|: the exact point's distance from the decoded ray.
+        let [a, b] = [exact, got];
+        let cross = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let len = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let off = len(cross) / len(got).max(1e-12);
+        self.off_ray_m = self.off_ray_m.max(off);
+        self.off_ray_ratio = self.off_ray_ratio.max(off / (r * F32_ROUNDING + 1e-12));
     }
     fn check(&self, what: &str, case: &Case) {
         println!(
@@ -269,6 +339,20 @@ impl Worst {
             self.s
         );
         assert!(self.points > 0, "{what} {}: nothing compared", case.sensor);
+        if case.exact_rays() {
+            // The simulator casts each Hesai channel along the ray the decoder computes: the
+            // exact point is on it but for the truth's f32 rounding.
+            println!(
+                "{what} {}: worst distance of the exact point from the decoded ray {:.2e} m = \
+                 {:.2} of the truth's f32 rounding ({F32_ROUNDING:e} x range)",
+                case.sensor, self.off_ray_m, self.off_ray_ratio
+            );
+            assert!(
+                self.off_ray_ratio <= 1.0,
+                "{what} {}: a point off its ray",
+                case.sensor
+            );
+        }
         assert!(
             self.ratio <= 1.0,
             "{what} {}: a point beyond tolerance",

@@ -56,6 +56,11 @@ pub struct InputArgs {
     /// Bag/MCAP topic (default: the only PointCloud2 topic).
     #[arg(long)]
     pub topic: Option<String>,
+    /// Which sequence of a dataset folder that holds several, as kiss-icp's --sequence:
+    /// HeLiPR's LiDAR (Ouster, Velodyne, Avia or Aeva), a nuScenes scene number (61 for
+    /// scene-0061), a KITTI raw odometry sequence (00-10) [default: the only one there].
+    #[arg(long)]
+    pub sequence: Option<String>,
     /// How to decode a sensor recording.
     #[command(flatten)]
     pub sensor: SensorArgs,
@@ -117,6 +122,7 @@ impl InputArgs {
     pub fn open_options(&self, scan_points: usize) -> OpenOptions {
         OpenOptions {
             topic: self.topic.clone(),
+            sequence: self.sequence.clone(),
             scan_points,
             sensor: self.sensor.options(),
             imu: ImuInput::Builtin,

@@ -5,6 +5,7 @@
 //! hands the sweeps on as a frame source.
 
 pub mod frames;
+pub mod hesai_at128;
 pub mod hesai_calib;
 pub mod ouster_meta;
 pub mod pcap;

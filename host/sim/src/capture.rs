@@ -1,6 +1,6 @@
 //! Writes simulated packets as a pcap capture (Ethernet, IPv4, UDP, as Wireshark or VeloView
-//! record a sensor) and, for an Ouster, the metadata JSON that describes it, for a Hesai
-//! QT128 or OT128 its angle correction file.
+//! record a sensor) and, for an Ouster, the metadata JSON that describes it, for a Hesai its
+//! angle correction file (a CSV; the AT128's: a `.dat`).
 //!
 //! The last step of `simulate --format pcap`, after [`crate::packets`]. Datagrams are not
 //! fragmented: an OS1-64 packet (12 544 bytes) travels in one jumbo frame. IMU packets (the
@@ -26,6 +26,8 @@ pub const META_NAME: &str = "packets.json";
 pub const ANGLES_NAME: &str = "packets.csv";
 /// The Velodyne calibration (ROS YAML) beside a HDL-64E's or VLS-128's capture.
 pub const CALIBRATION_NAME: &str = "packets.yaml";
+/// The PandarAT128's angle correction file's name in the output folder.
+pub const CORRECTION_NAME: &str = "packets.dat";
 
 /// A pcap file being written.
 pub struct CaptureWriter {

@@ -20,8 +20,10 @@
 //! (`packets/ouster_imu.rs`, `packets/mid360_imu.rs`), one a sample, stamped on the clock of
 //! their lidar packets.
 
+mod at128;
 mod avia;
 mod hesai128;
+mod hesai_fixed;
 mod mid360;
 mod mid360_imu;
 mod ouster_imu;
@@ -94,6 +96,45 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "vls128"))]
     #[serde(rename = "vls128")]
     Vls128,
+    /// Hesai PandarXT-16, protocol 6.1 with sequence numbers, strongest return, 10 Hz.
+    #[cfg_attr(feature = "clap", value(name = "xt16"))]
+    #[serde(rename = "xt16")]
+    Xt16,
+    /// Hesai PandarXT32M, protocol 6.1, six blocks a packet, strongest return, 10 Hz (angle
+    /// file beside).
+    #[cfg_attr(feature = "clap", value(name = "xt32m"))]
+    #[serde(rename = "xt32m")]
+    Xt32m,
+    /// Hesai Pandar40P, headerless packets of ten blocks, strongest return, 10 Hz (angle file
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "pandar40p"))]
+    #[serde(rename = "pandar40p")]
+    Pandar40p,
+    /// Hesai Pandar64, 8-byte header, sequence numbers, strongest return, 10 Hz (angle file
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "pandar64"))]
+    #[serde(rename = "pandar64")]
+    Pandar64,
+    /// Hesai PandarQT64, protocol 3.1 with sequence numbers, last return, 10 Hz (angle file
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "qt64"))]
+    #[serde(rename = "qt64")]
+    Qt64,
+    /// Hesai PandarAT128, protocol 4.3, strongest return, 10 frames a second of 600 packets
+    /// (its angle correction file, the `.dat`, beside).
+    #[cfg_attr(feature = "clap", value(name = "at128"))]
+    #[serde(rename = "at128")]
+    At128,
+}
+
+impl PacketSensor {
+    /// The Hesai models of fixed layout (`packets/hesai_fixed.rs`).
+    const fn hesai_fixed(self) -> bool {
+        matches!(
+            self,
+            Self::Xt16 | Self::Xt32m | Self::Pandar40p | Self::Pandar64 | Self::Qt64
+        )
+    }
 }
 
 /// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
@@ -209,6 +250,12 @@ impl PacketSensor {
             Self::Xt32 => Err("an XT32 runs at 5, 10 or 20 Hz (--rate-hz)".into()),
             Self::Qt128 | Self::Ot128 if rate_hz == hesai128::RATE_HZ => Ok(rate_hz),
             Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
+            Self::At128 if rate_hz == at128::RATE_HZ => Ok(rate_hz),
+            Self::At128 => Err("an AT128 runs at 10 frames a second (--rate-hz)".into()),
+            s if s.hesai_fixed() && rate_hz == hesai_fixed::RATE_HZ => Ok(rate_hz),
+            s if s.hesai_fixed() => {
+                Err("the simulated Hesai sensors run at 10 Hz (--rate-hz)".into())
+            }
             // Frames by time: any rate, read back with `--frame-period` 1 / rate.
             Self::Mid360 | Self::Avia => Ok(rate_hz),
             Self::Helios => {
@@ -227,6 +274,9 @@ impl PacketSensor {
     /// Hesai's angle correction file of a QT128 or OT128, which its decoder needs
     /// (`Laser id,Elevation,Azimuth`); `None` for the other sensors.
     pub fn angle_file(self) -> Option<String> {
+        if self.hesai_fixed() {
+            return Some(hesai_fixed::csv_text(self));
+        }
         matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
     }
 
@@ -237,6 +287,12 @@ impl PacketSensor {
             offset: 0.0,
             payload: robosense::difop(rate_hz),
         })
+    }
+
+    /// The PandarAT128's angle correction file (the `.dat`, version 1.5), which its decoder
+    /// needs; `None` for the other sensors.
+    pub fn correction_file(self) -> Option<Vec<u8>> {
+        (self == Self::At128).then(at128::correction_file)
     }
 
     /// The IMU packet carrying `sample`, the `count`th, sent at trajectory time `offset` and
@@ -257,7 +313,10 @@ impl PacketSensor {
     /// with a UTC date (from 2024-01-01 00:00:00); the other sensors' clocks read sequence time.
     pub const fn clock_origin_s(self) -> i64 {
         match self {
-            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::Helios => xt32::CLOCK_ORIGIN_S,
+            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::Helios | Self::At128 => {
+                xt32::CLOCK_ORIGIN_S
+            }
+            s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
     }
@@ -273,6 +332,8 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Os1 => u64::from(os1::WIDTH / os1::COLUMNS_PER_PACKET),
             PacketSensor::Xt32 => per_period(xt32::PACKET_NS),
             PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
+            s if s.hesai_fixed() => per_period(hesai_fixed::packet_ns(sensor)),
+            PacketSensor::At128 => at128::PACKETS_PER_FRAME,
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
             PacketSensor::Helios => libm::round(period * 1e6 / robosense::packet_us()) as u64,
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
@@ -303,6 +364,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Xt32 | PacketSensor::Qt128 | PacketSensor::Ot128 if k > 0 => {
                 k * self.per_sweep + 1
             }
+            s if s.hesai_fixed() && k > 0 => k * self.per_sweep + 1,
             _ => k * self.per_sweep,
         }
     }
@@ -327,6 +389,8 @@ impl<'a> PacketSim<'a> {
                 self.wide_start(last) + self.model.firing_s(groups - 1, banks - 1, 31)
             }
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
+            s if s.hesai_fixed() => hesai_fixed::last_offset(s, last),
+            PacketSensor::At128 => at128::last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
                 self.packet_offset(last) + self.model.firing_time_s(n, 31)
@@ -356,6 +420,8 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
                 PacketSensor::Helios => self.robosense_packet(p),
                 PacketSensor::Hdl64e | PacketSensor::Vls128 => self.wide_packet(p),
+                s if s.hesai_fixed() => self.hesai_fixed_packet(p),
+                PacketSensor::At128 => self.at128_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();

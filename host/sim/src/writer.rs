@@ -27,7 +27,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 10] = [
+const OWNED_FILES: [&str; 11] = [
     "poses.txt",
     "times.txt",
     "sim.toml",
@@ -35,6 +35,7 @@ const OWNED_FILES: [&str; 10] = [
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
     crate::capture::CALIBRATION_NAME,
+    crate::capture::CORRECTION_NAME,
     crate::imu::CSV_NAME,
     crate::ros::BAG_NAME,
     crate::ros::MCAP_NAME,

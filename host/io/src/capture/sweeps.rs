@@ -21,7 +21,7 @@
 //! capacity), however long the sensor takes to end it.
 
 use super::pcap::{self, Capture, Datagram, Record};
-use super::{hesai_calib, ouster_meta, robosense_calib, velodyne_calib};
+use super::{hesai_at128, hesai_calib, ouster_meta, robosense_calib, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
 use crate::imu::ImuSample;
 use anyhow::{anyhow, bail, Result};
@@ -167,6 +167,8 @@ enum Decoder {
     RobosenseM1(Box<robosense::m1::Decoder>),
     Ouster(Box<ouster::Decoder>),
     Hesai(Box<hesai::Decoder>),
+    /// The PandarAT128: its angles from the mirror-frame correction.
+    HesaiAt128(Box<hesai::Decoder<hesai::MirrorAngles>>),
     Livox(Box<livox::Decoder>),
 }
 
@@ -182,6 +184,7 @@ impl Decoder {
                 Self::RobosenseM1(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
                 Self::Hesai(d) => d.push(bytes, sink),
+                Self::HesaiAt128(d) => d.push(bytes, sink),
                 Self::Livox(d) => d.push(bytes, sink),
             };
             if r != Ok(Pushed::Again) {
@@ -197,6 +200,7 @@ impl Decoder {
             Self::RobosenseM1(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
             Self::Hesai(d) => d.finish(sink),
+            Self::HesaiAt128(d) => d.finish(sink),
             Self::Livox(d) => d.finish(sink),
         }
     }
@@ -207,6 +211,7 @@ impl Decoder {
             Self::RobosenseM1(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
             Self::Hesai(d) => *d.between_sweeps(),
+            Self::HesaiAt128(d) => *d.between_sweeps(),
             Self::Livox(d) => *d.between_sweeps(),
         }
     }
@@ -335,8 +340,9 @@ pub struct PcapSweeps {
 /// hand on.
 struct Survey {
     seen: BTreeMap<(u16, usize), u64>,
-    /// Hesai protocol versions (major, minor) of the `EE FF` packets on port 2368.
-    hesai: BTreeMap<(u8, u8), u64>,
+    /// Hesai models of the packets on port 2368, by their first bytes
+    /// ([`hesai::identify`]).
+    hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
 }
@@ -353,10 +359,8 @@ fn survey(path: &Path) -> Result<Survey> {
         match capture.next_record() {
             Ok(Some(Record::Datagram(d))) => {
                 *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
-                if let (VELODYNE_PORT, [0xEE, 0xFF, major, minor, ..]) =
-                    (d.port, d.payload.as_slice())
-                {
-                    *s.hesai.entry((*major, *minor)).or_insert(0) += 1;
+                if let (VELODYNE_PORT, Some(model)) = (d.port, hesai::identify(&d.payload)) {
+                    s.hesai.entry(model.name()).or_insert((model, 0)).1 += 1;
                 }
             }
             Ok(Some(Record::Damaged { port, .. })) => {
@@ -538,17 +542,11 @@ pub fn decode(
     ))
 }
 
-/// The Hesai model whose protocol most `EE FF` packets on port 2368 announce. Protocol 1.4
-/// is taken for an OT128: the Pandar128 sends the same packets and differs in firing times
-/// only (`--sensor pandar128`).
+/// The Hesai model most packets on port 2368 come from ([`hesai::identify`]). Protocol 1.4 is
+/// taken for an OT128: the Pandar128 sends the same packets and differs in firing times only
+/// (`--sensor pandar128`).
 fn hesai_in(s: &Survey) -> Option<hesai::Model> {
-    let (&version, _) = s.hesai.iter().max_by_key(|(_, n)| **n)?;
-    match version {
-        hesai::wire::VERSION => Some(hesai::Model::Xt32),
-        hesai::wire128::VERSION_QT => Some(hesai::Model::Qt128),
-        hesai::wire128::VERSION_128 => Some(hesai::Model::Ot128),
-        _ => None,
-    }
+    s.hesai.values().max_by_key(|(_, n)| *n).map(|(m, _)| *m)
 }
 
 /// The Hesai model `--sensor` names, if it names one.
@@ -558,6 +556,12 @@ fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
         SensorKind::Qt128 => Some(hesai::Model::Qt128),
         SensorKind::Pandar128 => Some(hesai::Model::Pandar128),
         SensorKind::Ot128 => Some(hesai::Model::Ot128),
+        SensorKind::Xt16 => Some(hesai::Model::Xt16),
+        SensorKind::Xt32m => Some(hesai::Model::Xt32m),
+        SensorKind::Pandar40p => Some(hesai::Model::Pandar40P),
+        SensorKind::Pandar64 => Some(hesai::Model::Pandar64),
+        SensorKind::Qt64 => Some(hesai::Model::PandarQT64),
+        SensorKind::At128 => Some(hesai::Model::At128),
         _ => None,
     }
 }
@@ -682,6 +686,9 @@ fn hesai_decoder(
     model: hesai::Model,
     port: u16,
 ) -> Result<PcapSweeps> {
+    if model == hesai::Model::At128 {
+        return at128_decoder(path, capture, opts, port);
+    }
     let calibration = match opts.calibration.as_deref() {
         Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
         None if model.nominal_calibration().is_none() => bail!(
@@ -706,6 +713,39 @@ fn hesai_decoder(
         decoder,
         opts,
         (port, sensor, Vec::new()),
+    ))
+}
+
+/// The PandarAT128 decoder with its angle correction file (`.dat`, [`hesai_at128`]).
+fn at128_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    port: u16,
+) -> Result<PcapSweeps> {
+    let name = hesai::Model::At128.name();
+    let Some(dat) = opts.calibration.as_deref() else {
+        bail!(
+            "{}: packets of a {name}: give its angle correction file (the .dat the sensor \
+             hands out and Hesai ships) with --calibration",
+            path.display()
+        );
+    };
+    if opts.cut_angle_deg.is_some() {
+        bail!(
+            "{}: packets of a {name}: its sweeps are its mirror frames, so --cut-angle does not \
+             apply",
+            path.display()
+        );
+    }
+    let correction = hesai_at128::read(dat)?;
+    let dec = hesai::Decoder::at128(&correction).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    Ok(sweeps(
+        path,
+        capture,
+        Decoder::HesaiAt128(Box::new(dec)),
+        opts,
+        (port, name.to_string(), Vec::new()),
     ))
 }
 
@@ -816,10 +856,14 @@ impl PcapSweeps {
                 hesai::wire::field::LEN_WITH_SEQUENCE
             }
             // The lengths the sensors send by default: QT128C2X 1127 bytes, 1.4 861 bytes.
+            Decoder::Hesai(d) if d.model().fixed_format().is_some() => {
+                d.model().fixed_format().map_or(0, |f| f.default_len())
+            }
             Decoder::Hesai(d) if d.model() == hesai::Model::Qt128 => {
                 hesai::wire128::packet_len(hesai::wire128::VERSION_QT, 0x1D)
             }
             Decoder::Hesai(_) => hesai::wire128::packet_len(hesai::wire128::VERSION_128, 0x07),
+            Decoder::HesaiAt128(_) => hesai::wire_fixed::PANDARAT128.default_len(),
             // The SDKs' default data types: SDK 1's 2, SDK 2's 1 (96 points, the Mid-360's).
             Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
                 livox::sdk2::packet_len(1, livox::sdk2::MID360_POINTS).unwrap_or(0)
