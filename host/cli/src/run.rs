@@ -3,7 +3,7 @@
 //!
 //! The frames go through the [`Driver`]; this module decides what stops a run and what is
 //! written ([`record`], `files`), and hands every outcome to its [`observe::Observer`]s: those
-//! of [`crate::viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
+//! of [`viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
 //! (`live` prints each pose as it comes). The rules (the book's failure reference): a frame-level problem is a warning and a
 //! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
 //! in which no frame could be registered ends with exit 1 and its own reason, never an output
@@ -17,6 +17,7 @@ mod files;
 pub mod observe;
 mod options;
 pub mod record;
+pub mod viz;
 
 pub use files::{Latency, Summary, OUTPUTS};
 pub use options::{PoseTime, RunArgs, RunOptions};
@@ -67,7 +68,7 @@ pub(crate) fn execute_on(
 ) -> Result<i32> {
     let settings = args.common.settings(None)?;
     let inputs = inputs(args);
-    crate::viz::check(&args.view, &inputs)?;
+    viz::check(&args.view, &inputs)?;
     // The sensor files are read while the input opens; `--config` is read by now, and
     // `config.toml` is the settings it gave, written back.
     for name in OUTPUTS {
@@ -79,7 +80,7 @@ pub(crate) fn execute_on(
     let opened = open(&args.common.open_options(settings.capacities()?.scan_points));
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     earlier.remove()?;
-    for path in crate::viz::files(&args.view) {
+    for path in viz::files(&args.view) {
         kiss_odom_io::write::remove_stale_file(path)?;
     }
     // An input that cannot be opened refuses the run before it starts: nothing is written.
@@ -88,7 +89,7 @@ pub(crate) fn execute_on(
         .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
     let mut record = Record::default();
     // After the folder: a recording or cloud may be asked for inside it.
-    let mut observers = match crate::viz::observers(&args.view) {
+    let mut observers = match viz::observers(&args.view) {
         Ok(o) => watchers.into_iter().chain(o).collect::<Vec<_>>(),
         Err(e) => {
             let end = End::Failed(e);

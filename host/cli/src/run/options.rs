@@ -1,7 +1,7 @@
 //! `kiss-odom run`'s options, and the instant within a sweep a pose refers to.
 
+use super::viz::ViewArgs;
 use crate::args::CommonArgs;
-use crate::viz::ViewArgs;
 use kiss_odom_drive::SweepMotions;
 use nalgebra::Isometry3;
 use std::path::PathBuf;

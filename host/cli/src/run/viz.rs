@@ -12,7 +12,7 @@ pub mod recording;
 
 pub use options::ViewArgs;
 
-use crate::run::observe::Observer;
+use super::observe::Observer;
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 
