@@ -2,7 +2,6 @@
 # The house's layers, checked: the libraries others reuse (readers, simulator, driver) and the
 # Python bindings build without the command line's crates (clap, plotters, indicatif, the
 # `kiss-odom` CLI crate), and the core and sensor decoders stay no_std with no allocator crate.
-# (farm-studio draws the same house with its import circles; this is what CI can hold it to.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 failed=0

@@ -24,23 +24,101 @@ pub enum PacketError {
     /// A Livox SDK 2 or Hesai QT128 packet whose CRC does not match its bytes: corrupted on the
     /// way. Skip it.
     Checksum,
+    /// A Livox SDK 2 header whose length field disagrees with the length its `dot_num` points
+    /// take: corrupted (the CRC does not cover the header). Skip it.
+    LengthField {
+        /// The header's length field.
+        stated: u16,
+        /// The length of its points and header.
+        expected: u16,
+    },
+    /// A Livox SDK 2 IMU packet whose `dot_num` is not 1 (an IMU packet holds one sample):
+    /// corrupted. Skip it.
+    ImuPoints {
+        /// The header's `dot_num`.
+        dot_num: u16,
+    },
+    /// A Livox SDK 2 point packet whose `time_interval` is 0: its points' times (and the
+    /// packet's period, by which losses are counted) are unknown. Skip it.
+    PointInterval,
     /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.
     BlockFlag,
-    /// A Velodyne or Hesai azimuth at or above 360.00 degrees: corrupted. Skip it.
+    /// A Velodyne, Hesai or Robosense azimuth at or above 360.00 degrees: corrupted. Skip it.
     Azimuth,
-    /// A Velodyne timestamp at or above one hour (it counts microseconds past the hour), or a
-    /// Hesai date that does not exist: corrupted. Skip it.
+    /// A PandarAT128 block azimuth outside every mirror frame of the unit's angle correction:
+    /// corrupted, or the correction of another unit. Skip it; if every packet says so, give
+    /// the `.dat` of this unit.
+    MirrorFrame,
+    /// A Velodyne timestamp at or above one hour (it counts microseconds past the hour):
+    /// corrupted. Skip it.
     Timestamp,
+    /// A UTC date or time of day that does not exist (Hesai, Robosense, Livox GPS time: month
+    /// 13, February 30, hour 24, microseconds beyond the second): corrupted. Skip it.
+    DateTime,
+    /// A Livox timestamp type the protocol does not define (SDK 1: above 4; SDK 2: above 2):
+    /// the time cannot be read. Skip it.
+    TimeType {
+        /// The packet's timestamp type byte.
+        kind: u8,
+    },
+    /// The packet's time is further after the packet before it than the packets between can
+    /// explain (by their sequence numbers, or 16 packet periods without them): a stray
+    /// packet's time. It is dropped and counted in `out_of_order`; a timeline this far ahead
+    /// is taken once [`crate::RESYNC_PACKETS`] packets agree on it (a pause, a clock step).
+    Ahead,
     /// The Velodyne factory byte names a model this crate does not decode (or none, as old
-    /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`]. Hesai: the
-    /// header's laser or block count or distance unit is not the protocol's model's.
+    /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`].
     UnknownModel,
+    /// A Hesai header whose laser count, block count or distance unit is not the model's
+    /// (another Hesai model on the port, or corrupted). Skip it; if every packet says so, give
+    /// the right model.
+    Header,
     /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
-    /// Hesai one is none of the six modes, or disagrees with the header's return count.
+    /// Hesai one is none of the model's six modes.
     UnknownReturnMode,
+    /// A Hesai header's return count is not 1 or 2, or contradicts the return-mode byte (a
+    /// count of 1 with a dual mode, or one above the model's most with the mode): corrupted.
+    /// Skip it.
+    ReturnCount {
+        /// The header's return count.
+        count: u8,
+        /// The return-mode byte.
+        mode: u8,
+    },
+    /// A Hesai dual-return packet whose pair of blocks (one firing) has two azimuths: the
+    /// data is not dual-return data, or corrupted. Skip it.
+    DualPair {
+        /// Azimuth of the pair's first block, 0.01 degree.
+        first: u16,
+        /// Azimuth of its second block.
+        second: u16,
+    },
+    /// A Hesai packet whose block azimuths advance from firing to firing by another step than
+    /// its motor speed and the model's firing time give (none: the rotor does not turn, or
+    /// dual-return data under a single-return mode byte; a multiple: another protocol's or
+    /// operational state's packets). Skip it.
+    FiringStep {
+        /// The step seen, 0.01 degree.
+        step: u16,
+        /// The step the motor speed and firing time give.
+        expected: u16,
+    },
+    /// A Pandar128 or OT128 packet whose operational state and block azimuth state are not a
+    /// state the model's firing-time file lists (OT128: high resolution 0 with azimuth states
+    /// 0-3, standard 2 with 0-1; Pandar128: energy saving 3 too; 1 is shutdown): its
+    /// channels' firing times are unknown. Skip it.
+    FiringState {
+        /// The operational state byte.
+        operational: u8,
+        /// The block's azimuth state.
+        azimuth: u8,
+    },
     /// The Hesai return-mode byte is triple return (0x3D, the XT32M's first, last and
     /// strongest in three blocks): not decoded. Set the sensor to a single or dual return mode.
     TripleReturn,
+    /// Dual-return packets of a model whose pairs are not decoded (the RS-Ruby's, which pair
+    /// returns across packets): set the sensor to a single return mode.
+    DualNotDecoded,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
     /// or an Ouster column whose measurement id is beyond the frame): two sensors on one
     /// port. Filter by source address, or give each sensor its own port.
@@ -70,7 +148,7 @@ pub enum PacketError {
 
 impl core::fmt::Display for PacketError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
+        let text = match *self {
             Self::Truncated => "packet shorter than the format's length (truncated)",
             Self::Length => {
                 "packet longer than the format's length (another packet kind or profile)"
@@ -78,17 +156,77 @@ impl core::fmt::Display for PacketError {
             Self::StartBytes => "not the format's start bytes (Hesai: EE FF)",
             Self::Version => "a protocol version not the model's (another Hesai or Livox model?)",
             Self::Checksum => "CRC does not match the packet's bytes (corrupted)",
+            Self::LengthField { stated, expected } => {
+                return write!(
+                    f,
+                    "header length field {stated} where its points take {expected} bytes"
+                )
+            }
+            Self::ImuPoints { dot_num } => {
+                return write!(f, "an IMU packet whose dot_num is {dot_num}, not 1")
+            }
+            Self::PointInterval => "time_interval 0: its points' times are unknown",
             Self::BlockFlag => "a data block without its 0xFFEE flag",
             Self::Azimuth => "an azimuth of 360 degrees or more",
-            Self::Timestamp => "a timestamp of one hour or more",
-            Self::UnknownModel => "unknown model (Velodyne product byte, Hesai header)",
-            Self::UnknownReturnMode => "unknown return-mode byte",
+            Self::MirrorFrame => "an azimuth outside every mirror frame of the angle correction",
+            Self::Timestamp => "a timestamp of one hour or more (microseconds past the hour)",
+            Self::DateTime => {
+                "a date or time of day that does not exist (month 13, hour 24, microseconds \
+                 beyond the second...)"
+            }
+            Self::TimeType { kind } => {
+                return write!(
+                    f,
+                    "timestamp type {kind}, which the protocol does not define"
+                )
+            }
+            Self::Ahead => {
+                "a time further after the packet before it than the packets between explain (a \
+                 stray packet's time, or the first packets after a pause)"
+            }
+            Self::UnknownModel => "unknown model (Velodyne product byte)",
+            Self::Header => "a header's laser count, block count or distance unit not the model's",
+            Self::UnknownReturnMode => "a return-mode byte the model does not define",
+            Self::ReturnCount { count, mode } => {
+                return write!(
+                    f,
+                    "header return count {count} against return-mode byte {mode:#04X}"
+                )
+            }
+            Self::DualPair { first, second } => {
+                return write!(
+                    f,
+                    "a dual-return mode byte, but a firing's two blocks at azimuths {first} and \
+                     {second} (0.01 degree)"
+                )
+            }
+            Self::FiringStep { step, expected } => {
+                return write!(
+                    f,
+                    "block azimuths {step} apart (0.01 degree) from firing to firing where the \
+                     motor speed, firing time and return mode give {expected}"
+                )
+            }
+            Self::FiringState {
+                operational,
+                azimuth,
+            } => {
+                return write!(
+                    f,
+                    "operational state {operational} with azimuth state {azimuth}, which the \
+                     model's firing times do not list"
+                )
+            }
             Self::TripleReturn => {
                 "triple return (0x3D) is not decoded: set the sensor to a single or dual return \
                  mode"
             }
+            Self::DualNotDecoded => {
+                "dual-return packets of this model are not decoded: set it to a single return \
+                 mode"
+            }
             Self::OtherSensor => "packet of another sensor than the sweep's",
-            Self::PacketType => "not a point data packet",
+            Self::PacketType => "not a point data packet (IMU, status, or a data type not decoded)",
             Self::MetadataMismatch => "initialisation id or serial differs from the metadata",
             Self::ColumnWindow => {
                 "a valid column outside the metadata's column_window (metadata of another \
@@ -99,8 +237,9 @@ impl core::fmt::Display for PacketError {
                  columns_per_frame"
             }
             Self::NoCalibration => "a model that needs its calibration file, and none was given",
-            Self::Late => "packet older than the sweep being assembled",
-        })
+            Self::Late => "a time or frame id not after the packet before it (late or repeated)",
+        };
+        f.write_str(text)
     }
 }
 

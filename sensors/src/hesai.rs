@@ -15,11 +15,13 @@
 
 mod angles;
 mod at128;
+mod consistency;
 mod decoder;
 mod firetimes;
 mod identify;
 mod model;
 mod timing;
+mod view;
 pub mod wire;
 pub mod wire128;
 pub mod wire_fixed;

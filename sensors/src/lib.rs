@@ -26,6 +26,7 @@ pub mod pose_datagram;
 pub mod robosense;
 pub mod sweep;
 mod time;
+mod timeline;
 pub mod velodyne;
 
 pub use error::{ConfigError, PacketError};

@@ -7,6 +7,9 @@
 //! (streamed into the odometry's `begin_frame`/`push`/`finish`, or collected).
 
 use crate::error::PacketError;
+pub(crate) use crate::timeline::{
+    lost_between, lost_in_step, max_step_ns, LateRun, Step, Timeline,
+};
 
 /// Points handed to the sink at a time, at most: one chunk buffer of this many points lives in
 /// each decoder (40 bytes a point).
@@ -117,8 +120,9 @@ pub struct SweepStats {
     /// Packets missing, estimated from timestamp gaps (Velodyne) or missing columns and frame
     /// ids (Ouster).
     pub lost_packets: u32,
-    /// Late or repeated packets (dropped) and, for Ouster, columns out of order within the
-    /// frame (decoded: their position is explicit).
+    /// Late or repeated packets and packets whose time is too far ahead ([`PacketError::Ahead`])
+    /// (dropped) and, for Ouster, columns out of order within the frame (decoded: their
+    /// position is explicit).
     pub out_of_order: u32,
     /// Velodyne: azimuth jumps between consecutive packets that the timestamps do not explain.
     pub azimuth_jumps: u32,
@@ -139,7 +143,9 @@ impl SweepStats {
     /// Counts a refused packet.
     pub(crate) fn refuse(&mut self, e: PacketError) {
         match e {
-            PacketError::Late => self.out_of_order = self.out_of_order.saturating_add(1),
+            PacketError::Late | PacketError::Ahead => {
+                self.out_of_order = self.out_of_order.saturating_add(1)
+            }
             PacketError::OtherSensor
             | PacketError::MetadataMismatch
             | PacketError::ColumnWindow
@@ -362,38 +368,5 @@ impl AzimuthCut {
         let complete = self.coverage > u32::from(AZIMUTH_UNITS) / 2 && self.coverage > coverage;
         self.coverage = coverage;
         complete
-    }
-}
-
-/// Consecutive packets refused as older than the last one accepted, and the last one's time
-/// (ns): after [`RESYNC_PACKETS`] of them whose times move on from one to the next, by at most
-/// a decoder's gap, their timeline is the sensor's.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct LateRun(Option<(u32, u64)>);
-
-impl LateRun {
-    /// Counts a late packet of time `t`; true when it completes a run.
-    pub fn complete(&mut self, t: u64, gap_ns: u64) -> bool {
-        let n = match self.0 {
-            Some((n, last)) if t > last && t - last <= gap_ns => n + 1,
-            _ => 1,
-        };
-        self.0 = Some((n, t));
-        n >= RESYNC_PACKETS
-    }
-
-    /// A packet in order ends any run.
-    pub fn clear(&mut self) {
-        self.0 = None;
-    }
-}
-
-/// Packets missing in a time step of `step` between two consecutive packets sent `period`
-/// apart: none up to one and a half periods, else the step in whole periods less one.
-pub(crate) fn lost_in_step(step: f64, period: f64) -> u32 {
-    if step > 1.5 * period {
-        (libm::round(step / period) - 1.0).min(f64::from(u32::MAX)) as u32
-    } else {
-        0
     }
 }

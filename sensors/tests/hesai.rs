@@ -253,18 +253,18 @@ fn late_foreign_and_damaged_packets_are_refused_and_counted() {
         ([g.as_slice(), &[0]].concat(), PacketError::Length),
         (with(g, 0, 0xEF), PacketError::StartBytes),
         (with(g, 2, 4), PacketError::Version),
-        (with(g, 6, 16), PacketError::UnknownModel),
+        (with(g, 6, 16), PacketError::Header),
         (with(g, 12 + 130 * 3 + 1, 0x8D), PacketError::Azimuth),
         (
             with(g, field::DATE_TIME.start + 2, 31),
-            PacketError::Timestamp,
+            PacketError::DateTime,
         ),
     ];
     for (bytes, want) in &cases {
         assert_eq!(feed(&mut dec, bytes, &mut log), Err(*want));
     }
     let us = with(g, field::MICROSECONDS.start + 3, 0x10);
-    assert_eq!(feed(&mut dec, &us, &mut log), Err(PacketError::Timestamp));
+    assert_eq!(feed(&mut dec, &us, &mut log), Err(PacketError::DateTime));
     // Nothing above changed the decoder: the next good packet goes on the sweep.
     assert_eq!(feed(&mut dec, g, &mut log), Ok(Pushed::Decoded));
     dec.finish(&mut log);
@@ -274,29 +274,39 @@ fn late_foreign_and_damaged_packets_are_refused_and_counted() {
     assert_eq!(s.lost_packets, 0);
 
     // A mode byte unknown, or naming dual returns in a single-return packet, before any
-    // packet fixed the mode.
-    for mode in [0x3A, 0x39] {
+    // packet fixed the mode: refused naming the byte, or the header's count against it.
+    for (mode, want) in [
+        (0x3A, PacketError::UnknownReturnMode),
+        (
+            0x39,
+            PacketError::ReturnCount {
+                count: 1,
+                mode: 0x39,
+            },
+        ),
+    ] {
         let mut fresh = decoder();
         let bad = with(g, field::RETURN_MODE, mode);
-        assert_eq!(
-            feed(&mut fresh, &bad, &mut log),
-            Err(PacketError::UnknownReturnMode)
-        );
+        assert_eq!(feed(&mut fresh, &bad, &mut log), Err(want));
         assert_eq!(fresh.return_mode(), None);
     }
 }
 
 #[test]
-fn a_pause_ends_the_sweep_and_a_clock_step_back_is_followed() {
+fn a_pause_ends_the_sweep_once_its_packets_agree_and_a_clock_step_back_is_followed() {
     let mut dec = decoder();
     let mut log = Log::default();
     for p in sweep_packets(0, 0, 10, None) {
         feed(&mut dec, &p, &mut log).unwrap();
     }
-    // 400 ms later.
-    for p in sweep_packets(1440, 400_000, 10, None) {
-        feed(&mut dec, &p, &mut log).unwrap();
-    }
+    // 400 ms later: held out as a stray's time until RESYNC_PACKETS in a row agree, then the
+    // sweep ends at the pause.
+    let run = kiss_odom_sensors::RESYNC_PACKETS as usize;
+    let ahead = sweep_packets(1440, 400_000, 20, None)
+        .iter()
+        .filter(|p| feed(&mut dec, p, &mut log) == Err(PacketError::Ahead))
+        .count();
+    assert_eq!(ahead, run - 1);
     // The clock steps back 0.2 s and stays there: after RESYNC_PACKETS late ones, theirs.
     let back = sweep_packets(2880, 200_000, 40, None);
     let refused = back
@@ -304,11 +314,54 @@ fn a_pause_ends_the_sweep_and_a_clock_step_back_is_followed() {
         .filter(|p| feed(&mut dec, p, &mut log) == Err(PacketError::Late))
         .count();
     dec.finish(&mut log);
-    assert_eq!(refused, kiss_odom_sensors::RESYNC_PACKETS as usize - 1);
+    assert_eq!(refused, run - 1);
     let ends: Vec<_> = log.ends.iter().map(|s| s.end).collect();
     assert_eq!(ends, [SweepEnd::Gap, SweepEnd::Resync, SweepEnd::Finished]);
+    assert_eq!(log.ends[0].packets, 10);
+    assert_eq!(log.ends[1].packets, 20 - ahead as u32);
+    assert_eq!(log.ends[1].out_of_order, ahead as u32);
     assert_eq!(log.ends[2].resyncs, 1);
     assert_eq!(log.ends[2].packets, 40 - refused as u32);
+}
+
+#[test]
+fn a_stray_packets_time_is_refused_and_counted_not_made_a_sweep() {
+    // One packet 10 s ahead, one far behind (a time that wrapped), amid a sweep: each
+    // refused with what was wrong with it; the sweep goes on and no loss is invented.
+    for (stray_us, want) in [
+        (10_000_000 + 400 * 40, PacketError::Ahead),
+        (0, PacketError::Late),
+    ] {
+        let mut dec = decoder();
+        let mut log = Log::default();
+        let mut packets = sweep_packets(0, 400_000, 300, Some(100));
+        // The stray keeps its place in the sequence; only its time is wrong.
+        let mut stray = sweep_packets(40 * 144, 0, 1, Some(140)).remove(0);
+        let date = field::DATE_TIME.start;
+        let secs = stray_us / 1_000_000;
+        stray[date + 5] = 12 + secs as u8;
+        stray[field::MICROSECONDS].copy_from_slice(&((stray_us % 1_000_000) as u32).to_le_bytes());
+        packets[40] = stray.clone();
+        let mut refused = Vec::new();
+        for p in &packets {
+            if let Err(e) = feed(&mut dec, p, &mut log) {
+                refused.push(e);
+            }
+        }
+        dec.finish(&mut log);
+        assert_eq!(refused, [want], "{stray_us}");
+        // The first sweep is the turn of 250 packets, the stray refused in it.
+        assert_eq!(log.ends[0].end, SweepEnd::Complete);
+        assert_eq!(log.ends[0].packets, 250);
+        assert_eq!(log.ends[0].out_of_order, 1);
+        assert_eq!(
+            log.ends[0].lost_packets, 1,
+            "the stray's place in the sequence"
+        );
+        assert!(log.ends.iter().all(|s| s.end != SweepEnd::Resync));
+        // Past it, the times and sequence go on: nothing lost, nothing refused.
+        assert_eq!((log.ends[1].lost_packets, log.ends[1].out_of_order), (0, 0));
+    }
 }
 
 #[test]

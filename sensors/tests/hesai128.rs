@@ -66,6 +66,17 @@ fn unit_len(s: &Spec) -> usize {
     3 + extra
 }
 
+/// The azimuth step from firing to firing at the packets' 600 rpm, 0.01 degree: the QT128's
+/// 111.11 us firings 0.4 degree apart, protocol 1.4's standard 55.556 us (high resolution
+/// 27.778 us) firings 0.2 (0.1) degree apart.
+fn step(s: &Spec) -> u32 {
+    match (s.version, s.operational_state) {
+        (wire128::VERSION_QT, _) => 40,
+        (_, 0) => 10,
+        _ => 20,
+    }
+}
+
 /// A packet whose channel `c` of block `k` returns `(200 + c + 1000 k) * 4 mm` on even
 /// channels and `(200 + c) * 4 mm` on odd ones (a dual pair's blocks agree on odd channels),
 /// except that channel 9 returns nothing.
@@ -82,7 +93,7 @@ fn packet(s: &Spec) -> Vec<u8> {
     for k in 0..2 {
         let firing = k / usize::from(returns);
         let at = 12 + (2 + 128 * unit) * k;
-        let az = (u32::from(s.azimuth) + 40 * firing as u32) % 36000;
+        let az = (u32::from(s.azimuth) + step(s) * firing as u32) % 36000;
         b[at..at + 2].copy_from_slice(&(az as u16).to_le_bytes());
         for c in 0..128 {
             let ch = at + 2 + unit * c;
@@ -165,7 +176,8 @@ fn every_return_takes_its_channels_angles_and_firing_time() {
             };
             let d = raw as f64 * 0.004;
             let e = cal.elevation_deg[c].to_radians();
-            let az = (90.0 + 0.4 * k as f64 + cal.azimuth_deg[c]).to_radians();
+            let az =
+                (90.0 + 0.01 * (step(&spec) as usize * k) as f64 + cal.azimuth_deg[c]).to_radians();
             let want = [d * e.cos() * az.cos(), -d * e.cos() * az.sin(), d * e.sin()];
             for i in 0..3 {
                 assert!(
@@ -274,11 +286,17 @@ fn bad_packets_are_refused_with_their_reason() {
     // A 1.4 packet to the QT128: the other protocol.
     assert_eq!(refused(&p128), PacketError::Version);
     // 64 lasers, or a distance unit not 4 mm.
-    assert_eq!(refused(&with(&qt, 6, 64)), PacketError::UnknownModel);
-    assert_eq!(refused(&with(&qt, 9, 2)), PacketError::UnknownModel);
+    assert_eq!(refused(&with(&qt, 6, 64)), PacketError::Header);
+    assert_eq!(refused(&with(&qt, 9, 2)), PacketError::Header);
     // A flag that changes the layout (no signature): the length no longer agrees.
     assert_eq!(refused(&with(&qt, 11, 0x15)), PacketError::Length);
-    assert_eq!(refused(&with(&qt, 10, 3)), PacketError::UnknownReturnMode);
+    assert_eq!(
+        refused(&seal(&mut with(&qt, 10, 3))),
+        PacketError::ReturnCount {
+            count: 3,
+            mode: 0x37
+        }
+    );
     // A distance or a tail byte changed on the way: the body's or the tail's CRC fails.
     assert_eq!(refused(&with(&qt, 14, 0x77)), PacketError::Checksum);
     let t = tail_at(&Spec::qt(0, 0));
@@ -290,7 +308,7 @@ fn bad_packets_are_refused_with_their_reason() {
     );
     assert_eq!(
         refused(&seal(&mut with(&qt, t + 16, 13))),
-        PacketError::Timestamp
+        PacketError::DateTime
     );
     assert_eq!(
         refused(&seal(&mut with(&qt, t + 12, 0x3A))),
@@ -338,4 +356,126 @@ fn the_wide_models_need_a_calibration_of_their_channels() {
         Err(ConfigError::Calibration)
     ));
     assert!(hesai::Decoder::new(config(Model::Xt32, None)).is_ok());
+}
+
+#[test]
+fn protocol_1_4_packets_whose_crcs_do_not_match_are_refused_as_the_qt128s_are() {
+    for model in [Model::Ot128, Model::Pandar128] {
+        let p128 = packet(&Spec::p128(100, 0));
+        let t = tail_at(&Spec::p128(0, 0));
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        // A distance, a tail byte (the return mode), the sequence number changed on the way.
+        for at in [14, t + 12, t + 26] {
+            assert_eq!(
+                feed(&mut dec, &with(&p128, at, p128[at] ^ 0x40), &mut log),
+                Err(PacketError::Checksum),
+                "{model:?} byte {at}"
+            );
+        }
+        // The functional safety part and the signature have CRCs of their own (not checked).
+        assert_eq!(feed(&mut dec, &p128, &mut log), Ok(Pushed::Decoded));
+        assert!(log.points.iter().all(|p| p.0 == 0));
+        dec.finish(&mut log);
+        assert_eq!(log.ends[0].bad_packets, 3, "{model:?}");
+    }
+}
+
+#[test]
+fn fields_that_contradict_each_other_are_refused_naming_both() {
+    let t = tail_at(&Spec::p128(0, 0));
+    let mut dec = decoder(Model::Ot128);
+    let mut log = Log::default();
+    let mut refused = |bytes: Vec<u8>| feed(&mut dec, &bytes, &mut log).unwrap_err();
+    // Operational states the OT128's firing-time file does not list: shutdown, energy saving,
+    // none; standard with azimuth state 2.
+    for state in [1, 3, 7] {
+        let p = Spec {
+            operational_state: state,
+            ..Spec::p128(100, 0)
+        };
+        assert_eq!(
+            refused(packet(&p)),
+            PacketError::FiringState {
+                operational: state,
+                azimuth: 0
+            }
+        );
+    }
+    let p = Spec {
+        azimuth_states: 0b10 << 14,
+        ..Spec::p128(100, 0)
+    };
+    assert_eq!(
+        refused(packet(&p)),
+        PacketError::FiringState {
+            operational: 2,
+            azimuth: 2
+        }
+    );
+    // High resolution fires every 0.1 degree at 600 rpm: blocks 0.2 degree apart are
+    // standard-state packets that say high resolution.
+    let p = Spec {
+        operational_state: 0,
+        ..Spec::p128(100, 0)
+    };
+    let mut b = packet(&p);
+    b[12 + 2 + 128 * 3..][..2].copy_from_slice(&120u16.to_le_bytes());
+    assert_eq!(
+        refused(seal(&mut b)),
+        PacketError::FiringStep {
+            step: 20,
+            expected: 10
+        }
+    );
+    // The rotor does not turn: both firings at one azimuth.
+    let mut b = packet(&Spec::p128(100, 0));
+    b[12 + 2 + 128 * 3..][..2].copy_from_slice(&100u16.to_le_bytes());
+    assert_eq!(
+        refused(seal(&mut b)),
+        PacketError::FiringStep {
+            step: 0,
+            expected: 20
+        }
+    );
+    // A dual-return mode byte over single-return data (two firings, two azimuths), and
+    // the header's count against the mode byte.
+    let mut b = packet(&Spec::p128(100, 0));
+    b[10] = 2;
+    b[t + 12] = 0x39;
+    assert_eq!(
+        refused(seal(&mut b)),
+        PacketError::DualPair {
+            first: 100,
+            second: 120
+        }
+    );
+    let mut b = packet(&Spec::p128(100, 0));
+    b[t + 12] = 0x39;
+    assert_eq!(
+        refused(seal(&mut b)),
+        PacketError::ReturnCount {
+            count: 1,
+            mode: 0x39
+        }
+    );
+    // A QT128 packet relabelled protocol 1.4: its layout reads the same, its CRCs hold, but
+    // its firings are 0.4 degree apart where the 1.4 states it reads give 0.1.
+    let mut qt = packet(&Spec {
+        flags: 0x15,
+        ..Spec::qt(100, 0)
+    });
+    qt[2..4].copy_from_slice(&[1, 4]);
+    let e = refused(qt);
+    assert!(
+        matches!(e, PacketError::FiringStep { step: 40, .. }),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("40 apart"), "{e}");
+    // None of them was decoded; a packet that agrees with itself is.
+    assert!(log.points.is_empty());
+    assert_eq!(
+        feed(&mut dec, &packet(&Spec::p128(100, 0)), &mut log),
+        Ok(Pushed::Decoded)
+    );
 }

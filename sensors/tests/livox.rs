@@ -147,13 +147,26 @@ fn frames_are_cut_by_time_and_losses_counted_from_the_packet_times() {
     // A frame's times start at its start.
     let first_of_second = log.points.iter().find(|p| p.0 == 1).unwrap();
     assert_eq!(first_of_second.2, 0.0);
-    // A pause of more than 0.3 s ends the frame and starts the next at the packet.
+    // A pause of more than 0.3 s: its first packets are held out as a stray's time until
+    // RESYNC_PACKETS in a row agree; then the frame ends and the next starts at the packet,
+    // and the pause is not counted as losses.
     let mut dec = decoder();
     let mut log = Log::default();
     feed(&mut dec, &packet(2, T0), &mut log).unwrap();
-    feed(&mut dec, &packet(2, T0 + 400_000_000), &mut log).unwrap();
+    let after = |i: u64| packet(2, T0 + 400_000_000 + 400_000 * i);
+    let run = u64::from(kiss_odom_sensors::RESYNC_PACKETS);
+    for i in 0..run - 1 {
+        assert_eq!(feed(&mut dec, &after(i), &mut log), Err(PacketError::Ahead));
+    }
+    feed(&mut dec, &after(run - 1), &mut log).unwrap();
     assert_eq!(log.ends[0].end, SweepEnd::Gap);
-    assert_eq!(log.starts[1].start_ns, T0 + 400_000_000);
+    assert_eq!(log.ends[0].out_of_order, run as u32 - 1);
+    assert_eq!(
+        log.starts[1].start_ns,
+        T0 + 400_000_000 + 400_000 * (run - 1)
+    );
+    dec.finish(&mut log);
+    assert_eq!(log.ends[1].lost_packets, 0);
     assert_eq!(
         livox::Decoder::new(livox::Config {
             frame_period_ns: 0,
@@ -190,7 +203,12 @@ fn gps_time_is_a_utc_date_and_microseconds_in_the_hour() {
     b[12] = 31;
     assert_eq!(
         livox::sdk1::Packet::new_checked(&b).err(),
-        Some(PacketError::Timestamp)
+        Some(PacketError::DateTime)
+    );
+    // A timestamp type the protocol does not define.
+    assert_eq!(
+        livox::sdk1::Packet::new_checked(&with(&packet(2, 0), 8, 7)).err(),
+        Some(PacketError::TimeType { kind: 7 })
     );
 }
 
@@ -262,4 +280,31 @@ fn a_clock_step_back_is_followed_after_a_run_of_late_packets() {
     assert_eq!(ends, [SweepEnd::Resync, SweepEnd::Finished]);
     assert_eq!(log.ends[1].resyncs, 1);
     assert_eq!(log.starts[1].start_ns, 1_000 + 400_000 * u64::from(refused));
+}
+
+#[test]
+fn a_stray_packets_time_is_refused_and_counted_not_made_a_frame() {
+    // 0.4 s of packets, one of them stamped 10 s ahead (or at 2^64 - 1 ns): the frames are
+    // the ones without it, the stray counted as out of order, no loss invented.
+    for stray in [T0 + 10_000_000_000, u64::MAX] {
+        let mut dec = decoder();
+        let mut log = Log::default();
+        let mut refused = Vec::new();
+        for i in 0..1000u64 {
+            let t = if i == 400 { stray } else { T0 + 400_000 * i };
+            if let Err(e) = feed(&mut dec, &packet(2, t), &mut log) {
+                refused.push(e);
+            }
+        }
+        dec.finish(&mut log);
+        assert_eq!(refused, [PacketError::Ahead], "{stray}");
+        let starts: Vec<u64> = log.starts.iter().map(|s| s.start_ns).collect();
+        let want: Vec<u64> = (0..4).map(|k| T0 + 100_000_000 * k).collect();
+        assert_eq!(starts, want, "{stray}");
+        let lost: u32 = log.ends.iter().map(|s| s.lost_packets).sum();
+        let late: u32 = log.ends.iter().map(|s| s.out_of_order).sum();
+        // The stray's place: one packet missing from the times.
+        assert_eq!((lost, late), (1, 1), "{stray}");
+        assert!(log.ends.iter().all(|s| s.end != SweepEnd::Resync));
+    }
 }

@@ -216,15 +216,30 @@ fn imu_crc_version_length_and_late_packets_are_refused_and_counted() {
     flipped[500] ^= 0x01;
     let mut long_field = g.clone();
     long_field[1] = long_field[1].wrapping_add(1);
-    let cases: [(Vec<u8>, PacketError); 8] = [
+    // An IMU packet that says it holds two samples (its length field and datagram agreeing);
+    // a point packet whose points span no time.
+    let mut two = header(sdk2::IMU, 2, T0 + 960_000);
+    two[1..3].copy_from_slice(&60u16.to_le_bytes());
+    two.truncate(60);
+    let mut no_interval = g.clone();
+    no_interval[3..5].copy_from_slice(&[0, 0]);
+    let cases: [(Vec<u8>, PacketError); 10] = [
         (g[..1000].to_vec(), PacketError::Truncated),
         (g[..20].to_vec(), PacketError::Truncated),
         ([g.as_slice(), &[0]].concat(), PacketError::Length),
-        (long_field, PacketError::Length),
+        (
+            long_field,
+            PacketError::LengthField {
+                stated: 1381,
+                expected: 1380,
+            },
+        ),
         (with(&g, 0, 5), PacketError::Version),
         (with(&g, 10, 9), PacketError::PacketType),
         (flipped, PacketError::Checksum),
-        (sealed(with(&g, 11, 3)), PacketError::Timestamp),
+        (sealed(with(&g, 11, 3)), PacketError::TimeType { kind: 3 }),
+        (sealed(two), PacketError::ImuPoints { dot_num: 2 }),
+        (no_interval, PacketError::PointInterval),
     ];
     for (bytes, want) in &cases {
         assert_eq!(feed(&mut dec, bytes, &mut log), Err(*want));
@@ -256,4 +271,59 @@ fn an_sdk_1_packet_is_not_read_as_sdk_2_nor_the_other_way() {
         feed(&mut one, &packet(1, T0), &mut log),
         Err(PacketError::Version)
     );
+}
+
+/// A Mid-360 point packet at `t` ns with counter `count`.
+fn counted(t: u64, count: u16) -> Vec<u8> {
+    let mut b = packet(1, t);
+    b[sdk2::field::UDP_CNT].copy_from_slice(&count.to_le_bytes());
+    sealed(b)
+}
+
+#[test]
+fn losses_come_from_the_counter_where_the_times_agree_and_stay_within_bounds() {
+    let mut dec = decoder(100_000_000);
+    let mut log = Log::default();
+    let mut refused = Vec::new();
+    let mut push = |b: Vec<u8>, log: &mut Log| {
+        if let Err(e) = feed(&mut dec, &b, log) {
+            refused.push(e);
+        }
+    };
+    let at = |i: u64| T0 + 480_000 * i;
+    for i in 0..10 {
+        push(counted(at(i), i as u16), &mut log);
+    }
+    // Packets 10..13 lost: the counter and the time both say so.
+    push(counted(at(13), 13), &mut log);
+    // A counter that jumps 1000 where the time moved one packet: the time's count, none.
+    push(counted(at(14), 1014), &mut log);
+    // One packet 10 s ahead, one whose time wrapped to near 2^64: held out as strays, then
+    // the stream goes on where it was.
+    push(counted(at(15) + 10_000_000_000, 1015), &mut log);
+    push(counted(u64::MAX - 5, 1016), &mut log);
+    for i in 17..30 {
+        push(counted(at(i), 1000 + i as u16), &mut log);
+    }
+    dec.finish(&mut log);
+    assert_eq!(refused, [PacketError::Ahead, PacketError::Ahead]);
+    assert_eq!(log.ends.len(), 1, "no frame of a stray");
+    let s = log.ends[0];
+    // 3 lost before packet 13, and the two strays' places (15, 16) by time and counter.
+    assert_eq!((s.lost_packets, s.out_of_order, s.packets), (3 + 2, 2, 25));
+}
+
+#[test]
+fn the_last_frame_is_complete_when_its_packets_reach_its_end() {
+    for (packets, end) in [(42, SweepEnd::Complete), (41, SweepEnd::Finished)] {
+        let mut dec = decoder(10_000_000);
+        let mut log = Log::default();
+        for i in 0..packets {
+            feed(&mut dec, &packet(1, T0 + 480_000 * i), &mut log).unwrap();
+        }
+        dec.finish(&mut log);
+        // Packets 21..: the second frame, from 10.08 ms; the 42nd's points end at 20.16 ms.
+        assert_eq!(log.ends.len(), 2);
+        assert_eq!(log.ends[1].end, end, "{packets} packets");
+    }
 }

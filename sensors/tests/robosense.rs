@@ -160,7 +160,7 @@ fn bad_input_is_refused_with_its_reason() {
     late_us[26..30].copy_from_slice(&2_000_000u32.to_be_bytes());
     assert_eq!(
         feed(&mut dec, &late_us, &mut log),
-        Err(PacketError::Timestamp)
+        Err(PacketError::DateTime)
     );
     feed(&mut dec, &p, &mut log).unwrap();
     dec.finish(&mut log);
@@ -183,7 +183,7 @@ fn dual_return_pairs_give_strongest_and_second_and_the_rubys_are_refused() {
     let p = msop(Model::Ruby, (1000, 0), 1000, 2);
     assert_eq!(
         feed(&mut dec, &p, &mut log),
-        Err(PacketError::UnknownReturnMode)
+        Err(PacketError::DualNotDecoded)
     );
 }
 

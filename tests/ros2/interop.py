@@ -10,9 +10,13 @@ bits). Types are declared the way rosidl lays them out, with ROS 2's DDS names
 
 Discovery is unicast over loopback: CYCLONEDDS_URI (set below unless already set) restricts
 Cyclone to 127.0.0.1, disables multicast and names 127.0.0.1 as the peer, so the participants
-find each other through the well-known unicast ports.
+find each other through the well-known unicast ports. Each side of a topic matches on its own,
+and a reader drops what a writer it has not matched yet sends: this side waits for its own
+matches, and with `--go-on-stdin` for a line on standard input from a caller that sees the
+node's side (the Rust test, through the node's watch) before the first cloud.
 
 usage: interop.py --folder DIR --domain N (--rate HZ | --ack) --out FILE.json [--frames N]
+                  [--go-on-stdin] [--timeout S]
 """
 
 import argparse
@@ -175,7 +179,7 @@ def wait_for(what, ok, timeout):
     while time.monotonic() < end:
         if ok():
             return
-        time.sleep(0.05)
+        time.sleep(0.005)
     sys.exit(f"interop.py: timed out waiting for {what}")
 
 
@@ -187,6 +191,8 @@ def main():
     ap.add_argument("--ack", action="store_true",
                     help="send each cloud once the odometry of the one before came (no --rate)")
     ap.add_argument("--frames", type=int, default=None)
+    ap.add_argument("--go-on-stdin", action="store_true",
+                    help="after the matches, wait for a line on stdin before the first cloud")
     ap.add_argument("--timeout", type=float, default=60.0)
     ap.add_argument("--out", type=Path, required=True)
     a = ap.parse_args()
@@ -218,9 +224,9 @@ def main():
         and tf_r.get_matched_publications(),
         a.timeout,
     )
-    # Matching is symmetric only once both sides processed discovery; give the node's side a
-    # moment so the first cloud is not sent before its reader knows this writer.
-    time.sleep(1.0)
+    if a.go_on_stdin:
+        print("matched; waiting for the go on stdin", flush=True)
+        sys.stdin.readline()
 
     odoms, tfs = [], []
 
@@ -257,6 +263,7 @@ def main():
             wait_for(f"the odometry of cloud {k - 1}", lambda: drain() or len(odoms) >= k,
                      a.timeout)
         else:
+            # Pacing at --rate (the sleep sets the pace; it waits for nothing).
             due = start + k / a.rate
             while time.monotonic() < due:
                 drain()
@@ -264,11 +271,11 @@ def main():
         cloud_w.write(kitti_cloud(path, times[k]))
         print(f"sent {path.name} stamp {times[k]}", flush=True)
 
+    # Until an odometry and a transform per cloud came (or the timeout: the caller counts).
     end = time.monotonic() + a.timeout
     while time.monotonic() < end and (len(odoms) < len(scans) or len(tfs) < len(scans)):
         drain()
-        time.sleep(0.02)
-    time.sleep(0.5)
+        time.sleep(0.005)
     drain()
     a.out.write_text(json.dumps({"sent": len(scans), "odometry": odoms, "tf": tfs}))
     print(f"received {len(odoms)} odometry and {len(tfs)} tf messages for {len(scans)} clouds")

@@ -1,9 +1,13 @@
 //! Shared helpers for the workspace-level tests in `tests/tests/`: running `kiss-odom` in
-//! process on a dataset and reading back what it wrote.
+//! process on a dataset and reading back what it wrote, and waiting for what another thread or
+//! process does (a condition polled against a deadline, never a fixed sleep).
 
 use std::ffi::OsString;
+use std::net::UdpSocket;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus};
+use std::time::{Duration, Instant};
 
 /// The repository root.
 pub fn repo() -> PathBuf {
@@ -213,4 +217,112 @@ impl Run {
         }
         line
     }
+}
+
+// ------------------------------------------------------------------------------------------
+// Waiting for another thread or process
+
+/// How often [`wait_until`] looks.
+pub const POLL: Duration = Duration::from_millis(5);
+
+/// A deadline for what another process or thread must do (bind a socket, match a DDS
+/// endpoint, register a cloud, exit): minutes, for a loaded machine. A hang guard, never a
+/// speed check: every wait ends as soon as its condition holds.
+pub const HANG: Duration = Duration::from_secs(120);
+
+/// Polls `ok` every [`POLL`] until it holds or `limit` has passed; returns whether it held.
+pub fn wait_until(limit: Duration, mut ok: impl FnMut() -> bool) -> bool {
+    let start = Instant::now();
+    loop {
+        if ok() {
+            return true;
+        }
+        if start.elapsed() >= limit {
+            return false;
+        }
+        std::thread::sleep(POLL);
+    }
+}
+
+/// Waits for `child` (named `what` in the failure) to exit; kills it and fails the test if it
+/// is still running after `limit`.
+pub fn wait_exit(child: &mut Child, what: &str, limit: Duration) -> ExitStatus {
+    let mut status = None;
+    let ended = wait_until(limit, || {
+        status = child.try_wait().unwrap();
+        status.is_some()
+    });
+    if !ended {
+        let _ = child.kill();
+        let _ = child.wait();
+        panic!("{what} still running after {limit:?}");
+    }
+    status.unwrap()
+}
+
+/// Sends `signal` (a name: `INT`, `STOP`...) to `child`.
+pub fn signal(child: &Child, signal: &str) {
+    let ok = Command::new("kill")
+        .args([format!("-{signal}"), child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok, "kill -{signal} {}", child.id());
+}
+
+/// Bytes waiting on the UDP socket bound to the loopback address `addr` (`127.0.0.1:PORT`),
+/// as `/proc/net/udp` shows them (`rx_queue`): what its owner has not read yet. `None` when no
+/// such socket is open (or not on Linux).
+pub fn udp_queued(addr: &str) -> Option<u64> {
+    let port: u16 = addr.rsplit_once(':')?.1.parse().ok()?;
+    let local = format!("0100007F:{port:04X}");
+    let table = std::fs::read_to_string("/proc/net/udp").ok()?;
+    table.lines().skip(1).find_map(|line| {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        if f.get(1) != Some(&local.as_str()) {
+            return None;
+        }
+        u64::from_str_radix(f.get(4)?.split_once(':')?.1, 16).ok()
+    })
+}
+
+/// Sends `datagrams` from `tx` to `addr`, where `child` listens, so that they reach it in the
+/// order sent and all before it reads the first: `child` is stopped (SIGSTOP) meanwhile, each
+/// datagram goes once the one before is seen queued on its socket, and then `child` goes on
+/// (SIGCONT, also if this fails).
+pub fn send_in_order(child: &Child, tx: &UdpSocket, addr: &str, datagrams: &[&[u8]]) {
+    struct Resume<'a>(&'a Child);
+    impl Drop for Resume<'_> {
+        fn drop(&mut self) {
+            signal(self.0, "CONT");
+        }
+    }
+    signal(child, "STOP");
+    let _resume = Resume(child);
+    // A signal is delivered, not obeyed on the spot: wait until the child is stopped.
+    let stat = format!("/proc/{}/stat", child.id());
+    let state = || {
+        std::fs::read_to_string(&stat)
+            .ok()?
+            .rsplit_once(") ")?
+            .1
+            .chars()
+            .next()
+    };
+    assert!(
+        wait_until(HANG, || state() == Some('T')),
+        "the listener never stopped"
+    );
+    for (k, d) in datagrams.iter().enumerate() {
+        let before = udp_queued(addr).expect("the listener's socket");
+        tx.send_to(d, addr).unwrap();
+        let queued = wait_until(HANG, || udp_queued(addr).is_some_and(|q| q > before));
+        assert!(queued, "datagram {k} never reached {addr}");
+    }
+}
+
+/// Waits until the owner of the UDP socket at `addr` has read everything queued on it.
+pub fn wait_read(addr: &str) {
+    let read = wait_until(HANG, || udp_queued(addr) == Some(0));
+    assert!(read, "{addr}: {:?} bytes still unread", udp_queued(addr));
 }

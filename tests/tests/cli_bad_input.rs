@@ -652,8 +652,8 @@ fn no_frames_or_no_such_path_exit_1_with_the_reason() {
     assert!(line.contains("no frames"), "{line}");
 }
 
-/// `kiss-odom eval` on finite poses far enough apart for the error
-/// sums to overflow reported the ATE as `null` (JSON has no inf) with exit 0.
+/// `kiss-odom eval` on finite poses far enough apart for the error sums to overflow fails
+/// naming the metric, rather than writing the ATE as `null` (JSON has no inf) with exit 0.
 #[test]
 fn eval_with_an_infinite_ate_fails_naming_the_metric() {
     let dir = tempfile::tempdir().unwrap();

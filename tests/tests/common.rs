@@ -271,19 +271,14 @@ pub fn ouster_payload_at(bytes: &[u8], k: u32) -> usize {
 }
 
 /// Waits until `child` (named `name` in failures) has bound the UDP address `addr`: that is
-/// when the address can no longer be taken. A hang guard of `limit`, not a speed check.
-pub fn wait_listening(
-    child: &mut std::process::Child,
-    addr: &str,
-    name: &str,
-    limit: std::time::Duration,
-) {
-    let start = std::time::Instant::now();
-    while std::net::UdpSocket::bind(addr).is_ok() {
+/// when the address can no longer be taken. A hang guard of [`kiss_odom_tests::HANG`], not a
+/// speed check.
+pub fn wait_listening(child: &mut std::process::Child, addr: &str, name: &str) {
+    let listening = kiss_odom_tests::wait_until(kiss_odom_tests::HANG, || {
         if let Some(status) = child.try_wait().unwrap() {
             panic!("{name} ended ({status}) before listening");
         }
-        assert!(start.elapsed() < limit, "{name} never listened");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+        std::net::UdpSocket::bind(addr).is_err()
+    });
+    assert!(listening, "{name} never listened");
 }

@@ -3,8 +3,6 @@
 //! (`fixtures/bags/make_bags.py`), independent of our readers: `out_of_order.*` holds the
 //! Ouster-style clouds of frames 0..5 written in the order 0, 2, 1, 4, 3, each with the
 //! receive time and header stamp of its frame; `ouster.*` holds frames 0..4 in order.
-//!
-//! Each test failed before the readers learnt time order (its comment says what went wrong).
 
 use kiss_odom_tests::{repo, run};
 use std::path::PathBuf;
@@ -13,8 +11,8 @@ fn fixture(name: &str) -> PathBuf {
     repo().join("fixtures/bags").join(name)
 }
 
-/// A bag (or MCAP file) recorded out of time order was processed in file order and
-/// its TUM times went backwards.
+/// A bag (or MCAP file) recorded out of time order is read in time order, with a warning: in
+/// file order its TUM times would go backwards.
 #[test]
 fn bags_and_mcap_files_out_of_time_order_are_read_in_time_order_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();
@@ -49,8 +47,8 @@ fn bags_and_mcap_files_out_of_time_order_are_read_in_time_order_with_a_warning()
     }
 }
 
-/// A ROS 1 bag cut inside its first chunk said "no PointCloud2 topic (topics:
-/// none)" instead of saying it is damaged.
+/// A ROS 1 bag cut inside its first chunk is reported as damaged, not as a bag with no
+/// PointCloud2 topic.
 #[test]
 fn a_bag_cut_inside_its_first_chunk_is_reported_as_damaged() {
     let dir = tempfile::tempdir().unwrap();

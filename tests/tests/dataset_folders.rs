@@ -5,16 +5,14 @@
 //! and run end to end through `kiss-odom run`; the rule every test holds is that a frame is
 //! paired with its own ground truth and time, and that anything the tool cannot pair is
 //! reported (a warning naming the file, counted in `summary.json`) or refused, never silent.
-//!
-//! Each test failed on the main branch before the dataset layer learnt frame identities (the
-//! finding it holds is named in its comment).
+//! Each test's comment says what pairing by position alone would get wrong.
 
 use kiss_odom_io::folders::{bin, pcd, ply};
 use kiss_odom_tests::{kitti_copy, run, Run};
 use std::path::{Path, PathBuf};
 
 /// Margin on the ATE of a run with one frame lost against the full run. The full run's ATE is
-/// 0.019 m; pairing frames with the wrong ground truth after the gap gave 0.282 m.
+/// 0.019 m; pairing the frames after the gap with the next frame's ground truth gives 0.282 m.
 const ATE_MARGIN_M: f64 = 0.005;
 
 /// The clean KITTI sample, run once per test that compares against it.
@@ -65,8 +63,9 @@ fn same_first_poses(a: &Run, b: &Run, n: usize) {
     );
 }
 
-/// `rm velodyne/000005.bin` shifted every later frame onto the next frame's ground
-/// truth and time without a word (ATE 0.282 m instead of 0.019 m).
+/// `rm velodyne/000005.bin`: the lost frame is named, and every later frame keeps its own
+/// ground truth and time (pairing by position would shift them onto the next frame's: ATE
+/// 0.282 m instead of 0.019 m).
 #[test]
 fn a_frame_lost_from_a_kitti_sequence_is_skipped_and_later_frames_keep_their_ground_truth() {
     let dir = tempfile::tempdir().unwrap();
@@ -92,8 +91,8 @@ fn a_frame_lost_from_a_kitti_sequence_is_skipped_and_later_frames_keep_their_gro
     strict.failed_with(&["000005.bin"]);
 }
 
-/// Other shapes of a gap: a folder or a dangling symlink in place of a frame was
-/// skipped silently by the listing, with the same shift.
+/// Other shapes of a gap: a folder or a dangling symlink in place of a frame is a skipped
+/// frame naming it, not a name the listing leaves out (which would shift the later frames).
 #[test]
 fn a_folder_or_dangling_symlink_in_place_of_a_frame_is_a_skipped_frame_naming_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -134,8 +133,8 @@ fn a_frame_lost_from_a_generic_bin_ply_or_pcd_folder_is_skipped_and_pairing_hold
     }
 }
 
-/// macOS AppleDouble companions (`._000000.bin`, 4096 bytes) were read as frames of
-/// garbage points and shifted every index.
+/// macOS AppleDouble companions (`._000000.bin`, 4096 bytes) are not frames: read as frames
+/// they would be garbage points and shift every index.
 #[test]
 fn macos_appledouble_companions_are_ignored_with_one_warning() {
     let dir = tempfile::tempdir().unwrap();
@@ -180,8 +179,8 @@ fn hidden_editor_and_system_files_are_ignored_with_one_warning() {
     assert_eq!(r.lines("poses_kitti.txt"), full.lines("poses_kitti.txt"));
 }
 
-/// With `.ply` and `.bin` frames mixed, only the first file's format was read and
-/// the other frames silently ignored.
+/// With `.ply` and `.bin` frames mixed, no frame is silently ignored: `auto` refuses the
+/// folder, an explicit format names the frames of the other one.
 #[test]
 fn frames_of_two_formats_are_refused_under_auto_and_the_rest_named_under_an_explicit_format() {
     let dir = tempfile::tempdir().unwrap();
@@ -211,8 +210,8 @@ fn rename_frames(data: &Path, names: &[String]) {
     }
 }
 
-/// Frames named by time with decimals (`100.0.bin` ... `100.45.bin`) were taken
-/// in the order 0, 2, 4, 6, 8, 1, 3, 5, 7, 9.
+/// Frames named by time with decimals (`100.0.bin` ... `100.45.bin`) are read in time order
+/// (sorting the names as text would give 0, 2, 4, 6, 8, 1, 3, 5, 7, 9).
 #[test]
 fn frames_named_by_decimal_seconds_are_read_in_time_order_with_their_times() {
     let dir = tempfile::tempdir().unwrap();
@@ -236,8 +235,8 @@ fn frames_named_by_decimal_seconds_are_read_in_time_order_with_their_times() {
     assert_eq!(r.tum_times(), want);
 }
 
-/// Other time names: integer nanoseconds and microsecond decimals give the times
-/// in seconds (they were frame numbers), and a long interval is reported as lost frames.
+/// Other time names: integer nanoseconds and microsecond decimals give the times in seconds
+/// (not frame numbers), and a long interval is reported as lost frames.
 #[test]
 fn frames_named_by_nanoseconds_or_microseconds_carry_their_times_and_gaps_are_reported() {
     let dir = tempfile::tempdir().unwrap();
@@ -281,8 +280,9 @@ fn frames_named_by_nanoseconds_or_microseconds_carry_their_times_and_gaps_are_re
     }
 }
 
-/// A KITTI-shaped folder whose `calib.txt` has no `Tr` was read as a generic folder:
-/// no KITTI correction, camera-frame ground truth scored as LiDAR poses (final error 7.25 m).
+/// A KITTI-shaped folder whose `calib.txt` has no `Tr` is refused, or read as KITTI without
+/// ground truth; read as a generic folder it would lose the KITTI correction and score
+/// camera-frame ground truth as LiDAR poses (final error 7.25 m).
 #[test]
 fn a_kitti_folder_without_tr_is_refused_or_read_as_kitti_without_ground_truth() {
     let dir = tempfile::tempdir().unwrap();
@@ -316,8 +316,8 @@ fn side_file(data: &Path, name: &str, rows: usize) {
     std::fs::write(data.join(name), out.join("\n") + "\n").unwrap();
 }
 
-/// Ground truth: a `poses.txt` shorter than the frames gave `metrics: null` with
-/// `warnings: 0`; a longer one went unremarked.
+/// Ground truth: a `poses.txt` shorter or longer than the frames is reported with a warning,
+/// and the metrics are computed on the frames that have a row.
 #[test]
 fn ground_truth_shorter_or_longer_than_the_frames_is_reported_and_paired_by_frame() {
     let dir = tempfile::tempdir().unwrap();
@@ -341,8 +341,8 @@ fn ground_truth_shorter_or_longer_than_the_frames_is_reported_and_paired_by_fram
     assert_eq!(l.summary()["metrics"], full.summary()["metrics"]);
 }
 
-/// Times: a `times.txt` shorter than the frames mixed seconds and frame numbers in
-/// `poses_tum.txt`.
+/// Times: a `times.txt` shorter or longer than the frames is reported, and `poses_tum.txt`
+/// never mixes seconds with frame numbers.
 #[test]
 fn times_shorter_or_longer_than_the_frames_are_reported_and_never_mixed_with_frame_numbers() {
     let dir = tempfile::tempdir().unwrap();
@@ -363,7 +363,7 @@ fn times_shorter_or_longer_than_the_frames_are_reported_and_never_mixed_with_fra
 }
 
 /// Two files for one frame, or numbered and unnumbered names together, cannot be paired with
-/// ground truth: refused with the names (all were read as extra frames).
+/// ground truth: refused with the names (read as extra frames, they would shift the others).
 #[test]
 fn duplicate_frame_numbers_and_unnumbered_names_are_refused_with_the_names() {
     let dir = tempfile::tempdir().unwrap();
@@ -378,8 +378,8 @@ fn duplicate_frame_numbers_and_unnumbered_names_are_refused_with_the_names() {
     r.failed_with(&["scan.bin"]);
 }
 
-/// A PLY that declares `x` twice was read at the wrong stride (ply-rs keeps one
-/// property per name).
+/// A PLY that declares `x` twice is skipped with the reason: ply-rs keeps one property per
+/// name, so its points would be read at the wrong stride.
 #[test]
 fn a_ply_declaring_a_property_twice_is_skipped_with_the_reason() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,8 +1,6 @@
 //! Dataset reading that needs a process of its own: a memory limit set with
 //! `ulimit -v`, or a `TMPDIR` the run must not touch. The command runs as a child under `sh`,
 //! so the limit applies to `kiss-odom run` alone.
-//!
-//! Each test failed before the fix it holds (its comment says what went wrong).
 
 use kiss_odom_tests::{kitti_copy, repo, Run};
 use std::path::Path;
@@ -41,9 +39,10 @@ fn sparse(path: &Path, head: &[u8]) {
     f.set_len(2 << 30).unwrap();
 }
 
-/// A `.bin` frame was read whole before its first `scan_points` points were taken;
-/// a 2 GB frame aborted the process (`memory allocation of 3221225472 bytes failed`) and lost
-/// the run. The PLY and PCD readers are held to the same bound.
+/// A frame costs at most `scan_points` points of memory whatever its file's size: a 2 GB
+/// `.bin` frame under a 1 GB address-space limit is truncated with a warning, where reading it
+/// whole would abort the process and lose the run. The PLY and PCD readers are held to the same
+/// bound.
 #[test]
 fn a_two_gigabyte_frame_is_truncated_with_a_warning_under_a_one_gigabyte_limit() {
     let dir = tempfile::tempdir().unwrap();
@@ -86,8 +85,7 @@ fn a_two_gigabyte_frame_is_truncated_with_a_warning_under_a_one_gigabyte_limit()
     }
 }
 
-/// A damaged bag was read from a full-size temporary copy in `TMPDIR`, left behind
-/// when the run was interrupted. The bag is now read in place: with no usable `TMPDIR` at all
+/// A damaged bag is read in place, not from a temporary copy: with no usable `TMPDIR` at all
 /// the frames before the damage are still processed.
 #[test]
 fn a_damaged_bag_is_read_without_a_temporary_copy() {

@@ -1,6 +1,6 @@
-//! An interrupted run on a damaged bag leaves nothing in the temporary folder (//! finding 10: the reader used to work on a full-size repaired copy there; it now reads a bag
-//! without an index in place). Alone in its file because it raises the
-//! process-wide stop flag (`kiss_odom::interrupt::raise`, what a SIGINT handler does) and
+//! An interrupted run on a damaged bag leaves nothing in the temporary folder: the reader reads
+//! a bag without an index in place, never from a repaired copy. Alone in its file because it
+//! raises the process-wide stop flag (`kiss_odom::interrupt::raise`, what a SIGINT handler does) and
 //! points `TMPDIR` at a folder of its own. The signal itself, sent to a real process, is in
 //! `tests/tests/signals.rs`.
 

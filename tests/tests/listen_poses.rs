@@ -7,6 +7,7 @@
 
 use crate::common;
 use kiss_odom_sensors::pose_datagram::{Counters, Link, PoseDatagram};
+use kiss_odom_tests::{send_in_order, signal, wait_read, wait_until, HANG};
 use nalgebra::{Isometry3, Vector3};
 use std::net::UdpSocket;
 use std::path::Path;
@@ -29,19 +30,15 @@ fn listen(addr: &str, out: &Path, extra: &[&str]) -> Child {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    common::wait_listening(&mut child, addr, "listen-poses", Duration::from_secs(60));
+    common::wait_listening(&mut child, addr, "listen-poses");
     child
 }
 
-/// The child's output, killing it if it has not ended within a minute.
+/// The child's output, killing it if it has not ended after [`HANG`].
 fn finish(mut child: Child) -> Output {
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("listen-poses did not end: {:?}", child.wait_with_output());
-        }
-        std::thread::sleep(Duration::from_millis(20));
+    if !wait_until(HANG, || child.try_wait().unwrap().is_some()) {
+        let _ = child.kill();
+        panic!("listen-poses did not end: {:?}", child.wait_with_output());
     }
     child.wait_with_output().unwrap()
 }
@@ -92,7 +89,8 @@ fn read(dir: &Path, name: &str) -> String {
 fn poses_come_back_bit_exact_in_sweep_order_with_losses_duplicates_and_junk_counted() {
     let dir = tempfile::tempdir().unwrap();
     let addr = free_address();
-    let child = listen(&addr, dir.path(), &["--sweeps", "3", "--idle", "30"]);
+    // An idle time longer than the hang guard: only `--sweeps 3` can end it in time.
+    let child = listen(&addr, dir.path(), &["--sweeps", "3", "--idle", "3600"]);
     let tx = UdpSocket::bind("127.0.0.1:0").unwrap();
     let mut later_one = datagram(1);
     later_one.pose[0] = 99.0;
@@ -103,19 +101,11 @@ fn poses_come_back_bit_exact_in_sweep_order_with_losses_duplicates_and_junk_coun
         later_one.encode().to_vec(),
         datagram(0).encode().to_vec(), // the third sweep: --sweeps 3 ends it here
     ];
-    for bytes in &sent {
-        tx.send_to(bytes, &addr).unwrap();
-        // Loopback keeps the order; the pause only keeps the receive buffer small.
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let start = Instant::now();
+    let sent: Vec<&[u8]> = sent.iter().map(Vec::as_slice).collect();
+    send_in_order(&child, &tx, &addr, &sent);
     let out = finish(child);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
-    assert!(
-        start.elapsed() < Duration::from_secs(20),
-        "--sweeps 3 did not end it"
-    );
     assert_eq!(
         stderr.trim(),
         "warning: 1 pose datagram(s) lost on the way (missing_sweeps in summary.json)\n\
@@ -191,18 +181,13 @@ fn without_a_sender_it_fails_after_the_idle_time_and_says_so() {
 fn sigint_ends_it_with_the_sweeps_so_far_written() {
     let dir = tempfile::tempdir().unwrap();
     let addr = free_address();
-    let child = listen(&addr, dir.path(), &["--idle", "60", "--quiet"]);
+    let child = listen(&addr, dir.path(), &["--idle", "3600", "--quiet"]);
     let tx = UdpSocket::bind("127.0.0.1:0").unwrap();
-    for k in [0, 1] {
-        tx.send_to(&datagram(k).encode(), &addr).unwrap();
-    }
-    // Time for both to be taken before the signal.
-    std::thread::sleep(Duration::from_secs(1));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
+    let (zero, one) = (datagram(0).encode(), datagram(1).encode());
+    send_in_order(&child, &tx, &addr, &[&zero[..], &one[..]]);
+    // Both read from the socket (and so taken) before the signal.
+    wait_read(&addr);
+    signal(&child, "INT");
     let out = finish(child);
     assert_eq!(
         out.status.code(),

@@ -10,12 +10,14 @@
 
 use crate::common;
 use kiss_odom_io::capture::pcap;
+use kiss_odom_tests::{wait_until, HANG};
 use std::io::{BufRead, BufReader, Read};
 use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 fn data() -> PathBuf {
@@ -65,7 +67,7 @@ fn live(addr: &str, sensor: &[&str], out: &Path, extra: &[&str]) -> Child {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    common::wait_listening(&mut child, addr, "live", Duration::from_secs(120));
+    common::wait_listening(&mut child, addr, "live");
     child
 }
 
@@ -263,49 +265,38 @@ fn packets_missing_from_the_stream_are_counted_in_their_sweep() {
     );
 }
 
-/// The lines a child prints on stdout, collected as they come (its acknowledgements).
-fn printed_lines(child: &mut Child) -> Arc<Mutex<Vec<String>>> {
+/// The lines a child prints on stdout, collected as they come (its acknowledgements), and the
+/// thread collecting them, which ends at the child's exit.
+fn printed_lines(child: &mut Child) -> (Arc<Mutex<Vec<String>>>, JoinHandle<()>) {
     let lines = Arc::new(Mutex::new(Vec::new()));
     let (stdout, sink) = (child.stdout.take().unwrap(), Arc::clone(&lines));
-    std::thread::spawn(move || {
+    let reader = std::thread::spawn(move || {
         for line in BufReader::new(stdout).lines().map_while(Result::ok) {
             sink.lock().unwrap().push(line);
         }
     });
-    lines
+    (lines, reader)
 }
 
 /// Signals the child with `name`, then waits for it to end: its status, the time from the
-/// signal to its exit and its stderr. A child that has not ended a minute later is killed and
+/// signal to its exit and its stderr. A child that has not ended [`HANG`] later is killed and
 /// the test fails.
 fn signal_and_time_exit(child: &mut Child, name: &str) -> (ExitStatus, Duration, String) {
     let sent = Instant::now();
-    let kill = Command::new("kill")
-        .args([format!("-{name}"), child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            let took = sent.elapsed();
-            let mut stderr = String::new();
-            if let Some(mut e) = child.stderr.take() {
-                e.read_to_string(&mut stderr).unwrap();
-            }
-            return (status, took, stderr);
-        }
-        if sent.elapsed() > Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("still running 60 s after SIG{name}");
-        }
-        std::thread::sleep(Duration::from_millis(5));
+    kiss_odom_tests::signal(child, name);
+    let status = kiss_odom_tests::wait_exit(child, &format!("live after SIG{name}"), HANG);
+    let took = sent.elapsed();
+    let mut stderr = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        e.read_to_string(&mut stderr).unwrap();
     }
+    (status, took, stderr)
 }
 
 /// What the tests below allow between a signal and the exit: the promise is 1 s; the rest is
 /// margin for a loaded machine (the figure measured is printed). Unoptimised, registering the
 /// sweep the signal cut takes seconds on its own (3.3-3.8 s measured with both cores busy); a
-/// signal held off by packets that keep coming would still reach the 60 s stop.
+/// signal held off by packets that keep coming would still end at the hang guard.
 const SIGNAL_TO_EXIT: Duration = if cfg!(debug_assertions) {
     Duration::from_secs(15)
 } else {
@@ -323,17 +314,11 @@ fn sigint_ends_live_with_its_outputs_written() {
     run(&pcap, &["--meta", s(&meta)], &ran);
     let addr = free_address();
     let mut child = live(&addr, &["--meta", s(&meta)], &out, &[]);
-    let printed = printed_lines(&mut child);
+    let (printed, reader) = printed_lines(&mut child);
     replay(&pcap, &addr, "1");
     // Two sweeps done (their poses printed); the third is open until the signal ends it.
-    let start = Instant::now();
-    while printed.lock().unwrap().len() < 2 {
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "no poses printed"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let two = wait_until(HANG, || printed.lock().unwrap().len() >= 2);
+    assert!(two, "{} poses printed", printed.lock().unwrap().len());
     let (status, _, stderr) = signal_and_time_exit(&mut child, "INT");
     assert_eq!(status.code(), Some(130), "{stderr}");
     let s = summary(&out);
@@ -349,7 +334,7 @@ fn sigint_ends_live_with_its_outputs_written() {
     let want = read(&ran, "poses_tum.txt");
     let want: Vec<&str> = want.lines().skip(1).take(2).collect();
     assert_eq!(&tum[..2], want.as_slice());
-    std::thread::sleep(Duration::from_millis(50)); // the reader thread's last lines
+    reader.join().unwrap(); // every line printed, up to the exit
     assert_eq!(printed.lock().unwrap().as_slice(), tum.as_slice());
 }
 
@@ -377,26 +362,29 @@ fn live_ends_within_a_second_of_sigint_while_packets_keep_coming_without_complet
     // The same packet a thousand times a second: its azimuth never advances, so no sweep
     // ends, and the queue is never idle.
     let stop = Arc::new(AtomicBool::new(false));
+    let sent = Arc::new(AtomicU64::new(0));
     let sender = {
-        let (stop, addr) = (Arc::clone(&stop), addr.clone());
+        let (stop, sent, addr) = (Arc::clone(&stop), Arc::clone(&sent), addr.clone());
         std::thread::spawn(move || {
             let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-            let mut sent = 0u64;
             while !stop.load(Ordering::Relaxed) {
                 let _ = socket.send_to(&packet, &addr);
-                sent += 1;
+                sent.fetch_add(1, Ordering::Relaxed);
+                // Pacing at a sensor's rate on purpose; the pause waits for nothing.
                 std::thread::sleep(Duration::from_millis(1));
             }
-            sent
         })
     };
-    std::thread::sleep(Duration::from_secs(1));
+    // Packets coming: a hundred sent (and more on the way) when the signal goes.
+    assert!(wait_until(HANG, || sent.load(Ordering::Relaxed) >= 100));
     let (status, took, stderr) = signal_and_time_exit(&mut child, "INT");
     stop.store(true, Ordering::Relaxed);
-    let sent = sender.join().unwrap();
+    sender.join().unwrap();
     println!(
-        "SIGINT to exit: {:.3} s with packets still coming ({sent} sent)",
-        took.as_secs_f64()
+        "SIGINT to exit: {:.3} s with packets still coming ({} sent), live's packets: {}",
+        took.as_secs_f64(),
+        sent.load(Ordering::Relaxed),
+        summary(&out)["packets"]
     );
     assert_eq!(status.code(), Some(130), "{stderr}");
     assert!(took < SIGNAL_TO_EXIT, "{took:?} from SIGINT to exit");

@@ -1,7 +1,8 @@
 //! A damaged MCAP file costs memory by its size, not by what its length fields declare: the
-//! fuzzer's 7 kB input whose chunk claims ~4 GB (fuzz/corpus/mcap/regress-oom-*) made `run`
-//! reach 4.2 GB of RSS before the reader fed the mcap crate in bounded pieces. Its own test
-//! binary, so no other test's memory counts.
+//! fuzzer's 7 kB input whose chunk claims ~4 GB (fuzz/corpus/mcap/regress-oom-*) is read with
+//! the mcap crate fed in bounded pieces, so the run's RSS stays far below the claim (fed without
+//! that bound, the crate's reader allocates what the chunk declares: 4.2 GB of RSS). Its own test binary, so no other
+//! test's memory counts.
 
 use kiss_odom::memory::{peak_rss_bytes, reset_peak_rss, rss_bytes};
 use kiss_odom_io::ros::mcap;

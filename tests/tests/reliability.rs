@@ -708,9 +708,9 @@ fn every_corridor_frame_is_flagged_degenerate_with_a_finite_pose() {
     ignore = "heavy: cargo test --release --test workspace reliability::"
 )]
 fn every_ground_plane_frame_is_flagged_degenerate_from_the_first_one() {
-    // Single scan rings on the ground used to read as lines constraining the horizontal
-    // directions (observability 0.03-0.05, unflagged, on the first frames while ICP slid
-    // metres); see core/src/degeneracy.rs.
+    // Single scan rings on the ground look like lines constraining the horizontal directions;
+    // counted as such they would give observability 0.03-0.05, unflagged, on the first frames
+    // while ICP slides metres. See core/src/observability.rs.
     for (beams, columns) in [(64, 1024), (32, 512)] {
         let seq = generate(Profile::Plane, 0, 0, 20, (beams, columns));
         let (flagged, n, worst, last) = degenerate_run(&seq);

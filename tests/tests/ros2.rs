@@ -1,13 +1,16 @@
 //! `kiss-odom ros2` on the wire: against an independent DDS stack (Cyclone DDS from Python),
-//! fed by `--play` in another process, paced by the node's odometry and at 10 and 50 Hz.
+//! fed by `--play`, paced by the node's odometry and at 10 and 50 Hz.
 //!
 //! Every pose the node publishes must be, as printed in a KITTI file, the pose `kiss-odom run`
 //! writes for the same cloud when run on the sequence of clouds the node registered (a cloud
 //! the node dropped under the latest-only rule is never registered, so `run` gets the
-//! registered ones only). Nothing here depends on how fast the machine is: a publisher that
-//! must lose nothing waits for each cloud's odometry (`interop.py --ack`, `--play
-//! --lockstep`); at a fixed rate the tests check the latest-only rule and the poses of what
-//! was registered, never how many were. The Cyclone test needs `KISS_ODOM_ROS2_PYTHON` (a Python with
+//! registered ones only). Nothing here depends on how fast the machine is: every publisher
+//! starts once the node has matched it (a reader drops what an unmatched writer sends); a
+//! publisher that must lose nothing waits for each cloud's odometry (`interop.py --ack`,
+//! `--play --lockstep`), so one cloud at most is in flight; at a fixed rate the tests check the
+//! latest-only rule and the poses of what was registered, never how many were, and count the
+//! clouds lost on the way: sensor data is best effort with a history of 5, so a loaded machine
+//! may lose some. The Cyclone test needs `KISS_ODOM_ROS2_PYTHON` (a Python with
 //! `tests/ros2/requirements.txt`, which `.ci/run` makes) and prints SKIP without it.
 
 use crate::ros2_common;
@@ -24,7 +27,9 @@ use kiss_odom_io::{open, Format, Item, OpenOptions};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
 use ros2_common::*;
 use serde_json::Value;
+use std::io::Write;
 use std::path::Path;
+use std::process::Stdio;
 use std::time::Duration;
 
 fn floats(v: &Value) -> Vec<f64> {
@@ -62,14 +67,24 @@ fn cyclonedds_publisher_and_subscriber_get_runs_poses_bit_for_bit_with_twist_and
     let d = domain(0);
     let node = start_node(d, dir.path(), Duration::ZERO);
     let json = dir.path().join("received.json");
-    let status = std::process::Command::new(&py)
+    let mut cyclone = std::process::Command::new(&py)
         .arg(root().join("tests/ros2/interop.py"))
         .args(["--folder", &kitti()])
-        .args(["--domain", &d.to_string(), "--ack"])
+        .args(["--domain", &d.to_string(), "--ack", "--go-on-stdin"])
+        .args(["--timeout", &HANG.as_secs().to_string()])
         .arg("--out")
         .arg(&json)
-        .status()
+        .stdin(Stdio::piped())
+        .spawn()
         .expect("start the Cyclone DDS side");
+    // Its first cloud goes once the node has matched its cloud writer and its two readers.
+    for topic in ["/points", "/kiss/odometry", "/tf"] {
+        node.wait_matched(topic, 1);
+    }
+    let mut go = cyclone.stdin.take().unwrap();
+    go.write_all(b"go\n").unwrap();
+    drop(go);
+    let status = kiss_odom_tests::wait_exit(&mut cyclone, "interop.py", 2 * HANG);
     let stopped = node.stop();
     println!("{}{}", stopped.out, stopped.err);
     assert!(status.success(), "interop.py failed");
@@ -156,25 +171,41 @@ fn cyclonedds_publisher_and_subscriber_get_runs_poses_bit_for_bit_with_twist_and
 
 /// Plays `file` into a node in this process with `--play` flags `args`; returns what the
 /// node printed and what the player printed.
+///
+/// With `--lockstep` one cloud at most is in flight and every cloud published must be
+/// received. At a fixed rate a cloud can be lost on the way, as sensor data may be (best
+/// effort, a reader history of 5): the losses are counted and printed.
 fn play_into_node(k: u16, file: &Path, args: &[&str], min_period: Duration) -> (Stopped, String) {
     let dir = tempfile::tempdir().unwrap();
     let d = domain(k);
     let node = start_node(d, dir.path(), min_period);
-    let played = play(file, d, args);
+    let played = play(&node, file, d, args);
     let stamps = published_stamps(&played);
     let sent = stamps.len();
-    // Latest-only: the last cloud published is never replaced, so the node registers it; its
-    // frame line says every cloud before has been taken or dropped.
+    let lockstep = args.contains(&"--lockstep");
+    // Latest-only: the last cloud published is never replaced (nor pushed out of the reader's
+    // history), so the node registers it unless it is lost on the wire; its frame line says
+    // every cloud before has been taken or dropped. Only waiting tells a lost cloud: at a
+    // fixed rate, one not registered by the deadline is counted with the other losses.
     let last = *stamps.last().expect("no cloud published");
-    let done = wait_until(Duration::from_secs(120), || node.has_registered(last));
+    let done = wait_until(HANG, || node.has_registered(last));
     let stopped = node.stop();
     let s = &stopped.summary;
     println!("{}: {}", file.display(), s.line());
-    assert!(done, "the last cloud (stamp {last}) was never registered");
-    assert_eq!(
-        s.received as usize, sent,
-        "every cloud published was received"
+    assert!(
+        s.received as usize <= sent,
+        "received more than was published"
     );
+    let lost = sent - s.received as usize;
+    println!(
+        "{}: {sent} clouds published, {} received, {lost} lost on the way",
+        file.display(),
+        s.received
+    );
+    if lockstep {
+        assert!(done, "the last cloud (stamp {last}) was never registered");
+        assert_eq!(lost, 0, "--lockstep: every cloud published was received");
+    }
     assert_eq!(
         s.received,
         s.registered + s.dropped + s.malformed + s.empty,
@@ -275,12 +306,12 @@ fn a_bag_with_an_imu_feeds_the_gyroscope_prior_and_the_poses_are_runs_with_imu_a
     let dir = tempfile::tempdir().unwrap();
     let d = domain(7);
     let node = start_node_imu(d, dir.path(), "/imu");
-    let played = play(&bag, d, &["--lockstep", "--imu", "auto"]);
+    let played = play(&node, &bag, d, &["--lockstep", "--imu", "auto"]);
     let stamps = published_stamps(&played);
     assert_eq!(stamps.len(), 30, "{played}");
     assert!(played.contains("IMU samples on /imu"), "{played}");
     let last = *stamps.last().unwrap();
-    let done = wait_until(Duration::from_secs(120), || node.has_registered(last));
+    let done = wait_until(HANG, || node.has_registered(last));
     let stopped = node.stop();
     let s = &stopped.summary;
     println!("{}", s.line());
@@ -399,8 +430,8 @@ fn base_to_lidar_extrinsic_moves_the_poses_and_the_local_map_is_published_in_the
     let node = start_node_with(d, dir.path(), Duration::ZERO, params);
     let dp = dds::participant(d).unwrap();
     let mut maps = dds::cloud_reader(&dp, "/kiss/local_map").unwrap();
-    play(&root().join(KITTI_DIR), d, &["--lockstep"]);
-    let stopped = node.stop_after(10, Duration::from_secs(60));
+    play(&node, &root().join(KITTI_DIR), d, &["--lockstep"]);
+    let stopped = node.stop_after(10);
     assert_eq!(stopped.summary.registered, 10);
 
     // Base poses are E L E^-1 of run's LiDAR poses.

@@ -34,7 +34,7 @@ fn header(seconds: f64) -> Header {
     }
 }
 
-/// A node on domain `k` and a cloud writer it has matched. Holds the test lock.
+/// A node on domain `k` and a cloud writer matched on both sides. Holds the test lock.
 struct Rig {
     _lock: std::sync::MutexGuard<'static, ()>,
     dir: tempfile::TempDir,
@@ -50,12 +50,8 @@ fn rig(k: u16) -> Rig {
     let dp = dds::participant(domain(k)).unwrap();
     let w: Writer<PointCloud2> =
         dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();
-    assert!(
-        dds::wait_for_reader(&w, Duration::from_secs(10), &|| false),
-        "no node"
-    );
-    // The match is seen here first; give the node's side time to learn this writer too.
-    std::thread::sleep(Duration::from_millis(500));
+    assert!(dds::wait_for_reader(&w, HANG, &|| false), "no node");
+    node.wait_matched("/points", 1);
     Rig {
         _lock: lock,
         dir,
@@ -68,7 +64,7 @@ fn rig(k: u16) -> Rig {
 impl Rig {
     /// Waits until the node has printed `n` warnings: the skipped clouds' acknowledgements.
     fn warned(&self, n: usize) {
-        let ok = wait_until(Duration::from_secs(60), || self.node.warnings() >= n);
+        let ok = wait_until(HANG, || self.node.warnings() >= n);
         assert!(
             ok,
             "the node printed {} warnings, not {n}",
@@ -83,10 +79,10 @@ impl Rig {
 fn around(k: u16, bad: impl FnOnce(&Rig)) -> Stopped {
     let r = rig(k);
     r.w.write(good(0), None).unwrap();
-    assert!(wait_until(Duration::from_secs(60), || r.node.registered() == 1));
+    assert!(wait_until(HANG, || r.node.registered() == 1));
     bad(&r);
     r.w.write(good(1), None).unwrap();
-    let stopped = r.node.stop_after(2, Duration::from_secs(10));
+    let stopped = r.node.stop_after(2);
     println!("{}{}", stopped.out, stopped.err);
     let s = &stopped.summary;
     assert_eq!(s.dropped, 0);
@@ -170,7 +166,7 @@ fn non_finite_points_are_skipped_and_counted_and_an_all_nan_cloud_is_skipped() {
     c.data.0[..8].copy_from_slice(&f64::NAN.to_le_bytes());
     c.data.0[32..40].copy_from_slice(&f64::NEG_INFINITY.to_le_bytes());
     r.w.write(c, None).unwrap();
-    let stopped = r.node.stop_after(1, Duration::from_secs(10));
+    let stopped = r.node.stop_after(1);
     assert_eq!(
         (stopped.summary.registered, stopped.summary.warnings),
         (1, 1)
@@ -196,8 +192,8 @@ fn message_cut_short_is_skipped_with_a_counted_warning() {
         let dp = dds::participant(domain(10)).unwrap();
         let w: Writer<Cut> =
             dds::writer(&dp, "/points", POINTCLOUD2_TYPE, &dds::sensor_qos()).unwrap();
-        assert!(dds::wait_for_reader(&w, Duration::from_secs(10), &|| false));
-        std::thread::sleep(Duration::from_millis(500));
+        assert!(dds::wait_for_reader(&w, HANG, &|| false));
+        r.node.wait_matched("/points", 2);
         let cut = Cut {
             header: header(0.15),
             height: 1,
@@ -251,21 +247,31 @@ fn malformed_imu_message_is_counted_and_warned_and_the_node_goes_on() {
     // A header alone on the IMU topic, from a participant of its own.
     let other = dds::participant(d).unwrap();
     let bad: Writer<Header> = dds::writer(&other, "/imu", IMU_TYPE, &dds::sensor_qos()).unwrap();
-    let wait = Duration::from_secs(10);
-    assert!(dds::wait_for_reader(&w, wait, &|| false), "no node");
-    assert!(dds::wait_for_reader(&imu, wait, &|| false), "no IMU reader");
-    assert!(dds::wait_for_reader(&bad, wait, &|| false), "no IMU reader");
-    std::thread::sleep(Duration::from_millis(500));
+    assert!(dds::wait_for_reader(&w, HANG, &|| false), "no node");
+    assert!(dds::wait_for_reader(&imu, HANG, &|| false), "no IMU reader");
+    assert!(dds::wait_for_reader(&bad, HANG, &|| false), "no IMU reader");
+    node.wait_matched("/points", 1);
+    node.wait_matched("/imu", 2);
+    // The bad message first, then a good sample, then the cloud, each once the node took the
+    // one before: the two writers' messages travel apart and could pass each other.
+    let took = |n: u64| {
+        let ok = wait_until(HANG, || node.watch.imu_messages() >= n);
+        assert!(
+            ok,
+            "the node took {} IMU messages",
+            node.watch.imu_messages()
+        );
+    };
     bad.write(header(0.0), None).unwrap();
-    std::thread::sleep(Duration::from_millis(200));
+    took(1);
     let sample = kiss_odom_io::imu::ImuSample {
         time_ns: 50_000_000,
         ..Default::default()
     };
     imu.write(Imu::of(&sample, "imu"), None).unwrap();
-    std::thread::sleep(Duration::from_millis(200));
+    took(2);
     w.write(good(0), None).unwrap();
-    let stopped = node.stop_after(1, Duration::from_secs(60));
+    let stopped = node.stop_after(1);
     let s = &stopped.summary;
     println!("{}{}", stopped.out, stopped.err);
     assert_eq!(s.registered, 1, "the node goes on");

@@ -1,15 +1,25 @@
-//! Helpers shared by the `ros2*.rs` tests: a node in a thread of the test process, the
-//! `kiss-odom` command as a separate process, `kiss-odom run` for the poses to compare with.
+//! Helpers shared by the `ros2*.rs` tests: a node and the player in threads of the test
+//! process, the `kiss-odom` command as a separate process, `kiss-odom run` for the poses to
+//! compare with.
+//!
+//! DDS matches the two ends of a topic separately, and a reader drops what a writer it has not
+//! matched yet sends: whatever publishes to a node here starts once the node's side has matched
+//! it ([`Node::wait_matched`]), not after a pause.
 
 #![allow(dead_code)]
 
+use clap::Parser;
+use kiss_odom::cli::{Cli, Command};
 use kiss_odom::ros2::node::{self, NodeOptions, Summary};
 use kiss_odom::ros2::params::NodeParams;
+use kiss_odom::ros2::play::Player;
+use kiss_odom::ros2::watch::Watch;
 use kiss_odom_drive::settings::Settings;
+pub use kiss_odom_tests::{wait_until, HANG};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// One DDS test at a time in a test binary: they share two cores, and a 10 Hz test must not
 /// compete with a 50 Hz one.
@@ -77,6 +87,10 @@ pub struct Node {
     handle: NodeThread,
     out: Printed,
     err: Printed,
+    /// What its readers and writers have matched.
+    pub watch: Arc<Watch>,
+    /// The IMU topic it reads, if any.
+    pub imu_topic: Option<String>,
     /// Where it writes its poses.
     pub poses: PathBuf,
 }
@@ -93,8 +107,8 @@ pub struct Stopped {
     pub poses: String,
 }
 
-/// Starts a node on `domain` with default parameters, `threads` core threads (None = all), and
-/// its poses written to `dir/poses.txt`.
+/// Starts a node on `domain` with default parameters, taking a cloud at most every `min_period`,
+/// its poses written to `dir/node_poses.txt`.
 pub fn start_node(domain: u16, dir: &Path, min_period: Duration) -> Node {
     start_node_with(domain, dir, min_period, NodeParams::default())
 }
@@ -125,13 +139,15 @@ fn start_node_opts(
     let mut settings = Settings::default();
     settings.imu.enabled = imu_topic.is_some();
     let poses = dir.join("node_poses.txt");
+    let watch = Arc::new(Watch::default());
     let opts = NodeOptions {
         settings,
         params,
         domain,
         poses: Some(poses.clone()),
         min_period,
-        imu_topic,
+        imu_topic: imu_topic.clone(),
+        watch: watch.clone(),
     };
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
@@ -145,6 +161,8 @@ fn start_node_opts(
         handle,
         out,
         err,
+        watch,
+        imu_topic,
         poses,
     }
 }
@@ -173,9 +191,20 @@ impl Node {
             .count()
     }
 
-    /// Waits until `n` poses are written (or `timeout`), then stops the node.
-    pub fn stop_after(self, n: usize, timeout: Duration) -> Stopped {
-        wait_until(timeout, || self.registered() >= n);
+    /// Waits until the node has matched at least `n` remote endpoints on `topic` (publishers
+    /// of a topic it reads, subscribers of one it publishes); fails the test after [`HANG`].
+    pub fn wait_matched(&self, topic: &str, n: usize) {
+        let ok = wait_until(HANG, || self.watch.matched(topic) >= n);
+        assert!(
+            ok,
+            "the node matched {} endpoints on {topic}, not {n}",
+            self.watch.matched(topic)
+        );
+    }
+
+    /// Waits until `n` poses are written (at most [`HANG`]), then stops the node.
+    pub fn stop_after(self, n: usize) -> Stopped {
+        wait_until(HANG, || self.registered() >= n);
         self.stop()
     }
 
@@ -195,18 +224,6 @@ impl Node {
     }
 }
 
-/// Polls `ok` every 20 ms until it holds or `timeout` passes; returns whether it held.
-pub fn wait_until(timeout: Duration, mut ok: impl FnMut() -> bool) -> bool {
-    let start = Instant::now();
-    while start.elapsed() < timeout {
-        if ok() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    ok()
-}
-
 /// `kiss-odom run ARGS --out DIR` in-process; returns its `poses_kitti.txt`.
 pub fn run_poses(args: &[&str], out: &Path) -> String {
     let mut argv: Vec<std::ffi::OsString> = vec!["kiss-odom".into(), "run".into()];
@@ -218,22 +235,39 @@ pub fn run_poses(args: &[&str], out: &Path) -> String {
     std::fs::read_to_string(out.join("poses_kitti.txt")).expect("poses_kitti.txt")
 }
 
-/// `kiss-odom ros2 --play PATH --domain D ARGS` as a separate process, to its end.
-pub fn play(path: &Path, domain: u16, args: &[&str]) -> String {
-    let out = std::process::Command::new(cli())
-        .arg("ros2")
-        .arg("--play")
-        .arg(path)
-        .args(["--domain", &domain.to_string()])
-        .args(args)
-        .output()
-        .expect("start kiss-odom ros2 --play");
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "--play failed: {text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+/// `kiss-odom ros2 --play PATH --domain D ARGS` in this thread, into `node`: the player sets
+/// up its writers (and with `--lockstep` its odometry reader), waits until `node` has matched
+/// them, then plays to the end. Its `--wait` (for a subscriber, for each cloud's odometry) is
+/// [`HANG`] unless `args` give one. Returns what it printed.
+pub fn play(node: &Node, path: &Path, domain: u16, args: &[&str]) -> String {
+    let mut argv: Vec<String> = ["kiss-odom", "ros2", "--play"].map(String::from).into();
+    argv.push(path.to_string_lossy().into_owned());
+    argv.extend(["--domain".into(), domain.to_string()]);
+    if !args.contains(&"--wait") {
+        argv.extend(["--wait".into(), HANG.as_secs().to_string()]);
+    }
+    argv.extend(args.iter().map(|a| a.to_string()));
+    let cli = Cli::try_parse_from(&argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
+    let Command::Ros2(ros2) = cli.command else {
+        unreachable!("a ros2 command")
+    };
+    let opts = kiss_odom::ros2::play_options(&ros2).expect("--play");
+    let (mut out, mut err) = (Vec::new(), Vec::new());
+    let player = Player::new(&opts, &mut err).unwrap_or_else(|e| panic!("--play: {e:#}"));
+    node.wait_matched(&opts.points_topic, 1);
+    if let Some(topic) = &opts.lockstep {
+        node.wait_matched(topic, 1);
+    }
+    if let (Some(read), Some((_, sent))) = (&node.imu_topic, &opts.imu) {
+        if read == sent {
+            node.wait_matched(read, 1);
+        }
+    }
+    let played = player.play(&AtomicBool::new(false), &mut out, &mut err);
+    let text = String::from_utf8_lossy(&out).into_owned();
+    let err = String::from_utf8_lossy(&err);
+    played.unwrap_or_else(|e| panic!("--play failed: {e:#}\n{text}{err}"));
+    print!("{err}");
     text
 }
 

@@ -52,7 +52,7 @@ fn damaged_packets_are_counted_skips_with_their_reasons() {
     assert_eq!(bad, 3);
     let reasons: Vec<_> = report.refused.keys().cloned().collect();
     println!("XT16 refusals: {:?}", report.refused);
-    for needle in ["truncated", "unknown model", "return-mode"] {
+    for needle in ["truncated", "laser count", "return-mode"] {
         assert!(
             reasons.iter().any(|r| r.contains(needle)),
             "{needle}: {reasons:?}"

@@ -110,7 +110,9 @@ fn the_command_finds_the_sensor_and_counts_the_imu_packets() {
         report.other_sources
     );
     assert_eq!(frames.len(), 4);
-    assert_eq!(run_poses(FILE), 4);
+    // The fourth is the open frame the recording ends in (0.07 s of its 0.1 s): not
+    // registered.
+    assert_eq!(run_poses(FILE), 3);
 }
 
 #[test]

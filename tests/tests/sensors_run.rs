@@ -211,14 +211,25 @@ fn frames_csv_has_the_packet_statistics_of_each_sweep() {
     let pcap = data().join("velodyne/velodyne_vlp16.pcap");
     let r = run(&pcap, &dir.path().join("out"), &[]);
     assert_eq!(r.code, 0, "{}", r.stderr);
-    let (sweeps, _) = sweeps::read_all(&pcap, &SensorOptions::default()).unwrap();
-    let packets: Vec<String> = sweeps.iter().map(|s| s.stats.packets.to_string()).collect();
+    let (mut sweeps, _) = sweeps::read_all(&pcap, &SensorOptions::default()).unwrap();
+    // The recording ends inside its last sweep: that one is not registered, its packets
+    // counted in the last row's columns.
+    let open = sweeps.pop().unwrap();
+    assert_eq!(open.stats.end, kiss_odom_sensors::SweepEnd::Finished);
+    let mut packets: Vec<u32> = sweeps.iter().map(|s| s.stats.packets).collect();
+    *packets.last_mut().unwrap() += open.stats.packets;
+    let packets: Vec<String> = packets.iter().map(u32::to_string).collect();
     assert_eq!(r.column("packets"), packets);
-    let lost: Vec<String> = sweeps
-        .iter()
-        .map(|s| s.stats.lost_packets.to_string())
-        .collect();
+    let mut lost: Vec<u32> = sweeps.iter().map(|s| s.stats.lost_packets).collect();
+    *lost.last_mut().unwrap() += open.stats.lost_packets;
+    let lost: Vec<String> = lost.iter().map(u32::to_string).collect();
     assert_eq!(r.column("packets_lost"), lost);
+    assert!(
+        r.stderr.contains("the recording ends in this sweep"),
+        "{}",
+        r.stderr
+    );
+    sweeps.push(open);
     assert_eq!(
         r.summary()["packets"]["decoded"],
         sweeps

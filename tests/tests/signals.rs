@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// A generic folder of `n` real scans, links to the 10 of the KITTI sample forth and back, so
 /// the motion stays smooth and the run takes seconds.
@@ -35,19 +35,19 @@ fn cpu_seconds(pid: u32) -> Option<f64> {
     Some(ticks as f64 / 100.0)
 }
 
-/// Waits until `ready` holds or the child exits (a hang guard of minutes, not a speed check).
+/// Waits until `ready` holds; fails if the child exits first or after five minutes (a hang
+/// guard, not a speed check).
 fn wait_until(child: &mut Child, what: &str, mut ready: impl FnMut() -> bool) {
-    let start = Instant::now();
-    while !ready() {
+    let ok = kiss_odom_tests::wait_until(Duration::from_secs(300), || {
+        if ready() {
+            return true;
+        }
         if let Some(status) = child.try_wait().unwrap() {
             panic!("the process ended ({status}) before {what}");
         }
-        assert!(
-            start.elapsed() < Duration::from_secs(300),
-            "{what}: no progress"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+        false
+    });
+    assert!(ok, "{what}: no progress");
 }
 
 fn signal(child: &Child, name: &str) {
@@ -172,8 +172,8 @@ fn an_interrupted_simulate_leaves_no_data_set() {
 
 #[test]
 fn help_into_a_pipe_whose_reader_has_gone_ends_without_a_panic() {
-    // `kiss-odom run --help | head -1`: the reader is gone before the help is written. The help
-    // used to go through `print!`, which panics (exit 101, a backtrace) when the write fails.
+    // `kiss-odom run --help | head -1`: the reader is gone before the help is written. Written
+    // with `print!`, the help would panic (exit 101, a backtrace) when the write fails.
     let (reader, writer) = std::io::pipe().expect("a pipe");
     drop(reader);
     let out = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))

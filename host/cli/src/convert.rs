@@ -11,6 +11,8 @@
 //! (the generic reader sees the gap); a damaged container ends the conversion with its error
 //! after the frames before it. Every file is written under a temporary name and renamed when
 //! complete ([`kiss_odom_io::write`]), so a full disk or a signal leaves whole frames only.
+//! It replaces nothing: a file already at one of those names (an earlier conversion's, or the
+//! user's own) refuses the conversion before the recording is opened.
 
 use crate::args::InputArgs;
 use anyhow::{bail, Context, Result};
@@ -26,7 +28,8 @@ pub struct ConvertArgs {
     /// Recording: a .pcap/.pcapng (with --meta for Ouster), a .bag, an .mcap, a ROS 2 bag (its
     /// folder or a .db3) or a folder.
     pub path: PathBuf,
-    /// Output folder; its `velodyne/` must be empty or missing.
+    /// Output folder; its `velodyne/` and `timestamps/` must be empty or missing, and it must
+    /// have no `times.txt` or `imu.csv` (nothing there is replaced).
     #[arg(long)]
     pub out: PathBuf,
     /// Nothing printed but warnings.
@@ -41,15 +44,40 @@ fn create(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
 }
 
+/// Refuses an output folder that already holds a file `convert` would write: a frame or
+/// stamp file, `times.txt`, `imu.csv`. Convert into a new folder, so that nothing of another
+/// recording stays and nothing of the user's is replaced.
+fn refuse_occupied(out: &Path) -> Result<()> {
+    for dir in ["velodyne", "timestamps"].map(|d| out.join(d)) {
+        let first = std::fs::read_dir(&dir)
+            .ok()
+            .and_then(|mut d| d.next())
+            .and_then(Result::ok);
+        if let Some(entry) = first {
+            bail!(
+                "{}: already there ({} is not empty); convert into a new folder, so that nothing \
+                 is replaced",
+                entry.path().display(),
+                dir.display()
+            );
+        }
+    }
+    for name in ["times.txt", kiss_odom_io::imu::CSV_NAME] {
+        let path = out.join(name);
+        if std::fs::symlink_metadata(&path).is_ok() {
+            bail!(
+                "{}: already there; convert into a new folder, so that nothing is replaced",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Runs `kiss-odom convert`.
 pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
     let frames_dir = args.out.join("velodyne");
-    if std::fs::read_dir(&frames_dir).is_ok_and(|mut d| d.next().is_some()) {
-        bail!(
-            "{}: not empty; convert into a new folder so no frame of another recording stays",
-            frames_dir.display()
-        );
-    }
+    refuse_occupied(&args.out)?;
     let mut dataset = io::open(
         &args.path,
         args.input.format,

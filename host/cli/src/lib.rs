@@ -26,4 +26,3 @@ pub mod run;
 pub mod simulate;
 pub mod size;
 pub mod stats;
-pub mod viz;

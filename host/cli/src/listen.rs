@@ -26,7 +26,8 @@ pub struct ListenArgs {
     /// Address to listen on, e.g. 0.0.0.0:9000.
     #[arg(long)]
     pub bind: SocketAddr,
-    /// Output folder (created if missing) for poses_kitti.txt, frames.csv and summary.json.
+    /// Output folder (created if missing) for poses_kitti.txt, frames.csv and summary.json;
+    /// a file of those names that no earlier command wrote refuses the command.
     #[arg(long)]
     pub out: PathBuf,
     /// Stop once this many sweeps have come [default: at the idle timeout or SIGINT/SIGTERM].
@@ -49,11 +50,13 @@ pub fn execute(args: &ListenArgs, err: &mut dyn Write) -> Result<i32> {
         );
     }
     let idle = crate::interrupt::seconds(args.idle);
+    // Only the files an earlier command wrote there are replaced; any other refuses this one.
+    let earlier = kiss_odom_io::write::outputs::Earlier::check(&args.out, &OUTPUTS)?;
     let name = format!("udp://{}", args.bind);
     let socket = UdpSocket::bind(args.bind).with_context(|| format!("{name}: cannot listen"))?;
     socket.set_read_timeout(Some(crate::interrupt::POLL))?;
     let bound = socket.local_addr()?;
-    kiss_odom_io::write::remove_stale(&args.out, &OUTPUTS)?;
+    earlier.remove()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("{}: cannot create output folder", args.out.display()))?;
     let mut received = Received::default();
@@ -85,8 +88,8 @@ pub fn execute(args: &ListenArgs, err: &mut dyn Write) -> Result<i32> {
             Err(e) => return Err(e).with_context(|| format!("{name}: cannot receive")),
         }
     };
-    let summary = Summary::of(bound, &received, signal.is_some());
-    outputs::write(&args.out, &summary, &received)?;
+    let mut summary = Summary::of(bound, &received, signal.is_some());
+    outputs::write(&args.out, &mut summary, &received)?;
     for w in &summary.warned {
         writeln!(err, "warning: {w}")?;
     }

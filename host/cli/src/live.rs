@@ -11,8 +11,8 @@
 
 use crate::args::{CommonArgs, CoreArgs, InputArgs, PipelineArgs, SensorArgs};
 use crate::run::observe::{Observer, Seen};
+use crate::run::viz::ViewArgs;
 use crate::run::{FrameRow, RunArgs, RunOptions};
-use crate::viz::ViewArgs;
 use anyhow::{anyhow, bail, Context, Result};
 use kiss_odom_drive::Driver;
 use kiss_odom_io::capture::frames::SweepFrames;

@@ -5,7 +5,8 @@
 //! `sensor_msgs/PointCloud2` from the wire ([`node`]) and publishes odometry, `/tf` and the
 //! local map; [`play`] goes the other way, from the file readers to the wire. [`msg`] holds the
 //! ROS 2 message layouts, [`dds`] the participant, QoS and discovery, [`params`] the parameter
-//! file, and [`engine`] the adapter to the host frame driver.
+//! file, [`engine`] the adapter to the host frame driver, and [`watch`] what a caller in the
+//! same process can see of a running node.
 
 pub mod dds;
 pub mod engine;
@@ -14,6 +15,7 @@ pub mod msg;
 pub mod node;
 pub mod params;
 pub mod play;
+pub mod watch;
 
 use crate::args::{CoreArgs, ImuMode, PipelineArgs};
 use anyhow::Result;
@@ -115,29 +117,7 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
     STOP.store(false, Ordering::SeqCst);
     let domain = args.domain.unwrap_or_else(dds::default_domain);
     let mut out = std::io::stdout();
-    if let Some(path) = &args.play {
-        let opts = play::PlayOptions {
-            path: path.clone(),
-            format: args.format,
-            source_topic: args.topic.clone(),
-            points_topic: args.points.clone().unwrap_or_else(|| "/points".into()),
-            frame_id: args.frame_id.clone(),
-            rate: args.rate,
-            period: args.period,
-            wait: args.wait,
-            lockstep: args
-                .lockstep
-                .then(|| args.odom.clone().unwrap_or_else(|| "/kiss/odometry".into())),
-            domain,
-            imu: match &args.pipeline.imu {
-                None | Some(ImuMode::Auto) => Some((ImuInput::Auto, DEFAULT_IMU_TOPIC.to_string())),
-                Some(ImuMode::Off) => None,
-                Some(ImuMode::Topic(t)) => Some((ImuInput::Topic(t.clone()), t.clone())),
-                Some(ImuMode::File(f)) => {
-                    Some((ImuInput::File(f.clone()), DEFAULT_IMU_TOPIC.to_string()))
-                }
-            },
-        };
+    if let Some(opts) = play_options(args) {
         play::run(&opts, &STOP, &mut out, err)?;
         return Ok(0);
     }
@@ -149,9 +129,37 @@ pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
         poses: args.poses.clone(),
         min_period: std::time::Duration::from_secs_f64(args.min_period),
         imu_topic: Some(imu_topic(args.pipeline.imu.as_ref())?),
+        watch: Default::default(),
     };
     node::run(&opts, &STOP, &mut out, err)?;
     Ok(0)
+}
+
+/// What `--play` plays and how, from the arguments (`None` without `--play`).
+pub fn play_options(args: &Ros2Args) -> Option<play::PlayOptions> {
+    let path = args.play.as_ref()?;
+    Some(play::PlayOptions {
+        path: path.clone(),
+        format: args.format,
+        source_topic: args.topic.clone(),
+        points_topic: args.points.clone().unwrap_or_else(|| "/points".into()),
+        frame_id: args.frame_id.clone(),
+        rate: args.rate,
+        period: args.period,
+        wait: args.wait,
+        lockstep: args
+            .lockstep
+            .then(|| args.odom.clone().unwrap_or_else(|| "/kiss/odometry".into())),
+        domain: args.domain.unwrap_or_else(dds::default_domain),
+        imu: match &args.pipeline.imu {
+            None | Some(ImuMode::Auto) => Some((ImuInput::Auto, DEFAULT_IMU_TOPIC.to_string())),
+            Some(ImuMode::Off) => None,
+            Some(ImuMode::Topic(t)) => Some((ImuInput::Topic(t.clone()), t.clone())),
+            Some(ImuMode::File(f)) => {
+                Some((ImuInput::File(f.clone()), DEFAULT_IMU_TOPIC.to_string()))
+            }
+        },
+    })
 }
 
 /// The IMU topic the node reads when the gyroscope prior is on: `--imu TOPIC`, else `/imu`.

@@ -3,19 +3,21 @@
 //!
 //! The frames go through the [`Driver`]; this module decides what stops a run and what is
 //! written ([`record`], `files`), and hands every outcome to its [`observe::Observer`]s: those
-//! of [`crate::viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
+//! of [`viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
 //! (`live` prints each pose as it comes). The rules (the book's failure reference): a frame-level problem is a warning and a
 //! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
 //! in which no frame could be registered ends with exit 1 and its own reason, never an output
 //! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
 //! every case the outputs hold the frames processed so far (pose files and the plot only when
 //! a frame was registered), written atomically, and no output of an earlier run stays beside
-//! them.
+//! them; a file in the output folder that no earlier command wrote (a hand-written
+//! `config.toml`, the data set's own) refuses the run before anything is removed.
 
 mod files;
 pub mod observe;
 mod options;
 pub mod record;
+pub mod viz;
 
 pub use files::{Latency, Summary, OUTPUTS};
 pub use options::{PoseTime, RunArgs, RunOptions};
@@ -25,6 +27,7 @@ use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::Flag;
 use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, PriorWarnings, Step};
+use kiss_odom_io::write::outputs::Earlier;
 use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
 use nalgebra::Isometry3;
 use observe::{Observer, Seen};
@@ -52,8 +55,9 @@ pub fn execute(args: &RunArgs, err: &mut dyn Write) -> Result<i32> {
 /// and `live` with a socket for a dataset and a watcher that prints its poses.
 ///
 /// Every argument is checked and every input read before any file is removed: a run refused
-/// for its arguments changes nothing, and a `--config` inside the output folder is read
-/// before the folder's old outputs go. An input that cannot be opened refuses the run after
+/// for its arguments, or for a file in the output folder that is not an earlier command's
+/// output, changes nothing, and a `--config` inside the output folder is read before the
+/// folder's old outputs go. An input that cannot be opened refuses the run after
 /// those are removed, writing nothing; once it is open, `summary.json` is written however the
 /// run ends.
 pub(crate) fn execute_on(
@@ -64,17 +68,19 @@ pub(crate) fn execute_on(
 ) -> Result<i32> {
     let settings = args.common.settings(None)?;
     let inputs = inputs(args);
-    crate::viz::check(&args.view, &inputs)?;
+    viz::check(&args.view, &inputs)?;
     // The sensor files are read while the input opens; `--config` is read by now, and
     // `config.toml` is the settings it gave, written back.
     for name in OUTPUTS {
         kiss_odom_io::write::refuse_input(&args.run.out.join(name), &inputs[1..3])?;
     }
+    // Only the files an earlier command wrote there are replaced; any other refuses the run.
+    let earlier = Earlier::check(&args.run.out, &OUTPUTS)?;
     let mut driver = Driver::new(&settings)?;
     let opened = open(&args.common.open_options(settings.capacities()?.scan_points));
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
-    kiss_odom_io::write::remove_stale(&args.run.out, &OUTPUTS)?;
-    for path in crate::viz::files(&args.view) {
+    earlier.remove()?;
+    for path in viz::files(&args.view) {
         kiss_odom_io::write::remove_stale_file(path)?;
     }
     // An input that cannot be opened refuses the run before it starts: nothing is written.
@@ -83,7 +89,7 @@ pub(crate) fn execute_on(
         .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
     let mut record = Record::default();
     // After the folder: a recording or cloud may be asked for inside it.
-    let mut observers = match crate::viz::observers(&args.view) {
+    let mut observers = match viz::observers(&args.view) {
         Ok(o) => watchers.into_iter().chain(o).collect::<Vec<_>>(),
         Err(e) => {
             let end = End::Failed(e);

@@ -99,8 +99,10 @@ pub struct SimulateArgs {
     /// With --imu-rate: the exact rates and forces, without noise or bias.
     #[arg(long, requires = "imu_rate")]
     pub imu_exact: bool,
-    /// Replace a dataset already in --out (removes only its frame files, poses, times and
-    /// sim.toml). The new one appears only once complete.
+    /// Replace the data set an earlier `simulate` wrote in --out: the files and folders its
+    /// sim.toml lists go once the new one is complete. A folder holding anything else of those
+    /// names (a data set simulate did not write, a file in velodyne/ that is not a frame) is
+    /// refused, and nothing is removed.
     #[arg(long)]
     pub overwrite: bool,
 }

@@ -1,5 +1,5 @@
 //! The local map's voxel table: our own open addressing (linear probing, backward-shift
-//! deletion, as in `core/src/local_map/mod.rs`) against hashbrown's `HashTable` living in a
+//! deletion, as in `core/src/local_map/`) against hashbrown's `HashTable` living in a
 //! fixed arena (a bump allocator over one `Vec<u8>`, through allocator-api2, sized once for
 //! the capacity and never grown).
 //!
@@ -101,7 +101,8 @@ trait VoxelTable {
 }
 
 // ------------------------------------------------------------------------------------------
-// Our table: a line-for-line replica of the voxel table in core/src/local_map/mod.rs.
+// Our table: a line-for-line replica of the voxel table in core/src/local_map/ (`view.rs`
+// finds a key, `update.rs` inserts and removes).
 
 struct Own {
     keys: Vec<VoxelKey>,

@@ -43,7 +43,7 @@ pub struct Frame {
     /// IMU samples that arrived with the frame (sensor captures whose sensor sends them, a
     /// folder's `imu.csv`, a bag's or MCAP file's `sensor_msgs/Imu` topic, `--imu FILE`), in
     /// time order; every sample of a recording is in exactly one frame.
-    pub imu: Vec<crate::imu::ImuSample>,
+    pub imu: Vec<ImuSample>,
     /// The sweep's end on the sensor's clock (s) where the reader knows it and the points'
     /// times do not tell it: a bag's or MCAP file's cloud whose point times are offsets, not
     /// seconds on its header's clock, ends at its header stamp.
@@ -65,6 +65,25 @@ impl Frame {
                 stamps.iter().copied().reduce(f64::max)
             })
             .or(self.time)
+    }
+}
+
+/// One IMU sample, as the readers hand it on with a frame ([`Frame::imu`]). Built from a
+/// sensor's units and written to `imu.csv` by [`crate::imu`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImuSample {
+    /// Sensor-clock time, ns.
+    pub time_ns: u64,
+    /// Angular rate, rad/s.
+    pub gyro: [f64; 3],
+    /// Specific force, m/s^2.
+    pub accel: [f64; 3],
+}
+
+impl ImuSample {
+    /// Its time in seconds.
+    pub fn seconds(&self) -> f64 {
+        self.time_ns as f64 * 1e-9
     }
 }
 
@@ -110,7 +129,8 @@ impl Item {
 pub struct Trailer {
     /// Warnings naming the source: to print, count and, under `--strict`, refuse.
     pub warnings: Vec<String>,
-    /// Sensor packets refused or lost after the last sweep, for the packet totals.
+    /// Sensor packets refused or lost after the last sweep, and those of an open sweep at the
+    /// end that was not made a frame (`packets`), for the packet totals.
     pub packets: Option<SweepStats>,
 }
 

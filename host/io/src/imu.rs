@@ -5,6 +5,10 @@
 
 pub mod attach;
 
+/// One IMU sample: defined with the frames that carry it ([`crate::dataset`]), so that the
+/// readers' vocabulary depends on nothing else of this crate.
+pub use crate::dataset::ImuSample;
+
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -18,17 +22,7 @@ pub const CSV_NAME: &str = "imu.csv";
 /// Its header row.
 pub const CSV_HEADER: &str = "time,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z";
 
-/// One IMU sample.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ImuSample {
-    /// Sensor-clock time, ns.
-    pub time_ns: u64,
-    /// Angular rate, rad/s.
-    pub gyro: [f64; 3],
-    /// Specific force, m/s^2.
-    pub accel: [f64; 3],
-}
-
+/// A sample from a sensor's units, and its `imu.csv` row.
 impl ImuSample {
     /// A sample from what a sensor sends: angular rate in rad/s, specific force in g.
     pub fn from_g(time_ns: u64, gyro: [f32; 3], accel_g: [f32; 3]) -> Self {
@@ -37,11 +31,6 @@ impl ImuSample {
             gyro: gyro.map(f64::from),
             accel: accel_g.map(|a| f64::from(a) * STANDARD_GRAVITY),
         }
-    }
-
-    /// Its time in seconds.
-    pub fn seconds(&self) -> f64 {
-        self.time_ns as f64 * 1e-9
     }
 
     /// Its `imu.csv` row, with a line end: the time to the nanosecond, the rest as Rust prints

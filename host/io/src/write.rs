@@ -3,9 +3,13 @@
 //! A file is written under a hidden temporary name in its own folder and renamed over its
 //! final name when complete, so a reader (or a later command) never sees half a file, and an
 //! interrupted or failed command leaves no partial output. Before a command starts it removes
-//! the outputs of its own kind that an earlier run left ([`remove_stale`]), so a failed run
-//! cannot leave an older `summary.json` looking like its own; temporary files that a killed
-//! process could not clean up go with them.
+//! the outputs an earlier run left, so a failed run cannot leave an older `summary.json`
+//! looking like its own: in an output folder only the files an earlier command recorded as
+//! its own ([`outputs`]), and a file the user named (`--json`, `--save-map`) as named
+//! ([`remove_stale_file`]); temporary files that a killed process could not clean up go with
+//! them.
+
+pub mod outputs;
 
 use anyhow::{Context, Result};
 use std::io::Write;
@@ -75,12 +79,9 @@ pub fn write_via_path(path: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Re
     Ok(())
 }
 
-/// Removes the files `names` from `dir` if present, and every temporary file this module left
-/// there for them. A missing `dir` has nothing stale.
-pub fn remove_stale(dir: &Path, names: &[&str]) -> Result<()> {
-    for name in names {
-        remove_file_if_present(&dir.join(name))?;
-    }
+/// Removes the temporary files this module left in `dir` for the files `names`. A missing
+/// `dir` has none.
+fn remove_temporaries(dir: &Path, names: &[&str]) -> Result<()> {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return Ok(());
     };
@@ -96,10 +97,11 @@ pub fn remove_stale(dir: &Path, names: &[&str]) -> Result<()> {
     Ok(())
 }
 
-/// Removes the single output `path` (a `--json` file) and its temporaries, as
-/// [`remove_stale`] does for a folder of outputs.
+/// Removes the output `path` the user named (a `--json` file, `--save-map`) and its
+/// temporaries.
 pub fn remove_stale_file(path: &Path) -> Result<()> {
-    remove_stale(parent_of(path), &[&file_name(path)?])
+    remove_file_if_present(path)?;
+    remove_temporaries(parent_of(path), &[&file_name(path)?])
 }
 
 /// Refuses an output at `path` that would remove an input: the file there is removed before
@@ -125,6 +127,44 @@ pub fn refuse_input(path: &Path, inputs: &[&Path]) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Refuses two of the options `named` (each with the file it names, if given) that name one
+/// file, by any path to it: one output would replace the other.
+pub fn refuse_shared(named: &[(&str, Option<&Path>)]) -> Result<()> {
+    let given: Vec<(&str, &Path)> = named
+        .iter()
+        .filter_map(|(o, p)| Some((*o, (*p)?)))
+        .collect();
+    for (k, (option, path)) in given.iter().enumerate() {
+        if let Some((other, _)) = given[k + 1..].iter().find(|(_, p)| same_file(path, p)) {
+            anyhow::bail!(
+                "{}: {option} and {other} name the same file, and one would replace the other; \
+                 give each its own",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name one file, whether it exists yet or not: the same name in the same
+/// folder (whatever path leads to it), or one existing file under two names (a link).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let entry = |p: &Path| Some(parent_of(p).canonicalize().ok()?.join(p.file_name()?));
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            if (x.dev(), x.ino()) == (y.dev(), y.ino()) {
+                return true;
+            }
+        }
+    }
+    match (entry(a), entry(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
 }
 
 /// Removes `path` if it is a file (or a link); anything else there is left alone.
@@ -198,19 +238,53 @@ mod tests {
     }
 
     #[test]
-    fn stale_outputs_and_their_temporaries_are_removed_and_nothing_else() {
+    fn one_file_is_the_same_under_any_path_to_it_existing_or_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("sub")).unwrap();
+        let map = d.join("map.ply");
+        assert!(same_file(&map, &d.join("sub/../map.ply")), "not there yet");
+        assert!(same_file(&map, &d.join("./map.ply")));
+        assert!(!same_file(&map, &d.join("cloud.ply")));
+        assert!(!same_file(&map, &d.join("sub/map.ply")));
+        std::fs::write(&map, "x").unwrap();
+        std::fs::hard_link(&map, d.join("link.ply")).unwrap();
+        assert!(same_file(&map, &d.join("link.ply")), "one file, two names");
+        assert!(same_file(Path::new("new/m.ply"), Path::new("new/./m.ply")));
+    }
+
+    #[test]
+    fn two_options_naming_one_file_are_refused_naming_both() {
+        let dir = tempfile::tempdir().unwrap();
+        let (map, cloud) = (dir.path().join("map.ply"), dir.path().join("cloud.ply"));
+        let other = dir.path().join("./map.ply");
+        let ok = [
+            ("--a", Some(map.as_path())),
+            ("--b", Some(&cloud)),
+            ("--c", None),
+        ];
+        refuse_shared(&ok).unwrap();
+        let e = refuse_shared(&[("--a", Some(&map)), ("--b", None), ("--c", Some(&other))])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("map.ply") && e.contains("--a and --c"), "{e}");
+    }
+
+    #[test]
+    fn a_named_output_and_its_temporaries_are_removed_and_nothing_else() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         for name in [
-            "summary.json",
+            "map.ply",
             "notes.txt",
-            ".kiss-odom-tmp-summary.json-abc123",
-            ".kiss-odom-tmp-other.json-abc123",
+            ".kiss-odom-tmp-map.ply-abc123",
+            ".kiss-odom-tmp-other.ply-abc123",
         ] {
             std::fs::write(d.join(name), "x").unwrap();
         }
-        std::fs::create_dir(d.join("frames.csv")).unwrap(); // not a file: left alone
-        remove_stale(d, &["summary.json", "frames.csv", "poses_kitti.txt"]).unwrap();
+        std::fs::create_dir(d.join("cloud.ply")).unwrap(); // not a file: left alone
+        remove_stale_file(&d.join("map.ply")).unwrap();
+        remove_stale_file(&d.join("cloud.ply")).unwrap();
         let mut left: Vec<String> = std::fs::read_dir(d)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -218,12 +292,8 @@ mod tests {
         left.sort();
         assert_eq!(
             left,
-            [
-                ".kiss-odom-tmp-other.json-abc123",
-                "frames.csv",
-                "notes.txt"
-            ]
+            [".kiss-odom-tmp-other.ply-abc123", "cloud.ply", "notes.txt"]
         );
-        remove_stale(&d.join("missing"), &["summary.json"]).unwrap();
+        remove_stale_file(&d.join("missing/map.ply")).unwrap();
     }
 }

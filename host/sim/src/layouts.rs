@@ -20,6 +20,7 @@ pub mod nuscenes;
 #[cfg(test)]
 mod tests;
 
+use crate::replace::{written_table, Replacement, SIM_TOML, STAGING_PREFIX};
 use crate::sensor::Frame;
 use crate::simulation::Simulation;
 use crate::trajectory::PoseM;
@@ -256,7 +257,9 @@ pub struct Outcome {
 }
 
 /// Writes the sequence of `sim` in `layout` into `out`; when `stop` asks to end before the
-/// last frame nothing is left in `out`. `sim_toml` is the provenance text.
+/// last frame nothing is left in `out`. `sim_toml` is the provenance text. An earlier data set
+/// in `out` is replaced only with `overwrite`, only if `simulate` wrote it, and only once this
+/// one is complete ([`crate::replace`]).
 pub fn write(
     sim: &Simulation,
     layout: Layout,
@@ -267,22 +270,11 @@ pub fn write(
     progress: &mut dyn FnMut(u64),
 ) -> Result<Outcome> {
     let owned = layout.owned();
-    let existing: Vec<&str> = owned
-        .iter()
-        .chain(["sim.toml"].iter())
-        .copied()
-        .filter(|n| out.join(n).exists())
-        .collect();
-    if !existing.is_empty() && !overwrite {
-        bail!(
-            "{} already holds {}; pass --overwrite to replace it",
-            out.display(),
-            existing.join(", ")
-        );
-    }
+    let names: Vec<&str> = owned.iter().copied().chain([SIM_TOML]).collect();
+    let earlier = Replacement::check(out, &names, overwrite)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let staging = tempfile::Builder::new()
-        .prefix(".kiss-odom-simulate-")
+        .prefix(STAGING_PREFIX)
         .tempdir_in(out)
         .with_context(|| format!("creating a staging folder in {}", out.display()))?;
     let dir = staging.path();
@@ -313,18 +305,21 @@ pub fn write(
     if !complete {
         return Ok(outcome);
     }
-    put(&dir.join("sim.toml"), sim_toml.as_bytes())?;
-    for name in owned.iter().chain(["sim.toml"].iter()) {
+    let written: Vec<&str> = owned
+        .iter()
+        .copied()
+        .filter(|n| dir.join(n).exists())
+        .collect();
+    let toml = format!("{sim_toml}{}", written_table(&written)?);
+    put(&dir.join(SIM_TOML), toml.as_bytes())?;
+    earlier.remove_old()?;
+    for name in names {
         let (from, to) = (dir.join(name), out.join(name));
         if !from.exists() {
             continue;
         }
-        if to.is_dir() {
-            std::fs::remove_dir_all(&to)
-                .with_context(|| format!("{}: cannot remove the earlier output", to.display()))?;
-        } else if to.exists() {
-            std::fs::remove_file(&to)
-                .with_context(|| format!("{}: cannot remove the earlier output", to.display()))?;
+        if std::fs::symlink_metadata(&to).is_ok() {
+            bail!("{}: appeared while simulating; not replaced", to.display());
         }
         std::fs::rename(&from, &to)
             .with_context(|| format!("moving {} into place", to.display()))?;

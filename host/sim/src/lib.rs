@@ -8,7 +8,8 @@
 //! [`packets`] fires a real sensor's beams at its own timing and packs its UDP packets,
 //! [`capture`] writes them as a pcap, [`ros`] the frames, packets and IMU samples as a ROS bag,
 //! MCAP file or sqlite3 bag, [`writer`] the generic layout, [`layouts`] the public datasets'
-//! own layouts, and [`sequence`] a whole sequence. Every random draw is
+//! own layouts, both replacing only a data set `simulate` wrote ([`replace`]), and
+//! [`sequence`] a whole sequence. Every random draw is
 //! keyed by indices ([`rng`]), so the bytes depend on the seed and parameters only, never on
 //! the thread count.
 
@@ -18,6 +19,7 @@ pub mod imu;
 pub mod layouts;
 pub mod packets;
 pub mod profile;
+pub mod replace;
 pub mod rng;
 pub mod ros;
 pub mod scene;

@@ -19,6 +19,7 @@
 //! them gives back the exact `f64`. These writers are private to the simulator on purpose: the
 //! readers in `io/` are checked against them, not built from them.
 
+use crate::replace::{Replacement, SIM_TOML, STAGING_PREFIX};
 use crate::sensor::Frame;
 use crate::trajectory::PoseM;
 use anyhow::{bail, Context, Result};
@@ -27,11 +28,10 @@ use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Files and folders the layout owns.
+/// Files the layout owns, `sim.toml` last.
 const OWNED_FILES: [&str; 11] = [
     "poses.txt",
     "times.txt",
-    "sim.toml",
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
@@ -40,6 +40,7 @@ const OWNED_FILES: [&str; 11] = [
     crate::imu::CSV_NAME,
     crate::ros::BAG_NAME,
     crate::ros::MCAP_NAME,
+    SIM_TOML,
 ];
 const OWNED_DIRS: [&str; 2] = ["velodyne", "timestamps"];
 /// The sqlite3 bag's folder and the files in it.
@@ -75,43 +76,34 @@ pub fn frame_name(k: u64) -> String {
     format!("{k:06}.bin")
 }
 
-fn is_frame_name(name: &str) -> bool {
-    name.len() >= 10
-        && name.ends_with(".bin")
-        && name[..name.len() - 4].bytes().all(|b| b.is_ascii_digit())
-}
-
-/// Staging folders start with this (hidden, so no reader takes one for a dataset).
-const STAGING_PREFIX: &str = ".kiss-odom-simulate-";
-
 /// Streams a dataset to a folder, frame by frame, through a hidden staging folder inside it:
 /// the dataset appears in the folder only when [`Self::finish`] moves it there, frame folder
 /// last, so a later `run` never reads half a data set; dropped unfinished (an error, an
-/// interrupt), the staging folder goes and nothing appears.
+/// interrupt), the staging folder goes and nothing appears, and an earlier data set stays.
 pub struct DatasetWriter {
     dir: PathBuf,
     staging: tempfile::TempDir,
     poses: BufWriter<File>,
     times: BufWriter<File>,
+    /// `sim.toml` but for the list of what was written, which [`Self::finish`] adds.
+    provenance: String,
+    /// The earlier data set, removed by [`Self::finish`].
+    earlier: Replacement,
 }
 
 impl DatasetWriter {
-    /// Prepares `dir` and writes `provenance` to `sim.toml`. A folder that already holds a
-    /// dataset is refused unless `overwrite`, which removes only the layout's own files (frame
-    /// files, poses, times, sim.toml) so that no stale frame survives a shorter run; staging
-    /// folders a killed run left are removed too.
+    /// Prepares `dir` for a data set whose `sim.toml` records `provenance`. A folder that
+    /// already holds a data set is refused unless `overwrite`, and then unless it is one
+    /// `simulate` wrote, checked whole ([`Replacement::check`]); it is replaced when the new
+    /// one is complete, so no stale frame survives a shorter run. Staging folders a killed
+    /// run left are removed.
     pub fn create(dir: &Path, overwrite: bool, provenance: &impl Serialize) -> Result<Self> {
-        let existing = OWNED_FILES
-            .iter()
-            .chain(OWNED_DIRS.iter())
-            .any(|n| dir.join(n).exists());
-        if existing && !overwrite {
-            bail!(
-                "{} already holds a dataset; pass --overwrite to replace it",
-                dir.display()
-            );
-        }
-        remove_owned(dir)?;
+        let names: Vec<&str> = (OWNED_FILES.iter().chain([&OWNED_BAG.0]))
+            .chain(&OWNED_DIRS)
+            .copied()
+            .collect();
+        only_the_bag(&dir.join(OWNED_BAG.0))?;
+        let earlier = Replacement::check(dir, &names, overwrite)?;
         fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         let staging = tempfile::Builder::new()
             .prefix(STAGING_PREFIX)
@@ -126,9 +118,6 @@ impl DatasetWriter {
         let header = "# Written by `kiss-odom simulate`: the parameters that generated this \
                       dataset.\n# The same parameters (and kiss-odom version) give the same \
                       bytes.\n\n";
-        let p = root.join("sim.toml");
-        fs::write(&p, format!("{header}{toml}"))
-            .with_context(|| format!("writing {}", p.display()))?;
         let open = |name: &str| -> Result<BufWriter<File>> {
             let p = root.join(name);
             Ok(BufWriter::new(
@@ -140,6 +129,8 @@ impl DatasetWriter {
             poses: open("poses.txt")?,
             times: open("times.txt")?,
             staging,
+            provenance: format!("{header}{toml}"),
+            earlier,
         })
     }
 
@@ -171,17 +162,35 @@ impl DatasetWriter {
         Ok(())
     }
 
-    /// Flushes the text files and moves the dataset into place, the frame folder last.
+    /// Flushes the text files, writes `sim.toml` with the list of what was written, removes
+    /// the earlier data set and moves this one into place, the frame folder last.
     pub fn finish(mut self) -> Result<()> {
         self.poses.flush().context("writing poses.txt")?;
         self.times.flush().context("writing times.txt")?;
-        let names = (OWNED_FILES.iter())
+        let root = self.staging.path();
+        let names: Vec<&str> = OWNED_FILES
+            .iter()
             .chain([&OWNED_BAG.0])
-            .chain(OWNED_DIRS.iter().rev());
+            .chain(OWNED_DIRS.iter().rev())
+            .copied()
+            .collect();
+        // The optional files (the capture, the metadata) only when written.
+        let written: Vec<&str> = names
+            .iter()
+            .copied()
+            .filter(|n| *n != SIM_TOML && root.join(n).exists())
+            .collect();
+        let toml = self.provenance.clone() + &crate::replace::written_table(&written)?;
+        let p = root.join(SIM_TOML);
+        fs::write(&p, toml).with_context(|| format!("writing {}", p.display()))?;
+        self.earlier.remove_old()?;
         for name in names {
-            let (from, to) = (self.staging.path().join(name), self.dir.join(name));
+            let (from, to) = (root.join(name), self.dir.join(name));
             if !from.exists() {
-                continue; // an optional file (the capture, the metadata)
+                continue;
+            }
+            if fs::symlink_metadata(&to).is_ok() {
+                bail!("{}: appeared while simulating; not replaced", to.display());
             }
             fs::rename(&from, &to)
                 .with_context(|| format!("moving {} into place", to.display()))?;
@@ -190,64 +199,20 @@ impl DatasetWriter {
     }
 }
 
-/// Removes the dataset files the layout owns from `dir` (and the frame folders once empty),
-/// and staging folders a killed run left.
-fn remove_owned(dir: &Path) -> Result<()> {
-    for name in OWNED_FILES {
-        let path = dir.join(name);
-        if fs::symlink_metadata(&path).is_ok_and(|m| !m.is_dir()) {
-            fs::remove_file(&path)
-                .with_context(|| format!("{}: cannot remove the earlier output", path.display()))?;
-        }
-    }
-    let bag = dir.join(OWNED_BAG.0);
-    if bag.is_dir() {
-        for name in OWNED_BAG.1 {
-            let path = bag.join(name);
-            if path.is_file() {
-                fs::remove_file(&path).with_context(|| {
-                    format!("{}: cannot remove the earlier output", path.display())
-                })?;
-            }
-        }
-        fs::remove_dir(&bag).with_context(|| {
-            format!(
-                "{} holds files that are not the bag's; move them away or choose another --out",
-                bag.display()
-            )
-        })?;
-    }
-    for sub in OWNED_DIRS {
-        let d = dir.join(sub);
-        if !d.is_dir() {
-            continue;
-        }
-        for entry in fs::read_dir(&d).with_context(|| format!("listing {}", d.display()))? {
-            let entry = entry?;
-            let name = entry.file_name();
-            if name.to_str().is_some_and(is_frame_name) && entry.path().is_file() {
-                fs::remove_file(entry.path())
-                    .with_context(|| format!("removing {}", entry.path().display()))?;
-            }
-        }
-        fs::remove_dir(&d).with_context(|| {
-            format!(
-                "{} holds files that are not frames; move them away or choose another --out",
-                d.display()
-            )
-        })?;
-    }
-    let Ok(entries) = fs::read_dir(dir) else {
-        return Ok(());
+/// Refuses a sqlite3 bag folder that holds more than the bag `simulate` writes: replacing the
+/// data set removes the folder whole.
+fn only_the_bag(bag: &Path) -> Result<()> {
+    let Ok(entries) = fs::read_dir(bag) else {
+        return Ok(()); // none yet
     };
-    for entry in entries.flatten() {
-        let stale = entry
-            .file_name()
-            .to_string_lossy()
-            .starts_with(STAGING_PREFIX);
-        if stale && entry.path().is_dir() {
-            fs::remove_dir_all(entry.path())
-                .with_context(|| format!("removing {}", entry.path().display()))?;
+    for entry in entries {
+        let entry = entry.with_context(|| format!("listing {}", bag.display()))?;
+        let name = entry.file_name();
+        if !OWNED_BAG.1.iter().any(|n| name.to_str() == Some(n)) {
+            bail!(
+                "{}: not the bag simulate writes; move it away or choose another --out",
+                entry.path().display()
+            );
         }
     }
     Ok(())
@@ -295,6 +260,5 @@ mod tests {
     fn frame_names_are_six_digits() {
         assert_eq!(frame_name(0), "000000.bin");
         assert_eq!(frame_name(42), "000042.bin");
-        assert!(is_frame_name("000042.bin") && !is_frame_name("notes.bin"));
     }
 }

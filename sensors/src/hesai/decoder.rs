@@ -1,15 +1,17 @@
-//! Hesai packets to sweeps: checks, order and loss detection (by the UDP sequence number when
-//! the packets carry one, else by their times), the cut, then each return to a point.
+//! Hesai packets to sweeps: checks (the format, then what the fields must agree on,
+//! `consistency.rs`), order and loss detection (each packet's time against the last one's, by
+//! the UDP sequence number when the packets carry one, else by their times: [`Timeline`]), the
+//! cut, then each return to a point.
 
 use super::angles::{Angles, ChannelAngles, MirrorAngles};
 use super::at128::At128Correction;
-use super::model::{Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, PANDAR128_NEAR_M};
-use super::wire::Packet;
-use super::{wire128, wire_fixed};
+use super::consistency::azimuths_agree;
+use super::model::{Config, Firing, Model, ReturnMode, PANDAR128_NEAR_M};
+use super::view::View;
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
-    lost_in_step, Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd,
-    SweepSink, SweepStats,
+    lost_between, max_step_ns, Assembly, AzimuthCut, Decode, PointMeta, Pushed, Return, Step,
+    SweepEnd, SweepSink, SweepStats, Timeline,
 };
 
 /// A sweep whose packets span more than this (sensor time) ends and the next packet begins a
@@ -22,125 +24,6 @@ const MAX_SEQUENCE_STEP: u32 = 1 << 20;
 
 /// The return-mode byte of triple return (first, last, strongest: the XT32M's).
 const TRIPLE_RETURN: u8 = 0x3D;
-
-/// A checked packet of either layout.
-#[derive(Clone, Copy)]
-enum View<'a> {
-    Xt32(Packet<'a>),
-    Wide(wire128::Packet<'a>),
-    Fixed(wire_fixed::Packet<'a>),
-}
-
-impl<'a> View<'a> {
-    /// Checks `bytes` as a packet of `model`'s protocol.
-    fn new_checked(model: Model, bytes: &'a [u8]) -> Result<Self, PacketError> {
-        if let Some((format, _)) = model.fixed() {
-            return wire_fixed::Packet::new_checked(format, bytes).map(Self::Fixed);
-        }
-        let version = match model {
-            Model::Xt32 => return Packet::new_checked(bytes).map(Self::Xt32),
-            Model::Qt128 => wire128::VERSION_QT,
-            _ => wire128::VERSION_128,
-        };
-        let p = wire128::Packet::new_checked(bytes)?;
-        if p.version() != version {
-            return Err(PacketError::Version);
-        }
-        Ok(Self::Wide(p))
-    }
-    /// Whether the header's return count fits `mode`. Where the count is the mode's (QT64,
-    /// QT128, Pandar128, OT128: their manuals' "1 single, 2 dual"; the QT64's capture says 2
-    /// in dual) it must equal it. Protocol 6.1 (XT32, XT16, XT32M) and the AT128 may state
-    /// the most returns the unit sends instead (the XT manual's later edition: "0x02, each
-    /// channel can generate two returns maximum"; the XT32M's capture says 3 in dual mode):
-    /// the count must be at least the mode's and at most that maximum. The 40P has no header
-    /// and the Pandar64's has no count: bytes 6 and 7 are reserved (nebula's `Header8B`, the
-    /// manual) and its "first block's return" byte 4 reads 0, single, in all 2,400 packets of
-    /// its dual-return capture, so neither can be checked.
-    fn returns_fit(&self, model: Model, mode: ReturnMode) -> bool {
-        let n = mode.returns();
-        let count = match self {
-            Self::Xt32(p) => p.returns(),
-            Self::Wide(p) => return usize::from(p.returns()) == n,
-            Self::Fixed(p) => match p.header_returns() {
-                Some(r) => r,
-                None => return true,
-            },
-        };
-        let most = match model {
-            Model::PandarQT64 => return usize::from(count) == n,
-            Model::Xt32m => 3,
-            _ => 2,
-        };
-        (n..=most).contains(&usize::from(count))
-    }
-    /// Metres per distance unit.
-    fn distance_unit_m(&self) -> f64 {
-        match self {
-            Self::Fixed(p) => f64::from(p.distance_unit_mm()) * 1e-3,
-            _ => DISTANCE_UNIT_M,
-        }
-    }
-    fn return_mode(&self) -> u8 {
-        match self {
-            Self::Xt32(p) => p.return_mode(),
-            Self::Wide(p) => p.return_mode(),
-            Self::Fixed(p) => p.return_mode(),
-        }
-    }
-    fn azimuth(&self, k: usize) -> u16 {
-        match self {
-            Self::Xt32(p) => p.azimuth(k),
-            Self::Wide(p) => p.azimuth(k),
-            Self::Fixed(p) => p.azimuth(k),
-        }
-    }
-    /// Block `k`'s azimuth in 1/25,600 degree (the AT128's fine byte; the others' hundredths
-    /// times 256).
-    fn fine_azimuth(&self, k: usize) -> u32 {
-        match self {
-            Self::Fixed(p) => p.fine_azimuth(k),
-            _ => u32::from(self.azimuth(k)) << 8,
-        }
-    }
-    fn channel(&self, k: usize, c: usize) -> (u16, u8) {
-        match self {
-            Self::Xt32(p) => p.channel(k, c),
-            Self::Wide(p) => p.channel(k, c),
-            Self::Fixed(p) => p.channel(k, c),
-        }
-    }
-    fn unix_ns(&self) -> Option<u64> {
-        match self {
-            Self::Xt32(p) => p.unix_ns(),
-            Self::Wide(p) => p.unix_ns(),
-            Self::Fixed(p) => p.unix_ns(),
-        }
-    }
-    fn udp_sequence(&self) -> Option<u32> {
-        match self {
-            Self::Xt32(p) => p.udp_sequence(),
-            Self::Wide(p) => p.udp_sequence(),
-            Self::Fixed(p) => p.udp_sequence(),
-        }
-    }
-    /// Block `k`'s firing state, for a mode of `returns` returns.
-    fn firing(&self, k: usize, returns: usize) -> Firing {
-        match self {
-            Self::Xt32(_) | Self::Fixed(_) => Firing {
-                returns,
-                ..Firing::default()
-            },
-            Self::Wide(p) => Firing {
-                returns,
-                mode_flag: p.mode_flag(),
-                operational_state: p.operational_state(),
-                azimuth_state: p.azimuth_state(k),
-                near: false,
-            },
-        }
-    }
-}
 
 /// Hesai packets in, sweeps out (see the module doc of [`crate::hesai`]). `A` is how returns
 /// get their directions: each channel's angles ([`Decoder::new`]) or the AT128's mirror-frame
@@ -166,8 +49,8 @@ pub struct Decoder<A: Angles = ChannelAngles> {
     angles: A,
     /// The return mode and its byte, fixed by the first packet decoded.
     mode: Option<(ReturnMode, u8)>,
-    /// Time of the last packet accepted, ns since the Unix epoch.
-    last_ns: Option<u64>,
+    /// The packets' times, packet to packet.
+    timeline: Timeline,
     last_sequence: Option<u32>,
     last_azimuth: u16,
     cut: AzimuthCut,
@@ -177,7 +60,6 @@ pub struct Decoder<A: Angles = ChannelAngles> {
     sweep_start_ns: u64,
     /// Firings decoded into the open sweep.
     column: u16,
-    late_run: LateRun,
     asm: Assembly,
 }
 
@@ -219,14 +101,13 @@ impl<A: Angles> Decoder<A> {
             model,
             angles,
             mode: None,
-            last_ns: None,
+            timeline: Timeline::default(),
             last_sequence: None,
             last_azimuth: 0,
             cut,
             sweep_frame: None,
             sweep_start_ns: 0,
             column: 0,
-            late_run: LateRun::default(),
             asm: Assembly::new(),
         })
     }
@@ -241,10 +122,10 @@ impl<A: Angles> Decoder<A> {
         self.mode.map(|(m, _)| m)
     }
 
-    /// The packet's return mode: the one the first packet fixed, which every packet's mode
-    /// byte must repeat (else another sensor's) and its header's return count fit (else the
-    /// header is damaged).
-    fn identify(&mut self, p: &View<'_>) -> Result<ReturnMode, PacketError> {
+    /// The packet's return mode and its byte: the one the first packet decoded fixed, which
+    /// every packet's mode byte must repeat (else another sensor's) and its header's return
+    /// count fit (else the header is damaged).
+    fn identify(&self, p: &View<'_>) -> Result<(ReturnMode, u8), PacketError> {
         let byte = p.return_mode();
         let mode = match self.mode {
             Some((mode, b)) if b == byte => mode,
@@ -254,17 +135,13 @@ impl<A: Angles> Decoder<A> {
                 ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?
             }
         };
-        if !p.returns_fit(self.model, mode) {
-            return Err(PacketError::UnknownReturnMode);
-        }
-        self.mode = Some((mode, byte));
-        Ok(mode)
+        p.returns_fit(self.model, mode)?;
+        Ok((mode, byte))
     }
 
     /// Abandons the open sweep's clock; true if a sweep was open and has ended.
     fn resync<S: SweepSink>(&mut self, sink: &mut S) -> bool {
-        self.late_run.clear();
-        self.last_ns = None;
+        self.timeline.restart();
         self.last_sequence = None;
         let open = self.asm.open.is_some();
         self.asm.end(sink, SweepEnd::Resync);
@@ -273,33 +150,70 @@ impl<A: Angles> Decoder<A> {
         open
     }
 
+    /// Checks what the packet's fields must agree on (`consistency.rs`): a protocol 1.4
+    /// packet's states with the firing-time file, and the block azimuths with the return mode
+    /// and motor speed (the AT128's blocks sweep its mirror frames: not checked so).
+    fn consistent(&self, p: &View<'_>, returns: usize) -> Result<(), PacketError> {
+        let blocks = self.model.blocks();
+        for k in 0..blocks {
+            let f = p.firing(k, returns);
+            if !self.model.lists_state(&f) {
+                return Err(PacketError::FiringState {
+                    operational: f.operational_state,
+                    azimuth: f.azimuth_state,
+                });
+            }
+        }
+        if self.angles.sweeps_are_frames() {
+            return Ok(());
+        }
+        let firing_ns = self.model.firing_ns(p.firing(0, returns).operational_state);
+        let azimuth = |k| p.azimuth(k);
+        azimuths_agree(azimuth, blocks, returns, p.motor_rpm(), firing_ns)
+    }
+
+    /// Time from one packet to the next, ns, in the packet's mode and state.
+    fn period_ns(&self, p: &View<'_>, returns: usize) -> f64 {
+        let state = p.firing(0, returns).operational_state;
+        (self.model.blocks() / returns.max(1)) as f64 * self.model.firing_ns(state) as f64
+    }
+
+    /// Packets since the last one by their UDP sequence numbers, if both carry one and the
+    /// step is one a sensor makes (not a restart's).
+    fn sequence_step(&self, p: &View<'_>) -> Option<u32> {
+        let d = p.udp_sequence()?.wrapping_sub(self.last_sequence?);
+        (1..MAX_SEQUENCE_STEP).contains(&d).then_some(d)
+    }
+
     fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
         let p = View::new_checked(self.model, bytes)?;
-        let mode = self.identify(&p)?;
-        let t = p.unix_ns().ok_or(PacketError::Timestamp)?;
+        let (mode, mode_byte) = self.identify(&p)?;
+        let t = p.unix_ns().ok_or(PacketError::DateTime)?;
         // Every block's azimuth must lie in a frame of the AT128's correction.
         let blocks = self.model.blocks();
         if (0..blocks).any(|k| self.angles.frame(p.fine_azimuth(k)).is_none()) {
-            return Err(PacketError::Azimuth);
+            return Err(PacketError::MirrorFrame);
         }
-        let mut step = None;
-        if let Some(last) = self.last_ns {
-            if t <= last {
-                if !self.late_run.complete(t, GAP_NS) {
-                    return Err(PacketError::Late);
-                }
-                if self.resync(sink) {
-                    return Ok(Pushed::Again);
-                }
-            } else {
-                step = Some(t - last);
-            }
-        }
-        self.late_run.clear();
         let returns = mode.returns();
+        self.consistent(&p, returns)?;
+        let period = self.period_ns(&p, returns);
+        let sequence = self.sequence_step(&p);
+        let step = match self
+            .timeline
+            .judge(t, max_step_ns(period, sequence), GAP_NS)?
+        {
+            Step::First => None,
+            Step::After(s) => Some(s),
+            Step::Resync if self.resync(sink) => return Ok(Pushed::Again),
+            Step::Resync => None,
+        };
+        self.mode = Some((mode, mode_byte));
         if self.asm.open.is_some() && t.saturating_sub(self.sweep_start_ns) > GAP_NS {
             self.asm.end(sink, SweepEnd::Gap);
             self.cut.restart(Some(self.last_azimuth));
+            // A gap is not counted as losses: the packet begins a timeline of its own.
+            self.timeline.restart();
+            self.last_sequence = None;
             return Ok(Pushed::Again);
         }
         let frame = self.angles.frame(p.fine_azimuth(0));
@@ -317,13 +231,13 @@ impl<A: Angles> Decoder<A> {
             self.sweep_frame = frame;
             self.column = 0;
         }
-        let lost = self.lost_before(&p, step, returns);
+        let lost = step.map_or(0, |s| lost_between(s, period, sequence));
         self.decode(&p, t, mode, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
         let last_az = p.azimuth(blocks - 1);
-        self.last_ns = Some(t);
+        self.timeline.accept(t);
         self.last_sequence = p.udp_sequence();
         self.last_azimuth = last_az;
         if !by_frame && self.cut.passed(last_az) {
@@ -332,21 +246,6 @@ impl<A: Angles> Decoder<A> {
             return Ok(Pushed::Ended);
         }
         Ok(Pushed::Decoded)
-    }
-
-    /// Packets missing between the last one and `p`: the sequence numbers' step, or the
-    /// time step in packet periods when there are none.
-    fn lost_before(&self, p: &View<'_>, step_ns: Option<u64>, returns: usize) -> u32 {
-        let Some(step_ns) = step_ns else { return 0 };
-        if let (Some(now), Some(last)) = (p.udp_sequence(), self.last_sequence) {
-            let d = now.wrapping_sub(last);
-            if (1..MAX_SEQUENCE_STEP).contains(&d) {
-                return d - 1;
-            }
-        }
-        let state = p.firing(0, returns).operational_state;
-        let period = (self.model.blocks() / returns) as f64 * self.model.firing_ns(state) as f64;
-        lost_in_step(step_ns as f64, period)
     }
 
     /// Every return of a checked packet of time `t` (ns).

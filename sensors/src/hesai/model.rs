@@ -212,6 +212,19 @@ impl Model {
         self.table_entry(block, channel, f) != Some(NONE)
     }
 
+    /// Whether the firing-time file lists the operational and azimuth state of a protocol
+    /// 1.4 firing (the other models have no such states): the OT128 high resolution (0) in
+    /// azimuth states 0-3 and standard (2) in 0-1; the Pandar128 also energy saving (3) in
+    /// 0-1. Shutdown (1) and any other state have no firing times.
+    pub const fn lists_state(self, f: &Firing) -> bool {
+        match (self, f.operational_state) {
+            (Self::Ot128 | Self::Pandar128, 0) => f.azimuth_state < 4,
+            (Self::Ot128, 2) | (Self::Pandar128, 2 | 3) => f.azimuth_state < 2,
+            (Self::Ot128 | Self::Pandar128, _) => false,
+            _ => true,
+        }
+    }
+
     /// The firing-time file's entry for the channel in this block, if the model has one.
     fn table_entry(self, block: usize, channel: usize, f: &Firing) -> Option<u32> {
         let column = match (self, f.operational_state) {

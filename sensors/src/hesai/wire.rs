@@ -127,7 +127,7 @@ impl<'a> Packet<'a> {
             byte(bytes, field::DISTANCE_UNIT),
         );
         if layout != (field::CHANNELS as u8, field::BLOCKS as u8, 4) {
-            return Err(PacketError::UnknownModel);
+            return Err(PacketError::Header);
         }
         let len = if p.flags() & FLAG_UDP_SEQUENCE != 0 {
             field::LEN_WITH_SEQUENCE
@@ -141,7 +141,10 @@ impl<'a> Packet<'a> {
             return Err(PacketError::Length);
         }
         if !matches!(p.returns(), 1 | 2) {
-            return Err(PacketError::UnknownReturnMode);
+            return Err(PacketError::ReturnCount {
+                count: p.returns(),
+                mode: p.return_mode(),
+            });
         }
         for k in 0..field::BLOCKS {
             if p.azimuth(k) >= AZIMUTH_UNITS {
@@ -149,7 +152,7 @@ impl<'a> Packet<'a> {
             }
         }
         if p.unix_ns().is_none() {
-            return Err(PacketError::Timestamp);
+            return Err(PacketError::DateTime);
         }
         Ok(p)
     }

@@ -229,7 +229,8 @@ pub struct Packet<'a> {
 }
 
 impl<'a> Packet<'a> {
-    /// Checks the start bytes, version, layout, length, returns, azimuths and time.
+    /// Checks the start bytes, version, layout, length, the body and tail CRCs, returns,
+    /// azimuths and time.
     pub fn new_checked(bytes: &'a [u8]) -> Result<Self, PacketError> {
         if bytes.len() < field::BODY {
             return Err(PacketError::Truncated);
@@ -247,7 +248,7 @@ impl<'a> Packet<'a> {
             byte(bytes, field::DISTANCE_UNIT),
         );
         if shape != (LASERS as u8, BLOCKS as u8, 4) {
-            return Err(PacketError::UnknownModel);
+            return Err(PacketError::Header);
         }
         let p = Self {
             buf: bytes,
@@ -259,23 +260,30 @@ impl<'a> Packet<'a> {
         if bytes.len() > p.layout.len {
             return Err(PacketError::Length);
         }
-        if version == VERSION_QT && !p.crcs_hold() {
+        if !p.crcs_hold() {
             return Err(PacketError::Checksum);
         }
         if !matches!(p.returns(), 1 | 2) {
-            return Err(PacketError::UnknownReturnMode);
+            return Err(PacketError::ReturnCount {
+                count: p.returns(),
+                mode: p.return_mode(),
+            });
         }
         if (0..BLOCKS).any(|k| p.azimuth(k) >= AZIMUTH_UNITS) {
             return Err(PacketError::Azimuth);
         }
         if p.unix_ns().is_none() {
-            return Err(PacketError::Timestamp);
+            return Err(PacketError::DateTime);
         }
         Ok(p)
     }
 
     /// Whether the body CRC (over the blocks) and the tail CRC (over the tail, sequence number
-    /// and IMU sample) match: CRC-32/MPEG-2, as a recorded QT128 computes them.
+    /// and IMU sample) match: CRC-32/MPEG-2, as a recorded QT128 computes them. Protocol 1.4
+    /// has the same two (the Pandar128E3X manual: "CRC 1: CRC-32 checksum of the Body", "CRC
+    /// 3: CRC-32 checksum of the Tail", the tail running from its first byte through the
+    /// sequence number and IMU sample), of the same CRC (Hesai's SDK 2.0 computes every
+    /// protocol's with one CRC-32/MPEG-2, `GeneralParser::CRCCalc`).
     fn crcs_hold(&self) -> bool {
         self.layout.crc_ranges().into_iter().all(|(covered, at)| {
             self.buf.get(covered).map(crc32_mpeg2) == Some(u32_at(self.buf, at))

@@ -245,13 +245,13 @@ impl<'a> Packet<'a> {
                 if (usize::from(byte(bytes, 6)), usize::from(byte(bytes, 7)))
                     != (f.lasers, f.blocks)
                 {
-                    return Err(PacketError::UnknownModel);
+                    return Err(PacketError::Header);
                 }
             }
             8 if (usize::from(byte(bytes, 2)), usize::from(byte(bytes, 3)))
                 != (f.lasers, f.blocks) =>
             {
-                return Err(PacketError::UnknownModel);
+                return Err(PacketError::Header);
             }
             _ => {}
         }
@@ -283,7 +283,7 @@ impl<'a> Packet<'a> {
             sequence,
         };
         if p.distance_unit_mm() == 0 {
-            return Err(PacketError::UnknownModel);
+            return Err(PacketError::Header);
         }
         for k in 0..f.blocks {
             let at = f.block_at(k);
@@ -295,7 +295,7 @@ impl<'a> Packet<'a> {
             }
         }
         if p.unix_ns().is_none() {
-            return Err(PacketError::Timestamp);
+            return Err(PacketError::DateTime);
         }
         Ok(p)
     }
@@ -414,7 +414,7 @@ mod tests {
         // As an XT32M: the header's lasers and blocks are the XT16's.
         assert_eq!(
             Packet::new_checked(&PANDARXT32M, &xt16).unwrap_err(),
-            PacketError::UnknownModel
+            PacketError::Header
         );
         assert_eq!(
             Packet::new_checked(&PANDARQT64, &xt16).unwrap_err(),

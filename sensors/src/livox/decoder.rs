@@ -1,11 +1,12 @@
-//! Livox packets to frames: checks, order and loss detection by the packets' times, the cut
-//! every frame period, then each return to a point.
+//! Livox packets to frames: checks, order and loss detection (each packet's time against the
+//! last one's, with the SDK 2 packet counter where there is one: [`Timeline`]), the cut every
+//! frame period, then each return to a point.
 
 use super::{sdk1, sdk2, Config, Model};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
-    lost_in_step, Assembly, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd, SweepSink,
-    SweepStats,
+    lost_between, max_step_ns, Assembly, Decode, PointMeta, Pushed, Return, Step, SweepEnd,
+    SweepSink, SweepStats, Timeline,
 };
 
 /// Packets more than this apart (sensor time) are not one frame's: the sensor stopped, or the
@@ -32,10 +33,14 @@ pub struct Decoder {
     period: u64,
     /// Sender (SDK 1 slot and lidar id) and data type, fixed by the first packet decoded.
     sender: Option<((u8, u8), u8)>,
-    last_ns: Option<u64>,
+    /// The packets' times, packet to packet.
+    timeline: Timeline,
+    /// The last packet's SDK 2 counter.
+    last_count: Option<u16>,
     /// The open frame's start, ns.
     frame_start: u64,
-    late_run: LateRun,
+    /// Where the last packet's points end and how long they span, ns.
+    covered: (u64, u64),
     asm: Assembly,
 }
 
@@ -49,9 +54,10 @@ impl Decoder {
             model: config.model,
             period: config.frame_period_ns,
             sender: None,
-            last_ns: None,
+            timeline: Timeline::default(),
+            last_count: None,
             frame_start: 0,
-            late_run: LateRun::default(),
+            covered: (0, 0),
             asm: Assembly::new(),
         })
     }
@@ -76,60 +82,68 @@ impl Decoder {
         }
     }
 
+    /// Packets since the last one by the SDK 2 counter (none on SDK 1), if it moved on as a
+    /// sensor's does (not back, not half its range).
+    fn sequence_step(&self, p: &Packet<'_>) -> Option<u32> {
+        let d = p.count()?.wrapping_sub(self.last_count?);
+        (1..0x8000).contains(&d).then_some(u32::from(d))
+    }
+
+    /// Abandons the open frame's clock (a run of packets agreed on a timeline of their own);
+    /// true if a frame was open and has ended.
+    fn resync<S: SweepSink>(&mut self, sink: &mut S) -> bool {
+        self.timeline.restart();
+        self.last_count = None;
+        let open = self.asm.open.is_some();
+        self.asm.end(sink, SweepEnd::Resync);
+        self.asm.resynced();
+        open
+    }
+
     fn accept<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
         let p = Packet::new_checked(bytes, self.model)?;
         self.identify(&p)?;
         let t = p.time_ns();
-        let mut step = None;
-        if let Some(last) = self.last_ns {
-            if t <= last {
-                if !self.late_run.complete(t, GAP_NS) {
-                    return Err(PacketError::Late);
-                }
-                self.late_run.clear();
-                self.last_ns = None;
-                let open = self.asm.open.is_some();
-                self.asm.end(sink, SweepEnd::Resync);
-                self.asm.resynced();
-                if open {
-                    return Ok(Pushed::Again);
-                }
-            } else {
-                step = Some(t - last);
-            }
-        }
-        self.late_run.clear();
+        let span = p.span_ns();
+        let sequence = self.sequence_step(&p);
+        let step = match self
+            .timeline
+            .judge(t, max_step_ns(span, sequence), GAP_NS)?
+        {
+            Step::First => None,
+            Step::After(s) => Some(s),
+            Step::Resync if self.resync(sink) => return Ok(Pushed::Again),
+            Step::Resync => None,
+        };
         if self.asm.open.is_some() {
-            let end = if step.is_some_and(|s| s > GAP_NS) {
-                Some(SweepEnd::Gap)
-            } else if t >= self.frame_start.saturating_add(self.period) {
-                Some(SweepEnd::Complete)
-            } else {
-                None
-            };
-            if let Some(end) = end {
-                self.asm.end(sink, end);
-                if end == SweepEnd::Complete {
-                    // Frames keep their grid: the next starts at the period the packet is in.
-                    let periods = (t - self.frame_start) / self.period;
-                    self.frame_start += periods * self.period;
-                } else {
-                    self.frame_start = t;
-                }
+            if step.is_some_and(|s| s > GAP_NS) {
+                // A pause: not counted as losses; the packet begins a timeline of its own.
+                self.asm.end(sink, SweepEnd::Gap);
+                self.timeline.restart();
+                self.last_count = None;
+                return Ok(Pushed::Again);
+            }
+            if t >= self.frame_start.saturating_add(self.period) {
+                self.asm.end(sink, SweepEnd::Complete);
+                // Frames keep their grid: the next starts at the period the packet is in.
+                let periods = (t - self.frame_start) / self.period;
+                self.frame_start += periods * self.period;
                 return Ok(Pushed::Again);
             }
         } else {
-            if self.last_ns.is_none() || step.is_some_and(|s| s > GAP_NS) {
+            if step.is_none() {
                 self.frame_start = t;
             }
             self.asm.begin(sink, self.frame_start, None);
         }
-        let lost = step.map_or(0, |s| lost_in_step(s as f64, p.span_ns()));
+        let lost = step.map_or(0, |s| lost_between(s, span, sequence));
         self.decode(&p, t, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
-        self.last_ns = Some(t);
+        self.timeline.accept(t);
+        self.last_count = p.count();
+        self.covered = (t.saturating_add(span as u64), span as u64);
         Ok(Pushed::Decoded)
     }
 
@@ -214,6 +228,13 @@ impl<'a> Packet<'a> {
             Self::Sdk2(p) => p.firing_ns(),
         }
     }
+    /// The SDK 2 packet counter (SDK 1 has none).
+    fn count(&self) -> Option<u16> {
+        match self {
+            Self::Sdk1(..) => None,
+            Self::Sdk2(p) => Some(p.udp_cnt()),
+        }
+    }
     /// Time a packet's firings span, ns.
     fn span_ns(&self) -> f64 {
         match self {
@@ -234,8 +255,17 @@ impl Decode for Decoder {
         let r = self.accept(bytes, sink);
         self.asm.counted(r)
     }
+    /// Ends the open frame: complete if its packets' points reach its period's end (within
+    /// half a packet), else [`SweepEnd::Finished`], a frame the recording cut short.
     fn finish<S: SweepSink>(&mut self, sink: &mut S) {
-        self.asm.end(sink, SweepEnd::Finished);
+        let (until, span) = self.covered;
+        let whole = until.saturating_add(span / 2) >= self.frame_start.saturating_add(self.period);
+        let how = if whole {
+            SweepEnd::Complete
+        } else {
+            SweepEnd::Finished
+        };
+        self.asm.end(sink, how);
     }
     fn between_sweeps(&self) -> &SweepStats {
         &self.asm.pending

@@ -51,6 +51,8 @@ pub mod field {
 pub const VERSION: u8 = 5;
 /// The IMU data type.
 pub const IMU: u8 = 6;
+/// The last timestamp type the protocol defines (4, PPS).
+pub const LAST_TIMESTAMP_TYPE: u8 = 4;
 
 /// Bytes per point and points per packet of a point data type.
 pub const fn layout(data_type: u8) -> Option<(usize, usize)> {
@@ -84,7 +86,8 @@ pub struct Packet<'a> {
 }
 
 impl<'a> Packet<'a> {
-    /// Checks version, data type, length and timestamp.
+    /// Checks version, data type, length and timestamp (a type the protocol defines, a UTC
+    /// date that exists).
     pub fn new_checked(bytes: &'a [u8]) -> Result<Self, PacketError> {
         if bytes.len() < field::DATA {
             return Err(PacketError::Truncated);
@@ -105,8 +108,12 @@ impl<'a> Packet<'a> {
             size,
             count,
         };
+        let kind = p.timestamp_type();
+        if kind > LAST_TIMESTAMP_TYPE {
+            return Err(PacketError::TimeType { kind });
+        }
         if p.time_ns().is_none() {
-            return Err(PacketError::Timestamp);
+            return Err(PacketError::DateTime);
         }
         Ok(p)
     }

@@ -64,6 +64,8 @@ pub const VERSION: u8 = 0;
 pub const IMU: u8 = 0;
 /// The dual-return Cartesian data type.
 pub const DUAL: u8 = 0x11;
+/// The last time type the protocol defines (2, GPS).
+pub const LAST_TIME_TYPE: u8 = 2;
 /// Points the Mid-360 sends in a packet.
 pub const MID360_POINTS: usize = 96;
 
@@ -114,15 +116,17 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     })
 }
 
-/// A checked view of a data packet: version, data type, length field and datagram length
-/// agree, the CRC holds and the time type is one this crate reads.
+/// A checked view of a data packet: version, data type, `dot_num`, length field and datagram
+/// length agree, the CRC holds, the time type is one this crate reads and a point packet's
+/// points span a time (`time_interval` above 0). The CRC does not cover the header, so its
+/// fields are checked against each other.
 #[derive(Clone, Copy, Debug)]
 pub struct Packet<'a> {
     buf: &'a [u8],
 }
 
 impl<'a> Packet<'a> {
-    /// Checks version, data type, lengths, CRC and time type, in that order.
+    /// Checks version, data type, lengths, CRC, time type and point interval, in that order.
     pub fn new_checked(bytes: &'a [u8]) -> Result<Self, PacketError> {
         if bytes.len() < field::DATA {
             return Err(PacketError::Truncated);
@@ -131,11 +135,17 @@ impl<'a> Packet<'a> {
             return Err(PacketError::Version);
         }
         let data_type = byte(bytes, field::DATA_TYPE);
-        let points = usize::from(u16_at(bytes, field::DOT_NUM.start));
-        let len = packet_len(data_type, points).ok_or(PacketError::PacketType)?;
-        let stated = usize::from(u16_at(bytes, field::LENGTH.start));
-        if stated != len || (data_type == IMU && points != 1) {
-            return Err(PacketError::Length);
+        let dot_num = u16_at(bytes, field::DOT_NUM.start);
+        let len = packet_len(data_type, usize::from(dot_num)).ok_or(PacketError::PacketType)?;
+        let stated = u16_at(bytes, field::LENGTH.start);
+        if data_type == IMU && dot_num != 1 {
+            return Err(PacketError::ImuPoints { dot_num });
+        }
+        if usize::from(stated) != len {
+            return Err(PacketError::LengthField {
+                stated,
+                expected: u16::try_from(len).unwrap_or(u16::MAX),
+            });
         }
         if bytes.len() < len {
             return Err(PacketError::Truncated);
@@ -147,8 +157,12 @@ impl<'a> Packet<'a> {
         if crc32(&bytes[field::TIMESTAMP.start..]) != crc {
             return Err(PacketError::Checksum);
         }
-        if byte(bytes, field::TIME_TYPE) > 2 {
-            return Err(PacketError::Timestamp);
+        let kind = byte(bytes, field::TIME_TYPE);
+        if kind > LAST_TIME_TYPE {
+            return Err(PacketError::TimeType { kind });
+        }
+        if data_type != IMU && u16_at(bytes, field::TIME_INTERVAL.start) == 0 {
+            return Err(PacketError::PointInterval);
         }
         Ok(Self { buf: bytes })
     }
@@ -161,7 +175,7 @@ impl<'a> Packet<'a> {
     pub fn time_type(&self) -> u8 {
         byte(self.buf, field::TIME_TYPE)
     }
-    /// The packet counter.
+    /// The packet counter: one more on each packet the sensor sends.
     pub fn udp_cnt(&self) -> u16 {
         u16_at(self.buf, field::UDP_CNT.start)
     }

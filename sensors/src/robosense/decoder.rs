@@ -128,7 +128,7 @@ impl Decoder {
                 && p.azimuth(0) == p.azimuth(1)
         });
         if dual && self.model == Model::Ruby {
-            return Err(PacketError::UnknownReturnMode);
+            return Err(PacketError::DualNotDecoded);
         }
         Ok(dual)
     }
@@ -152,7 +152,7 @@ impl Decoder {
             return Err(PacketError::NoCalibration);
         }
         let dual = self.mode(&p)?;
-        let t = p.time_us().ok_or(PacketError::Timestamp)?;
+        let t = p.time_us().ok_or(PacketError::DateTime)?;
         let mut step = None;
         if let Some(last) = self.last_us {
             if t <= last {

@@ -63,7 +63,7 @@ impl<'a> Packet<'a> {
             return Err(PacketError::StartBytes);
         }
         let p = Self { buf };
-        p.time_us().ok_or(PacketError::Timestamp)?;
+        p.time_us().ok_or(PacketError::DateTime)?;
         Ok(p)
     }
     /// The packet's sequence number in its frame (from 1).
@@ -144,7 +144,7 @@ impl Decoder {
         if *self.mode.get_or_insert(mode) != mode {
             return Err(PacketError::OtherSensor);
         }
-        let t = p.time_us().ok_or(PacketError::Timestamp)?;
+        let t = p.time_us().ok_or(PacketError::DateTime)?;
         let seq = p.sequence();
         if let Some(last) = self.last_seq {
             // The same frame: later packets only (a repeat or one from before is late).

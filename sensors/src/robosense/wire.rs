@@ -69,7 +69,7 @@ impl<'a> Msop<'a> {
                 return Err(PacketError::Azimuth);
             }
         }
-        p.time_us().ok_or(PacketError::Timestamp)?;
+        p.time_us().ok_or(PacketError::DateTime)?;
         Ok(p)
     }
 

@@ -1,9 +1,11 @@
 //! What `listen-poses` writes: `poses_kitti.txt` through `run`'s writer, `frames.csv` (a row
-//! per sweep with the receiver's figures and running counters) and `summary.json`.
+//! per sweep with the receiver's figures and running counters) and `summary.json`, which
+//! records the others as `run`'s does ([`kiss_odom_io::write::outputs`]).
 
 use super::received::{Received, Undecodable};
 use anyhow::Result;
 use kiss_odom_core::Flag;
+use kiss_odom_io::write::outputs::{Digests, Outputs};
 use kiss_odom_sensors::pose_datagram::{Counters, Link};
 use serde::ser::{Serialize, SerializeStruct, Serializer};
 use std::net::SocketAddr;
@@ -93,6 +95,9 @@ pub struct Summary {
     /// Their text.
     #[serde(skip)]
     pub warned: Vec<String>,
+    /// The other files written in the output folder and the SHA-256 of each: what a later
+    /// command replaces as an earlier one's.
+    pub outputs: Digests,
 }
 
 /// What each counter but `packets` means when it is not 0.
@@ -160,6 +165,7 @@ impl Summary {
             interrupted,
             warnings: warned.len(),
             warned,
+            outputs: Digests::new(),
         }
     }
 
@@ -191,12 +197,13 @@ impl Summary {
 
 /// Writes the outputs into `dir`: `summary.json` always, the others when a sweep came (as
 /// `run` writes no pose file without a pose).
-pub fn write(dir: &Path, s: &Summary, r: &Received) -> Result<()> {
+pub fn write(dir: &Path, s: &mut Summary, r: &Received) -> Result<()> {
+    let mut out = Outputs::new(dir);
     if !r.sweeps.is_empty() {
         let rows: Vec<[f64; 12]> = r.sweeps.values().map(|d| d.pose).collect();
         let kitti = kiss_odom_io::poses::format_kitti_rows(&rows);
-        kiss_odom_io::write::write(&dir.join("poses_kitti.txt"), kitti.as_bytes())?;
-        kiss_odom_io::write::write_with(&dir.join("frames.csv"), |w| {
+        out.write("poses_kitti.txt", kitti.as_bytes())?;
+        out.write_with("frames.csv", |w| {
             let mut csv = csv::Writer::from_writer(w);
             for d in r.sweeps.values() {
                 let row = Row {
@@ -214,8 +221,8 @@ pub fn write(dir: &Path, s: &Summary, r: &Received) -> Result<()> {
             Ok(())
         })?;
     }
-    let json = serde_json::to_string_pretty(s)? + "\n";
-    kiss_odom_io::write::write(&dir.join("summary.json"), json.as_bytes())
+    s.outputs = out.record().clone();
+    out.write_summary(s)
 }
 
 #[cfg(test)]

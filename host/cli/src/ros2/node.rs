@@ -34,6 +34,7 @@ use super::msg::{
     TFMESSAGE_TYPE,
 };
 use super::params::NodeParams;
+use super::watch::Watch;
 use crate::stats::percentile;
 use anyhow::{anyhow, Context, Result};
 use kiss_odom_drive::settings::Settings;
@@ -44,10 +45,11 @@ use kiss_odom_io::ros::message::parse_cdr;
 use kiss_odom_io::ros::pointcloud2::{decode, frame_of};
 use nalgebra::Isometry3;
 use rustdds::mio1::{Events, Interest, Poll, Token};
+use rustdds::StatusEvented;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 /// How often blocked threads look at the stop flag.
@@ -71,6 +73,9 @@ pub struct NodeOptions {
     /// The `sensor_msgs/Imu` topic whose samples feed the gyroscope prior (`None`: no
     /// subscription). Only read with the prior on (`settings.imu.enabled`).
     pub imu_topic: Option<String>,
+    /// Kept up to date with what the node's readers and writers have matched and the IMU
+    /// messages it took, for a caller in the same process ([`Watch`]).
+    pub watch: Arc<Watch>,
 }
 
 /// Counters printed at exit.
@@ -233,15 +238,21 @@ pub fn run(
 
     let mailbox = Mailbox::default();
     let inbox = ImuInbox::new();
-    let imu = imu_reader.as_mut().map(|r| (r, &inbox));
+    let watch = &*opts.watch;
+    let clouds = Topic(&mut reader, &p.points_topic);
+    let imu = imu_reader
+        .as_mut()
+        .zip(imu_topic)
+        .map(|(r, t)| (Topic(r, t), &inbox));
     let mut summary = std::thread::scope(|scope| -> Result<Summary> {
-        let receiver = scope.spawn(|| receive(&mut reader, imu, &mailbox, stop));
+        let receiver = scope.spawn(|| receive(clouds, imu, &mailbox, watch, stop));
         let result = engine::driver(&opts.settings).and_then(|mut driver| {
             let cycle = Cycle {
                 min_period: opts.min_period,
                 stop,
                 imu: imu_topic
                     .map(|_| (&inbox, Duration::from_secs_f64(opts.settings.imu.max_gap))),
+                watch,
             };
             work(
                 &mut driver,
@@ -272,29 +283,39 @@ pub fn run(
     Ok(summary)
 }
 
+/// A reader and the ROS 2 topic it reads.
+struct Topic<'a>(&'a mut dds::CloudReader, &'a str);
+
 /// Moves every cloud the reader delivers into the mailbox, and every IMU message into the
 /// inbox (decoded; a malformed one is counted and its error kept for a warning), until `stop`.
 /// IMU messages are drained first, so the samples that came before a cloud are there when
-/// the worker takes it.
+/// the worker takes it. The readers' matches go to `watch`.
 fn receive(
-    reader: &mut dds::CloudReader,
-    mut imu: Option<(&mut dds::CloudReader, &ImuInbox)>,
+    clouds: Topic,
+    mut imu: Option<(Topic, &ImuInbox)>,
     mailbox: &Mailbox,
+    watch: &Watch,
     stop: &AtomicBool,
 ) -> Result<()> {
+    let Topic(reader, topic) = clouds;
     let mut poll = Poll::new()?;
-    poll.registry()
-        .register(reader, Token(0), Interest::READABLE)?;
-    if let Some((r, _)) = imu.as_mut() {
-        poll.registry().register(*r, Token(1), Interest::READABLE)?;
+    let registry = poll.registry();
+    registry.register(reader, Token(0), Interest::READABLE)?;
+    registry.register(reader.as_status_source_mio1(), Token(1), Interest::READABLE)?;
+    if let Some((Topic(r, _), _)) = imu.as_mut() {
+        registry.register(*r, Token(2), Interest::READABLE)?;
+        registry.register(r.as_status_source_mio1(), Token(3), Interest::READABLE)?;
     }
     let mut events = Events::with_capacity(4);
     while !stop.load(Ordering::SeqCst) {
         poll.poll(&mut events, Some(TICK))?;
         // Drain on every wake-up and every tick: readiness is edge-triggered.
-        if let Some((r, inbox)) = imu.as_mut() {
+        watch.reader(topic, reader);
+        if let Some((Topic(r, imu_topic), inbox)) = imu.as_mut() {
+            watch.reader(imu_topic, r);
             while let Ok(Some(sample)) = r.take_next_sample() {
                 inbox.put(imu_msg::parse_cdr(&sample.into_value().0));
+                watch.took_imu_message();
             }
         }
         while let Ok(Some(sample)) = reader.take_next_sample() {
@@ -319,6 +340,7 @@ struct Cycle<'a> {
     min_period: Duration,
     stop: &'a AtomicBool,
     imu: Option<(&'a ImuInbox, Duration)>,
+    watch: &'a Watch,
 }
 
 /// The worker loop: one registered or skipped cloud per mailbox delivery.
@@ -338,6 +360,7 @@ fn work(
     let mut last_map: Option<Instant> = None;
     let mut n = 0u64;
     while !stop.load(Ordering::SeqCst) {
+        publish.watch(cycle.watch);
         let wait = next_take.saturating_duration_since(Instant::now());
         if !wait.is_zero() {
             std::thread::sleep(wait.min(TICK));
@@ -487,6 +510,17 @@ pub fn twist_of(delta: &Isometry3<f64>, dt: f64) -> Twist {
 }
 
 impl Publishers {
+    /// Takes the writers' status events: the subscribers each has matched.
+    fn watch(&self, watch: &Watch) {
+        watch.writer(&self.params.odom_topic, &self.odom);
+        if let Some(w) = &self.tf {
+            watch.writer("/tf", w);
+        }
+        if let Some(w) = &self.map {
+            watch.writer(&self.params.local_map_topic, w);
+        }
+    }
+
     /// Publishes the odometry and the transform; returns the base pose.
     fn odometry(
         &self,

@@ -65,179 +65,221 @@ pub fn run(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<u64> {
-    if !(opts.rate.is_finite() && opts.rate > 0.0) {
-        bail!("--rate must be positive");
-    }
-    if !(opts.period.is_finite() && opts.period > 0.0) {
-        bail!("--period must be positive");
-    }
-    let open = |imu: ImuInput| {
-        io::open(
-            &opts.path,
-            opts.format,
-            &OpenOptions {
-                topic: opts.source_topic.clone(),
-                imu,
-                ..OpenOptions::default()
-            },
-        )
-    };
-    let mut dataset = match &opts.imu {
-        None => open(ImuInput::Builtin)?,
-        // A recording with several IMU topics and none named: play its clouds alone.
-        Some((ImuInput::Auto, _)) => open(ImuInput::Auto).or_else(|e| {
-            writeln!(err, "warning: {e:#}; publishing no IMU samples")?;
-            open(ImuInput::Builtin)
-        })?,
-        Some((input, _)) => open(input.clone())?,
-    };
-    let dp = dds::participant(opts.domain)?;
-    let w: Writer<PointCloud2> = dds::writer(
-        &dp,
-        &opts.points_topic,
-        POINTCLOUD2_TYPE,
-        &dds::sensor_qos(),
-    )?;
-    let imu_w: Option<(Writer<Imu>, &str)> = opts
-        .imu
-        .as_ref()
-        .map(|(_, topic)| {
-            Ok::<_, anyhow::Error>((
-                dds::writer(&dp, topic, IMU_TYPE, &dds::imu_qos())?,
-                topic.as_str(),
-            ))
-        })
-        .transpose()?;
-    let stopped = || stop.load(Ordering::SeqCst);
-    let wait = crate::interrupt::seconds(opts.wait);
-    let mut acks = opts
-        .lockstep
-        .as_ref()
-        .map(|topic| {
-            let r = dds::reader::<Odometry>(&dp, topic, ODOMETRY_TYPE, &dds::reliable_qos(10))?;
-            Ok::<_, anyhow::Error>((topic, r))
-        })
-        .transpose()?;
-    if !dds::wait_for_reader(&w, wait, &stopped) {
-        writeln!(
-            err,
-            "warning: no subscriber on {} after {} s; publishing anyway",
-            opts.points_topic, opts.wait
+    Player::new(opts, err)?.play(stop, out, err)
+}
+
+/// A player set up: the recording opened, the DDS writers (and with `lockstep` the odometry
+/// reader) created, so that discovery is under way; [`Player::play`] publishes. Between the
+/// two, a caller that sees the subscriber's side of the match (the node's
+/// [`super::watch::Watch`]) can wait for it: a player only sees its own side.
+pub struct Player<'a> {
+    opts: &'a PlayOptions,
+    dataset: io::Dataset,
+    clouds: Writer<PointCloud2>,
+    imu: Option<Writer<Imu>>,
+    acks: Option<dds::Reader<Odometry>>,
+    /// Declared last: dropped after its writers and reader.
+    _dp: dds::DomainParticipant,
+}
+
+impl<'a> Player<'a> {
+    /// Checks `opts`, opens the recording and creates the participant, writers and reader.
+    pub fn new(opts: &'a PlayOptions, err: &mut dyn Write) -> Result<Self> {
+        if !(opts.rate.is_finite() && opts.rate > 0.0) {
+            bail!("--rate must be positive");
+        }
+        if !(opts.period.is_finite() && opts.period > 0.0) {
+            bail!("--period must be positive");
+        }
+        let open = |imu: ImuInput| {
+            io::open(
+                &opts.path,
+                opts.format,
+                &OpenOptions {
+                    topic: opts.source_topic.clone(),
+                    imu,
+                    ..OpenOptions::default()
+                },
+            )
+        };
+        let dataset = match &opts.imu {
+            None => open(ImuInput::Builtin)?,
+            // A recording with several IMU topics and none named: play its clouds alone.
+            Some((ImuInput::Auto, _)) => open(ImuInput::Auto).or_else(|e| {
+                writeln!(err, "warning: {e:#}; publishing no IMU samples")?;
+                open(ImuInput::Builtin)
+            })?,
+            Some((input, _)) => open(input.clone())?,
+        };
+        let dp = dds::participant(opts.domain)?;
+        let clouds = dds::writer(
+            &dp,
+            &opts.points_topic,
+            POINTCLOUD2_TYPE,
+            &dds::sensor_qos(),
         )?;
+        let imu = opts
+            .imu
+            .as_ref()
+            .map(|(_, topic)| dds::writer(&dp, topic, IMU_TYPE, &dds::imu_qos()))
+            .transpose()?;
+        let acks = opts
+            .lockstep
+            .as_ref()
+            .map(|topic| dds::reader(&dp, topic, ODOMETRY_TYPE, &dds::reliable_qos(10)))
+            .transpose()?;
+        Ok(Self {
+            opts,
+            dataset,
+            clouds,
+            imu,
+            acks,
+            _dp: dp,
+        })
     }
-    if let Some((topic, r)) = &acks {
-        if !dds::wait_for_writer(r, wait, &stopped) {
+
+    /// Waits for a subscriber (and with `lockstep` the odometry), then publishes the clouds
+    /// (and IMU samples) until the recording ends or `stop` is set; returns the number of
+    /// clouds published.
+    pub fn play(
+        mut self,
+        stop: &AtomicBool,
+        out: &mut dyn Write,
+        err: &mut dyn Write,
+    ) -> Result<u64> {
+        let opts = self.opts;
+        let dataset = &mut self.dataset;
+        let w = &self.clouds;
+        let imu_w = self
+            .imu
+            .as_ref()
+            .zip(opts.imu.as_ref().map(|(_, topic)| topic.as_str()));
+        let stopped = || stop.load(Ordering::SeqCst);
+        let wait = crate::interrupt::seconds(opts.wait);
+        if !dds::wait_for_reader(w, wait, &stopped) {
             writeln!(
                 err,
-                "warning: no odometry on {topic} after {} s; --lockstep waits for each cloud anyway",
-                opts.wait
+                "warning: no subscriber on {} after {} s; publishing anyway",
+                opts.points_topic, opts.wait
             )?;
         }
-    }
-    let mut first: Option<(f64, Instant)> = None;
-    let mut sent = 0u64;
-    let mut imu_sent = 0u64;
-    let mut imu_checked = false;
-    let mut next_time = 0.0;
-    // One item ahead, for the first IMU sample after a cloud's end.
-    let mut ahead = dataset.frames.next_item()?;
-    // How many of the next frame's samples went out with the cloud before.
-    let mut lead = 0;
-    while !stopped() {
-        let frame = match ahead.take() {
-            None => break,
-            Some(Item::Skipped { reason, .. }) => {
-                writeln!(err, "warning: {reason}")?;
-                ahead = dataset.frames.next_item()?;
-                continue;
-            }
-            Some(Item::Frame(f)) => f,
-        };
-        ahead = dataset.frames.next_item()?;
-        for w in &frame.warnings {
-            writeln!(err, "warning: {w}")?;
-        }
-        let time = frame
-            .time
-            .or_else(|| {
-                dataset
-                    .info
-                    .frame_times
-                    .as_ref()
-                    .and_then(|t| t.get(frame.index).copied())
-            })
-            .unwrap_or(next_time);
-        next_time = time + opts.period;
-        let (t0, start) = *first.get_or_insert((time, Instant::now()));
-        // A tiny rate or a long gap is a long wait (past `Instant`'s range: until stopped).
-        let due = start.checked_add(crate::interrupt::seconds((time - t0) / opts.rate));
-        while !stopped() {
-            let left = due.map_or(Duration::MAX, |d| {
-                d.saturating_duration_since(Instant::now())
-            });
-            if left.is_zero() {
-                break;
-            }
-            std::thread::sleep(left.min(Duration::from_millis(50)));
-        }
-        if let Some((w, topic)) = &imu_w {
-            let next = match &ahead {
-                Some(Item::Frame(f)) => f.imu.first(),
-                _ => None,
-            };
-            let samples = frame.imu.iter().skip(lead).chain(next);
-            lead = usize::from(next.is_some());
-            if !imu_checked && !frame.imu.is_empty() {
-                imu_checked = true;
-                // Discovery found the cloud reader: an IMU reader, if any, is found by now.
-                let short = wait.min(Duration::from_secs(1));
-                if !dds::wait_for_reader(w, short, &stopped) {
-                    writeln!(
-                        err,
-                        "warning: no subscriber on {topic}; publishing the IMU samples anyway"
-                    )?;
-                }
-            }
-            for s in samples {
-                w.write(Imu::of(s, "imu"), None)
-                    .map_err(|e| anyhow::anyhow!("publishing {topic}: {e:?}"))?;
-                imu_sent += 1;
-            }
-        }
-        let stamp = Time::from_seconds(time);
-        let header = Header {
-            stamp,
-            frame_id: opts.frame_id.clone(),
-        };
-        let msg = PointCloud2::xyzt(header, &frame.points, frame.stamps.as_deref());
-        w.write(msg, None)
-            .map_err(|e| anyhow::anyhow!("publishing {}: {e:?}", opts.points_topic))?;
-        writeln!(
-            out,
-            "published {sent} {} stamp {time:.6} points {}",
-            frame.name,
-            frame.points.len()
-        )?;
-        sent += 1;
-        if let Some((topic, r)) = &mut acks {
-            if !answered(r, stamp, wait, &stopped) && !stopped() {
+        if let (Some(r), Some(topic)) = (&self.acks, &opts.lockstep) {
+            if !dds::wait_for_writer(r, wait, &stopped) {
                 writeln!(
                     err,
-                    "warning: no odometry for stamp {time:.6} on {topic} after {} s (skipped \
-                     by the node?); publishing the next cloud",
+                    "warning: no odometry on {topic} after {} s; --lockstep waits for each cloud anyway",
                     opts.wait
                 )?;
             }
         }
+        let mut acks = self.acks.as_mut().zip(opts.lockstep.as_ref());
+        let mut first: Option<(f64, Instant)> = None;
+        let mut sent = 0u64;
+        let mut imu_sent = 0u64;
+        let mut imu_checked = false;
+        let mut next_time = 0.0;
+        // One item ahead, for the first IMU sample after a cloud's end.
+        let mut ahead = dataset.frames.next_item()?;
+        // How many of the next frame's samples went out with the cloud before.
+        let mut lead = 0;
+        while !stopped() {
+            let frame = match ahead.take() {
+                None => break,
+                Some(Item::Skipped { reason, .. }) => {
+                    writeln!(err, "warning: {reason}")?;
+                    ahead = dataset.frames.next_item()?;
+                    continue;
+                }
+                Some(Item::Frame(f)) => f,
+            };
+            ahead = dataset.frames.next_item()?;
+            for w in &frame.warnings {
+                writeln!(err, "warning: {w}")?;
+            }
+            let time = frame
+                .time
+                .or_else(|| {
+                    dataset
+                        .info
+                        .frame_times
+                        .as_ref()
+                        .and_then(|t| t.get(frame.index).copied())
+                })
+                .unwrap_or(next_time);
+            next_time = time + opts.period;
+            let (t0, start) = *first.get_or_insert((time, Instant::now()));
+            // A tiny rate or a long gap is a long wait (past `Instant`'s range: until stopped).
+            let due = start.checked_add(crate::interrupt::seconds((time - t0) / opts.rate));
+            // Pacing: the cloud goes at its recorded time, the stop flag looked at meanwhile.
+            while !stopped() {
+                let left = due.map_or(Duration::MAX, |d| {
+                    d.saturating_duration_since(Instant::now())
+                });
+                if left.is_zero() {
+                    break;
+                }
+                std::thread::sleep(left.min(Duration::from_millis(50)));
+            }
+            if let Some((w, topic)) = imu_w {
+                let next = match &ahead {
+                    Some(Item::Frame(f)) => f.imu.first(),
+                    _ => None,
+                };
+                let samples = frame.imu.iter().skip(lead).chain(next);
+                lead = usize::from(next.is_some());
+                if !imu_checked && !frame.imu.is_empty() {
+                    imu_checked = true;
+                    // Discovery found the cloud reader: an IMU reader, if any, is found by now.
+                    let short = wait.min(Duration::from_secs(1));
+                    if !dds::wait_for_reader(w, short, &stopped) {
+                        writeln!(
+                            err,
+                            "warning: no subscriber on {topic}; publishing the IMU samples anyway"
+                        )?;
+                    }
+                }
+                for s in samples {
+                    w.write(Imu::of(s, "imu"), None)
+                        .map_err(|e| anyhow::anyhow!("publishing {topic}: {e:?}"))?;
+                    imu_sent += 1;
+                }
+            }
+            let stamp = Time::from_seconds(time);
+            let header = Header {
+                stamp,
+                frame_id: opts.frame_id.clone(),
+            };
+            let msg = PointCloud2::xyzt(header, &frame.points, frame.stamps.as_deref());
+            w.write(msg, None)
+                .map_err(|e| anyhow::anyhow!("publishing {}: {e:?}", opts.points_topic))?;
+            writeln!(
+                out,
+                "published {sent} {} stamp {time:.6} points {}",
+                frame.name,
+                frame.points.len()
+            )?;
+            sent += 1;
+            if let Some((r, topic)) = &mut acks {
+                if !answered(r, stamp, wait, &stopped) && !stopped() {
+                    writeln!(
+                        err,
+                        "warning: no odometry for stamp {time:.6} on {topic} after {} s (skipped \
+                         by the node?); publishing the next cloud",
+                        opts.wait
+                    )?;
+                }
+            }
+        }
+        // Best effort has no acknowledgement to wait for: give the event loop time to put the
+        // last fragments on the wire before the participant goes.
+        std::thread::sleep(Duration::from_millis(500));
+        write!(out, "played {sent} clouds on {}", opts.points_topic)?;
+        match imu_w {
+            Some((_, topic)) => writeln!(out, ", {imu_sent} IMU samples on {topic}")?,
+            None => writeln!(out)?,
+        }
+        Ok(sent)
     }
-    // Let the event loop put the last fragments on the wire before the participant goes.
-    std::thread::sleep(Duration::from_millis(500));
-    write!(out, "played {sent} clouds on {}", opts.points_topic)?;
-    match &imu_w {
-        Some((_, topic)) => writeln!(out, ", {imu_sent} IMU samples on {topic}")?,
-        None => writeln!(out)?,
-    }
-    Ok(sent)
 }
 
 /// Waits until odometry stamped `stamp` comes on `r` (older messages are passed over), `stop`

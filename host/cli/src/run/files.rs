@@ -1,6 +1,8 @@
 //! What `run` writes: `poses_kitti.txt`, `poses_tum.txt`, `frames.csv` (one typed row per
 //! frame, one 0/1 column per status flag), `summary.json`, `config.toml`, `trajectory.png` and
-//! `diagnostics.png`, each atomically (see [`kiss_odom_io::write`]).
+//! `diagnostics.png`, each atomically (see [`kiss_odom_io::write`]); `summary.json`, last,
+//! records the digest of each of the others, by which a later run knows them for its own
+//! ([`kiss_odom_io::write::outputs`]).
 
 use super::options::RunArgs;
 use super::record::{FlagColumns, FrameRow, PacketTotals, Record, RowKind};
@@ -9,6 +11,7 @@ use anyhow::Result;
 use kiss_odom_drive::settings::Settings;
 use kiss_odom_drive::Driver;
 use kiss_odom_io as io;
+use kiss_odom_io::write::outputs::{Digests, Outputs};
 use nalgebra::Isometry3;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -96,6 +99,9 @@ pub struct Summary {
     pub input: serde_json::Value,
     /// Metrics against ground truth, when it exists.
     pub metrics: Option<serde_json::Value>,
+    /// The other files this run wrote in the output folder and the SHA-256 of each: what a
+    /// later command replaces as an earlier one's.
+    pub outputs: Digests,
 }
 
 /// `summary.json`'s `state`: see [`Summary::state`].
@@ -174,7 +180,7 @@ impl Run<'_> {
     /// others from being tried: `summary.json`, last, then says which failed in `stop_reason`
     /// (if nothing else stopped the run), and the first such error is returned.
     pub fn write(&self) -> Result<Summary> {
-        let dir = &self.args.run.out;
+        let mut out = Outputs::new(&self.args.run.out);
         let o = self.record;
         let mut failed: Option<anyhow::Error> = None;
         let mut attempt = |r: Result<()>| {
@@ -185,20 +191,17 @@ impl Run<'_> {
         attempt(
             self.settings
                 .to_toml()
-                .and_then(|t| kiss_odom_io::write::write(&dir.join("config.toml"), t.as_bytes())),
+                .and_then(|t| out.write("config.toml", t.as_bytes())),
         );
         if !o.rows.is_empty() {
-            attempt(kiss_odom_io::write::write_with(
-                &dir.join("frames.csv"),
-                |w| {
-                    let mut csv = csv::Writer::from_writer(w);
-                    for row in &o.rows {
-                        csv.serialize((row, FlagColumns(row.status)))?;
-                    }
-                    csv.flush()?;
-                    Ok(())
-                },
-            ));
+            attempt(out.write_with("frames.csv", |w| {
+                let mut csv = csv::Writer::from_writer(w);
+                for row in &o.rows {
+                    csv.serialize((row, FlagColumns(row.status)))?;
+                }
+                csv.flush()?;
+                Ok(())
+            }));
         }
         let rows = self.info.ground_truth_for(&o.indices);
         let metrics = match self.metrics(&rows) {
@@ -209,7 +212,7 @@ impl Run<'_> {
             }
         };
         if o.registered() > 0 {
-            attempt(self.write_poses());
+            attempt(self.write_poses(&mut out));
             let title = self
                 .args
                 .path
@@ -218,15 +221,13 @@ impl Run<'_> {
             let gt = self.in_estimate_frame(&rows);
             let paired: Vec<Isometry3<f64>> = gt.iter().flatten().copied().collect();
             let paired = (!paired.is_empty()).then_some(paired.as_slice());
-            attempt(kiss_odom_io::write::write_via_path(
-                &dir.join("trajectory.png"),
-                |p| crate::plot::trajectory_png(p, &o.poses, paired, &title),
-            ));
+            attempt(out.write_via_path("trajectory.png", |p| {
+                crate::plot::trajectory_png(p, &o.poses, paired, &title)
+            }));
             let diagnostics = self.diagnostics(&gt);
-            attempt(kiss_odom_io::write::write_via_path(
-                &dir.join("diagnostics.png"),
-                |p| crate::plot::diagnostics_png(p, &diagnostics, &title),
-            ));
+            attempt(out.write_via_path("diagnostics.png", |p| {
+                crate::plot::diagnostics_png(p, &diagnostics, &title)
+            }));
         }
         let mut summary = self.summary(metrics.filter(|_| o.registered() > 0));
         if let (None, Some(e)) = (&summary.stop_reason, &failed) {
@@ -235,19 +236,18 @@ impl Run<'_> {
                 kiss_odom_drive::one_line(e)
             ));
         }
-        let json = serde_json::to_string_pretty(&summary)? + "\n";
-        let written = kiss_odom_io::write::write(&dir.join("summary.json"), json.as_bytes());
+        summary.outputs = out.record().clone();
+        let written = out.write_summary(&summary);
         match failed {
             Some(e) => Err(e),
             None => written.map(|()| summary),
         }
     }
 
-    fn write_poses(&self) -> Result<()> {
-        let dir = &self.args.run.out;
+    fn write_poses(&self, out: &mut Outputs) -> Result<()> {
         let o = self.record;
         let kitti = io::poses::format_kitti(&o.poses);
-        kiss_odom_io::write::write(&dir.join("poses_kitti.txt"), kitti.as_bytes())?;
+        out.write("poses_kitti.txt", kitti.as_bytes())?;
         // TUM needs a time per pose: the frames' own if every frame has one, else the frame
         // number for all (as the reference does without times), never a mix.
         let seconds = self.tum_seconds();
@@ -266,7 +266,7 @@ impl Run<'_> {
             self.pose_instant(),
             io::poses::format_tum(&timed)
         );
-        kiss_odom_io::write::write(&dir.join("poses_tum.txt"), tum.as_bytes())
+        out.write("poses_tum.txt", tum.as_bytes())
     }
 
     /// The instant each pose refers to, for the TUM file's header.
@@ -428,6 +428,7 @@ impl Run<'_> {
                 "tum_times": if self.tum_seconds() { "seconds" } else { "frame numbers" },
             }),
             metrics,
+            outputs: Digests::new(),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! `kiss-odom run`'s options, and the instant within a sweep a pose refers to.
 
+use super::viz::ViewArgs;
 use crate::args::CommonArgs;
-use crate::viz::ViewArgs;
 use kiss_odom_drive::SweepMotions;
 use nalgebra::Isometry3;
 use std::path::PathBuf;
@@ -27,7 +27,8 @@ pub struct RunArgs {
 /// What `run` and `live` share: where the outputs go and how the run goes.
 #[derive(Debug, Clone, clap::Args)]
 pub struct RunOptions {
-    /// Output folder (created if missing); the outputs of an earlier run there are replaced.
+    /// Output folder (created if missing); the outputs of an earlier run there are replaced,
+    /// and a file of an output's name that no earlier run wrote refuses the run.
     #[arg(long)]
     pub out: PathBuf,
     /// Treat a skipped frame, ignored timestamps or a dataset warning as an error (exit 1).

@@ -216,10 +216,12 @@ impl FrameRow {
         self
     }
 
-    /// Adds packets refused or lost after the last sweep (a source's trailer) to this row's
-    /// packet columns, so that the totals count them.
+    /// Adds packets refused or lost after the last sweep, and those of an open sweep at the
+    /// end that was not registered (a source's trailer), to this row's packet columns, so that
+    /// the totals count them.
     pub fn add_packets(&mut self, s: &SweepStats) {
         let add = |c: &mut Option<u32>, n: u32| *c = Some(c.unwrap_or(0).saturating_add(n));
+        add(&mut self.packets, s.packets);
         add(&mut self.packets_lost, s.lost_packets);
         add(&mut self.packets_out_of_order, s.out_of_order);
         add(&mut self.packets_bad, s.bad_packets);

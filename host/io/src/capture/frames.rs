@@ -12,11 +12,17 @@
 //! otherwise in the [`Trailer`]; packets refused after the last sweep are added to the last
 //! frame's statistics or the trailer's. A capture that ends in damage ends the stream with
 //! its error.
+//!
+//! A sweep the recording ends in ([`SweepEnd::Finished`]) with fewer packets than the whole
+//! sweeps before it (under 98 % of the most they held) is not a frame: registering part of a turn (or of a Livox frame's period)
+//! gives a pose that is off, so it is dropped, with a warning giving its packets and a whole
+//! sweep's; its packets go in the trailer's, so the totals still count them. A recording of
+//! one sweep, or one whose sweeps never ended whole, keeps it.
 
 use super::sweeps::{self, PcapSweeps};
 use crate::dataset::{Dataset, DatasetInfo, Format, FrameSource, Item, OpenOptions, Trailer};
 use anyhow::Result;
-use kiss_odom_sensors::{SweepStats, RESYNC_PACKETS};
+use kiss_odom_sensors::{SweepEnd, SweepStats, RESYNC_PACKETS};
 use std::path::Path;
 
 /// Sweeps of a decoder as frames.
@@ -27,6 +33,10 @@ pub struct SweepFrames {
     scan_points: usize,
     /// Whether the end-of-stream report has been handed on.
     reported: bool,
+    /// The most packets a sweep that ended whole held so far.
+    whole_packets: u32,
+    /// The warning and refusals of an open sweep at the end that was dropped.
+    dropped: Option<(String, SweepStats)>,
 }
 
 impl SweepFrames {
@@ -39,6 +49,8 @@ impl SweepFrames {
             next: 0,
             scan_points,
             reported: false,
+            whole_packets: 0,
+            dropped: None,
         }
     }
 
@@ -46,13 +58,19 @@ impl SweepFrames {
     fn end_report(&mut self) -> Trailer {
         self.reported = true;
         let file = &self.name;
-        let after = self.sweeps.after_last_sweep();
+        let mut after = self.sweeps.after_last_sweep();
+        let mut warnings: Vec<String> = (self.sweeps.report().warnings().iter())
+            .map(|w| format!("{file}: {w}"))
+            .collect();
+        let dropped = self.dropped.take().map(|(w, stats)| {
+            warnings.insert(0, w);
+            add_refusals(&mut after, &stats);
+            after.packets = after.packets.saturating_add(stats.packets);
+        });
         let refused = after.lost_packets + after.out_of_order + after.bad_packets;
         Trailer {
-            warnings: (self.sweeps.report().warnings().iter())
-                .map(|w| format!("{file}: {w}"))
-                .collect(),
-            packets: (refused + after.other_sensor > 0).then_some(after),
+            warnings,
+            packets: (refused + after.other_sensor > 0 || dropped.is_some()).then_some(after),
         }
     }
 }
@@ -90,6 +108,24 @@ impl FrameSource for SweepFrames {
         let Some(sweep) = self.sweeps.next().transpose()? else {
             return Ok(None);
         };
+        let stats = sweep.stats;
+        if matches!(stats.end, SweepEnd::Complete | SweepEnd::NextFrame) {
+            self.whole_packets = self.whole_packets.max(stats.packets);
+        }
+        // Whole sweeps differ by a packet or two where the turn falls between packets.
+        let short = u64::from(stats.packets) * 50 < u64::from(self.whole_packets) * 49;
+        if stats.end == SweepEnd::Finished && short {
+            self.dropped = Some((
+                format!(
+                    "{}#{}: the recording ends in this sweep, {} packet(s) into it (a whole one \
+                     had {}): not registered",
+                    self.name, self.next, stats.packets, self.whole_packets
+                ),
+                stats,
+            ));
+            // The open sweep is the last: the rest of the report goes in the trailer.
+            return Ok(None);
+        }
         let index = self.next;
         self.next += 1;
         let name = format!("{}#{index}", self.name);

@@ -20,18 +20,18 @@
 //! keeps at most the points it is asked to ([`PcapSweeps::limit_points`]: the core's scan
 //! capacity), however long the sensor takes to end it.
 
+use super::identify;
 use super::pcap::{self, Capture, Datagram, Record};
-use super::{hesai_at128, hesai_calib, ouster_meta, robosense_calib, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
 use crate::imu::ImuSample;
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, Result};
 use kiss_odom_sensors::robosense;
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
     hesai, livox, ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart,
     SweepStats,
 };
-use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::collections::{BTreeMap, VecDeque};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 
@@ -120,7 +120,8 @@ pub struct PcapReport {
     pub imu_packets: u64,
     /// Datagrams on other ports (skipped), by port.
     pub other_ports: BTreeMap<u16, u64>,
-    /// Of those, datagrams of the sensor's data-packet length, by port: another sensor there?
+    /// Of those, datagrams of the sensor's data-packet length or of a sensor family's data
+    /// packets ([`identify::family_of`]), by port: another sensor there?
     pub data_elsewhere: BTreeMap<u16, u64>,
     /// What else the capture, the metadata and the packets' timing showed (frames not read,
     /// fragments lost, a model the timing contradicts), one line each; complete at the end.
@@ -151,8 +152,8 @@ impl PcapReport {
         if self.decoded > 0 {
             for (port, n) in &self.data_elsewhere {
                 w.push(format!(
-                    "{n} packet(s) of the sensor's data length on port {port} not decoded (a \
-                     second sensor? --port {port} decodes them instead)"
+                    "{n} sensor data packet(s) on port {port} not decoded (a second sensor? \
+                     --port {port} decodes them instead)"
                 ));
             }
         }
@@ -161,7 +162,7 @@ impl PcapReport {
     }
 }
 
-enum Decoder {
+pub(super) enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
     Robosense(Box<robosense::Decoder>),
     RobosenseM1(Box<robosense::m1::Decoder>),
@@ -324,95 +325,18 @@ pub struct PcapSweeps {
     capture: Box<dyn DatagramSource>,
     decoder: Decoder,
     sink: Collect,
-    meta_path: Option<PathBuf>,
+    pub(super) meta_path: Option<PathBuf>,
     /// Whether `--sensor` named the Velodyne model.
     model_given: bool,
     /// The Ouster IMU port.
-    imu_port: Option<u16>,
+    pub(super) imu_port: Option<u16>,
     report: PcapReport,
     /// Ouster packets contradicting the metadata before the first sweep: the stream's end.
     fatal: Option<anyhow::Error>,
     finished: bool,
 }
 
-/// The first datagrams of a capture (up to any damage, which the decoding pass reports):
-/// whole ones by port and length, the ports of damaged ones, and what the capture could not
-/// hand on. A pcap is surveyed from its file; another recording of packets (a bag) hands its
-/// own to [`decode_beside`].
-#[derive(Clone, Debug, Default)]
-pub struct Survey {
-    seen: BTreeMap<(u16, usize), u64>,
-    /// Hesai models of the packets on port 2368, by their first bytes
-    /// ([`hesai::identify`]).
-    hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
-    damaged: BTreeSet<u16>,
-    notes: Vec<String>,
-    records: usize,
-}
-
-impl Survey {
-    /// How many records a survey looks at.
-    pub const RECORDS: usize = 2000;
-
-    /// Counts one record; false once the survey has seen enough.
-    pub fn add(&mut self, record: &Record) -> bool {
-        match record {
-            Record::Datagram(d) => {
-                *self.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
-                if let (VELODYNE_PORT, Some(model)) = (d.port, hesai::identify(&d.payload)) {
-                    self.hesai.entry(model.name()).or_insert((model, 0)).1 += 1;
-                }
-            }
-            Record::Damaged { port, .. } => {
-                self.damaged.insert(*port);
-            }
-        }
-        self.records += 1;
-        self.records < Self::RECORDS
-    }
-}
-
-fn survey(path: &Path) -> Result<Survey> {
-    let mut capture = pcap::open(path)?;
-    let mut s = Survey::default();
-    while let Ok(Some(record)) = capture.next_record() {
-        if !s.add(&record) {
-            break;
-        }
-    }
-    s.notes = capture.counts().warnings();
-    Ok(s)
-}
-
-/// What a recording other than a pcap knows beside its packets (a bag of packets).
-#[derive(Default)]
-pub struct Beside {
-    /// Its first datagrams, for telling the sensor (a pcap is surveyed from its file).
-    pub survey: Option<Survey>,
-    /// The Ouster metadata it carries, and where (`--meta` wins over it).
-    pub ouster_meta: Option<(ouster_meta::OusterMeta, String)>,
-    /// A device-information packet it carries (a Robosense DIFOP: the lasers' angles), and
-    /// where (`--calibration` wins over it).
-    pub device: Option<(Vec<u8>, String)>,
-}
-
-fn describe(s: &Survey) -> String {
-    let mut text = if s.seen.is_empty() {
-        "no UDP packets at all".to_string()
-    } else {
-        let list: Vec<_> = s
-            .seen
-            .iter()
-            .map(|((p, l), n)| format!("{n} x {l} bytes on port {p}"))
-            .collect();
-        format!("UDP seen: {}", list.join(", "))
-    };
-    for n in &s.notes {
-        text.push_str("; ");
-        text.push_str(n);
-    }
-    text
-}
+pub use super::choose::{decode, decode_beside, Beside, Survey};
 
 /// Opens a recording (see the module doc).
 pub fn open(path: &Path, opts: &SensorOptions) -> Result<PcapSweeps> {
@@ -433,374 +357,7 @@ fn sensor_flag(m: Model) -> &'static str {
     }
 }
 
-/// Decodes the datagrams of `capture`, named `path` in messages; without `opts.port` a
-/// Velodyne recording at `path` is looked at first, for an error that says what it holds.
-pub fn decode(
-    path: &Path,
-    capture: Box<dyn DatagramSource>,
-    opts: &SensorOptions,
-) -> Result<PcapSweeps> {
-    decode_beside(path, capture, opts, Beside::default())
-}
-
-/// [`decode`], for a recording that knows what `beside` says (a bag of packets).
-pub fn decode_beside(
-    path: &Path,
-    capture: Box<dyn DatagramSource>,
-    opts: &SensorOptions,
-    beside: Beside,
-) -> Result<PcapSweeps> {
-    let Beside {
-        survey: surveyed,
-        ouster_meta: carried_meta,
-        device,
-    } = beside;
-    let ouster = opts.meta.is_some() || carried_meta.is_some() || opts.sensor == SensorKind::Ouster;
-    if ouster {
-        let (meta, meta_path) = match (&opts.meta, carried_meta) {
-            (Some(file), _) => (ouster_meta::read(file)?, file.display().to_string()),
-            (None, Some(carried)) => carried,
-            (None, None) => bail!(
-                "{}: an Ouster recording needs the sensor's metadata JSON (--meta)",
-                path.display()
-            ),
-        };
-        let dec = ouster::Decoder::new(&meta.info).map_err(|e| anyhow!("{meta_path}: {e}"))?;
-        let port = opts.port.or(meta.udp_port_lidar).unwrap_or(OUSTER_PORT);
-        let name = format!(
-            "Ouster {} {} ({})",
-            meta.prod_line, meta.serial, meta.firmware
-        );
-        let notes = meta
-            .warnings
-            .iter()
-            .map(|w| format!("{meta_path}: {w}"))
-            .collect();
-        let mut s = sweeps(
-            path,
-            capture,
-            Decoder::Ouster(Box::new(dec)),
-            opts,
-            (port, name, notes),
-        );
-        s.imu_port = Some(meta.udp_port_imu.unwrap_or(OUSTER_IMU_PORT));
-        s.meta_path = Some(PathBuf::from(meta_path));
-        return Ok(s);
-    }
-    let (decoder, port, sensor) = {
-        let model = match opts.sensor {
-            SensorKind::Vlp16 => Some(Model::Vlp16),
-            SensorKind::PuckHiRes => Some(Model::PuckHiRes),
-            SensorKind::Vlp32c => Some(Model::Vlp32c),
-            SensorKind::Hdl32e => Some(Model::Hdl32e),
-            SensorKind::Vlp32ab => Some(Model::Vlp32ab),
-            SensorKind::Hdl64eS2 => Some(Model::Hdl64eS2),
-            SensorKind::Hdl64eS3 => Some(Model::Hdl64eS3),
-            SensorKind::Vls128 => Some(Model::Vls128),
-            _ => None,
-        };
-        if let Some(model) = livox_model(opts.sensor) {
-            return livox_decoder(path, capture, opts, model, opts.port);
-        }
-        if let Some(model) = robosense_model(opts.sensor) {
-            return robosense_decoder(path, capture, opts, (model, device));
-        }
-        if opts.sensor == SensorKind::M1 {
-            let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
-            let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
-            let name = "Robosense RS-M1".to_string();
-            return Ok(sweeps(path, capture, dec, opts, (port, name, Vec::new())));
-        }
-        let port = opts.port.unwrap_or(VELODYNE_PORT);
-        let mut hesai = hesai_model(opts.sensor);
-        if opts.port.is_none() && hesai.is_none() {
-            let s = match surveyed {
-                Some(s) => s,
-                None => survey(path)?,
-            };
-            let data = s
-                .seen
-                .keys()
-                .any(|(_, len)| *len == velodyne::wire::field::LEN)
-                || s.damaged.contains(&port);
-            let auto = !data && opts.sensor == SensorKind::Auto;
-            hesai = if auto { hesai_in(&s) } else { None };
-            if auto && hesai.is_none() && s.seen.keys().any(is_livox) {
-                return livox_decoder(path, capture, opts, livox::Model::Horizon, None);
-            }
-            if auto && hesai.is_none() && s.seen.keys().any(is_livox2) {
-                return livox_decoder(path, capture, opts, livox::Model::Mid360, None);
-            }
-            if !data && hesai.is_none() {
-                if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
-                    bail!(
-                        "{}: packets on port {OUSTER_PORT} look like an Ouster's: give its \
-                         metadata JSON (--meta)",
-                        path.display()
-                    );
-                }
-                bail!(
-                    "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368) or Livox \
-                     (ports 56001, 56301) data packets; {}",
-                    path.display(),
-                    describe(&s)
-                );
-            }
-        }
-        if let Some(model) = hesai {
-            return hesai_decoder(path, capture, opts, model, port);
-        }
-        let calibration = opts
-            .calibration
-            .as_deref()
-            .map(velodyne_calib::read)
-            .transpose()?;
-        if let Some(m) = model.filter(|m| m.needs_calibration() && calibration.is_none()) {
-            bail!(
-                "{}: a Velodyne {} needs the unit's calibration file (--calibration: Velodyne's \
-                 XML or the ROS YAML)",
-                path.display(),
-                m.name()
-            );
-        }
-        let config = velodyne::Config {
-            model,
-            calibration,
-            cut_angle_deg: opts.cut_angle_deg,
-        };
-        let dec = velodyne::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        (
-            Decoder::Velodyne(Box::new(dec)),
-            port,
-            "Velodyne".to_string(),
-        )
-    };
-    Ok(sweeps(
-        path,
-        capture,
-        decoder,
-        opts,
-        (port, sensor, Vec::new()),
-    ))
-}
-
-/// The Hesai model most packets on port 2368 come from ([`hesai::identify`]). Protocol 1.4 is
-/// taken for an OT128: the Pandar128 sends the same packets and differs in firing times only
-/// (`--sensor pandar128`).
-fn hesai_in(s: &Survey) -> Option<hesai::Model> {
-    s.hesai.values().max_by_key(|(_, n)| *n).map(|(m, _)| *m)
-}
-
-/// The Hesai model `--sensor` names, if it names one.
-fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
-    match sensor {
-        SensorKind::Xt32 => Some(hesai::Model::Xt32),
-        SensorKind::Qt128 => Some(hesai::Model::Qt128),
-        SensorKind::Pandar128 => Some(hesai::Model::Pandar128),
-        SensorKind::Ot128 => Some(hesai::Model::Ot128),
-        SensorKind::Xt16 => Some(hesai::Model::Xt16),
-        SensorKind::Xt32m => Some(hesai::Model::Xt32m),
-        SensorKind::Pandar40p => Some(hesai::Model::Pandar40P),
-        SensorKind::Pandar64 => Some(hesai::Model::Pandar64),
-        SensorKind::Qt64 => Some(hesai::Model::PandarQT64),
-        SensorKind::At128 => Some(hesai::Model::At128),
-        _ => None,
-    }
-}
-
-/// Whether packets of this port and length look like Livox SDK 1 point packets.
-fn is_livox(&(port, len): &(u16, usize)) -> bool {
-    port == LIVOX_PORT && (0..6).any(|t| livox::sdk1::packet_len(t) == Some(len))
-}
-
-/// Whether packets of this port and length look like Mid-360 (SDK 2) point packets.
-fn is_livox2(&(port, len): &(u16, usize)) -> bool {
-    port == LIVOX2_PORT
-        && (1..4).any(|t| livox::sdk2::packet_len(t, livox::sdk2::MID360_POINTS) == Some(len))
-}
-
-/// The Livox model `--sensor` names, if it names one.
-fn livox_model(sensor: SensorKind) -> Option<livox::Model> {
-    match sensor {
-        SensorKind::Livox => Some(livox::Model::Horizon),
-        SensorKind::Mid40 => Some(livox::Model::Mid40),
-        SensorKind::Mid360 => Some(livox::Model::Mid360),
-        _ => None,
-    }
-}
-
-/// The Livox decoder for `model`, on `port` or the model's default.
-fn livox_decoder(
-    path: &Path,
-    capture: Box<dyn DatagramSource>,
-    opts: &SensorOptions,
-    model: livox::Model,
-    port: Option<u16>,
-) -> Result<PcapSweeps> {
-    let (name, default_port) = match model {
-        livox::Model::Mid40 => ("Livox Mid-40/70", LIVOX_PORT),
-        livox::Model::Horizon => ("Livox Horizon/Tele-15/Avia", LIVOX_PORT),
-        livox::Model::Mid360 => ("Livox Mid-360/HAP", LIVOX2_PORT),
-    };
-    let port = port.unwrap_or(default_port);
-    let mut config = livox::Config {
-        model,
-        ..livox::Config::default()
-    };
-    if let Some(p) = opts.frame_period_s {
-        if !(p.is_finite() && p > 0.0) {
-            bail!("--frame-period {p}: give a positive number of seconds");
-        }
-        config.frame_period_ns = (p * 1e9).round() as u64;
-    }
-    let dec = livox::Decoder::new(config).map_err(|e| anyhow!("--frame-period: {e}"))?;
-    let decoder = Decoder::Livox(Box::new(dec));
-    Ok(sweeps(
-        path,
-        capture,
-        decoder,
-        opts,
-        (port, name.to_string(), Vec::new()),
-    ))
-}
-
-/// The Hesai decoder for `model`, with the angle correction file if one is given (the
-/// 128-channel models need one).
-/// The Robosense model `--sensor` names.
-fn robosense_model(kind: SensorKind) -> Option<robosense::Model> {
-    Some(match kind {
-        SensorKind::Rs16 => robosense::Model::Rs16,
-        SensorKind::Rs32 => robosense::Model::Rs32,
-        SensorKind::Bpearl => robosense::Model::Bpearl,
-        SensorKind::Helios => robosense::Model::Helios,
-        SensorKind::Helios16p => robosense::Model::Helios16p,
-        SensorKind::Ruby => robosense::Model::Ruby,
-        _ => return None,
-    })
-}
-
-/// A Robosense recording: MSOP packets on port 6699, the angles from `--calibration`
-/// (`angle.csv`) or the recording's first DIFOP packet; without either, exit with both named.
-fn robosense_decoder(
-    path: &Path,
-    capture: Box<dyn DatagramSource>,
-    opts: &SensorOptions,
-    (model, device): (robosense::Model, Option<(Vec<u8>, String)>),
-) -> Result<PcapSweeps> {
-    // A bag carries the DIFOP packet on a topic of its own; a pcap is searched for it.
-    let carried =
-        device.map(
-            |(payload, from)| match robosense_calib::from_payload(&payload, model) {
-                Some(angles) => angles.map_err(|e| anyhow!("{from}: {e}")),
-                None => Err(anyhow!("{from}: not a DIFOP packet")),
-            },
-        );
-    let calibration = match (opts.calibration.as_deref(), carried) {
-        (Some(csv), _) => robosense_calib::read(csv, model)?,
-        (None, Some(angles)) => angles?,
-        (None, None) => match path
-            .is_file()
-            .then(|| robosense_calib::from_capture(path, model))
-            .transpose()?
-            .flatten()
-        {
-            Some(c) => c,
-            None => bail!(
-                "{}: a {} needs its laser angles: the recording has no DIFOP packet (port \
-                 {}); give the unit's angle.csv with --calibration",
-                path.display(),
-                model.name(),
-                robosense_calib::DIFOP_PORT
-            ),
-        },
-    };
-    let config = robosense::Config {
-        model,
-        calibration: Some(calibration),
-        cut_angle_deg: opts.cut_angle_deg,
-    };
-    let dec = robosense::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
-    Ok(sweeps(
-        path,
-        capture,
-        Decoder::Robosense(Box::new(dec)),
-        opts,
-        (port, format!("Robosense {}", model.name()), Vec::new()),
-    ))
-}
-
-fn hesai_decoder(
-    path: &Path,
-    capture: Box<dyn DatagramSource>,
-    opts: &SensorOptions,
-    model: hesai::Model,
-    port: u16,
-) -> Result<PcapSweeps> {
-    if model == hesai::Model::At128 {
-        return at128_decoder(path, capture, opts, port);
-    }
-    let calibration = match opts.calibration.as_deref() {
-        Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
-        None if model.nominal_calibration().is_none() => bail!(
-            "{}: packets of a {}: give its angle correction file (the CSV Hesai ships with \
-             the sensor) with --calibration",
-            path.display(),
-            model.name()
-        ),
-        None => None,
-    };
-    let config = hesai::Config {
-        model,
-        calibration,
-        cut_angle_deg: opts.cut_angle_deg,
-    };
-    let dec = hesai::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    let sensor = model.name().to_string();
-    let decoder = Decoder::Hesai(Box::new(dec));
-    Ok(sweeps(
-        path,
-        capture,
-        decoder,
-        opts,
-        (port, sensor, Vec::new()),
-    ))
-}
-
-/// The PandarAT128 decoder with its angle correction file (`.dat`, [`hesai_at128`]).
-fn at128_decoder(
-    path: &Path,
-    capture: Box<dyn DatagramSource>,
-    opts: &SensorOptions,
-    port: u16,
-) -> Result<PcapSweeps> {
-    let name = hesai::Model::At128.name();
-    let Some(dat) = opts.calibration.as_deref() else {
-        bail!(
-            "{}: packets of a {name}: give its angle correction file (the .dat the sensor \
-             hands out and Hesai ships) with --calibration",
-            path.display()
-        );
-    };
-    if opts.cut_angle_deg.is_some() {
-        bail!(
-            "{}: packets of a {name}: its sweeps are its mirror frames, so --cut-angle does not \
-             apply",
-            path.display()
-        );
-    }
-    let correction = hesai_at128::read(dat)?;
-    let dec = hesai::Decoder::at128(&correction).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-    Ok(sweeps(
-        path,
-        capture,
-        Decoder::HesaiAt128(Box::new(dec)),
-        opts,
-        (port, name.to_string(), Vec::new()),
-    ))
-}
-
-fn sweeps(
+pub(super) fn sweeps(
     path: &Path,
     capture: Box<dyn DatagramSource>,
     decoder: Decoder,
@@ -944,7 +501,12 @@ impl PcapSweeps {
         let r = &mut self.report;
         if port != r.port {
             *r.other_ports.entry(port).or_insert(0) += 1;
-            if matches!(&record, Record::Datagram(d) if d.payload.len() == data_len) {
+            // Another sensor's data packets: of this one's length, or of a family whose
+            // packets name it (a second Livox unit sends to another port, in other lengths).
+            let data = |d: &Datagram| {
+                d.payload.len() == data_len || identify::family_of(&d.payload).is_some()
+            };
+            if matches!(&record, Record::Datagram(d) if data(d)) {
                 *r.data_elsewhere.entry(port).or_insert(0) += 1;
             }
             return;

@@ -116,7 +116,7 @@ fn fixed_capacities_and_a_reached_limit_keep_the_boards_rule_and_say_so() {
     let frames = drive(8, 10.0);
     let s = settings_at(10.0, Scalar::F64, Storage::Exact);
     let sized = s.capacities().unwrap();
-    // The same sizes given explicitly: fixed, so the map evicts, as the old default did.
+    // The same sizes given explicitly: fixed, so the map evicts (the board's rule).
     let mut fixed = s.clone();
     fixed.capacities = sized.into();
     assert_eq!(fixed.memory_limit(), None);

@@ -12,13 +12,14 @@ pub mod recording;
 
 pub use options::ViewArgs;
 
-use crate::run::observe::Observer;
+use super::observe::Observer;
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 
 /// Checks `args` without creating anything: the file types, the cloud's voxel, what this
-/// build can record, and that no file named is one of the run's `inputs` (the file at an
-/// output's name is removed before the run starts, so this comes first).
+/// build can record, that no two options name one file (one would replace the other) and
+/// that no file named is one of the run's `inputs` (the file at an output's name is removed
+/// before the run starts, so this comes first).
 pub fn check(args: &ViewArgs, inputs: &[&Path]) -> Result<()> {
     if let Some(path) = &args.save_map {
         export::MapExport::new(path)?;
@@ -37,6 +38,11 @@ pub fn check(args: &ViewArgs, inputs: &[&Path]) -> Result<()> {
             bail!("{}: give a .rrd file name", path.display());
         }
     }
+    kiss_odom_io::write::refuse_shared(&[
+        ("--save-map", args.save_map.as_deref()),
+        ("--save-cloud", args.save_cloud.as_deref()),
+        ("--rerun", args.rerun.as_deref()),
+    ])?;
     for path in files(args) {
         kiss_odom_io::write::refuse_input(path, inputs)?;
     }
