@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# The `accurate` preset against kiss-icp 1.3.0 (our default mode: its poses, bit for bit),
-# GenZ-ICP 0.3.2 and MAD-ICP 0.0.10 on the same frames (BENCHMARKS.md, "The accurate preset").
+# Reproduces BENCHMARKS.md section 15, "Against kiss-icp, GenZ-ICP and MAD-ICP": the
+# `accurate` preset against kiss-icp 1.3.0 (our default mode: its poses, bit for bit), GenZ-ICP
+# 0.3.2 and MAD-ICP 0.0.10 on the same frames. Also how the preset's candidates were compared
+# (ACCURATE_ARGS="--config CANDIDATE.toml" on the tuning seeds "7 8"; that section's "Tried and
+# dropped").
 #
-#   bench/accurate.sh [FRAMES] [SEEDS]     (default 500 frames, seeds "1 2 3")
+#   nice bash bench/accurate.sh [FRAMES] [SEEDS]     (default 500 frames, seeds "1 2 3"; hours)
 #
 # PROFILES picks the runs (default "urban fast corridor tunnel field vlp16 mid360 kitti"):
 # `vlp16` and `mid360` are the urban scene seen by a generated VLP-16 and Livox Mid-360
@@ -13,6 +16,7 @@
 #
 # The preset also runs in f32 (`accuratef32`), for its error against f64's (F32=0: not).
 #
+# The drives are generated into $GEN (default target/bench/accurate; kept for reruns).
 # Writes $OUT/results.jsonl (one line per run and system) and prints the Markdown table
 # (bench/accurate_table.py). Every system runs on one thread; run it alone at `nice` on a
 # shared machine. The peers' venvs are made here (target/genzvenv, target/madvenv; MAD-ICP is
@@ -23,7 +27,7 @@ cd "$(dirname "$0")/.."
 FRAMES=${1:-500}
 SEEDS=${2:-"1 2 3"}
 PROFILES=${PROFILES:-"urban fast corridor tunnel field vlp16 mid360 kitti"}
-GEN=${GEN:-/work/data-gen/accurate}
+GEN=${GEN:-target/bench/accurate}
 OUT=${OUT:-$GEN/results-$FRAMES}
 read -r -a extra <<< "${ACCURATE_ARGS:-}"
 . bench/peers.sh

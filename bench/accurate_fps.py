@@ -1,7 +1,8 @@
-"""Frames per second of the `accurate` preset and of the default mode against kiss-icp 1.3.0,
-one thread each, same frames, in the same run (BENCHMARKS.md, "The accurate preset").
+"""Reproduces BENCHMARKS.md section 15, "Speed against kiss-icp": frames per second of the
+`accurate` preset and of the default mode against kiss-icp 1.3.0, one thread each, same frames,
+in the same run. bench/accurate_fps.sh makes the data and the venv and runs it; by hand:
 
-    target/pyvenv/bin/python bench/accurate_fps.py [--repeats N] DATA...
+    BIN=target/release/kiss-odom target/pyvenv/bin/python bench/accurate_fps.py [--repeats N] DATA...
 
 DATA is a KITTI `sequences/NN` folder or a `kiss-odom simulate` folder (its per-point times
 deskew, as they do for kiss-odom). kiss-icp runs in this process on frames read beforehand

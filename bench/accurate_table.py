@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The Markdown table of bench/accurate.sh's results (BENCHMARKS.md, "The accurate preset").
+"""Prints BENCHMARKS.md section 15's table "Against kiss-icp, GenZ-ICP and MAD-ICP" from
+bench/accurate.sh's results.
 
     python3 bench/accurate_table.py RESULTS.jsonl
 

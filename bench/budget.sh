@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# what a per-frame work budget costs and buys. For each budget: accuracy on kitti-mini
+# Reproduces BENCHMARKS.md section 10, "The work budget", both tables: what a per-frame work
+# budget costs and buys. For each budget: accuracy on kitti-mini
 # and on generated urban/fast drives (host, f32 + quantized map + SMALL capacities at 50 m, the
 # microcontroller configuration; the same work units as on the target), the worst frame's work,
 # and the Cortex-M7's instruction counts per frame under QEMU on the embedded kitti-mini 05
@@ -7,19 +8,20 @@
 #
 #   bench/budget.sh [budget...]        (default: none 400000 250000 150000 100000)
 #
-# DATA (default /work/data or bench/data) holds urban-7-1000 and fast-5-500 from
-# `kiss-odom simulate --frames N --seed S --profile P`; made here if missing.
+# DATA (default target/bench/budget) holds urban-7-1000 and fast-5-500 from
+# `kiss-odom simulate --frames N --seed S --profile P`; made here if missing. The Cortex-M7 part
+# needs QEMU and the Rust target (embedded/README.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 budgets=("$@"); [ ${#budgets[@]} -gt 0 ] || budgets=(none 400000 250000 150000 100000)
 cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
-DATA=${DATA:-bench/data}; mkdir -p "$DATA"
+DATA=${DATA:-target/bench/budget}; mkdir -p "$DATA"
 for spec in "urban 7 1000" "fast 5 500"; do
   set -- $spec; d="$DATA/$1-$2-$3"
   [ -f "$d/sim.toml" ] || $B simulate --out "$d" --frames "$3" --seed "$2" --profile "$1" >/dev/null
 done
-out=target/budget; mkdir -p "$out"
+out=$DATA/runs; mkdir -p "$out"
 runs=(../shared/data/kitti-mini/sequences/01 ../shared/data/kitti-mini/sequences/02
       ../shared/data/kitti-mini/sequences/04 ../shared/data/kitti-mini/sequences/05
       "$DATA/urban-7-1000" "$DATA/fast-5-500")

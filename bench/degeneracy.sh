@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Degenerate scenes: kiss-odom reference mode, robust mode and GenZ-ICP 0.3.2 on the
-# same generated runs and on kitti-mini (BENCHMARKS.md, "Degenerate scenes").
+# Reproduces BENCHMARKS.md section 12, "Robust mode against the reference and GenZ-ICP":
+# kiss-odom reference mode, robust mode and GenZ-ICP 0.3.2 on the same generated runs and on
+# kitti-mini.
 #
-#   bench/degeneracy.sh [FRAMES] [SEEDS]     (default 500 frames, seeds "1 2 3")
+#   nice bash bench/degeneracy.sh [FRAMES] [SEEDS]     (default 500 frames, seeds "1 2 3"; about
+#                                                       an hour on 2 shared cores)
 #
 # PROFILES picks the runs (default "corridor plane tunnel field urban fast kitti"; `kitti` is
 # every kitti-mini sequence). GenZ-ICP runs its `corridor` preset on corridor, plane and tunnel,
@@ -11,6 +13,7 @@
 # where GenZ-ICP has its corridor preset: every frame with plane terms, r_max / 200 voxels and
 # the hold prior (--plane-gate 1 --voxel-size 0.5 --prediction-prior 0.01).
 #
+# The drives are generated into $GEN (default target/bench/degeneracy; kept for reruns).
 # Writes $OUT/results.jsonl (one line per run and system, with the estimated over the true
 # distance travelled) and prints the Markdown table
 # (bench/degeneracy_table.py). GenZ-ICP runs from a venv made here (target/genzvenv).
@@ -21,7 +24,7 @@ cd "$(dirname "$0")/.."
 FRAMES=${1:-500}
 SEEDS=${2:-"1 2 3"}
 PROFILES=${PROFILES:-"corridor plane tunnel field urban fast kitti"}
-GEN=${GEN:-/work/data-gen/degeneracy}
+GEN=${GEN:-target/bench/degeneracy}
 OUT=${OUT:-$GEN/results-$FRAMES}
 . bench/peers.sh
 genz_venv

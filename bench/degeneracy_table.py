@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The Markdown table of bench/degeneracy.sh's results (BENCHMARKS.md, "Degenerate scenes").
+"""Prints BENCHMARKS.md section 12's table "Robust mode against the reference and GenZ-ICP"
+from bench/degeneracy.sh's results.
 
     python3 bench/degeneracy_table.py RESULTS.jsonl
 """

@@ -1,4 +1,5 @@
-"""GenZ-LIO 0.1.1 (PyPI genz-lio) on a `kiss-odom simulate --imu-rate` folder, through its
+"""A peer of BENCHMARKS.md section 14, "Against LiDAR only and LiDAR-inertial peers" (run by
+bench/imu_peers.sh): GenZ-LIO 0.1.1 (PyPI genz-lio) on a `kiss-odom simulate --imu-rate` folder, through its
 Python API (`GenZLIO.register_scan`, fed as its own Ouster PCAP reader feeds it): each scan's
 points with their times from its first point, the IMU samples since the last scan's end
 (t, accel, gyro), and the true extrinsic. Its configuration is its packaged `default/ouster.yaml`

@@ -1,5 +1,6 @@
-"""Runs GenZ-ICP (PyPI `genz-icp`) on a folder in kiss-odom's generic layout and writes its
-poses in KITTI format (BENCHMARKS.md, "Degenerate scenes").
+"""A peer of BENCHMARKS.md sections 12 and 15 (run by bench/degeneracy.sh, bench/accurate.sh
+and bench/spread.sh through bench/peers.sh): GenZ-ICP (PyPI `genz-icp` 0.3.2) on a folder in
+kiss-odom's generic layout, its poses written in KITTI format.
 
     genzvenv/bin/python bench/genz_run.py DATA OUT.txt [--preset NAME] [--no-deskew]
 

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# rko_lio 0.4.0, GenZ-LIO 0.1.1 and pelorus 0.0.8 (PyPI) on the drives bench/imu_prior.sh
+# Reproduces the peers' columns of BENCHMARKS.md section 14, "Against LiDAR only and
+# LiDAR-inertial peers": rko_lio 0.4.0, GenZ-LIO 0.1.1 and pelorus 0.0.8 (PyPI) on the drives
+# bench/imu_prior.sh
 # generated (drone-N, handheld-N under DATA), through bench/{rko_lio,genz_lio,pelorus}_run.py,
 # scored like ours with `kiss-odom eval` against the same ground truth. Prints one markdown row
 # per drive and peer: KITTI %, ATE m, RPE rad/frame.
 #
-#   bench/imu_peers.sh      (DATA=target/imu-prior, SEEDS="1 2 3", PEERS="rko_lio genz_lio
+#   bench/imu_peers.sh      (after bench/imu_prior.sh; DATA=target/bench/imu, SEEDS="1 2 3", PEERS="rko_lio genz_lio
 #                            pelorus"; the venv target/liovenv is made here: rko-lio==0.4.0,
 #                            plyfile, genz-lio==0.1.1, pelorus==0.0.8; BIN=a kiss-odom
 #                            to score with)
@@ -12,7 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${BIN:-target/release/kiss-odom}
 [ -n "${BIN:-}" ] || cargo build --release -q -p kiss-odom
-DATA=${DATA:-target/imu-prior}
+DATA=${DATA:-target/bench/imu}
 LIO=${LIO_VENV:-target/liovenv}
 [ -x "$LIO/bin/python" ] || python3 -m venv "$LIO"
 "$LIO/bin/python" -c "import rko_lio, plyfile, genz_lio, pelorus" 2>/dev/null ||

@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# The gyroscope prior (`run --imu auto`) against the LiDAR-only reference on generated
+# Reproduces BENCHMARKS.md section 14, "Against LiDAR only and LiDAR-inertial peers" (our
+# rows) and the variants of its "Tried and dropped: gyroscope prior": the gyroscope prior
+# (`run --imu auto`) against the LiDAR-only reference on generated
 # hand-held and drone runs with an IMU (`simulate --imu-rate 200`: noise, turn-on biases that
 # walk), deskew on, seeds 1-3: drone 500 frames, hand-held 1,000 (KITTI's 100 m segments need
 # that at walking pace). Variants: each point deskewed with the gyroscope's rotation to its time
@@ -7,13 +9,13 @@
 # bias estimate) and the prior without deskewing. Prints a markdown table: KITTI relative
 # translation error, ATE, mean relative rotation error per frame.
 #
-#   bench/imu_prior.sh     (DATA=target/imu-prior, SEEDS="1 2 3", BIN=a kiss-odom to use;
-#                           drives kept for reruns)
+#   bench/imu_prior.sh     (DATA=target/bench/imu, SEEDS="1 2 3", BIN=a kiss-odom to use;
+#                           drives kept for reruns; about 40 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${BIN:-target/release/kiss-odom}
 [ -n "${BIN:-}" ] || cargo build --release -q -p kiss-odom
-DATA=${DATA:-target/imu-prior}; mkdir -p "$DATA"
+DATA=${DATA:-target/bench/imu}; mkdir -p "$DATA"
 rows="$DATA/rows.tsv"; : > "$rows"
 printf '[imu]\nbias_gain = 0.02\n' > "$DATA/g002.toml"
 printf '[imu]\nbias_gain = 0.0\n' > "$DATA/g0.toml"

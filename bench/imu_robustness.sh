@@ -1,17 +1,20 @@
 #!/usr/bin/env bash
-# What the gyroscope prior does where it should not help or is given wrong facts, against the
+# Reproduces BENCHMARKS.md section 14, "Where it should not help, and wrong facts" and "The IMU
+# stopping": what the gyroscope prior does where it should not help or is given wrong facts,
+# against the
 # LiDAR-only run of the same drive: car drives (urban, fast: the constant-velocity model suits
 # them), and a drone flight with the IMU's extrinsic rotated by 5 degrees, its clock shifted by
 # 20 ms, or its samples stopping half-way. Prints markdown rows: KITTI %, ATE m, frames used.
 #
-#   bench/imu_robustness.sh     (DATA=target/imu-prior, SEED=1; drone-SEED from
+#   bench/imu_robustness.sh     (DATA=target/bench/imu, SEED=1; drone-SEED from
 #                                bench/imu_prior.sh is reused when there; STOPS="25", the
 #                                times in s at which the IMU stops, one run each)
+#   for s in 1 2 3; do SEED=$s STOPS="0.5 5 15 25 35" bench/imu_robustness.sh; done
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${BIN:-target/release/kiss-odom}
 [ -n "${BIN:-}" ] || cargo build --release -q -p kiss-odom
-DATA=${DATA:-target/imu-prior}; SEED=${SEED:-1}; mkdir -p "$DATA"
+DATA=${DATA:-target/bench/imu}; SEED=${SEED:-1}; mkdir -p "$DATA"
 row() { # drive, variant, run folder
   python3 - "$1" "$2" "$3" <<'P'
 import csv, json, sys

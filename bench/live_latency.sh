@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# Reproduces the `live` table of BENCHMARKS.md section 7, "From recordings and the network":
 # `kiss-odom live` fed by `kiss-odom replay` over loopback UDP, the OS-1-128
 # recording (../shared/data/sensors/ouster, 3 sweeps) replayed N times at each rate. Prints a
 # markdown table: sweeps whose last packet to pose time was measured (frames.csv
@@ -13,7 +14,7 @@ B=target/release/kiss-odom
 D=../shared/data/sensors/ouster
 PCAP=$D/OS-1-128_v2.3.0_1024x10_lb_n3.pcap META=$D/OS-1-128_v2.3.0_1024x10.json
 N=${N:-10}
-out=target/live-latency; rm -rf "$out"; mkdir -p "$out"
+out=target/bench/live-latency; rm -rf "$out"; mkdir -p "$out"
 $B run "$PCAP" --meta "$META" --out "$out/run" -q >/dev/null
 echo "| rate | replays | sweeps timed | last packet to pose p50 / p99 / max (ms) | core p50 (ms) | packets lost | poses byte-equal to run |"
 echo "|---|---|---|---|---|---|---|"

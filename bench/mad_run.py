@@ -1,6 +1,7 @@
-"""Runs MAD-ICP (PyPI `mad-icp` 0.0.10, built from its sdist) on a folder in kiss-odom's generic
-layout or a KITTI `sequences/NN` folder and writes its poses in KITTI format, in the LiDAR's
-frame (BENCHMARKS.md, "The accurate preset").
+"""A peer of BENCHMARKS.md section 15, "Against kiss-icp, GenZ-ICP and MAD-ICP" (run by
+bench/accurate.sh through bench/peers.sh): MAD-ICP (PyPI `mad-icp` 0.0.10, built from its sdist)
+on a folder in kiss-odom's generic layout or a KITTI `sequences/NN` folder, its poses written in
+KITTI format, in the LiDAR's frame.
 
     madvenv/bin/python bench/mad_run.py DATA OUT.txt [--kitti]
 

@@ -1,4 +1,5 @@
-"""Where ouster-sdk's poses file for the OS-1-128 recording comes from.
+"""Where ouster-sdk's poses file for the OS-1-128 recording comes from (BENCHMARKS.md section 7,
+"From recordings and the network"; run by bench/ouster_sdk_poses.sh).
 
 The file `OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt` beside the recording is named as
 kiss-icp's pipeline names its output. This script replays what kiss-icp 0.2.10's Ouster

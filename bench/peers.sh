@@ -1,5 +1,5 @@
-# Shared by bench/degeneracy.sh and bench/accurate.sh (sourced, not run, from the repository's
-# root): the peers' venvs, running each system on a folder and recording its scores as one JSON
+# Shared by bench/degeneracy.sh, bench/accurate.sh and bench/spread.sh (BENCHMARKS.md sections
+# 12 and 15; sourced, not run, from the repository's root): the peers' venvs, running each system on a folder and recording its scores as one JSON
 # line in $OUT/results.jsonl. Needs OUT; BIN (kiss-odom, built when missing), GENZ and MAD (the
 # peers' venvs) and KITTI (kitti-mini) have defaults.
 BIN=${BIN:-target/release/kiss-odom}

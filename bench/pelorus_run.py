@@ -1,4 +1,5 @@
-"""pelorus 0.0.8 (PyPI) on a `kiss-odom simulate --imu-rate` folder, through its Python API
+"""A peer of BENCHMARKS.md section 14, "Against LiDAR only and LiDAR-inertial peers" (run by
+bench/imu_peers.sh): pelorus 0.0.8 (PyPI) on a `kiss-odom simulate --imu-rate` folder, through its Python API
 (`pelorus.Handle`): the IMU samples up to 10 ms past each scan's end (`add_imu`, no
 orientation), then the scan as [x, y, z, t] with t the points' ns after its first
 (`add_pointcloud`, stamped with that first point's time), waiting for its odometry before the

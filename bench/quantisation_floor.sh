@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
+# Reproduces the rounding floor in BENCHMARKS.md section 7, "Generated recordings: pcap against
+# direct points" (`N=12 bench/quantisation_floor.sh avia urban 1`, and seed 2).
 # How far one generated drive's KITTI error moves when its direct points move by the size of
 # the packets' rounding: N copies of the simulator's direct points, each coordinate moved by a
 # uniform +-0.5 mm (Livox's 1 mm grid at a random offset; Hesai and Velodyne round the range
 # to 4 and 2 mm), run like the direct points and the pcap (`kiss-odom run`, deskew on).
 # The spread is the floor under which "pcap within X % of direct" cannot be told on that drive.
 #
-#   bench/quantisation_floor.sh SENSOR PROFILE SEED   (N=6, FRAMES=500, DATA=target/qfloor;
+#   bench/quantisation_floor.sh SENSOR PROFILE SEED   (N=6, FRAMES=500, DATA=target/bench/qfloor;
 #                                                      numpy from target/numpyvenv, made here)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 sensor=$1 profile=$2 seed=$3
-N=${N:-6} FRAMES=${FRAMES:-500} DATA=${DATA:-target/qfloor}
+N=${N:-6} FRAMES=${FRAMES:-500} DATA=${DATA:-target/bench/qfloor}
 cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
 PY=target/numpyvenv/bin/python

@@ -1,15 +1,20 @@
 #!/usr/bin/env bash
-# The host figures in one go: speed against the reference (f64, exact, 1 thread, poses
-# compared by the harness) on every kitti-mini sequence and a generated urban drive, with the
-# latency spread after frame 10 on the urban drive unbudgeted and budgeted, and the quantized
-# full-scale map against the reference's on kitti-mini 01 and the urban drive.
+# Reproduces BENCHMARKS.md section 2, "Speed against the reference, one thread" and "Frame-time
+# spread with a work budget", and section 3, "The map against the reference's" (its quantized
+# map): speed against the reference (f64, exact, 1 thread, poses compared by the harness) on
+# every kitti-mini sequence and a generated urban drive, the latency spread after frame 10 on
+# the urban drive and a fast one, unbudgeted and budgeted, and the quantized full-scale map
+# against the reference's on kitti-mini 01 and the urban drive.
 #
-#   KISS_ODOM_PYTHON=target/refvenv/bin/python bench/realtime.sh > target/issue14.txt
+#   KISS_ODOM_PYTHON=target/refvenv/bin/python bench/realtime.sh | tee target/bench/realtime.txt
+#
+# The drives go to DATA (default target/bench/realtime; made if missing). REPEATS (default 3;
+# the budget table used 5) and BUDGETS (default "300000 150000 100000 50000") can be set.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
-DATA=${DATA:-bench/data}; mkdir -p "$DATA"
+DATA=${DATA:-target/bench/realtime}; mkdir -p "$DATA"
 U="$DATA/urban-7-200"
 [ -f "$U/sim.toml" ] || $B simulate --out "$U" --frames 200 --seed 7 >/dev/null
 REPEATS=${REPEATS:-3}

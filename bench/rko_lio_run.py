@@ -1,4 +1,5 @@
-"""rko_lio 0.4.0 (PyPI, the same lab's LiDAR-inertial odometry) on a `kiss-odom simulate
+"""A peer of BENCHMARKS.md section 14, "Against LiDAR only and LiDAR-inertial peers" (run by
+bench/imu_peers.sh): rko_lio 0.4.0 (PyPI, the same lab's LiDAR-inertial odometry) on a `kiss-odom simulate
 --imu-rate` folder: the frames and IMU samples written in rko_lio's raw layout (one PLY per scan
 named by its end time in ns, with per-point times; imu.csv in ns; transforms.yaml with the
 LiDAR as the base and the IMU at sim.toml's extrinsic), rko_lio's CLI run on it, and its

@@ -1,21 +1,36 @@
 #!/usr/bin/env bash
-# Re-runs every measurement behind the speed, memory and voxel-table sections of BENCHMARKS.md.
+# Reproduces the host's speed, memory and build tables of BENCHMARKS.md, one step each:
 #
-#   bench/run_all.sh                  # everything (about 40 min on 2 shared cores)
-#   STEPS="speed" bench/run_all.sh    # a subset: speed rss small tables stages profile
+#   crosscheck  section 1, "Stages", "Whole sequences", "f32 build"
+#   speed       section 2, the all-threads ratios, and section 3's "High-water marks and
+#               margins" (the clouds) and "The map against the reference's" (the reference's
+#               map and RSS), printed by bench/summarize.py
+#   rss         section 3, "Peak RSS against sequence length" (bench/summarize.py)
+#   state       section 3, "State bytes of each capacity preset"
+#   small       section 3, the small configuration's accuracy (bench/summarize.py)
+#   tables      section 4, the voxel table against hashbrown (criterion)
+#   rerun       section 11, "Cost of `--rerun` on the README run" (builds `--features rerun`)
+#   build       sections 9 and 11, the build costs (three clean release builds)
 #
-# Results go to $OUT (JSON and text per measurement); bench/summarize.py turns them into the
-# tables of BENCHMARKS.md. Generated datasets go to $GEN and are made once. The reference
-# kiss-icp 1.3.0 runs from $KISS_ODOM_PYTHON (a venv made from tests/reference/requirements.txt).
+#   bench/run_all.sh                      # the default steps: speed rss small tables
+#   STEPS="state crosscheck" bench/run_all.sh
+#
+# Results go to $OUT (JSON and text per measurement; default target/bench/run-all/results);
+# `python3 bench/summarize.py $OUT` prints the speed, RSS and small-configuration tables. The
+# other steps print their table as they go. Generated drives go to $GEN (default
+# target/bench/run-all) and are made once. The reference kiss-icp 1.3.0 runs from
+# $KISS_ODOM_PYTHON (default target/refvenv/bin/python: a venv made from
+# tests/reference/requirements.txt, as .ci/run makes it). The default steps take about 40 min
+# on 2 shared cores; `build` about an hour.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/targets/bench}
-export KISS_ODOM_PYTHON=${KISS_ODOM_PYTHON:-/work/refvenv/bin/python}
+export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-target}
+export KISS_ODOM_PYTHON=${KISS_ODOM_PYTHON:-$PWD/target/refvenv/bin/python}
 KITTI=${KISS_ODOM_KITTI_MINI:-../shared/data/kitti-mini}
-GEN=${GEN:-/work/data-gen}
-OUT=${OUT:-$GEN/bench-results}
-STEPS=${STEPS:-"speed rss small tables stages"}
+GEN=${GEN:-target/bench/run-all}
+OUT=${OUT:-$GEN/results}
+STEPS=${STEPS:-"speed rss small tables"}
 # Timed runs per implementation and configuration (each after one untimed warm-up run).
 REPEATS_KITTI=${REPEATS_KITTI:-5}
 REPEATS_SIM=${REPEATS_SIM:-3}
@@ -28,12 +43,15 @@ BIN=$CARGO_TARGET_DIR/release/kiss-odom
 mkdir -p "$OUT" "$GEN"
 
 # The generated sequences (the simulator's bytes depend on the seed and flags only).
-for n in 500 2000; do
-  if [ ! -f "$GEN/urban-$n/poses.txt" ]; then
-    log "simulate urban-$n"
-    "$BIN" simulate --out "$GEN/urban-$n" --frames "$n" --seed 1 --profile urban
+sim() { # name frames seed
+  if [ ! -f "$GEN/$1/poses.txt" ]; then
+    log "simulate $1"
+    "$BIN" simulate --out "$GEN/$1" --frames "$2" --seed "$3" --profile urban >/dev/null
   fi
-done
+}
+if has speed || has small; then sim urban-500 500 1; fi
+if has rss; then sim urban-2000 2000 1; fi
+if has crosscheck; then sim crosscheck-urban-1000 1000 7; fi
 
 {
   echo "date: $(date -u +%FT%TZ)"
@@ -42,8 +60,26 @@ done
   echo "memory: $(free -g | awk '/Mem:/ {print $2}') GiB"
   echo "kernel: $(uname -r)"
   echo "rustc: $(rustc --version)"
-  echo "reference: $($KISS_ODOM_PYTHON tests/reference/driver.py info)"
+  if [ -x "$KISS_ODOM_PYTHON" ]; then
+    echo "reference: $($KISS_ODOM_PYTHON tests/reference/driver.py info)"
+  fi
 } > "$OUT/machine.txt"
+
+if has crosscheck; then
+  # Stage by stage and end to end against kiss-icp 1.3.0; exit 1 on any breach of a tolerance.
+  mkdir -p "$OUT/crosscheck"
+  for s in 01 02 04 05; do
+    log "crosscheck kitti-mini $s"
+    "$BIN" crosscheck "$KITTI/sequences/$s" --scalar f32 --table markdown \
+      --json "$OUT/crosscheck/kitti-$s.json"
+  done
+  log "crosscheck ncd-ouster-deskew"
+  "$BIN" crosscheck ../shared/data/ncd-ouster-deskew --table markdown \
+    --json "$OUT/crosscheck/ouster.json"
+  log "crosscheck urban-1000"
+  "$BIN" crosscheck "$GEN/crosscheck-urban-1000" --scalar f32 --table markdown \
+    --json "$OUT/crosscheck/urban-1000.json"
+fi
 
 if has speed; then
   mkdir -p "$OUT/speed"
@@ -72,6 +108,25 @@ if has rss; then
   done
 fi
 
+if has state; then
+  # The core's state (summary.json's state_bytes) for each capacity preset and build: fixed at
+  # start whatever the data, so one frame of the shipped sample is enough.
+  mkdir -p "$OUT/state"
+  echo "| capacities | f32, quantized map points | f64, exact map points |"
+  echo "|---|---|---|"
+  for c in tiny small full; do
+    row="| $c"
+    for build in "f32 quantized" "f64 exact"; do
+      set -- $build
+      o="$OUT/state/$c-$1"
+      "$BIN" run fixtures/kitti-05-reduced --out "$o" --quiet --frames ..1 \
+        --capacities "$c" --scalar "$1" --storage "$2" >/dev/null
+      row="$row | $(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["state_bytes"], "B")' "$o/summary.json")"
+    done
+    echo "$row |"
+  done
+fi
+
 if has small; then
   # Small (microcontroller) configuration against full scale: accuracy and state bytes.
   mkdir -p "$OUT/small"
@@ -91,28 +146,45 @@ fi
 
 if has tables; then
   log "voxel table: own open addressing vs hashbrown"
-  cargo bench -p kiss-odom --bench voxel_table -- --noplot 2>&1 | tee "$OUT/voxel_table.txt"
+  cargo bench -p kiss-odom-drive --bench voxel_table -- --noplot 2>&1 | tee "$OUT/voxel_table.txt"
 fi
 
-if has stages; then
-  log "per-stage micro-benchmarks"
-  cargo bench -p kiss-odom --bench stages -- --noplot 2>&1 | tee "$OUT/stages.txt"
-fi
-
-if has profile; then
-  # Where the time goes: perf over single-thread runs (needs perf; not in the default STEPS).
-  mkdir -p "$OUT/profile"
-  for ds in kitti-05 urban-500; do
-    case $ds in
-      kitti-*) path=$KITTI/sequences/${ds#kitti-} ;;
-      *) path=$GEN/$ds ;;
-    esac
-    log "perf on $ds"
-    perf record -F 2000 -g -o "$OUT/profile/$ds.data" -- \
-      "$BIN" bench "$path" --threads 1 --repeats 2 --no-reference > /dev/null
-    perf report -i "$OUT/profile/$ds.data" --no-children --stdio --percent-limit 0.5 \
-      -g none 2>/dev/null > "$OUT/profile/$ds.txt"
+if has rerun; then
+  # Wall time of the whole README run with and without `--rerun`, five alternating pairs, and
+  # the core's rate (summary.json's hz); the poses must be byte-equal.
+  RR=$GEN/rerun-target
+  log "build --features rerun (into $RR)"
+  CARGO_TARGET_DIR=$RR cargo build --release -q -p kiss-odom --features rerun
+  mkdir -p "$OUT/rerun"
+  for i in 1 2 3 4 5; do
+    for mode in plain rerun; do
+      extra=(); [ $mode = rerun ] && extra=(--rerun "$OUT/rerun/run.rrd")
+      s=$(date +%s.%N)
+      "$RR/release/kiss-odom" run fixtures/kitti-05-reduced --out "$OUT/rerun/$mode" --quiet "${extra[@]}"
+      e=$(date +%s.%N)
+      hz=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["hz"])' "$OUT/rerun/$mode/summary.json")
+      echo "$mode $(python3 -c "print(f'{$e - $s:.3f}')") s, core $hz Hz" | tee -a "$OUT/rerun/times.txt"
+    done
   done
+  cmp "$OUT/rerun/plain/poses_kitti.txt" "$OUT/rerun/rerun/poses_kitti.txt" && echo "poses byte-equal"
+fi
+
+if has build; then
+  # Clean release builds in empty target folders, CPU time (user + sys) and wall time from
+  # /usr/bin/time: the default build, `--features rerun` on top of it, and `--features ros2`
+  # from empty again.
+  B=$GEN/cleanbuild
+  rm -rf "$B" && mkdir -p "$B"
+  timed() { # label target-dir cargo-args...
+    local label=$1 dir=$2; shift 2
+    CARGO_TARGET_DIR=$dir /usr/bin/time -f "%U %S %e" -o "$B/$label.time" cargo build --release -q "$@"
+    awk -v l="$label" '{ printf "| %s | %.0f s (%.0f + %.0f) | %.0f s |\n", l, $1 + $2, $1, $2, $3 }' "$B/$label.time"
+  }
+  echo "| build | CPU (user + sys) | wall |"
+  echo "|---|---|---|"
+  timed "default features, clean" "$B/default" -p kiss-odom
+  timed "--features rerun on top of it" "$B/default" -p kiss-odom --features rerun
+  timed "--features ros2, clean" "$B/ros2" -p kiss-odom --features ros2
 fi
 
 log "done: results in $OUT (python3 bench/summarize.py $OUT)"

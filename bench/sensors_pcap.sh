@@ -1,23 +1,27 @@
 #!/usr/bin/env bash
+# Reproduces BENCHMARKS.md section 7, "Generated recordings: pcap against direct points" (with
+# CROSSCHECK=1 also its comparison with kiss-icp 1.3.0 on the same decoded points):
 # `kiss-odom run` on generated sensor recordings (packets) against the same run on the
 # simulator's direct point output (the exact points the packets were made from), deskew on and
-# off. VLP-16 and OS1-64 (and, with SPECS, the Mid-360, XT32, Avia, QT128 and OT128), urban
-# and fast, 500
-# sweeps each, seeds 1-3. Prints a markdown table of
-# KITTI relative translation error and ATE against the simulator's ground truth, per drive and
-# the mean over the seeds (a single drive's error is a random walk that the packets' range
+# off. VLP-16 and OS1-64 (and, with SPECS, the Mid-360, XT32, Avia, QT128, OT128, XT16, XT32M,
+# Pandar40P, Pandar64, QT64, AT128, Helios, HDL-64E S3 and VLS-128), urban and fast, 500 sweeps
+# each, seeds 1-3. Prints a markdown table of KITTI relative translation error and ATE against
+# the simulator's ground truth, per drive and the mean over the seeds (a single drive's error is a random walk that the packets' range
 # quantisation, 1-2 mm, already perturbs: compare means).
 #
-#   bench/sensors_pcap.sh        (DATA=target/sensors-pcap, FRAMES=500, SEEDS="1 2 3",
+#   bench/sensors_pcap.sh        (DATA=target/bench/sensors-pcap, FRAMES=500, SEEDS="1 2 3",
 #                                 SPECS="vlp16 urban,vlp16 fast,os1-64 urban,os1-64 fast"; each
 #                                 drive, up to 1.2 GB, is removed after its runs unless KEEP=1;
 #                                 ROWS=... appends to an earlier run's rows.tsv instead;
-#                                 KISS_ODOM_BIN=... runs that binary instead of building one)
+#                                 KISS_ODOM_BIN=... runs that binary instead of building one;
+#                                 CROSSCHECK=1 also runs `crosscheck` on each drive's pcap
+#                                 against kiss-icp 1.3.0 from $KISS_ODOM_PYTHON, into
+#                                 DATA/crosscheck.txt)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ -z "${KISS_ODOM_BIN:-}" ]; then cargo build --release -q -p kiss-odom; fi
 B=${KISS_ODOM_BIN:-target/release/kiss-odom}
-DATA=${DATA:-target/sensors-pcap}; mkdir -p "$DATA"
+DATA=${DATA:-target/bench/sensors-pcap}; mkdir -p "$DATA"
 FRAMES=${FRAMES:-500}
 rows=${ROWS:-$DATA/rows.tsv}; [ -n "${ROWS:-}" ] || : > "$rows"
 IFS=, read -ra specs <<< "${SPECS:-vlp16 urban,vlp16 fast,os1-64 urban,os1-64 fast}"
@@ -31,8 +35,10 @@ for spec in "${specs[@]}"; do
       # Livox frames by time, found by port; the XT32 by its packets, sweeps by azimuth
       # coverage: nothing to give.
       mid360|avia|xt32) src=() ;;
-      # Found by their packets too, with the angle correction file written beside.
-      qt128|ot128) src=(--calibration "$d/packets.csv") ;;
+      # Found by their packets too, with the angle correction file written beside (the
+      # AT128's: the .dat).
+      qt128|ot128|xt16|xt32m|pandar40p|pandar64|qt64) src=(--calibration "$d/packets.csv") ;;
+      at128) src=(--calibration "$d/packets.dat") ;;
       *) src=(--cut-angle 0) ;;
     esac
     for deskew in deskew no-deskew; do
@@ -43,6 +49,11 @@ for spec in "${specs[@]}"; do
         printf '%s\t%s\t%s\t%s\t%s\n' "$1 $2" "$seed" "$deskew" "$kind" "$(tr -d '\n ' <<< "$m")" >> "$rows"
       done
     done
+    if [ "${CROSSCHECK:-0}" = 1 ]; then
+      echo "== $1 $2 seed $seed" >> "$DATA/crosscheck.txt"
+      $B crosscheck "$d/packets.pcap" "${src[@]}" --only end-to-end --table markdown \
+        >> "$DATA/crosscheck.txt"
+    fi
     [ "${KEEP:-0}" = 1 ] || rm -rf "$d"
   done
 done

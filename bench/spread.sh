@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The spread of one run: the accurate preset and GenZ-ICP 0.3.2, each with its voxel size moved
-# by 1e-7, 1e-6 and 1e-5 of itself, up and down, beside the unmoved run (BENCHMARKS.md, "The
-# narrowest wins against the runs' own spread").
+# Reproduces the spread noted under BENCHMARKS.md section 15, "Against kiss-icp, GenZ-ICP and
+# MAD-ICP": the spread of one run, the accurate preset and GenZ-ICP 0.3.2 each with its voxel
+# size moved by 1e-7, 1e-6 and 1e-5 of itself, up and down, beside the unmoved run.
 #
 #   bench/spread.sh DATA GENZ_PRESET
+#   bash bench/spread.sh target/bench/accurate/urban-500-s1 outdoor   (a drive bench/accurate.sh made)
 #
 # DATA is a `kiss-odom simulate` folder or a KITTI `sequences/NN` folder (its ground truth is
 # the one `kiss-odom run` finds). The preset's voxel is PRESET_VOXEL (default 0.5, `r_max / 200`
@@ -16,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 data=$1 preset=$2
 name=$(basename "$data")
-OUT=${OUT:-target/spread/$name}
+OUT=${OUT:-target/bench/spread/$name}
 . bench/peers.sh
 genz_venv
 read -r -a genz_args <<< "${GENZ_ARGS:-}"

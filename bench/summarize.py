@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
-"""Markdown tables for BENCHMARKS.md from the results bench/run_all.sh wrote.
+"""Prints the figures of BENCHMARKS.md section 2 (the all-threads ratios) and section 3 ("High-water
+marks and margins", the reference's columns of "The map against the reference's", "Peak RSS
+against sequence length", the small configuration's accuracy) from what bench/run_all.sh's
+`speed`, `rss` and `small` steps wrote.
 
-    python3 bench/summarize.py [OUT]     (default /work/data-gen/bench-results)
+    python3 bench/summarize.py [OUT]     (default target/bench/run-all/results)
 """
 
 import json
 import sys
 from pathlib import Path
 
-OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "/work/data-gen/bench-results")
+OUT = Path(sys.argv[1] if len(sys.argv) > 1 else "target/bench/run-all/results")
 MIB = 1 << 20
 
 

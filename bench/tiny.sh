@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
+# Reproduces BENCHMARKS.md section 10, "TINY: a 16-beam sensor in 455 KiB":
 # TINY (f32, quantized map, Capacities::TINY, Config::tiny's r_max 50 m, v 2 m,
 # N_max 10) against FULL_SCALE f64 exact with the same parameters, on generated VLP-16 drives
 # (16 beams, 1800 columns, +-15 degrees, 10 Hz), 500 sweeps each. Prints a markdown table:
 # ATE and KITTI relative error of both, their ratio, and TINY's capacity drops.
 #
-#   bench/tiny.sh            (DATA=bench/data by default; the drives are made if missing)
+#   bench/tiny.sh            (DATA=target/bench/tiny by default; the drives are made if missing)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
-DATA=${DATA:-bench/data}; mkdir -p "$DATA"
-out=target/tiny; mkdir -p "$out"
+DATA=${DATA:-target/bench/tiny}; mkdir -p "$DATA"
+out=$DATA/runs; mkdir -p "$out"
 # FULL_SCALE with TINY's parameters (Config::tiny), so that only capacities and scalar differ.
 printf '[data]\nmax_range = 50.0\n[mapping]\nvoxel_size = 2.0\nmax_points_per_voxel = 10\n' > "$out/full.toml"
 echo "| run | FULL_SCALE f64: ATE m / KITTI % | TINY f32 quantized: ATE m / KITTI % | TINY / FULL ATE | TINY frames with drops | TINY state B |"

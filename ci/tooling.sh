@@ -6,7 +6,7 @@
 #
 #   ci/tooling.sh [props] [fuzz] [miri]     (default: all three)
 #
-# FUZZ_SECONDS  seconds of exploration per fuzz target (default 60; 17 targets, so about 17
+# FUZZ_SECONDS  seconds of exploration per fuzz target (default 60; 19 targets, so about 19
 #               minutes), after a replay of the committed corpus, which must pass
 # FUZZ_STRICT   1: new findings of the exploration fail the run too (default: reported)
 #

@@ -328,12 +328,24 @@ fn packets(out: &std::path::Path) {
     let pcap = dir.join("packets.pcap");
     println!("cargo:rerun-if-changed={}", pcap.display());
     let b = std::fs::read(&pcap).unwrap_or_else(|e| panic!("{}: {e}", pcap.display()));
-    let (payload, sequence) = if env::var_os("CARGO_FEATURE_MID360").is_some() {
-        (1380, "mid360-pcap")
-    } else {
-        (1206, "vlp16-pcap")
-    };
+    println!("cargo::rustc-check-cfg=cfg(hesai_at128)");
+    println!("cargo:rerun-if-env-changed=KISS_EMBED_HESAI");
     const HEADERS: usize = 14 + 20 + 8;
+    let hesai = env::var_os("CARGO_FEATURE_HESAI").map(|_| {
+        env::var("KISS_EMBED_HESAI").expect("KISS_EMBED_HESAI: the Hesai model (run.sh sets it)")
+    });
+    let (payload, sequence) = if let Some(model) = &hesai {
+        // Every packet of a generated Hesai recording has its model's default length.
+        let first = b
+            .get(24 + 8..24 + 12)
+            .map(|l| u32::from_le_bytes(l.try_into().unwrap()) as usize)
+            .expect("an empty pcap");
+        (first - HEADERS, format!("{model}-pcap"))
+    } else if env::var_os("CARGO_FEATURE_MID360").is_some() {
+        (1380, "mid360-pcap".to_string())
+    } else {
+        (1206, "vlp16-pcap".to_string())
+    };
     let (mut at, mut payloads) = (24, Vec::new());
     while at + 16 <= b.len() {
         let incl = u32::from_le_bytes(b[at + 8..at + 12].try_into().unwrap()) as usize;
@@ -384,7 +396,123 @@ fn packets(out: &std::path::Path) {
          /// The simulator's sweeps, in packets (the program finds them itself, by azimuth).\n\
          pub const FRAMES: [FrameInfo; {n}] = [\n{ranges}];\n"
     );
-    std::fs::write(out.join("frames.rs"), rs + &budget_line()).unwrap();
+    let angles = hesai.map_or(String::new(), |model| hesai_angles(&dir, &model));
+    std::fs::write(out.join("frames.rs"), rs + &budget_line() + &angles).unwrap();
+}
+
+/// With `hesai`: the generated unit's angles as constants, from the files `simulate` wrote
+/// beside the pcap: the angle correction CSV (`Laser id,Elevation,Azimuth`) as `ELEVATION_DEG`
+/// and `AZIMUTH_DEG` (none for the XT32, whose nominal angles are built in), or for the AT128 its `.dat` as the `CORRECTION` static (the tables at
+/// their version 1.5 offsets, as `kiss-odom-io`'s `hesai_at128` reads them; the host tool that
+/// wrote the file checks it) and the `hesai_at128` cfg; for the others `HESAI_MODEL`.
+fn hesai_angles(dir: &std::path::Path, model: &str) -> String {
+    let model_name = match model {
+        "xt32" => "Xt32",
+        "xt16" => "Xt16",
+        "xt32m" => "Xt32m",
+        "pandar40p" => "Pandar40P",
+        "pandar64" => "Pandar64",
+        "qt64" => "PandarQT64",
+        "at128" => "At128",
+        m => panic!("KISS_EMBED_HESAI={m}: not a Hesai model the simulator writes"),
+    };
+    let mut rs = String::new();
+    if model == "at128" {
+        println!("cargo:rustc-cfg=hesai_at128");
+        let path = dir.join("packets.dat");
+        println!("cargo:rerun-if-changed={}", path.display());
+        let b = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let (mirrors, frames, res) = (usize::from(b[5]), usize::from(b[6]), i64::from(b[15]));
+        let word = |i: usize| i32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+        let list = |v: Vec<String>| v.join(", ");
+        let at = 16;
+        let angle = |i: usize| {
+            list(
+                (0..8)
+                    .map(|k| {
+                        if k < frames {
+                            (i64::from(word(i + 4 * k) as u32) * res).to_string()
+                        } else {
+                            "0".into()
+                        }
+                    })
+                    .collect(),
+            )
+        };
+        let table = |from: usize| {
+            list(
+                (0..128)
+                    .map(|c| (i64::from(word(from + 4 * c)) * res).to_string())
+                    .collect(),
+            )
+        };
+        let adjust = |from: usize| {
+            list(
+                (0..128)
+                    .map(|c| {
+                        format!(
+                            "[{}]",
+                            list(
+                                (0..180)
+                                    .map(|i| (b[from + 180 * c + i] as i8).to_string())
+                                    .collect()
+                            )
+                        )
+                    })
+                    .collect(),
+            )
+        };
+        let tables = at + 8 * mirrors;
+        writeln!(
+            rs,
+            "/// The generated AT128's angle correction.\n\
+             pub static CORRECTION: kiss_odom_sensors::hesai::At128Correction = \
+             kiss_odom_sensors::hesai::At128Correction {{ frames: {frames}, start: [{}], end: [{}], \
+             azimuth: [{}], elevation: [{}], azimuth_adjust: [{}], elevation_adjust: [{}], \
+             adjust_unit: {res} }};",
+            angle(at),
+            angle(at + 4 * mirrors),
+            table(tables),
+            table(tables + 512),
+            adjust(tables + 1024),
+            adjust(tables + 1024 + 128 * 180),
+        )
+        .unwrap();
+        return rs;
+    }
+    // The XT32's nominal angles are built into its decoder: `simulate` writes no file.
+    let path = dir.join("packets.csv");
+    println!("cargo:rerun-if-changed={}", path.display());
+    let csv = if model == "xt32" {
+        String::new()
+    } else {
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    };
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|f| f.trim().to_string()).collect())
+        .collect();
+    let column = |i: usize| {
+        rows.iter()
+            .map(|r| format!("{:?}", r[i].parse::<f64>().unwrap()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    writeln!(
+        rs,
+        "/// The Hesai model of the packets.\n\
+         pub const HESAI_MODEL: kiss_odom_sensors::hesai::Model = \
+         kiss_odom_sensors::hesai::Model::{model_name};\n\
+         /// The generated unit's channel elevations and azimuth offsets, degrees.\n\
+         pub const ELEVATION_DEG: [f64; {n}] = [{}];\n\
+         pub const AZIMUTH_DEG: [f64; {n}] = [{}];",
+        column(1),
+        column(2),
+        n = rows.len()
+    )
+    .unwrap();
+    rs
 }
 
 /// Profile `net`: nothing embedded (the packets come over the network); the odometry is

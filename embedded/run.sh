@@ -110,7 +110,7 @@ if [[ ",$features," == *",tiny,"* ]] || [[ ",$features," == *",imu,"* ]]; then
 fi
 # The packets profile embeds the UDP payloads of a generated VLP-16 recording (the same drive).
 # `far`: a suburban drive, 36 sweeps from the fifth, over which TINY's map fills at 100 m.
-# `mid360`: the same drive seen by a Livox Mid-360.
+# `mid360`: the same drive seen by a Livox Mid-360; `hesai`: by a Hesai (KISS_EMBED_HESAI).
 if [[ ",$features," == *",packets,"* ]]; then
   sensor=vlp16
   if [[ ",$features," == *",far,"* ]]; then
@@ -118,6 +118,14 @@ if [[ ",$features," == *",packets,"* ]]; then
     export KISS_EMBED_FIRST="${KISS_EMBED_FIRST:-4}" KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-36}"
   elif [[ ",$features," == *",mid360,"* ]]; then
     sensor=mid360; pcapdir="${KISS_EMBED_PCAP:-$here/target/mid360-pcap}"; sim=(--frames 36)
+  elif [[ ",$features," == *",hesai,"* ]]; then
+    # `hesai`: the model KISS_EMBED_HESAI names (default xt32), sweeps 2-4 of a 6-sweep drive
+    # (the AT128's 600-packet frames: 2-3, to fit the board's code memory).
+    sensor="${KISS_EMBED_HESAI:-xt32}"; pcapdir="${KISS_EMBED_PCAP:-$here/target/$sensor-pcap}"
+    sim=(--frames 6)
+    frames=3; [ "$sensor" = at128 ] && frames=2
+    export KISS_EMBED_HESAI="$sensor" KISS_EMBED_FIRST="${KISS_EMBED_FIRST:-2}" \
+      KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-$frames}"
   else
     pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"; sim=(--frames 36)
   fi

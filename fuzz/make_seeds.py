@@ -229,6 +229,33 @@ def ouster_packet(profile, beams, fid, first):
     return struct.pack("<HH", 1, fid) + bytes(28) + cols + bytes(32)
 
 
+def robosense_helios():
+    """A Helios DIFOP packet with its angles, then two MSOP packets of twelve blocks."""
+    difop = bytearray(1248)
+    difop[:8] = bytes([0xA5, 0xFF, 0x00, 0x5A, 0x11, 0x11, 0x55, 0x55])
+    difop[8:10] = (600).to_bytes(2, "big")
+    difop[300] = 0x04
+    for i in range(32):
+        v = round((-55 + 70 * i / 31) * 100)
+        difop[468 + 3 * i] = int(v < 0)
+        difop[469 + 3 * i : 471 + 3 * i] = abs(v).to_bytes(2, "big")
+    out = b"\0\0" + bytes(difop)
+    for n in range(2):
+        msop = bytearray(1248)
+        msop[:4] = bytes([0x55, 0xAA, 0x05, 0x5A])
+        msop[20:26] = (1_704_067_200).to_bytes(6, "big")
+        msop[26:30] = (n * 667).to_bytes(4, "big")
+        for k in range(12):
+            at = 42 + 100 * k
+            msop[at : at + 2] = b"\xff\xee"
+            msop[at + 2 : at + 4] = ((n * 12 + k) * 20).to_bytes(2, "big")
+            for c in range(32):
+                msop[at + 4 + 3 * c : at + 6 + 3 * c] = (2000 + 37 * c).to_bytes(2, "big")
+                msop[at + 6 + 3 * c] = 100
+        out += b"\0\0" + bytes(msop)
+    return out
+
+
 def sensor_seeds():
     data = ROOT.parent / "shared" / "data" / "sensors" / "velodyne"
     packets = udp_payloads(data / "velodyne_vlp16.pcap", 2368)[:3]
@@ -240,12 +267,34 @@ def sensor_seeds():
         body = b"".join(bytes([0]) + ouster_packet(profile, 2, fid, first)
                         for fid in (3, 4) for first in range(0, 64, 4))
         put("ouster_packets", name, head + body)
+    vls = udp_payloads(ROOT / "fixtures" / "velodyne-nebula" / "vls128-sector.pcap", 2368)[:3]
+    put("velodyne_wide_packets", "vls128-3-packets", bytes([2, 0]) + b"".join(b"\0\0" + p for p in vls))
+    # The same packets as an HDL-64E's: upper and lower blocks by turns, no product byte.
+    hdl = [bytes(b ^ (0x33 if k % 200 == 101 else 0) for k, b in enumerate(p[:1200])) + p[1200:1204] + b"\0\0"
+           for p in vls]
+    put("velodyne_wide_packets", "hdl64e-3-packets", bytes([1, 3]) + b"".join(b"\0\0" + p for p in hdl))
+    put("robosense_packets", "helios-difop-msop", bytes([3]) + robosense_helios())
+    m1 = bytearray(1210)
+    m1[:4] = bytes([0x55, 0xAA, 0x5A, 0xA5])
+    m1[4:6] = (1).to_bytes(2, "big")
+    m1[8] = 0x04
+    for k in range(25):
+        for c in range(5):
+            at = 32 + 47 * k + 2 + 9 * c
+            m1[at : at + 6] = (2000 + c).to_bytes(2, "big") + (32768 + k).to_bytes(2, "big") + (32768 - c).to_bytes(2, "big")
+    put("robosense_packets", "m1-one-packet", bytes([0x80]) + b"\0\0" + bytes(m1))
     hesai = udp_payloads(data.parent / "hesai" / "hesai-xt32-small.pcap", 2368)[:3]
     put("hesai_packets", "xt32-3-packets", bytes([0]) + b"".join(b"\0\0" + p for p in hesai))
     qt128 = udp_payloads(ROOT / "fixtures" / "hesai-qt128" / "qt128-sector.pcap", 2368)[:3]
     put("hesai_packets", "qt128-3-packets", bytes([1 << 1 | 8]) + b"".join(b"\0\0" + p for p in qt128))
     put("hesai_packets", "ot128-4-packets", bytes([3 << 1]) + b"".join(
         b"\0\0" + hesai_1_4_packet(k) for k in range(4)))
+    for k, model in enumerate(["40p", "64", "qt64", "xt16", "xt32m"]):
+        pkts = udp_payloads(ROOT / "fixtures" / "hesai-nebula" / f"{model}.pcap", 2368)[:3]
+        put("hesai_fixed_packets", f"{model}-3-packets",
+            bytes([k << 1]) + b"".join(b"\0\0" + p for p in pkts))
+    put("hesai_fixed_packets", "at128-4-packets", bytes([5 << 1]) + b"".join(
+        b"\0\0" + hesai_at128_packet(k) for k in range(4)))
     livox = udp_payloads(data.parent / "livox" / "livox_tele15_small.pcap", 56001)[:6]
     put("livox_packets", "tele15-6-packets",
         bytes([0]) + b"".join(struct.pack("<H", 0x8000 | len(p)) + p for p in livox))
@@ -264,6 +313,20 @@ def hesai_1_4_packet(k):
     tail = bytes(9) + struct.pack("<HBBH", 0b0110 << 12, 2, 0x39, 600)
     tail += bytes([124, 10, 30, 7, 36, 29]) + struct.pack("<IB", 55 * k, 0x42)
     return head + blocks + bytes(4 + 17) + tail + struct.pack("<I", k) + bytes(22 + 4)
+
+
+def hesai_at128_packet(k):
+    """A PandarAT128 (protocol 4.3) packet of 1086 bytes, single strongest return: the k-th
+    after motor angle 40 degrees, 0.1 degree (two firings) a packet, in the fuzz target's
+    frame 0; the last packet steps into frame 1 (motor 140 degrees on)."""
+    head = bytes([0xEE, 0xFF, 4, 3, 0, 0, 128, 2, 0, 4, 1, 1])
+    motor = (40 * 25_600 + 2_560 * k) if k < 3 else 150 * 25_600
+    blocks = b"".join(struct.pack("<HB", (motor + 1_280 * b) >> 8, (motor + 1_280 * b) & 0xFF)
+                      + b"".join(struct.pack("<HBB", 800 + c + 9 * b, c, 0) for c in range(128))
+                      for b in range(2))
+    tail = bytes(18) + struct.pack("<HIBB", 200, 83 * k, 0x37, 0x42)
+    tail += bytes([0]) + (1_704_067_200).to_bytes(5, "big") + struct.pack("<I", k) + bytes(4)
+    return head + blocks + bytes(4) + tail
 
 
 def livox_sdk2_packets():

@@ -1,5 +1,5 @@
 //! The `packets` profile: a Velodyne VLP-16 recording's UDP payloads (with `mid360`, a Livox
-//! Mid-360's), embedded in the image, streamed packet by packet through `kiss-odom-sensors`
+//! Mid-360's; with `hesai`, the Hesai model `KISS_EMBED_HESAI` names), embedded in the image, streamed packet by packet through `kiss-odom-sensors`
 //! into the core, as a sensor on the network would deliver them. A sweep is never held whole:
 //! each chunk the decoder emits goes straight into the odometry's `FrameInput`.
 //!
@@ -66,7 +66,7 @@ impl<F: FnMut(&[[Scalar; 3]], &[f64])> SweepSink for Feed<F> {
 }
 
 /// The VLP-16 decoder: the simulator's sweeps start at azimuth 0.
-#[cfg(not(feature = "mid360"))]
+#[cfg(not(any(feature = "mid360", feature = "hesai")))]
 fn decoder() -> Option<kiss_odom_sensors::velodyne::Decoder> {
     use kiss_odom_sensors::velodyne;
     let config = velodyne::Config {
@@ -88,6 +88,30 @@ fn decoder() -> Option<kiss_odom_sensors::livox::Decoder> {
     livox::Decoder::new(config).ok()
 }
 
+/// A Hesai decoder with the generated unit's angles (`build.rs`), its sweeps cut as `run`
+/// cuts them without options.
+#[cfg(all(feature = "hesai", not(hesai_at128)))]
+fn decoder() -> Option<kiss_odom_sensors::hesai::Decoder> {
+    use crate::frames::{AZIMUTH_DEG, ELEVATION_DEG, HESAI_MODEL};
+    use kiss_odom_sensors::hesai;
+    let mut calibration = hesai::Calibration::nominal();
+    calibration.channels = ELEVATION_DEG.len();
+    calibration.elevation_deg[..ELEVATION_DEG.len()].copy_from_slice(&ELEVATION_DEG);
+    calibration.azimuth_deg[..AZIMUTH_DEG.len()].copy_from_slice(&AZIMUTH_DEG);
+    let config = hesai::Config {
+        model: HESAI_MODEL,
+        calibration: (!ELEVATION_DEG.is_empty()).then_some(calibration),
+        cut_angle_deg: None,
+    };
+    hesai::Decoder::new(config).ok()
+}
+
+/// The AT128 decoder with the generated unit's mirror-frame correction.
+#[cfg(all(feature = "hesai", hesai_at128))]
+fn decoder() -> Option<kiss_odom_sensors::hesai::Decoder<kiss_odom_sensors::hesai::MirrorAngles>> {
+    kiss_odom_sensors::hesai::Decoder::at128(&crate::frames::CORRECTION).ok()
+}
+
 /// Streams every embedded packet; the total instruction count where measured, or the exit
 /// status of the first failing sweep.
 pub fn run<S: Storage>(
@@ -98,6 +122,12 @@ pub fn run<S: Storage>(
     let Some(mut dec) = decoder() else {
         return Err(EXIT_CONFIG_ERROR);
     };
+    // The decoder's own state, beside the odometry's (`Odometry::state_bytes`).
+    out!(
+        "decoder state_bytes={} packet_len={}",
+        core::mem::size_of_val(&dec),
+        LEN
+    );
     let packets: &[u8] = &PACKETS.0;
     let n = packets.len() / LEN;
     let (mut next, mut sweep, mut span) = (0, 0, NOMINAL_SPAN);

@@ -38,6 +38,9 @@ pub enum PacketError {
     /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
     /// Hesai one is none of the six modes, or disagrees with the header's return count.
     UnknownReturnMode,
+    /// The Hesai return-mode byte is triple return (0x3D, the XT32M's first, last and
+    /// strongest in three blocks): not decoded. Set the sensor to a single or dual return mode.
+    TripleReturn,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
     /// or an Ouster column whose measurement id is beyond the frame): two sensors on one
     /// port. Filter by source address, or give each sensor its own port.
@@ -56,6 +59,10 @@ pub enum PacketError {
     /// metadata's (`columns_per_frame` columns a turn at its rate): its encoder angles would
     /// be wrong. Give the metadata saved with this recording.
     ColumnRate,
+    /// The packets come from a model whose angles only its unit's calibration file gives
+    /// (Velodyne HDL-64E, VLS-128, VLP-32A/B; Robosense without its DIFOP packet's angles) and
+    /// none was given: give the file (or the DIFOP port). Nothing is decoded until then.
+    NoCalibration,
     /// The packet is older than the sweep being assembled (a late or repeated packet): it is
     /// dropped and counted in `out_of_order`. Nothing to do.
     Late,
@@ -76,6 +83,10 @@ impl core::fmt::Display for PacketError {
             Self::Timestamp => "a timestamp of one hour or more",
             Self::UnknownModel => "unknown model (Velodyne product byte, Hesai header)",
             Self::UnknownReturnMode => "unknown return-mode byte",
+            Self::TripleReturn => {
+                "triple return (0x3D) is not decoded: set the sensor to a single or dual return \
+                 mode"
+            }
             Self::OtherSensor => "packet of another sensor than the sweep's",
             Self::PacketType => "not a point data packet",
             Self::MetadataMismatch => "initialisation id or serial differs from the metadata",
@@ -87,6 +98,7 @@ impl core::fmt::Display for PacketError {
                 "column timestamps spaced for another lidar_mode than the metadata's \
                  columns_per_frame"
             }
+            Self::NoCalibration => "a model that needs its calibration file, and none was given",
             Self::Late => "packet older than the sweep being assembled",
         })
     }

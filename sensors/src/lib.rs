@@ -2,12 +2,13 @@
 //!
 //! A spinning LiDAR sends UDP packets, each a slice of a sweep. This crate checks each packet
 //! against its wire format (fixed byte ranges, [`velodyne::Packet::new_checked`],
-//! [`ouster::Packet::new_checked`], [`hesai::Packet::new_checked`]), turns its returns into points in the sensor frame with
+//! [`ouster::Packet::new_checked`], [`hesai::Packet::new_checked`],
+//! [`robosense::wire::Msop::new_checked`]), turns its returns into points in the sensor frame with
 //! each point's capture time from the sensor's firing sequence, and assembles sweeps: points
 //! go to a caller's [`SweepSink`] in small chunks as packets arrive, with times relative to the
-//! sweep start, so a sweep never needs a second full copy. Sweeps end by azimuth (Velodyne, Hesai) or
-//! frame id (Ouster); lost, late, malformed and foreign packets are counted per sweep in
-//! [`SweepStats`], never patched over.
+//! sweep start, so a sweep never needs a second full copy. Sweeps end by azimuth (Velodyne,
+//! Hesai, Robosense) or frame id (Ouster); lost, late, malformed and foreign packets are
+//! counted per sweep in [`SweepStats`], never patched over.
 //!
 //! `#![no_std]`, no allocator, no panics on any input, no `unsafe`: every table has a
 //! compile-time capacity ([`velodyne::MAX_LASERS`], [`ouster::MAX_BEAMS`],
@@ -22,6 +23,7 @@ pub mod hesai;
 pub mod livox;
 pub mod ouster;
 pub mod pose_datagram;
+pub mod robosense;
 pub mod sweep;
 mod time;
 pub mod velodyne;

@@ -122,9 +122,10 @@ fn a_single_return_packet_gives_each_return_its_place_and_time() {
 
 #[test]
 fn dual_returns_pair_their_blocks_and_one_echo_is_one_point() {
+    // Which return each block of the XT32's pair holds (`ReturnMode::from_byte`).
     for (mode, first, second) in [
-        (0x39, Return::Last, Return::Strongest),
-        (0x3B, Return::First, Return::Last),
+        (0x39, Return::Strongest, Return::Last),
+        (0x3B, Return::Last, Return::First),
         (0x3C, Return::First, Return::Strongest),
     ] {
         let mut dec = decoder();

@@ -9,8 +9,9 @@
 //! its interpolation each round to it; a Hesai point is cast along its block's reported
 //! azimuth plus its channel's offset); times within 1 us; the same point count per sweep (a
 //! Livox frame: its 0.1 s of packets). The XT32 and the Livox sensors are decoded with no
-//! options, as `run` finds them, the QT128 and OT128 with the angle correction file written
-//! beside. The reference test runs `tests/sensors/dump_generated.py` with the Python in
+//! options, as `run` finds them, the other Hesai sensors with the angle correction file written
+//! beside (the AT128's `.dat`). A Hesai point must also lie on the exact point's ray but for
+//! the ground truth's f32 rounding: the simulator casts along the ray the decoder computes. The reference test runs `tests/sensors/dump_generated.py` with the Python in
 //! `KISS_ODOM_SENSOR_PYTHON` (velodyne-decoder 3.1.0, ouster-sdk 1.0.1) and prints SKIP
 //! without it; the copper-rs parsers (cu-hesai, cu-livox) decode the generated XT32 and Avia
 //! packets with `KISS_ODOM_COPPER_DUMP` (`tests/copper/compare.sh`).
@@ -20,6 +21,7 @@
 //! `bench/sensors_pcap.sh` measures the same on 500-sweep drives of both sensors.
 
 use kiss_odom_io::capture::sweeps::{self, Sweep};
+use kiss_odom_io::dataset::SensorKind;
 use kiss_odom_io::SensorOptions;
 use kiss_odom_sim::PacketSensor;
 use std::collections::HashMap;
@@ -43,7 +45,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 8] = [
+const CASES: [Case; 17] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -96,6 +98,63 @@ const CASES: [Case; 8] = [
         azimuth_rad: 0.0,
         clock_origin_s: PacketSensor::Ot128.clock_origin_s(),
     },
+    // Cast along the decoded ray, the truth at the range the packet writes: f32 alone.
+    Case {
+        sensor: "helios",
+        unit_m: 0.0,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Helios.clock_origin_s(),
+    },
+    Case {
+        sensor: "hdl64e-s3",
+        unit_m: 0.0,
+        azimuth_rad: 0.0,
+        clock_origin_s: 0,
+    },
+    Case {
+        sensor: "vls128",
+        unit_m: 0.0,
+        azimuth_rad: 0.0,
+        clock_origin_s: 0,
+    },
+    // The fixed-layout Hesai models, as the QT128.
+    Case {
+        sensor: "xt16",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Xt16.clock_origin_s(),
+    },
+    Case {
+        sensor: "xt32m",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Xt32m.clock_origin_s(),
+    },
+    Case {
+        sensor: "pandar40p",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Pandar40p.clock_origin_s(),
+    },
+    Case {
+        sensor: "pandar64",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Pandar64.clock_origin_s(),
+    },
+    Case {
+        sensor: "qt64",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Qt64.clock_origin_s(),
+    },
+    // Each channel along the direction its mirror-frame correction gives (the .dat beside).
+    Case {
+        sensor: "at128",
+        unit_m: 0.004,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::At128.clock_origin_s(),
+    },
 ];
 
 impl Case {
@@ -106,6 +165,11 @@ impl Case {
     fn tolerance(&self, r: f64) -> f64 {
         self.unit_m / 2.0 + r * self.azimuth_rad + SLACK_M
     }
+    /// Whether the simulator casts along the very ray the decoder computes (the Hesai
+    /// sensors: block azimuth and channel angles, or the AT128's mirror-frame correction).
+    fn exact_rays(&self) -> bool {
+        self.sensor == "xt32" || self.needs_angles()
+    }
     /// Whether `run` finds the recording and cuts its sweeps as the simulator does with no
     /// options: Livox frames by port, packet length and the decoder's default 0.1 s; the XT32
     /// by its packets, sweeps by azimuth coverage.
@@ -113,19 +177,46 @@ impl Case {
         matches!(self.sensor, "mid360" | "xt32" | "avia")
     }
     /// Whether `run` finds the recording by its packets and needs the angle correction file
-    /// `simulate` wrote beside it (the 128-channel Hesai sensors).
+    /// `simulate` wrote beside it (the Hesai sensors but the XT32).
     fn needs_angles(&self) -> bool {
-        matches!(self.sensor, "qt128" | "ot128")
+        matches!(
+            self.sensor,
+            "qt128" | "ot128" | "xt16" | "xt32m" | "pandar40p" | "pandar64" | "qt64" | "at128"
+        )
     }
     /// Whether `dump_generated.py`'s references decode the format (velodyne-decoder and
     /// ouster-sdk; the copper-rs parsers of the XT32 and the Avia have their own test).
     fn has_reference(&self) -> bool {
-        !self.found_as_is() && !self.needs_angles()
+        !self.found_as_is() && !self.needs_angles() && self.new_family().is_none()
+    }
+    /// The models whose `--sensor` must be named (with the calibration `simulate` wrote).
+    fn new_family(&self) -> Option<SensorKind> {
+        match self.sensor {
+            "helios" => Some(SensorKind::Helios),
+            "hdl64e-s3" => Some(SensorKind::Hdl64eS3),
+            "vls128" => Some(SensorKind::Vls128),
+            _ => None,
+        }
     }
     fn options(&self, dir: &Path) -> SensorOptions {
+        if let Some(sensor) = self.new_family() {
+            // The Helios's angles come in its DIFOP packet; the Velodynes' in packets.yaml.
+            let yaml = dir.join("packets.yaml");
+            return SensorOptions {
+                sensor,
+                calibration: yaml.is_file().then_some(yaml),
+                cut_angle_deg: Some(0.0),
+                ..SensorOptions::default()
+            };
+        }
         if self.needs_angles() {
+            let file = if self.sensor == "at128" {
+                "packets.dat"
+            } else {
+                "packets.csv"
+            };
             SensorOptions {
-                calibration: Some(dir.join("packets.csv")),
+                calibration: Some(dir.join(file)),
                 ..SensorOptions::default()
             }
         } else if self.found_as_is() {
@@ -196,14 +287,21 @@ fn truth(dir: &Path, k: usize) -> Vec<([f64; 3], f64)> {
         .collect()
 }
 
-/// Worst disagreement seen: metres, fraction of the tolerance, seconds.
+/// Worst disagreement seen: metres, fraction of the tolerance, seconds; and how far the exact
+/// point lies from the decoded ray (metres, fraction of the ground truth's f32 rounding).
 #[derive(Default)]
 struct Worst {
     m: f64,
     ratio: f64,
     s: f64,
     points: usize,
+    off_ray_m: f64,
+    off_ray_ratio: f64,
 }
+
+/// The ground truth's f32 rounding, relative: at most 2^-24 of each coordinate, so of the
+/// point's range (5.96e-8, rounded up).
+const F32_ROUNDING: f64 = 6.0e-8;
 
 impl Worst {
     fn add(&mut self, case: &Case, got: [f64; 3], exact: [f64; 3], dt: f64) {
@@ -216,6 +314,17 @@ impl Worst {
         self.ratio = self.ratio.max(d / case.tolerance(r));
         self.s = self.s.max(dt.abs());
         self.points += 1;
+        // |exact x got| / |got|: the exact point's distance from the decoded ray.
+        let [a, b] = [exact, got];
+        let cross = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let len = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let off = len(cross) / len(got).max(1e-12);
+        self.off_ray_m = self.off_ray_m.max(off);
+        self.off_ray_ratio = self.off_ray_ratio.max(off / (r * F32_ROUNDING + 1e-12));
     }
     fn check(&self, what: &str, case: &Case) {
         println!(
@@ -230,6 +339,20 @@ impl Worst {
             self.s
         );
         assert!(self.points > 0, "{what} {}: nothing compared", case.sensor);
+        if case.exact_rays() {
+            // The simulator casts each Hesai channel along the ray the decoder computes: the
+            // exact point is on it but for the truth's f32 rounding.
+            println!(
+                "{what} {}: worst distance of the exact point from the decoded ray {:.2e} m = \
+                 {:.2} of the truth's f32 rounding ({F32_ROUNDING:e} x range)",
+                case.sensor, self.off_ray_m, self.off_ray_ratio
+            );
+            assert!(
+                self.off_ray_ratio <= 1.0,
+                "{what} {}: a point off its ray",
+                case.sensor
+            );
+        }
         assert!(
             self.ratio <= 1.0,
             "{what} {}: a point beyond tolerance",
@@ -427,6 +550,55 @@ fn run_on_a_generated_pcap_tracks_as_well_as_on_the_direct_points() {
         assert!(
             off_p > 1.5 * on_p && off_q > 1.5 * on_q,
             "{}: deskewing should matter at 20-30 m/s",
+            case.sensor
+        );
+    }
+}
+
+/// `run` on the generated packets of the Robosense Helios, the HDL-64E S3 and the VLS-128
+/// tracks the fast drive as well as on the simulator's direct points: KITTI translation error
+/// within 10 % (deskewed; 100 sweeps, ~150 m).
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "heavy: cargo test --release --test workspace sensors_simulated::"
+)]
+fn run_on_generated_helios_hdl64e_and_vls128_pcaps_tracks_as_on_the_direct_points() {
+    for case in &CASES[8..] {
+        let dir = tmp(&format!("{}-run", case.sensor));
+        let d = dir.path();
+        generate(case, d, 100);
+        let (pcap, direct) = (d.join("pcap"), d.join("direct"));
+        let recording = d.join("packets.pcap");
+        let yaml = d.join("packets.yaml");
+        let flags = ["-q", "--deskew", "--cut-angle", "0", "--out"].map(OsStr::new);
+        let mut head = vec![
+            OsStr::new("run"),
+            recording.as_os_str(),
+            OsStr::new("--sensor"),
+            OsStr::new(case.sensor),
+        ];
+        if yaml.is_file() {
+            head.extend([OsStr::new("--calibration"), yaml.as_os_str()]);
+        }
+        cli(&[&head[..], &flags[..], &[pcap.as_os_str()]].concat());
+        let direct_flags = ["-q", "--deskew", "--out"].map(OsStr::new);
+        cli(&[
+            &[OsStr::new("run"), d.as_os_str()],
+            &direct_flags[..],
+            &[direct.as_os_str()],
+        ]
+        .concat());
+        let (p, q) = (kitti_error(&pcap, d), kitti_error(&direct, d));
+        println!(
+            "{} fast, 100 sweeps, deskewed: KITTI t_err pcap {p:.3} %, direct points {q:.3} %, \
+             ratio {:.3} (tolerance 1 +- 0.10)",
+            case.sensor,
+            p / q
+        );
+        assert!(
+            (p / q - 1.0).abs() <= 0.10,
+            "{}: pcap {p} % vs direct {q} %",
             case.sensor
         );
     }

@@ -56,6 +56,11 @@ pub struct InputArgs {
     /// Bag/MCAP topic (default: the only PointCloud2 topic).
     #[arg(long)]
     pub topic: Option<String>,
+    /// Which sequence of a dataset folder that holds several, as kiss-icp's --sequence:
+    /// HeLiPR's LiDAR (Ouster, Velodyne, Avia or Aeva), a nuScenes scene number (61 for
+    /// scene-0061), a KITTI raw odometry sequence (00-10) [default: the only one there].
+    #[arg(long)]
+    pub sequence: Option<String>,
     /// How to decode a sensor recording.
     #[command(flatten)]
     pub sensor: SensorArgs,
@@ -71,12 +76,14 @@ pub struct SensorArgs {
     /// Ouster metadata JSON (as `ouster-cli` saves it beside a recording); Ouster needs it.
     #[arg(long)]
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV); without one,
-    /// the model's published angles (the QT128, Pandar128 and OT128 have none: they need it).
+    /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV), Robosense
+    /// angle.csv; without one, the model's published angles (the QT128, Pandar128, OT128,
+    /// HDL-64E, VLS-128 and VLP-32A/B have none: they need it; a Robosense takes the
+    /// recording's DIFOP packet).
     #[arg(long)]
     pub calibration: Option<PathBuf>,
     /// UDP port of the sensor's data packets [default: Velodyne and Hesai 2368, Ouster the
-    /// metadata's lidar port, else 7502, Livox 56001].
+    /// metadata's lidar port, else 7502, Livox 56001, Robosense 6699].
     #[arg(long)]
     pub port: Option<u16>,
     /// Velodyne and Hesai: azimuth (degrees) where one sweep ends and the next begins [default: a full
@@ -115,6 +122,7 @@ impl InputArgs {
     pub fn open_options(&self, scan_points: usize) -> OpenOptions {
         OpenOptions {
             topic: self.topic.clone(),
+            sequence: self.sequence.clone(),
             scan_points,
             sensor: self.sensor.options(),
             imu: ImuInput::Builtin,

@@ -255,6 +255,7 @@ pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
                 format: Format::Pcap,
                 frames: None,
                 topic: None,
+                sequence: None,
                 sensor: args.sensor.clone(),
             },
             pipeline: args.pipeline.clone(),

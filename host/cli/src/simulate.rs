@@ -3,7 +3,9 @@
 //! recording).
 
 use anyhow::Result;
-use kiss_odom_sim::{Format, ImuSpec, Lidar, PacketSensor, Profile, Request, SimParams, Written};
+use kiss_odom_sim::{
+    Format, ImuSpec, Layout, Lidar, PacketSensor, Profile, Request, SimParams, Written,
+};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -56,6 +58,11 @@ pub struct SimulateArgs {
     /// Sequence time of the first point (s); every timestamp is offset by it.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub start_time: f64,
+    /// Start this many seconds into the drive (0 to 600): the same route and motion, entered
+    /// moving rather than from the standing start (e.g. 8 s puts the urban profile under seed 0
+    /// in its first turn).
+    #[arg(long, default_value_t = 0.0)]
+    pub lead_in: f64,
     /// A real sensor's beams, firing timing and packets instead of the generic sensor (whose
     /// --beams, --columns and --fov-* flags are then ignored); --rate-hz is rounded to the
     /// sensor's (a whole number of packets per turn; 10 or 20 Hz for the OS1, 5, 10 or 20 Hz
@@ -67,6 +74,13 @@ pub struct SimulateArgs {
     /// What to write.
     #[arg(long, value_enum, default_value_t = Format::Generic)]
     pub format: Format,
+    /// Write a public dataset's own layout instead, with its ground truth in that dataset's
+    /// convention (read it back with `run --format` of the same name; mulran and ncd store
+    /// whole 64 x 1024 Ouster scans, so take at most 64 --beams and 1024 --columns, fewer
+    /// leaving rows and columns empty; helipr writes all four of its LiDARs, chosen with `run
+    /// --sequence`).
+    #[arg(long, value_enum, default_value_t = Layout::Generic)]
+    pub layout: Layout,
     /// Also write imu.csv: a MEMS IMU riding with the sensor, sampled at this rate (Hz, e.g.
     /// 200), with white noise, turn-on biases that then walk, and gravity, 11, 23 and -44 mm
     /// from the LiDAR with its axes (as the Mid-360's); sim.toml records all of it. With
@@ -91,6 +105,7 @@ impl SimulateArgs {
             params: self.params(),
             sensor: self.sensor,
             format: self.format,
+            layout: self.layout,
             imu: self.imu_rate.map(|rate| {
                 let spec = ImuSpec::mems(rate);
                 if self.imu_exact {
@@ -109,6 +124,7 @@ impl SimulateArgs {
             seed: self.seed,
             frames: self.frames,
             start_time: self.start_time,
+            lead_in: self.lead_in,
             sensor: Lidar {
                 beams: self.beams,
                 columns: self.columns,

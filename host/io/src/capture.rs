@@ -5,9 +5,11 @@
 //! hands the sweeps on as a frame source.
 
 pub mod frames;
+pub mod hesai_at128;
 pub mod hesai_calib;
 pub mod ouster_meta;
 pub mod pcap;
 pub mod reassembly;
+pub mod robosense_calib;
 pub mod sweeps;
 pub mod velodyne_calib;

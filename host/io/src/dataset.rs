@@ -154,6 +154,23 @@ pub enum Format {
     Mcap,
     /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `--port`).
     Pcap,
+    /// MulRan sequence (`Ouster/`, `global_pose.csv`).
+    Mulran,
+    /// NCLT date folder (`velodyne_sync/`, `../ground_truth/`).
+    Nclt,
+    /// Newer College sequence (`raw_format/ouster_scan/`, `ground_truth/`).
+    Ncd,
+    /// HeLiPR sequence (`LiDAR/<sensor>/`, `LiDAR_GT/`); the sensor is `--sequence`.
+    Helipr,
+    /// Boreas sequence (`lidar/`, `applanix/`).
+    Boreas,
+    /// nuScenes data root (`v1.0-mini/`); the scene is `--sequence`.
+    Nuscenes,
+    /// Apollo-SouthBay sequence (`pcds/`, `poses/`).
+    Apollo,
+    /// KITTI raw data root (`2011_10_03/...`); the odometry sequence is `--sequence`.
+    #[serde(rename = "kitti-raw")]
+    KittiRaw,
 }
 
 /// Everything known about a dataset besides its frames.
@@ -210,6 +227,9 @@ pub struct OpenOptions {
     pub sensor: SensorOptions,
     /// Where the frames' IMU samples come from.
     pub imu: ImuInput,
+    /// Which sequence of a dataset folder that holds several (`--sequence`): HeLiPR's sensor,
+    /// a nuScenes scene number, a KITTI raw odometry sequence.
+    pub sequence: Option<String>,
 }
 
 /// Where the frames' IMU samples come from (`--imu`).
@@ -232,6 +252,7 @@ impl Default for OpenOptions {
         Self {
             topic: None,
             imu: ImuInput::Builtin,
+            sequence: None,
             sensor: SensorOptions::default(),
             scan_points: kiss_odom_core::Capacities::FULL_SCALE.scan_points,
         }
@@ -270,16 +291,51 @@ pub enum SensorKind {
     Vlp32c,
     /// Velodyne HDL-32E.
     Hdl32e,
+    /// Velodyne VLP-32A or VLP-32B (needs its calibration file, --calibration).
+    Vlp32ab,
+    /// Velodyne HDL-64E S2 (needs its calibration file, --calibration).
+    Hdl64eS2,
+    /// Velodyne HDL-64E S3 (needs its calibration file, --calibration).
+    Hdl64eS3,
+    /// Velodyne VLS-128 / Alpha Prime (needs its calibration file, --calibration).
+    Vls128,
     /// Ouster (needs the metadata JSON).
     Ouster,
-    /// Hesai PandarXT-32 (also XT16, XT32M).
+    /// Hesai PandarXT-32.
     Xt32,
+    /// Hesai PandarXT-16 (nominal angles built in; --calibration for the unit's own).
+    Xt16,
+    /// Hesai PandarXT32M (needs its angle correction file, --calibration).
+    Xt32m,
+    /// Hesai Pandar40P (needs its angle correction file, --calibration).
+    Pandar40p,
+    /// Hesai Pandar64 (needs its angle correction file, --calibration).
+    Pandar64,
+    /// Hesai PandarQT64 (needs its angle correction file, --calibration).
+    Qt64,
+    /// Hesai PandarAT128 (needs its angle correction file, the .dat, --calibration).
+    At128,
     /// Hesai PandarQT128 (needs its angle correction file, --calibration).
     Qt128,
     /// Hesai Pandar128 (needs its angle correction file, --calibration).
     Pandar128,
     /// Hesai OT128 (needs its angle correction file, --calibration).
     Ot128,
+    /// Robosense RS-LiDAR-16 (angles from the recording's DIFOP packets or --calibration).
+    Rs16,
+    /// Robosense RS-LiDAR-32 (angles from the recording's DIFOP packets or --calibration).
+    Rs32,
+    /// Robosense RS-Bpearl (angles from the recording's DIFOP packets or --calibration).
+    Bpearl,
+    /// Robosense RS-Helios 5515 (angles from the recording's DIFOP packets or --calibration).
+    Helios,
+    /// Robosense RS-Helios-16P (angles from the recording's DIFOP packets or --calibration).
+    Helios16p,
+    /// Robosense RS-Ruby / RS-LiDAR-128 (angles from the recording's DIFOP packets or
+    /// --calibration).
+    Ruby,
+    /// Robosense RS-M1 (MEMS; every point carries its direction).
+    M1,
     /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).
@@ -298,7 +354,8 @@ pub struct SensorOptions {
     pub port: Option<u16>,
     /// Ouster metadata JSON.
     pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), or Hesai angle correction (CSV).
+    /// Velodyne calibration (XML or YAML), Hesai angle correction (CSV; AT128: .dat), or
+    /// Robosense angle.csv.
     pub calibration: Option<PathBuf>,
     /// Livox frame period, seconds (default 0.1).
     pub frame_period_s: Option<f64>,

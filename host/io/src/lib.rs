@@ -5,11 +5,13 @@
 //! never has to fit in memory and no frame costs more than the scan capacity
 //! ([`OpenOptions::scan_points`]) whatever its file says. [`open()`] picks the reader and
 //! [`Selection`] keeps the frames of a [`FrameRange`]. The readers
-//! come in three families:
+//! come in four families:
 //!
 //! - [`folders`]: a folder of frame files (`.bin`, `.ply`, `.pcd`), generic or KITTI layout;
 //! - [`ros`]: ROS 1 bags and ROS 2 MCAP files carrying `sensor_msgs/PointCloud2`;
-//! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`.
+//! - [`capture`]: pcap/pcapng captures of sensor packets, decoded by `kiss-odom-sensors`;
+//! - [`layouts`]: the public datasets' own layouts (MulRan, NCLT, Newer College, HeLiPR,
+//!   Boreas, nuScenes, Apollo, KITTI raw), read as kiss-icp's dataloaders read them.
 //!
 //! [`poses`] reads and writes trajectories (KITTI, TUM), [`metrics`] scores them against ground
 //! truth as kiss-icp does, [`imu`] holds the IMU samples sensor captures carry beside their
@@ -20,6 +22,7 @@ pub mod capture;
 pub mod dataset;
 pub mod folders;
 pub mod imu;
+pub mod layouts;
 pub mod metrics;
 pub mod open;
 pub mod pose;

@@ -1,15 +1,18 @@
 //! Opening a dataset path: which reader a `--format` (or `auto`) picks.
 //!
-//! `auto` picks KITTI only for the benchmark layout ([`kitti::detect`]), because KITTI scans
-//! get a correction no other data should get, and refuses a KITTI-shaped folder it cannot
-//! read as KITTI; bag, MCAP and pcap/pcapng files are recognised by extension; anything else
-//! is the generic layout with the one frame format its files show (several is refused). An
+//! `auto` picks a public dataset's layout by its folders ([`layouts::detect`], refusing a
+//! folder with the structure of two), KITTI only for the benchmark layout ([`kitti::detect`]),
+//! because KITTI scans get a correction no other data should get, and refuses a KITTI-shaped
+//! folder it cannot read as KITTI; bag, MCAP and pcap/pcapng files are recognised by
+//! extension; anything else is the generic layout with the one frame format its files show
+//! (several is refused). An
 //! explicit format always wins. An `imu.csv` given with `--imu FILE` goes to the frames of any
 //! format by time, in place of the IMU samples the recording carries.
 
 use crate::dataset::{Dataset, Format, FrameSource, ImuInput, Item, OpenOptions, Trailer};
 use crate::folders::{generic, kitti};
 use crate::imu::{self, attach::WithImu};
+use crate::layouts;
 use anyhow::{bail, Result};
 use std::path::Path;
 
@@ -30,6 +33,9 @@ pub fn detect(path: &Path) -> Result<Format> {
                 path.display()
             ),
         };
+    }
+    if let Some(format) = layouts::detect(path)? {
+        return Ok(format);
     }
     if kitti::detect(path)? {
         return Ok(Format::Kitti);
@@ -55,6 +61,14 @@ pub fn open(path: &Path, format: Format, opts: &OpenOptions) -> Result<Dataset> 
         Format::Bag => crate::ros::bag::open(path, opts)?,
         Format::Mcap => crate::ros::mcap::open(path, opts)?,
         Format::Pcap => crate::capture::frames::open(path, opts)?,
+        Format::Mulran
+        | Format::Nclt
+        | Format::Ncd
+        | Format::Helipr
+        | Format::Boreas
+        | Format::Nuscenes
+        | Format::Apollo
+        | Format::KittiRaw => layouts::open(path, format, opts)?,
         Format::Auto => bail!("{}: format detection failed", path.display()),
     };
     match &opts.imu {

@@ -1,6 +1,6 @@
 //! Writes simulated packets as a pcap capture (Ethernet, IPv4, UDP, as Wireshark or VeloView
-//! record a sensor) and, for an Ouster, the metadata JSON that describes it, for a Hesai
-//! QT128 or OT128 its angle correction file.
+//! record a sensor) and, for an Ouster, the metadata JSON that describes it, for a Hesai its
+//! angle correction file (a CSV; the AT128's: a `.dat`).
 //!
 //! The last step of `simulate --format pcap`, after [`crate::packets`]. Datagrams are not
 //! fragmented: an OS1-64 packet (12 544 bytes) travels in one jumbo frame. IMU packets (the
@@ -24,6 +24,10 @@ pub const PCAP_NAME: &str = "packets.pcap";
 pub const META_NAME: &str = "packets.json";
 /// The Hesai angle correction file's name in the output folder.
 pub const ANGLES_NAME: &str = "packets.csv";
+/// The Velodyne calibration (ROS YAML) beside a HDL-64E's or VLS-128's capture.
+pub const CALIBRATION_NAME: &str = "packets.yaml";
+/// The PandarAT128's angle correction file's name in the output folder.
+pub const CORRECTION_NAME: &str = "packets.dat";
 
 /// A pcap file being written.
 pub struct CaptureWriter {
@@ -57,6 +61,8 @@ impl CaptureWriter {
             PacketSensor::Mid360 => ((56300, 56301), (56400, 56401), [192, 168, 1, 160]),
             // A Livox SDK 1 sensor sends its points to the host's port 56001.
             PacketSensor::Avia => ((65000, 56001), (65000, 56001), [192, 168, 1, 150]),
+            // Robosense: points to 6699, device information (DIFOP) to 7788.
+            PacketSensor::Helios => ((6699, 6699), (7788, 7788), [192, 168, 1, 200]),
             // Velodyne and Hesai.
             _ => ((2368, 2368), (2368, 2368), [192, 168, 1, 201]),
         };
@@ -74,6 +80,12 @@ impl CaptureWriter {
     /// Appends one lidar packet, stamped with the time it leaves the sensor.
     pub fn write(&mut self, packet: &Packet) -> Result<()> {
         self.write_to(packet, self.ports)
+    }
+
+    /// Appends one device-information packet ([`PacketSensor::device_packet`]), to the port
+    /// the sensor sends it to (the Robosense DIFOP port; the IMU port of the others).
+    pub fn write_device(&mut self, packet: &Packet) -> Result<()> {
+        self.write_to(packet, self.imu_ports)
     }
 
     /// Appends one IMU packet ([`PacketSensor::imu_packet`]), to the sensor's IMU port.

@@ -7,13 +7,15 @@
 //! ([`trajectory`]) of a [`Profile`]: a [`Simulation`], with an [`imu`] riding along.
 //! [`packets`] fires a real sensor's beams at its own timing and packs its UDP packets,
 //! [`capture`] writes them as a pcap, [`ros`] the frames and IMU samples as a ROS bag or MCAP
-//! file, [`writer`] the generic layout, and [`sequence`] a whole sequence. Every random draw is
+//! file, [`writer`] the generic layout, [`layouts`] the public datasets' own layouts, and
+//! [`sequence`] a whole sequence. Every random draw is
 //! keyed by indices ([`rng`]), so the bytes depend on the seed and parameters only, never on
 //! the thread count.
 
 pub mod capture;
 pub mod city;
 pub mod imu;
+pub mod layouts;
 pub mod packets;
 pub mod profile;
 pub mod rng;
@@ -27,6 +29,7 @@ pub mod trajectory;
 pub mod writer;
 
 pub use imu::ImuSpec;
+pub use layouts::Layout;
 pub use packets::{PacketSensor, PacketSim};
 pub use profile::Profile;
 pub use scene::{Scene, Surface};

@@ -20,11 +20,15 @@
 //! (`packets/ouster_imu.rs`, `packets/mid360_imu.rs`), one a sample, stamped on the clock of
 //! their lidar packets.
 
+mod at128;
 mod avia;
 mod hesai128;
+mod hesai_fixed;
 mod mid360;
 mod mid360_imu;
 mod ouster_imu;
+mod robosense;
+mod velodyne_wide;
 mod xt32;
 
 use crate::imu::ImuSample;
@@ -77,6 +81,60 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "ot128"))]
     #[serde(rename = "ot128")]
     Ot128,
+    /// Robosense RS-Helios: MSOP packets (port 6699) of twelve 32-laser blocks, strongest
+    /// return, 2.5 mm ranges, and a DIFOP packet with the lasers' angles (port 7788).
+    #[cfg_attr(feature = "clap", value(name = "helios"))]
+    #[serde(rename = "helios")]
+    Helios,
+    /// Velodyne HDL-64E S3: upper and lower blocks of 32 lasers, strongest return, 2 mm
+    /// ranges (calibration YAML beside).
+    #[cfg_attr(feature = "clap", value(name = "hdl64e-s3"))]
+    #[serde(rename = "hdl64e-s3")]
+    Hdl64e,
+    /// Velodyne VLS-128: four banks of 32 lasers, strongest return, 4 mm ranges (calibration
+    /// YAML beside).
+    #[cfg_attr(feature = "clap", value(name = "vls128"))]
+    #[serde(rename = "vls128")]
+    Vls128,
+    /// Hesai PandarXT-16, protocol 6.1 with sequence numbers, strongest return, 10 Hz.
+    #[cfg_attr(feature = "clap", value(name = "xt16"))]
+    #[serde(rename = "xt16")]
+    Xt16,
+    /// Hesai PandarXT32M, protocol 6.1, six blocks a packet, strongest return, 10 Hz (angle
+    /// file beside).
+    #[cfg_attr(feature = "clap", value(name = "xt32m"))]
+    #[serde(rename = "xt32m")]
+    Xt32m,
+    /// Hesai Pandar40P, headerless packets of ten blocks, strongest return, 10 Hz (angle file
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "pandar40p"))]
+    #[serde(rename = "pandar40p")]
+    Pandar40p,
+    /// Hesai Pandar64, 8-byte header, sequence numbers, strongest return, 10 Hz (angle file
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "pandar64"))]
+    #[serde(rename = "pandar64")]
+    Pandar64,
+    /// Hesai PandarQT64, protocol 3.1 with sequence numbers, last return, 10 Hz (angle file
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "qt64"))]
+    #[serde(rename = "qt64")]
+    Qt64,
+    /// Hesai PandarAT128, protocol 4.3, strongest return, 10 frames a second of 600 packets
+    /// (its angle correction file, the `.dat`, beside).
+    #[cfg_attr(feature = "clap", value(name = "at128"))]
+    #[serde(rename = "at128")]
+    At128,
+}
+
+impl PacketSensor {
+    /// The Hesai models of fixed layout (`packets/hesai_fixed.rs`).
+    const fn hesai_fixed(self) -> bool {
+        matches!(
+            self,
+            Self::Xt16 | Self::Xt32m | Self::Pandar40p | Self::Pandar64 | Self::Qt64
+        )
+    }
 }
 
 /// Ouster geometry: 64 beams over +-22.5 degrees staggered over four azimuths (an OS1-64's
@@ -154,14 +212,23 @@ pub struct PacketSim<'a> {
 impl PacketSensor {
     /// Velodyne packet period (s), single return.
     fn velodyne_packet_s(model: Model) -> f64 {
-        model.group_us() * velodyne::wire::field::BLOCKS as f64 * 1e-6
+        model.packet_us(false) * 1e-6
     }
 
     fn model(self) -> Model {
         match self {
             Self::Vlp32c => Model::Vlp32c,
+            Self::Hdl64e => Model::Hdl64eS3,
+            Self::Vls128 => Model::Vls128,
             _ => Model::Vlp16,
         }
+    }
+
+    /// The Velodyne calibration file a HDL-64E or VLS-128 needs (the ROS YAML), to write
+    /// beside the capture as [`crate::capture::CALIBRATION_NAME`]; `None` for the others.
+    pub fn calibration_file(self) -> Option<String> {
+        matches!(self, Self::Hdl64e | Self::Vls128)
+            .then(|| velodyne_wide::yaml(&velodyne_wide::calibration(self.model())))
     }
 
     /// A Livox sensor's point timing (the Mid-360's for the sensors that have none).
@@ -183,8 +250,19 @@ impl PacketSensor {
             Self::Xt32 => Err("an XT32 runs at 5, 10 or 20 Hz (--rate-hz)".into()),
             Self::Qt128 | Self::Ot128 if rate_hz == hesai128::RATE_HZ => Ok(rate_hz),
             Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
+            Self::At128 if rate_hz == at128::RATE_HZ => Ok(rate_hz),
+            Self::At128 => Err("an AT128 runs at 10 frames a second (--rate-hz)".into()),
+            s if s.hesai_fixed() && rate_hz == hesai_fixed::RATE_HZ => Ok(rate_hz),
+            s if s.hesai_fixed() => {
+                Err("the simulated Hesai sensors run at 10 Hz (--rate-hz)".into())
+            }
             // Frames by time: any rate, read back with `--frame-period` 1 / rate.
             Self::Mid360 | Self::Avia => Ok(rate_hz),
+            Self::Helios => {
+                let packet = robosense::packet_us() * 1e-6;
+                let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
+                Ok(1.0 / (per_turn * packet))
+            }
             _ => {
                 let packet = Self::velodyne_packet_s(self.model());
                 let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
@@ -196,7 +274,25 @@ impl PacketSensor {
     /// Hesai's angle correction file of a QT128 or OT128, which its decoder needs
     /// (`Laser id,Elevation,Azimuth`); `None` for the other sensors.
     pub fn angle_file(self) -> Option<String> {
+        if self.hesai_fixed() {
+            return Some(hesai_fixed::csv_text(self));
+        }
         matches!(self, Self::Qt128 | Self::Ot128).then(|| hesai128::csv_text(self))
+    }
+
+    /// The device-information packet a sensor sends beside its points, with the lasers'
+    /// angles its decoder needs (the Helios's DIFOP, to port 7788); `None` for the others.
+    pub fn device_packet(self, rate_hz: f64) -> Option<Packet> {
+        (self == Self::Helios).then(|| Packet {
+            offset: 0.0,
+            payload: robosense::difop(rate_hz),
+        })
+    }
+
+    /// The PandarAT128's angle correction file (the `.dat`, version 1.5), which its decoder
+    /// needs; `None` for the other sensors.
+    pub fn correction_file(self) -> Option<Vec<u8>> {
+        (self == Self::At128).then(at128::correction_file)
     }
 
     /// The IMU packet carrying `sample`, the `count`th, sent at trajectory time `offset` and
@@ -217,7 +313,10 @@ impl PacketSensor {
     /// with a UTC date (from 2024-01-01 00:00:00); the other sensors' clocks read sequence time.
     pub const fn clock_origin_s(self) -> i64 {
         match self {
-            Self::Xt32 | Self::Qt128 | Self::Ot128 => xt32::CLOCK_ORIGIN_S,
+            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::Helios | Self::At128 => {
+                xt32::CLOCK_ORIGIN_S
+            }
+            s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
     }
@@ -233,14 +332,21 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Os1 => u64::from(os1::WIDTH / os1::COLUMNS_PER_PACKET),
             PacketSensor::Xt32 => per_period(xt32::PACKET_NS),
             PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
+            s if s.hesai_fixed() => per_period(hesai_fixed::packet_ns(sensor)),
+            PacketSensor::At128 => at128::PACKETS_PER_FRAME,
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
+            PacketSensor::Helios => libm::round(period * 1e6 / robosense::packet_us()) as u64,
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
         };
         Self {
             sim,
             sensor,
             model,
-            calib: Calibration::nominal(model),
+            calib: if model.needs_calibration() {
+                velodyne_wide::calibration(model)
+            } else {
+                Calibration::nominal(model)
+            },
             per_sweep,
         }
     }
@@ -258,6 +364,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Xt32 | PacketSensor::Qt128 | PacketSensor::Ot128 if k > 0 => {
                 k * self.per_sweep + 1
             }
+            s if s.hesai_fixed() && k > 0 => k * self.per_sweep + 1,
             _ => k * self.per_sweep,
         }
     }
@@ -271,7 +378,19 @@ impl<'a> PacketSim<'a> {
                 self.timed_offset(last, self.sensor.timing().points - 1)
             }
             PacketSensor::Xt32 => xt32::last_offset(last),
+            PacketSensor::Helios => self.robosense_last_offset(last),
+            PacketSensor::Hdl64e | PacketSensor::Vls128 => {
+                let groups = velodyne::Layout {
+                    model: self.model,
+                    dual: false,
+                }
+                .groups();
+                let banks = self.model.banks();
+                self.wide_start(last) + self.model.firing_s(groups - 1, banks - 1, 31)
+            }
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
+            s if s.hesai_fixed() => hesai_fixed::last_offset(s, last),
+            PacketSensor::At128 => at128::last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
                 self.packet_offset(last) + self.model.firing_time_s(n, 31)
@@ -299,6 +418,10 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Avia => self.avia_packet(p),
                 PacketSensor::Xt32 => self.xt32_packet(p),
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
+                PacketSensor::Helios => self.robosense_packet(p),
+                PacketSensor::Hdl64e | PacketSensor::Vls128 => self.wide_packet(p),
+                s if s.hesai_fixed() => self.hesai_fixed_packet(p),
+                PacketSensor::At128 => self.at128_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();
@@ -356,7 +479,7 @@ impl<'a> PacketSim<'a> {
     /// Trajectory time of Velodyne packet `p`'s timestamp: whole microseconds, as the sensor's
     /// clock counts them.
     fn packet_offset(&self, p: u64) -> f64 {
-        let us = self.model.group_us() * velodyne::wire::field::BLOCKS as f64;
+        let us = self.model.packet_us(false);
         libm::floor(p as f64 * us) * 1e-6
     }
 
@@ -405,7 +528,7 @@ impl<'a> PacketSim<'a> {
         let stamp = (start_us + libm::round(t0 * 1e6) as i64).rem_euclid(i64::from(HOUR_US));
         buf[field::TIMESTAMP].copy_from_slice(&(stamp as u32).to_le_bytes());
         buf[field::RETURN_MODE] = 0x37;
-        buf[field::PRODUCT] = self.model.product();
+        buf[field::PRODUCT] = self.model.product().unwrap_or(0);
         let last = t0
             + self
                 .model

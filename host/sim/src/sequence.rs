@@ -7,6 +7,7 @@
 
 use crate::capture;
 use crate::imu::{self, ImuSample, ImuSpec};
+use crate::layouts::{self, Layout};
 use crate::packets::{PacketSensor, PacketSim};
 use crate::profile::Profile;
 use crate::ros;
@@ -49,6 +50,8 @@ pub struct Request {
     pub format: Format,
     /// An IMU riding along, written to `imu.csv`.
     pub imu: Option<ImuSpec>,
+    /// A public dataset's layout to write instead of the generic one.
+    pub layout: Layout,
     /// Replace a sequence already in the folder.
     pub overwrite: bool,
 }
@@ -79,6 +82,8 @@ struct Provenance<'a> {
     seed: u64,
     frames: u64,
     start_time: f64,
+    #[serde(skip_serializing_if = "is_zero")]
+    lead_in: f64,
     /// What the files mean, for a reader without this source at hand.
     layout: &'static str,
     sensor: &'a Lidar,
@@ -135,10 +140,34 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
             .rate_hz(params.sensor.rate_hz)
             .map_err(anyhow::Error::msg)?;
     }
+    if request.layout != Layout::Generic {
+        if request.format != Format::Generic || request.sensor.is_some() || request.imu.is_some() {
+            bail!(
+                "--layout {}: a dataset layout is written on its own (without --format, \
+                 --sensor or --imu-rate)",
+                serde_json::to_value(request.layout)?
+                    .as_str()
+                    .unwrap_or("?")
+            );
+        }
+        let (rows, columns) = layouts::OUSTER_GRID;
+        if request.layout.ouster_grid()
+            && (params.sensor.beams > rows || params.sensor.columns > columns)
+        {
+            // Each beam is a row of the OS1-64's grid and each column one of its firings.
+            bail!(
+                "--layout {}: the scans are {rows} x {columns} Ouster grids: at most {rows} \
+                 --beams and {columns} --columns (fewer leave rows and columns without returns)",
+                serde_json::to_value(request.layout)?
+                    .as_str()
+                    .unwrap_or("?")
+            );
+        }
+    }
     if request.format == Format::Pcap && request.sensor.is_none() {
         bail!(
-            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128 \
-             or ot128)"
+            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128, \
+             ot128, xt16, xt32m, pandar40p, pandar64 or qt64)"
         );
     }
     Ok(params)
@@ -154,6 +183,9 @@ pub fn write(
 ) -> Result<Written> {
     let params = params_of(request)?;
     let sim = Simulation::new(params).context("invalid simulation parameters")?;
+    if request.layout != Layout::Generic {
+        return write_layout(request, &sim, out, stop, progress);
+    }
     let packets = request.sensor.map(|s| PacketSim::new(&sim, s));
     let last = params.frames - 1;
     let end_offset = match &packets {
@@ -176,6 +208,7 @@ pub fn write(
         seed: params.seed,
         frames: params.frames,
         start_time: params.start_time,
+        lead_in: params.lead_in,
         layout: LAYOUT,
         sensor: &params.sensor,
         packets: packets
@@ -222,12 +255,23 @@ pub fn write(
                 std::fs::write(&path, angles)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
+            if let Some(text) = sensor.calibration_file() {
+                let path = writer.staging().join(capture::CALIBRATION_NAME);
+                std::fs::write(&path, text)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            if let Some(dat) = sensor.correction_file() {
+                let path = writer.staging().join(capture::CORRECTION_NAME);
+                std::fs::write(&path, dat)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
             let path = writer.staging().join(capture::PCAP_NAME);
-            Some(capture::CaptureWriter::create(
-                &path,
-                sensor,
-                params.start_time,
-            )?)
+            let mut c = capture::CaptureWriter::create(&path, sensor, params.start_time)?;
+            // The device packet first: its decoder needs the angles it carries.
+            if let Some(d) = sensor.device_packet(params.sensor.rate_hz) {
+                c.write_device(&d)?;
+            }
+            Some(c)
         }
         _ => None,
     };
@@ -284,6 +328,71 @@ pub fn write(
     }
     writer.finish()?;
     Ok(Written::Complete { points, route_m })
+}
+
+/// Writes `sim` in the dataset layout `request` asks for.
+fn write_layout(
+    request: &Request,
+    sim: &Simulation,
+    out: &Path,
+    stop: &dyn Fn() -> bool,
+    progress: &mut dyn FnMut(u64),
+) -> Result<Written> {
+    let params = sim.params();
+    let last = params.frames - 1;
+    let route_m = sim.trajectory().arc_length(sim.end_offset(last));
+    let provenance = LayoutProvenance {
+        generator: "kiss-odom simulate",
+        version: env!("CARGO_PKG_VERSION"),
+        profile: params.profile,
+        seed: params.seed,
+        frames: params.frames,
+        start_time: params.start_time,
+        lead_in: params.lead_in,
+        layout: request.layout,
+        sensor: &params.sensor,
+    };
+    let header = "# Written by `kiss-odom simulate --layout`: the parameters that generated this \
+                  dataset.\n\n";
+    let toml = toml::to_string(&provenance).context("serialising sim.toml")?;
+    let outcome = layouts::write(
+        sim,
+        request.layout,
+        out,
+        request.overwrite,
+        &format!("{header}{toml}"),
+        stop,
+        progress,
+    )?;
+    Ok(match outcome.complete {
+        true => Written::Complete {
+            points: outcome.points,
+            route_m,
+        },
+        false => Written::Stopped {
+            frames: outcome.frames,
+        },
+    })
+}
+
+/// What a dataset layout's `sim.toml` records.
+#[derive(Serialize)]
+struct LayoutProvenance<'a> {
+    generator: &'static str,
+    version: &'static str,
+    profile: Profile,
+    seed: u64,
+    frames: u64,
+    start_time: f64,
+    #[serde(skip_serializing_if = "is_zero")]
+    lead_in: f64,
+    layout: Layout,
+    sensor: &'a Lidar,
+}
+
+/// `sim.toml` records a lead-in only when there is one.
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// The IMU samples as the sensor's IMU packets, sent between its lidar packets in time order.

@@ -15,6 +15,9 @@ use serde::Serialize;
 /// Most frames one run may ask for (a longer route means a larger scene in memory).
 pub const MAX_FRAMES: u64 = 100_000;
 
+/// Longest lead-in (s): the scene is built along the whole route, the lead-in's included.
+pub const MAX_LEAD_IN: f64 = 600.0;
+
 /// Everything that determines a simulated sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SimParams {
@@ -26,6 +29,9 @@ pub struct SimParams {
     pub frames: u64,
     /// Sequence time of the first column (s).
     pub start_time: f64,
+    /// Seconds of the drive before the first column, not swept: the sequence starts that far
+    /// along the route, moving (0: at the route's start, where the car profiles stand still).
+    pub lead_in: f64,
     /// The sensor.
     pub sensor: Lidar,
 }
@@ -38,6 +44,7 @@ impl SimParams {
             seed,
             frames,
             start_time: 0.0,
+            lead_in: 0.0,
             sensor: Lidar::DEFAULT,
         }
     }
@@ -52,6 +59,9 @@ impl SimParams {
         }
         if !self.start_time.is_finite() || self.start_time.abs() > 1e9 {
             bail!("start-time must be finite and within 1e9 s");
+        }
+        if !(0.0..=MAX_LEAD_IN).contains(&self.lead_in) {
+            bail!("lead-in must be in 0..={MAX_LEAD_IN} s");
         }
         self.sensor.validate().map_err(anyhow::Error::msg)
     }
@@ -73,7 +83,8 @@ impl Simulation {
         params.validate()?;
         let l = params.sensor;
         let duration = (params.frames + 1) as f64 * l.period();
-        let trajectory = Trajectory::generate(params.profile, params.seed, duration);
+        let trajectory =
+            Trajectory::generate_after(params.profile, params.seed, params.lead_in, duration);
         let scene = city::build(params.profile, params.seed, trajectory.route());
         let sweeper = sensor::Sweeper::new(l, params.seed, params.start_time);
         let first_end = trajectory.pose(sweeper.end_offset(0));
@@ -135,5 +146,23 @@ impl Simulation {
         }
         let end = self.trajectory.pose(self.sweeper.end_offset(k));
         self.first_end.inverse() * end
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lead_in_outside_0_to_600_s_or_not_a_number_is_refused_naming_it() {
+        for bad in [-0.1, f64::NAN, MAX_LEAD_IN + 1.0, f64::INFINITY] {
+            let mut p = SimParams::new(Profile::Urban, 0, 1);
+            p.lead_in = bad;
+            let e = p.validate().unwrap_err().to_string();
+            assert!(e.contains("lead-in"), "{bad}: {e}");
+        }
+        let mut p = SimParams::new(Profile::Urban, 0, 1);
+        p.lead_in = MAX_LEAD_IN;
+        assert!(p.validate().is_ok());
     }
 }

@@ -619,11 +619,19 @@ pub struct Trajectory {
     bounce: [Wave; 2],
     /// Swings in yaw, pitch, roll and height, if the profile has them.
     swing: Option<[[Wave; 2]; 4]>,
+    /// Seconds of the drive before trajectory time 0.
+    lead_in: f64,
 }
 
 impl Trajectory {
     /// The trajectory of `profile` under `seed`, with route for `duration` seconds of driving.
     pub fn generate(profile: Profile, seed: u64, duration: f64) -> Self {
+        Self::generate_after(profile, seed, 0.0, duration)
+    }
+
+    /// As [`Trajectory::generate`], but time 0 is `lead_in` seconds into the drive: the same
+    /// route and motion, entered moving.
+    pub fn generate_after(profile: Profile, seed: u64, lead_in: f64, duration: f64) -> Self {
         let motion = MotionParams::of(profile);
         let mut rng = Stream::new(seed, Purpose::Motion);
         let speed = Speed::new(&mut rng, motion.speed.0, motion.speed.1, motion.launch_tau);
@@ -636,7 +644,7 @@ impl Trajectory {
         };
         let (roll, pitch, bounce) = (waves(wr), waves(wp), waves(wz));
         // Speed never exceeds the band's top, so this covers the whole run.
-        let length = motion.speed.1 * duration.max(0.0);
+        let length = motion.speed.1 * (lead_in + duration.max(0.0));
         let route = Route::generate(profile, seed, length, &speed);
         // Drawn from a stream of their own, so the cars' trajectories are unchanged.
         let mut rng = Stream::new(seed, Purpose::Swing);
@@ -653,6 +661,7 @@ impl Trajectory {
             pitch,
             bounce,
             swing,
+            lead_in,
         }
     }
 
@@ -661,18 +670,32 @@ impl Trajectory {
         &self.route
     }
 
-    /// Arc length driven after `t` seconds.
+    /// Arc length driven after `t` seconds (from time 0, the lead-in's not counted).
     pub fn arc_length(&self, t: f64) -> f64 {
-        self.speed.arc_length(t)
+        if self.lead_in == 0.0 {
+            return self.speed.arc_length(t);
+        }
+        self.speed.arc_length(self.drive_time(t)) - self.speed.arc_length(self.lead_in)
     }
 
     /// Speed at `t` (m/s).
     pub fn speed(&self, t: f64) -> f64 {
-        self.speed.speed(t)
+        self.speed.speed(self.drive_time(t))
+    }
+
+    /// Seconds since the drive's start at trajectory time `t` (`t` itself, bit for bit,
+    /// without a lead-in).
+    fn drive_time(&self, t: f64) -> f64 {
+        if self.lead_in == 0.0 {
+            t
+        } else {
+            self.lead_in + t
+        }
     }
 
     /// Roll, pitch and yaw (rad) and position (m) at `t`: the pose's parameters.
     pub fn state(&self, t: f64) -> ([f64; 3], [f64; 3]) {
+        let t = self.drive_time(t);
         let m = &self.motion;
         let s = self.speed.arc_length(t);
         let v = self.speed.speed(t);

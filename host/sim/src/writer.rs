@@ -9,6 +9,7 @@
 //! DIR/packets.pcap           with --format pcap: the same sweeps as sensor packets
 //! DIR/packets.json           with --format pcap and an Ouster: its metadata
 //! DIR/packets.csv            with --format pcap and a QT128 or OT128: its angle correction file
+//! DIR/packets.yaml           with --format pcap and a HDL-64E or VLS-128: its calibration
 //! DIR/points.bag             with --format bag: the frames (and IMU samples) as a ROS 1 bag
 //! DIR/points.mcap            with --format mcap: the same as a ROS 2 MCAP file
 //! ```
@@ -26,13 +27,15 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files and folders the layout owns.
-const OWNED_FILES: [&str; 9] = [
+const OWNED_FILES: [&str; 11] = [
     "poses.txt",
     "times.txt",
     "sim.toml",
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
+    crate::capture::CALIBRATION_NAME,
+    crate::capture::CORRECTION_NAME,
     crate::imu::CSV_NAME,
     crate::ros::BAG_NAME,
     crate::ros::MCAP_NAME,

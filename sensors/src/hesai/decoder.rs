@@ -1,11 +1,11 @@
 //! Hesai packets to sweeps: checks, order and loss detection (by the UDP sequence number when
 //! the packets carry one, else by their times), the cut, then each return to a point.
 
-use super::model::{
-    Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, MAX_CHANNELS, PANDAR128_NEAR_M,
-};
+use super::angles::{Angles, ChannelAngles, MirrorAngles};
+use super::at128::At128Correction;
+use super::model::{Config, Firing, Model, ReturnMode, DISTANCE_UNIT_M, PANDAR128_NEAR_M};
 use super::wire::Packet;
-use super::wire128;
+use super::{wire128, wire_fixed};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     lost_in_step, Assembly, AzimuthCut, Decode, LateRun, PointMeta, Pushed, Return, SweepEnd,
@@ -20,28 +20,27 @@ pub const GAP_NS: u64 = 300_000_000;
 /// restart): losses are then counted from the times.
 const MAX_SEQUENCE_STEP: u32 = 1 << 20;
 
-/// One channel, ready to use.
-#[derive(Clone, Copy, Debug, Default)]
-struct Beam {
-    cos_e: f64,
-    sin_e: f64,
-    azimuth_deg: f64,
-}
+/// The return-mode byte of triple return (first, last, strongest: the XT32M's).
+const TRIPLE_RETURN: u8 = 0x3D;
 
 /// A checked packet of either layout.
 #[derive(Clone, Copy)]
 enum View<'a> {
     Xt32(Packet<'a>),
     Wide(wire128::Packet<'a>),
+    Fixed(wire_fixed::Packet<'a>),
 }
 
 impl<'a> View<'a> {
     /// Checks `bytes` as a packet of `model`'s protocol.
     fn new_checked(model: Model, bytes: &'a [u8]) -> Result<Self, PacketError> {
+        if let Some((format, _)) = model.fixed() {
+            return wire_fixed::Packet::new_checked(format, bytes).map(Self::Fixed);
+        }
         let version = match model {
             Model::Xt32 => return Packet::new_checked(bytes).map(Self::Xt32),
             Model::Qt128 => wire128::VERSION_QT,
-            Model::Pandar128 | Model::Ot128 => wire128::VERSION_128,
+            _ => wire128::VERSION_128,
         };
         let p = wire128::Packet::new_checked(bytes)?;
         if p.version() != version {
@@ -49,46 +48,86 @@ impl<'a> View<'a> {
         }
         Ok(Self::Wide(p))
     }
-    fn returns(&self) -> u8 {
-        match self {
+    /// Whether the header's return count fits `mode`. Where the count is the mode's (QT64,
+    /// QT128, Pandar128, OT128: their manuals' "1 single, 2 dual"; the QT64's capture says 2
+    /// in dual) it must equal it. Protocol 6.1 (XT32, XT16, XT32M) and the AT128 may state
+    /// the most returns the unit sends instead (the XT manual's later edition: "0x02, each
+    /// channel can generate two returns maximum"; the XT32M's capture says 3 in dual mode):
+    /// the count must be at least the mode's and at most that maximum. The 40P has no header
+    /// and the Pandar64's has no count: bytes 6 and 7 are reserved (nebula's `Header8B`, the
+    /// manual) and its "first block's return" byte 4 reads 0, single, in all 2,400 packets of
+    /// its dual-return capture, so neither can be checked.
+    fn returns_fit(&self, model: Model, mode: ReturnMode) -> bool {
+        let n = mode.returns();
+        let count = match self {
             Self::Xt32(p) => p.returns(),
-            Self::Wide(p) => p.returns(),
+            Self::Wide(p) => return usize::from(p.returns()) == n,
+            Self::Fixed(p) => match p.header_returns() {
+                Some(r) => r,
+                None => return true,
+            },
+        };
+        let most = match model {
+            Model::PandarQT64 => return usize::from(count) == n,
+            Model::Xt32m => 3,
+            _ => 2,
+        };
+        (n..=most).contains(&usize::from(count))
+    }
+    /// Metres per distance unit.
+    fn distance_unit_m(&self) -> f64 {
+        match self {
+            Self::Fixed(p) => f64::from(p.distance_unit_mm()) * 1e-3,
+            _ => DISTANCE_UNIT_M,
         }
     }
     fn return_mode(&self) -> u8 {
         match self {
             Self::Xt32(p) => p.return_mode(),
             Self::Wide(p) => p.return_mode(),
+            Self::Fixed(p) => p.return_mode(),
         }
     }
     fn azimuth(&self, k: usize) -> u16 {
         match self {
             Self::Xt32(p) => p.azimuth(k),
             Self::Wide(p) => p.azimuth(k),
+            Self::Fixed(p) => p.azimuth(k),
+        }
+    }
+    /// Block `k`'s azimuth in 1/25,600 degree (the AT128's fine byte; the others' hundredths
+    /// times 256).
+    fn fine_azimuth(&self, k: usize) -> u32 {
+        match self {
+            Self::Fixed(p) => p.fine_azimuth(k),
+            _ => u32::from(self.azimuth(k)) << 8,
         }
     }
     fn channel(&self, k: usize, c: usize) -> (u16, u8) {
         match self {
             Self::Xt32(p) => p.channel(k, c),
             Self::Wide(p) => p.channel(k, c),
+            Self::Fixed(p) => p.channel(k, c),
         }
     }
     fn unix_ns(&self) -> Option<u64> {
         match self {
             Self::Xt32(p) => p.unix_ns(),
             Self::Wide(p) => p.unix_ns(),
+            Self::Fixed(p) => p.unix_ns(),
         }
     }
     fn udp_sequence(&self) -> Option<u32> {
         match self {
             Self::Xt32(p) => p.udp_sequence(),
             Self::Wide(p) => p.udp_sequence(),
+            Self::Fixed(p) => p.udp_sequence(),
         }
     }
     /// Block `k`'s firing state, for a mode of `returns` returns.
     fn firing(&self, k: usize, returns: usize) -> Firing {
         match self {
-            Self::Xt32(_) => Firing {
+            Self::Xt32(_) | Self::Fixed(_) => Firing {
                 returns,
                 ..Firing::default()
             },
@@ -103,7 +142,9 @@ impl<'a> View<'a> {
     }
 }
 
-/// Hesai packets in, sweeps out (see the module doc of [`crate::hesai`]).
+/// Hesai packets in, sweeps out (see the module doc of [`crate::hesai`]). `A` is how returns
+/// get their directions: each channel's angles ([`Decoder::new`]) or the AT128's mirror-frame
+/// correction ([`Decoder::at128`]).
 ///
 /// ```
 /// use kiss_odom_sensors::{hesai, Chunk, Decode, SweepSink, SweepStart, SweepStats};
@@ -120,9 +161,9 @@ impl<'a> View<'a> {
 /// assert!(dec.push(&[0u8; 100], &mut sink).is_err());
 /// dec.finish(&mut sink);
 /// ```
-pub struct Decoder {
+pub struct Decoder<A: Angles = ChannelAngles> {
     model: Model,
-    beams: [Beam; MAX_CHANNELS],
+    angles: A,
     /// The return mode and its byte, fixed by the first packet decoded.
     mode: Option<(ReturnMode, u8)>,
     /// Time of the last packet accepted, ns since the Unix epoch.
@@ -130,6 +171,8 @@ pub struct Decoder {
     last_sequence: Option<u32>,
     last_azimuth: u16,
     cut: AzimuthCut,
+    /// The AT128's mirror frame the open sweep holds.
+    sweep_frame: Option<usize>,
     /// The open sweep's time origin: its first packet's first firing, ns.
     sweep_start_ns: u64,
     /// Firings decoded into the open sweep.
@@ -138,11 +181,15 @@ pub struct Decoder {
     asm: Assembly,
 }
 
-impl Decoder {
+impl Decoder<ChannelAngles> {
     /// A decoder for `config`; nothing is decoded until the first packet. The calibration
-    /// must have one entry per channel of the model, and only the XT32 may go without.
+    /// must have one entry per channel of the model, and only the XT32 and XT16 may go
+    /// without. The AT128 has no per-channel angles: [`Decoder::at128`].
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         let model = config.model;
+        if model == Model::At128 {
+            return Err(ConfigError::Calibration);
+        }
         let calibration = config
             .calibration
             .or(model.nominal_calibration())
@@ -151,23 +198,32 @@ impl Decoder {
         if calibration.channels != model.channels() {
             return Err(ConfigError::Calibration);
         }
-        let mut beams = [Beam::default(); MAX_CHANNELS];
-        for (c, b) in beams.iter_mut().enumerate().take(model.channels()) {
-            let e = calibration.elevation_deg[c].to_radians();
-            *b = Beam {
-                cos_e: libm::cos(e),
-                sin_e: libm::sin(e),
-                azimuth_deg: calibration.azimuth_deg[c],
-            };
-        }
+        let angles = ChannelAngles::new(&calibration);
+        Self::with(model, angles, AzimuthCut::new(config.cut_angle_deg)?)
+    }
+}
+
+impl Decoder<MirrorAngles> {
+    /// A PandarAT128 decoder with the unit's mirror-frame angle correction (the `.dat` the
+    /// host reads); its sweeps are its mirror frames (each sweep ends when a packet of the
+    /// next frame arrives), so it takes no cut angle.
+    pub fn at128(correction: &At128Correction) -> Result<Self, ConfigError> {
+        let angles = MirrorAngles::new(correction)?;
+        Self::with(Model::At128, angles, AzimuthCut::new(None)?)
+    }
+}
+
+impl<A: Angles> Decoder<A> {
+    fn with(model: Model, angles: A, cut: AzimuthCut) -> Result<Self, ConfigError> {
         Ok(Self {
             model,
-            beams,
+            angles,
             mode: None,
             last_ns: None,
             last_sequence: None,
             last_azimuth: 0,
-            cut: AzimuthCut::new(config.cut_angle_deg)?,
+            cut,
+            sweep_frame: None,
             sweep_start_ns: 0,
             column: 0,
             late_run: LateRun::default(),
@@ -185,17 +241,20 @@ impl Decoder {
         self.mode.map(|(m, _)| m)
     }
 
+    /// The packet's return mode: the one the first packet fixed, which every packet's mode
+    /// byte must repeat (else another sensor's) and its header's return count fit (else the
+    /// header is damaged).
     fn identify(&mut self, p: &View<'_>) -> Result<ReturnMode, PacketError> {
         let byte = p.return_mode();
-        if let Some((mode, b)) = self.mode {
-            return if b == byte {
-                Ok(mode)
-            } else {
-                Err(PacketError::OtherSensor)
-            };
-        }
-        let mode = ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?;
-        if mode.returns() != usize::from(p.returns()) {
+        let mode = match self.mode {
+            Some((mode, b)) if b == byte => mode,
+            Some(_) => return Err(PacketError::OtherSensor),
+            None if byte == TRIPLE_RETURN => return Err(PacketError::TripleReturn),
+            None => {
+                ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?
+            }
+        };
+        if !p.returns_fit(self.model, mode) {
             return Err(PacketError::UnknownReturnMode);
         }
         self.mode = Some((mode, byte));
@@ -218,6 +277,11 @@ impl Decoder {
         let p = View::new_checked(self.model, bytes)?;
         let mode = self.identify(&p)?;
         let t = p.unix_ns().ok_or(PacketError::Timestamp)?;
+        // Every block's azimuth must lie in a frame of the AT128's correction.
+        let blocks = self.model.blocks();
+        if (0..blocks).any(|k| self.angles.frame(p.fine_azimuth(k)).is_none()) {
+            return Err(PacketError::Azimuth);
+        }
         let mut step = None;
         if let Some(last) = self.last_ns {
             if t <= last {
@@ -238,11 +302,19 @@ impl Decoder {
             self.cut.restart(Some(self.last_azimuth));
             return Ok(Pushed::Again);
         }
+        let frame = self.angles.frame(p.fine_azimuth(0));
+        let by_frame = self.angles.sweeps_are_frames();
+        if by_frame && self.asm.open.is_some() && frame != self.sweep_frame {
+            // The AT128's next mirror frame: this sweep is complete.
+            self.asm.end(sink, SweepEnd::Complete);
+            return Ok(Pushed::Again);
+        }
         if self.asm.open.is_none() {
             let (earliest, _) = self.model.firing_span_ns(0, &p.firing(0, returns));
             let start = t.saturating_add_signed(earliest);
             self.asm.begin(sink, start, None);
             self.sweep_start_ns = start;
+            self.sweep_frame = frame;
             self.column = 0;
         }
         let lost = self.lost_before(&p, step, returns);
@@ -250,11 +322,11 @@ impl Decoder {
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
-        let last_az = p.azimuth(self.model.blocks() - 1);
+        let last_az = p.azimuth(blocks - 1);
         self.last_ns = Some(t);
         self.last_sequence = p.udp_sequence();
         self.last_azimuth = last_az;
-        if self.cut.passed(last_az) {
+        if !by_frame && self.cut.passed(last_az) {
             self.asm.end(sink, SweepEnd::Complete);
             self.cut.restart(Some(last_az));
             return Ok(Pushed::Ended);
@@ -282,13 +354,16 @@ impl Decoder {
         let returns = mode.returns();
         let base = t as i64 - self.sweep_start_ns as i64;
         let channels = self.model.channels();
+        let unit_m = p.distance_unit_m();
         for firing in 0..self.model.blocks() / returns {
             let block = firing * returns;
-            let azimuth = f64::from(p.azimuth(block)) * 0.01;
+            let fine = p.fine_azimuth(block);
+            let frame = self.angles.frame(fine).unwrap_or(0);
             let state = p.firing(block, returns);
-            for (c, beam) in self.beams.iter().enumerate().take(channels) {
+            for c in 0..channels {
                 let mut emit = |raw: (u16, u8), ret| {
-                    let near = f64::from(raw.0) * DISTANCE_UNIT_M < PANDAR128_NEAR_M;
+                    let d = f64::from(raw.0) * unit_m;
+                    let near = d < PANDAR128_NEAR_M;
                     let offset = self
                         .model
                         .point_offset_ns(block, c, &Firing { near, ..state });
@@ -299,7 +374,8 @@ impl Decoder {
                         ret,
                         intensity: u16::from(raw.1),
                     };
-                    self.asm.push(sink, point(beam, raw.0, azimuth), time, meta);
+                    let xyz = self.angles.point(fine, frame, c, d);
+                    self.asm.push(sink, xyz, time, meta);
                 };
                 let first = p.channel(block, c);
                 match mode {
@@ -330,7 +406,7 @@ impl Decoder {
     }
 }
 
-impl Decode for Decoder {
+impl<A: Angles> Decode for Decoder<A> {
     fn push<S: SweepSink>(&mut self, bytes: &[u8], sink: &mut S) -> Result<Pushed, PacketError> {
         let r = self.accept(bytes, sink);
         self.asm.counted(r)
@@ -341,17 +417,4 @@ impl Decode for Decoder {
     fn between_sweeps(&self) -> &SweepStats {
         &self.asm.pending
     }
-}
-
-/// A return in the sensor frame: x forward (azimuth 0), y left, z up (the ROS convention; the
-/// azimuth turns clockwise seen from above).
-fn point(beam: &Beam, raw: u16, block_azimuth_deg: f64) -> [f64; 3] {
-    let d = f64::from(raw) * DISTANCE_UNIT_M;
-    let theta = (block_azimuth_deg + beam.azimuth_deg).to_radians();
-    let xy = d * beam.cos_e;
-    [
-        xy * libm::cos(theta),
-        -xy * libm::sin(theta),
-        d * beam.sin_e,
-    ]
 }

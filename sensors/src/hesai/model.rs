@@ -3,7 +3,9 @@
 
 pub use super::firetimes::PANDAR128_NEAR_M;
 use super::firetimes::{NONE, OT128_NS, PANDAR128_NS, QT128_NS};
+use super::timing::Timing;
 use super::wire::field;
+use super::wire_fixed::{self, Format};
 use crate::error::ConfigError;
 use crate::sweep::Return;
 
@@ -29,6 +31,19 @@ pub enum Model {
     Pandar128,
     /// OT128 (protocol 1.4): needs its angle correction file.
     Ot128,
+    /// Pandar40P (no header; 10 blocks of 40 channels): needs its angle correction file.
+    Pandar40P,
+    /// Pandar64 (8-byte header; 6 blocks of 64 channels): needs its angle correction file.
+    Pandar64,
+    /// PandarQT64 (protocol 3.1; 4 blocks of 64 channels): needs its angle correction file.
+    PandarQT64,
+    /// PandarXT16 (protocol 6.1; 8 blocks of 16 channels): nominal angles built in.
+    Xt16,
+    /// PandarXT32M (protocol 6.1; 6 blocks of 32 channels): needs its angle correction file.
+    Xt32m,
+    /// PandarAT128 (protocol 4.3; 2 blocks of 128 channels): needs its mirror-frame angle
+    /// correction file (`.dat`, [`super::At128Correction`]).
+    At128,
 }
 
 /// What a packet says about its firings, for [`Model::point_offset_ns`].
@@ -59,25 +74,61 @@ impl Firing {
 }
 
 impl Model {
+    /// Every model decoded.
+    pub const ALL: [Self; 10] = [
+        Self::Xt32,
+        Self::Qt128,
+        Self::Pandar128,
+        Self::Ot128,
+        Self::Pandar40P,
+        Self::Pandar64,
+        Self::PandarQT64,
+        Self::Xt16,
+        Self::Xt32m,
+        Self::At128,
+    ];
+    /// The packet format and firing times of a fixed-layout model ([`wire_fixed`]).
+    pub(super) const fn fixed(self) -> Option<(&'static Format, Timing)> {
+        Some(match self {
+            Self::Pandar40P => (&wire_fixed::PANDAR40P, Timing::Pandar40P),
+            Self::Pandar64 => (&wire_fixed::PANDAR64, Timing::Pandar64),
+            Self::PandarQT64 => (&wire_fixed::PANDARQT64, Timing::PandarQT64),
+            Self::Xt16 => (&wire_fixed::PANDARXT16, Timing::Xt16),
+            Self::Xt32m => (&wire_fixed::PANDARXT32M, Timing::Xt32m),
+            Self::At128 => (&wire_fixed::PANDARAT128, Timing::At128),
+            _ => return None,
+        })
+    }
+    /// The packet format of a fixed-layout model ([`wire_fixed`]), `None` for the XT32 and
+    /// the 128-channel models of protocols 3.2 and 1.4.
+    pub const fn fixed_format(self) -> Option<&'static Format> {
+        match self.fixed() {
+            Some((f, _)) => Some(f),
+            None => None,
+        }
+    }
     /// Channels a block holds.
     pub const fn channels(self) -> usize {
-        match self {
-            Self::Xt32 => CHANNELS,
-            _ => MAX_CHANNELS,
+        match self.fixed() {
+            Some((f, _)) => f.lasers,
+            None if matches!(self, Self::Xt32) => CHANNELS,
+            None => MAX_CHANNELS,
         }
     }
     /// Blocks a packet holds.
     pub const fn blocks(self) -> usize {
-        match self {
-            Self::Xt32 => field::BLOCKS,
-            _ => super::wire128::BLOCKS,
+        match self.fixed() {
+            Some((f, _)) => f.blocks,
+            None if matches!(self, Self::Xt32) => field::BLOCKS,
+            None => super::wire128::BLOCKS,
         }
     }
-    /// The angles to use without an angle correction file: the XT32's nominal ones; the
-    /// 128-channel models have none (each unit needs its own file).
+    /// The angles to use without an angle correction file: the XT32's and XT16's nominal
+    /// ones; the other models have none (each unit needs its own file).
     pub const fn nominal_calibration(self) -> Option<Calibration> {
         match self {
             Self::Xt32 => Some(Calibration::nominal()),
+            Self::Xt16 => Some(Calibration::nominal_xt16()),
             _ => None,
         }
     }
@@ -88,15 +139,24 @@ impl Model {
             Self::Qt128 => "Hesai PandarQT128",
             Self::Pandar128 => "Hesai Pandar128",
             Self::Ot128 => "Hesai OT128",
+            Self::Pandar40P => "Hesai Pandar40P",
+            Self::Pandar64 => "Hesai Pandar64",
+            Self::PandarQT64 => "Hesai PandarQT64",
+            Self::Xt16 => "Hesai PandarXT-16",
+            Self::Xt32m => "Hesai PandarXT32M",
+            Self::At128 => "Hesai PandarAT128",
         }
     }
     /// Time from one firing to the next, ns (1.4: in the packet's operational state).
     pub fn firing_ns(self, operational_state: u8) -> i64 {
+        if let Some((_, t)) = self.fixed() {
+            return t.firing_ns();
+        }
         match self {
             Self::Xt32 => FIRING_NS,
             Self::Qt128 => 111_110,
             Self::Pandar128 | Self::Ot128 if operational_state == 0 => 27_778,
-            Self::Pandar128 | Self::Ot128 => 55_556,
+            _ => 55_556,
         }
     }
 
@@ -111,8 +171,12 @@ impl Model {
     ///   3.148 us after it. Their channels fire at the times of Hesai's firing-time file for
     ///   the operational and azimuth state, and on the Pandar128 for the return's distance
     ///   ([`Firing::near`]).
+    /// - The fixed-layout models: their firing-time tables (see `timing.rs`).
     pub fn point_offset_ns(self, block: usize, channel: usize, f: &Firing) -> i64 {
         let returns = f.blocks();
+        if let Some((format, t)) = self.fixed() {
+            return t.offset_ns(format.blocks, block, channel, returns);
+        }
         let channel_ns = match self.table_entry(block, channel, f) {
             Some(ns) if ns != NONE => i64::from(ns),
             _ => 0,
@@ -120,7 +184,7 @@ impl Model {
         match self {
             Self::Xt32 => point_offset_ns(block, channel, returns),
             Self::Qt128 => 9_000 + 111_110 * (block / returns) as i64 + channel_ns,
-            Self::Pandar128 | Self::Ot128 => {
+            _ => {
                 let later = (self.blocks().saturating_sub(block + 1) / returns) as i64;
                 let start = if self == Self::Pandar128 { 3_148 } else { 0 };
                 start - self.firing_ns(f.operational_state) * later + channel_ns
@@ -203,16 +267,43 @@ pub enum ReturnMode {
 }
 
 impl ReturnMode {
-    /// The mode a return-mode byte names for `model` (its manual).
+    /// The mode a return-mode byte names for `model`, with the return each block of a dual
+    /// pair holds. The evidence for each order is in the comments: nebula's recorded captures
+    /// (`bench/hesai/return_order.py` counts, in every firing whose two blocks differ, which
+    /// block is the nearer), the models' manuals and nebula's decoders.
     pub const fn from_byte(model: Model, b: u8) -> Option<Self> {
+        // The modes each model lists (nebula's `return_mode_from_string_hesai`): the 40P, 64
+        // and AT128 strongest, last and dual last + strongest (the AT128's also Hesai's SDK,
+        // `HS_LIDAR_TAIL_ST_V3` of protocol 4.3); the QT64 first, last and dual first + last.
+        let listed = match model {
+            Model::Pandar40P | Model::Pandar64 | Model::At128 => matches!(b, 0x37..=0x39),
+            Model::PandarQT64 => matches!(b, 0x33 | 0x38 | 0x3B),
+            _ => true,
+        };
+        if !listed {
+            return None;
+        }
         Some(match (b, model) {
             (0x33, _) => Self::Single(Return::First),
             (0x37, _) => Self::Single(Return::Strongest),
             (0x38, _) => Self::Single(Return::Last),
+            // The XT32 sends the strongest (or second strongest) before the last: on nebula's
+            // XT32 capture block 0 is the nearer in all 8,829 differing pairs and the weaker in
+            // 7,511 (the last is mostly the strongest). The manuals' order, last first, holds
+            // on the 40P (9,147 of 9,147 pairs farther), 64 (14,744) and XT16 (4,192).
+            (0x39, Model::Xt32) => Self::Dual(Return::Strongest, Return::Last),
             (0x39, _) => Self::Dual(Return::Last, Return::Strongest),
-            // The XT32 sends the first return before the last, Hesai's other sensors after.
-            (0x3B, Model::Xt32) => Self::Dual(Return::First, Return::Last),
+            // The QT64 sends the first before the last: block 0 the nearer in all 6,099
+            // differing pairs of its capture.
+            (0x3B, Model::PandarQT64) => Self::Dual(Return::First, Return::Last),
+            // The others the last first: the XT16 manual's table ("0x3B: odd block last
+            // return, even block first return"), nebula's XT16 and XT32 decoders (which swap
+            // its default first-last order for them) and the Pandar128 manual ("Last Return in
+            // 0x39 or 0x3B mode"); the XT32M follows the XT table where its capture shows
+            // (0x3C, below). No recorded capture is in 0x3B mode.
             (0x3B, _) => Self::Dual(Return::Last, Return::First),
+            // First before strongest: the XT32M's capture has block 0 the nearer in all 5,436
+            // differing pairs.
             (0x3C, _) => Self::Dual(Return::First, Return::Strongest),
             _ => return None,
         })
@@ -249,6 +340,22 @@ impl Calibration {
         }
         Self {
             channels: CHANNELS,
+            elevation_deg,
+            azimuth_deg: [0.0; MAX_CHANNELS],
+        }
+    }
+
+    /// The PandarXT-16's nominal angles: channel `c` (from 0) at `15 - 2 c` degrees, no
+    /// azimuth offset (its manual's channel table; nebula's `PandarXT16.csv`).
+    pub const fn nominal_xt16() -> Self {
+        let mut elevation_deg = [0.0; MAX_CHANNELS];
+        let mut c = 0;
+        while c < 16 {
+            elevation_deg[c] = 15.0 - 2.0 * c as f64;
+            c += 1;
+        }
+        Self {
+            channels: 16,
             elevation_deg,
             azimuth_deg: [0.0; MAX_CHANNELS],
         }
@@ -321,8 +428,22 @@ mod tests {
         assert_eq!(ReturnMode::from_byte(Model::Xt32, 0x3A), None);
         assert_eq!(
             ReturnMode::from_byte(Model::Xt32, 0x3B),
+            Some(ReturnMode::Dual(Return::Last, Return::First))
+        );
+        assert_eq!(
+            ReturnMode::from_byte(Model::PandarQT64, 0x3B),
             Some(ReturnMode::Dual(Return::First, Return::Last))
         );
+        assert_eq!(
+            ReturnMode::from_byte(Model::Xt32, 0x39),
+            Some(ReturnMode::Dual(Return::Strongest, Return::Last))
+        );
+        assert_eq!(
+            ReturnMode::from_byte(Model::Xt16, 0x39),
+            Some(ReturnMode::Dual(Return::Last, Return::Strongest))
+        );
+        assert_eq!(ReturnMode::from_byte(Model::At128, 0x3B), None);
+        assert_eq!(ReturnMode::from_byte(Model::At128, 0x3D), None);
         assert_eq!(
             ReturnMode::from_byte(Model::Qt128, 0x3B),
             Some(ReturnMode::Dual(Return::Last, Return::First))

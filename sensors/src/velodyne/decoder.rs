@@ -1,8 +1,11 @@
 //! Velodyne packets to sweeps: checks, time unwrapping, loss and order detection, the cut,
 //! then each return to a point.
 
-use super::model::{Calibration, Config, Model, MAX_LASERS};
-use super::wire::{field, Packet, AZIMUTH_UNITS, HOUR_US};
+use super::calibration::{Config, Laser};
+use super::layout::{single_return, Blocks, Layout};
+use super::model::{Model, BANK_FLAGS, MAX_LASERS};
+use super::point::{interpolate, Beam, Gap};
+use super::wire::{Packet, HOUR_US, UNUSED_FLAG};
 use crate::error::{ConfigError, PacketError};
 use crate::sweep::{
     lost_in_step, wrap_azimuth as wrap, Assembly, AzimuthCut, Decode, PointMeta, Pushed, Return,
@@ -23,89 +26,127 @@ enum Mode {
     Dual,
 }
 
-/// One laser, ready to use.
-#[derive(Clone, Copy, Debug, Default)]
-struct Beam {
-    cos_v: f64,
-    sin_v: f64,
-    offset_deg: f64,
-    distance_offset: f64,
-    vertical_offset: f64,
-    horizontal_offset: f64,
-    ring: u16,
-}
-
-/// The sensor's tables, built once its model is known.
+/// The sensor's tables, built once its model and return mode are known.
 #[derive(Clone, Debug)]
 struct Sensor {
     model: Model,
     mode: Mode,
+    layout: Layout,
+    /// The first packet's return-mode and product bytes: later packets with others are
+    /// another sensor's (not checked on the HDL-64E, whose two bytes are a cycling status).
     mode_byte: u8,
-    /// The first packet's product byte: later packets with another are another sensor's.
     product_byte: u8,
-    beams: [Beam; MAX_LASERS],
     resolution: f64,
-    /// Firing times after the packet timestamp (s), in f32 as velodyne-decoder interpolates
-    /// azimuths with them; `[group][channel]`.
-    firing_f32: [[f32; field::CHANNELS]; field::BLOCKS],
+}
+
+/// The lasers, ready to use: from the calibration file when the decoder is made, or the
+/// model's nominal ones once a packet names it. Kept instead of the [`Calibration`] itself.
+struct Beams {
+    beams: [Beam; MAX_LASERS],
+    /// Lasers set; 0 until known.
+    count: usize,
+    /// Metres per distance unit.
+    resolution: f64,
+}
+
+impl Beams {
+    const NONE: Self = Self {
+        beams: [Beam::ZERO; MAX_LASERS],
+        count: 0,
+        resolution: 0.0,
+    };
+
+    /// Beams of `count` lasers, laser `i` being `laser(i)`.
+    fn set(&mut self, count: usize, resolution: f64, laser: impl Fn(usize) -> Laser) {
+        let count = count.min(MAX_LASERS);
+        for (i, b) in self.beams.iter_mut().enumerate().take(count) {
+            *b = Beam::new(&laser(i));
+        }
+        // Rings count up from the lowest laser; ties keep firing order.
+        for i in 0..count {
+            let v = laser(i).vertical_deg;
+            let below = (0..count)
+                .filter(|&j| {
+                    let w = laser(j).vertical_deg;
+                    w < v || (w == v && j < i)
+                })
+                .count();
+            self.beams[i].ring = below as u16;
+        }
+        self.count = count;
+        self.resolution = resolution;
+    }
 }
 
 impl Sensor {
-    fn new(model: Model, mode: Mode, bytes: (u8, u8), calib: &Calibration) -> Self {
+    fn new(model: Model, mode: Mode, bytes: (u8, u8), file_resolution: f64) -> Self {
         let (mode_byte, product_byte) = bytes;
-        let mut beams = [Beam::default(); MAX_LASERS];
-        for (b, l) in beams.iter_mut().zip(calib.lasers.iter()) {
-            let v = l.vertical_deg.to_radians();
-            *b = Beam {
-                cos_v: libm::cos(v),
-                sin_v: libm::sin(v),
-                offset_deg: l.azimuth_offset_deg,
-                distance_offset: l.distance_offset_m,
-                vertical_offset: l.vertical_offset_m,
-                horizontal_offset: l.horizontal_offset_m,
-                ring: 0,
-            };
-        }
-        // Rings count up from the lowest laser; ties keep firing order.
-        let lasers = &calib.lasers;
-        for (i, (b, l)) in beams.iter_mut().zip(lasers.iter()).enumerate() {
-            let below = lasers
-                .iter()
-                .enumerate()
-                .filter(|&(j, m)| {
-                    m.vertical_deg < l.vertical_deg || (m.vertical_deg == l.vertical_deg && j < i)
-                })
-                .count();
-            b.ring = below as u16;
-        }
-        let mut firing_f32 = [[0.0f32; field::CHANNELS]; field::BLOCKS];
-        for (g, row) in firing_f32.iter_mut().enumerate() {
-            for (c, t) in row.iter_mut().enumerate() {
-                *t = model.firing_time_s(g, c) as f32;
-            }
-        }
         Self {
             model,
             mode,
+            layout: Layout {
+                model,
+                dual: mode == Mode::Dual,
+            },
             mode_byte,
             product_byte,
-            beams,
-            resolution: calib.distance_resolution_m,
-            firing_f32,
+            // The VLS-128 counts 4 mm (manual 63-9483 section 9.3.1.3) whatever a calibration
+            // file says: the ROS driver and nebula ignore the YAML's `distance_resolution` for
+            // it too (nebula's VLS128.yaml has 0.007).
+            resolution: if model == Model::Vls128 {
+                model.distance_resolution_m()
+            } else {
+                file_resolution
+            },
         }
-    }
-
-    fn firing_f32(&self, g: usize, c: usize) -> f32 {
-        self.firing_f32
-            .get(g)
-            .and_then(|r| r.get(c))
-            .copied()
-            .unwrap_or(0.0)
     }
 
     /// Microseconds from one packet to the next.
     fn packet_us(&self) -> f64 {
-        self.model.packet_us(self.mode == Mode::Dual)
+        self.layout.packet_us()
+    }
+
+    /// Whether every block the layout reads carries its bank's flag: a packet of another
+    /// model (an HDL-64E's upper/lower pairs, a VLS-128's four banks) does not.
+    fn flags_match(&self, p: &Packet<'_>) -> Result<(), PacketError> {
+        let l = self.layout;
+        for g in 0..l.groups() {
+            for b in 0..self.model.banks() {
+                let want = BANK_FLAGS.get(b).copied().unwrap_or(0);
+                let (k0, k1) = match l.blocks(g, b) {
+                    Blocks::Single(k) => (k, k),
+                    Blocks::Dual { last, strongest } => (last, strongest),
+                };
+                for k in [k0, k1] {
+                    match p.flag(k) {
+                        f if f == want => {}
+                        // An unused block where this layout reads one: not this model's packet.
+                        f if BANK_FLAGS.contains(&f) || f == UNUSED_FLAG => {
+                            return Err(PacketError::OtherSensor)
+                        }
+                        _ => return Err(PacketError::BlockFlag),
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Azimuths of the packet's first and last firing groups.
+    fn azimuth_span(&self, p: &Packet<'_>) -> (u16, u16) {
+        let l = self.layout;
+        let at = |g: usize| l.group_block(g).map_or(0, |k| p.azimuth(k));
+        (at(0), at(l.groups().saturating_sub(1)))
+    }
+}
+
+/// The HDL-64E's return mode, from its azimuths (it has no mode byte): in dual-return mode
+/// each firing's two upper/lower pairs repeat one azimuth (velodyne-decoder's test).
+fn hdl64e_mode(p: &Packet<'_>) -> Mode {
+    if p.azimuth(0) == p.azimuth(2) {
+        Mode::Dual
+    } else {
+        Mode::Single(Return::Strongest)
     }
 }
 
@@ -127,7 +168,7 @@ impl Sensor {
 /// ```
 pub struct Decoder {
     config_model: Option<Model>,
-    calibration: Option<Calibration>,
+    beams: Beams,
     sensor: Option<Sensor>,
     /// Sensor time of the last packet accepted, microseconds, counted on across hours.
     last_us: Option<i64>,
@@ -146,16 +187,25 @@ pub struct Decoder {
 impl Decoder {
     /// A decoder for `config`; nothing is decoded until the first packet.
     pub fn new(config: Config) -> Result<Self, ConfigError> {
-        if let Some(c) = &config.calibration {
-            c.validate()?;
-            if config.model.is_some_and(|m| m.lasers() != c.lasers.len()) {
-                return Err(ConfigError::Calibration);
+        match (&config.calibration, config.model) {
+            (Some(c), m) => {
+                c.validate()?;
+                if m.is_some_and(|m| m.lasers() != c.lasers.len()) {
+                    return Err(ConfigError::Calibration);
+                }
             }
+            (None, Some(m)) if m.needs_calibration() => return Err(ConfigError::Calibration),
+            (None, _) => {}
         }
         let cut = AzimuthCut::new(config.cut_angle_deg)?;
+        let mut beams = Beams::NONE;
+        if let Some(c) = &config.calibration {
+            let at = |i: usize| c.lasers.get(i).copied().unwrap_or_default();
+            beams.set(c.lasers.len(), c.distance_resolution_m, at);
+        }
         Ok(Self {
             config_model: config.model,
-            calibration: config.calibration,
+            beams,
             sensor: None,
             last_us: None,
             last_azimuth: 0,
@@ -231,31 +281,48 @@ impl Decoder {
         let product = p.product();
         let byte = p.return_mode();
         if let Some(s) = &self.sensor {
-            return if product == s.product_byte && byte == s.mode_byte {
-                Ok(())
-            } else {
-                Err(PacketError::OtherSensor)
-            };
+            let bytes_match =
+                !s.model.has_mode_byte() || (product == s.product_byte && byte == s.mode_byte);
+            let mode_match = s.model.has_mode_byte() || hdl64e_mode(p) == s.mode;
+            if !(bytes_match && mode_match) {
+                return Err(PacketError::OtherSensor);
+            }
+            return s.flags_match(p);
         }
         // A configured model overrides the product byte (which some units get wrong).
         let model = match self.config_model {
             Some(m) => m,
             None => Model::from_product(product).ok_or(PacketError::UnknownModel)?,
         };
-        let mode = match byte {
-            0x37 => Mode::Single(Return::Strongest),
-            0x38 => Mode::Single(Return::Last),
-            0x39 => Mode::Dual,
-            // Old HDL-32E firmware writes neither byte; it fires strongest-return only.
-            0 if product == 0 => Mode::Single(Return::Strongest),
-            _ => return Err(PacketError::UnknownReturnMode),
+        let mode = if model.has_mode_byte() {
+            match (single_return(byte), byte) {
+                (Some(r), _) => Mode::Single(r),
+                (None, 0x39) => Mode::Dual,
+                // Old HDL-32E firmware writes neither byte; it fires strongest-return only.
+                (None, 0) if product == 0 => Mode::Single(Return::Strongest),
+                _ => return Err(PacketError::UnknownReturnMode),
+            }
+        } else {
+            hdl64e_mode(p)
         };
-        let calib = match &self.calibration {
-            Some(c) if c.lasers.len() != model.lasers() => return Err(PacketError::OtherSensor),
-            Some(c) => c.clone(),
-            None => Calibration::nominal(model),
-        };
-        self.sensor = Some(Sensor::new(model, mode, (byte, product), &calib));
+        match self.beams.count {
+            0 if model.needs_calibration() => return Err(PacketError::NoCalibration),
+            0 => {
+                let nominal = |i: usize| Laser {
+                    vertical_deg: model.vertical_deg().get(i).copied().unwrap_or(0.0),
+                    azimuth_offset_deg: model.azimuth_offset_deg(i),
+                    vertical_offset_m: model.vertical_offset_m(i),
+                    ..Laser::default()
+                };
+                let resolution = model.distance_resolution_m();
+                self.beams.set(model.lasers(), resolution, nominal);
+            }
+            n if n != model.lasers() => return Err(PacketError::OtherSensor),
+            _ => {}
+        }
+        let sensor = Sensor::new(model, mode, (byte, product), self.beams.resolution);
+        sensor.flags_match(p)?;
+        self.sensor = Some(sensor);
         Ok(())
     }
 
@@ -291,8 +358,8 @@ impl Decoder {
             self.shortest_step_us = Some(self.shortest_step_us.map_or(d, |s| s.min(d)));
         }
         let period = self.loss_period_us(sensor.packet_us());
-        let first_az = p.azimuth(0);
-        let last_az = p.azimuth(field::BLOCKS - 1);
+        let (first_az, last_az) = sensor.azimuth_span(&p);
+        let groups = sensor.layout.groups();
 
         if self.asm.open.is_some() && now - self.sweep_first_us > GAP_US {
             self.asm.end(sink, SweepEnd::Gap);
@@ -300,8 +367,10 @@ impl Decoder {
             return Ok(Pushed::Again);
         }
         if self.asm.open.is_none() {
-            self.asm
-                .begin(sink, (now as u64).saturating_mul(1000), None);
+            // The sweep's time origin is its first packet's first firing.
+            let lead_ns = libm::round(sensor.model.stamp_lead_us() * 1e3) as u64;
+            let start_ns = (now as u64).saturating_mul(1000).saturating_sub(lead_ns);
+            self.asm.begin(sink, start_ns, None);
             self.sweep_first_us = now;
             self.next_column = 0;
         }
@@ -313,17 +382,14 @@ impl Decoder {
             lost = lost_in_step(d as f64, period);
             if lost == 0 {
                 let span = wrap(i32::from(last_az) - i32::from(first_az));
-                let blocks = match sensor.mode {
-                    Mode::Single(_) => field::BLOCKS - 1,
-                    Mode::Dual => field::BLOCKS / 2 - 1,
-                };
-                let block_step = (span / blocks as u32).max(1);
+                let block_step = (span / groups.saturating_sub(1).max(1) as u32).max(1);
                 let advance = wrap(i32::from(first_az) - i32::from(self.last_azimuth));
                 jump = advance > 3 * block_step + 10;
             }
         }
         let rel_s = (now - self.sweep_first_us) as f64 * 1e-6;
-        self.decode(&p, rel_s, sink);
+        let previous = (step.is_some() && lost == 0).then_some(self.last_azimuth);
+        self.decode(&p, rel_s, previous, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
         stats.lost_packets = stats.lost_packets.saturating_add(lost);
@@ -341,73 +407,100 @@ impl Decoder {
     }
 
     /// Every return of a checked packet of the identified sensor.
-    fn decode<S: SweepSink>(&mut self, p: &Packet<'_>, rel_s: f64, sink: &mut S) {
+    fn decode<S: SweepSink>(
+        &mut self,
+        p: &Packet<'_>,
+        rel_s: f64,
+        previous: Option<u16>,
+        sink: &mut S,
+    ) {
         let Some(sensor) = &self.sensor else { return };
-        let dual = sensor.mode == Mode::Dual;
-        let (step, groups) = if dual {
-            (2, field::BLOCKS / 2)
-        } else {
-            (1, field::BLOCKS)
-        };
-        // Rotation rate over the packet, in f32 as velodyne-decoder computes it.
-        let span = wrap(i32::from(p.azimuth(field::BLOCKS - 1)) - i32::from(p.azimuth(0)));
-        let duration = sensor.firing_f32(groups - 1, 0) - sensor.firing_f32(0, 0);
-        let rate = span as f32 / duration;
-        let columns_per_block: u16 = if sensor.model.lasers() == 16 { 2 } else { 1 };
+        let l = sensor.layout;
+        let model = sensor.model;
+        let (_, group_ticks) = model.ticks();
+        let sixteen = model.lasers() == 16;
+        let columns_per_group: u16 = if sixteen { 2 } else { 1 };
         let mut column = self.next_column;
         let mut last_column = None;
-        for g in 0..groups {
-            let block = g * step;
-            let block_az = p.azimuth(block);
-            let t0 = sensor.firing_f32(g, 0);
-            for c in 0..field::CHANNELS {
-                let first = p.channel(block, c);
-                let second = if dual {
-                    p.channel(block + 1, c)
-                } else {
-                    (0, 0)
+        let groups = l.groups();
+        // The packet's mean step, for its last group; a packet of one group (VLS-128 dual
+        // return) steps from the previous packet's, if it came just before.
+        let (first_az, last_az) = sensor.azimuth_span(p);
+        let mean = if groups > 1 {
+            Gap {
+                turn: wrap(i32::from(last_az) - i32::from(first_az)),
+                groups: (groups - 1) as u32,
+            }
+        } else {
+            Gap {
+                turn: previous.map_or(0, |a| wrap(i32::from(first_az) - i32::from(a))),
+                groups: 1,
+            }
+        };
+        for g in 0..l.groups() {
+            let base_az = l.group_block(g).map_or(0, |k| p.azimuth(k));
+            // The manuals' precision azimuth (VLP-16 63-9243, VLP-32C 63-9325 and VLS-128
+            // 63-9483, section 9.5): the rotation from this firing group's azimuth to the next
+            // group's, spread over the group's firing time. The last group's next azimuth is
+            // in the next packet: it takes the packet's mean step (within a hundredth of a
+            // degree of the manual's, half the quantisation of a single step).
+            let gap = match l.group_block(g + 1) {
+                Some(next) => Gap {
+                    turn: wrap(i32::from(p.azimuth(next)) - i32::from(base_az)),
+                    groups: 1,
+                },
+                None => mean,
+            };
+            for b in 0..model.banks() {
+                let (first_block, second_block) = match l.blocks(g, b) {
+                    Blocks::Single(k) => (k, None),
+                    Blocks::Dual { last, strongest } => (last, Some(strongest)),
                 };
-                if first.0 == 0 && second.0 == 0 {
-                    continue;
-                }
-                let t = sensor.firing_f32(g, c);
-                let az = interpolate(block_az, rate, t - t0);
-                let (laser, col) = if columns_per_block == 2 && c >= 16 {
-                    (c - 16, column.wrapping_add(1))
-                } else {
-                    (c, column)
-                };
-                let Some(beam) = sensor.beams.get(laser) else {
-                    continue;
-                };
-                let time = rel_s + sensor.model.firing_time_s(g, c);
-                let mut emit = |raw: (u16, u8), ret| {
-                    let xyz = point(beam, sensor.resolution, raw.0, az);
-                    let meta = PointMeta {
-                        ring: beam.ring,
-                        column: col,
-                        ret,
-                        intensity: u16::from(raw.1),
+                let block_az = p.azimuth(first_block);
+                for c in 0..32 {
+                    let first = p.channel(first_block, c);
+                    let second = second_block.map_or((0, 0), |k| p.channel(k, c));
+                    if first.0 == 0 && second.0 == 0 {
+                        continue;
+                    }
+                    let az = interpolate(block_az, gap, model.firing_ticks(b, c), group_ticks);
+                    let (laser, col) = if sixteen && c >= 16 {
+                        (c - 16, column.wrapping_add(1))
+                    } else {
+                        (32 * b + c, column)
                     };
-                    self.asm.push(sink, xyz, time, meta);
-                    last_column = Some(col);
-                };
-                match sensor.mode {
-                    Mode::Single(ret) => emit(first, ret),
-                    // In a dual pair the first block holds the last return, the second the
-                    // strongest; one point when they coincide.
-                    Mode::Dual if first.0 == second.0 => emit(second, Return::Both),
-                    Mode::Dual => {
-                        if first.0 != 0 {
-                            emit(first, Return::Last);
-                        }
-                        if second.0 != 0 {
-                            emit(second, Return::Strongest);
+                    let Some(beam) = self.beams.beams.get(laser) else {
+                        continue;
+                    };
+                    let time = rel_s + model.firing_s(g, b, c);
+                    let mut emit = |raw: (u16, u8), ret| {
+                        let meta = PointMeta {
+                            ring: beam.ring,
+                            column: col,
+                            ret,
+                            intensity: u16::from(raw.1),
+                        };
+                        let xyz = beam.point(sensor.resolution, raw.0, az);
+                        self.asm.push(sink, xyz, time, meta);
+                        last_column = Some(col);
+                    };
+                    match sensor.mode {
+                        Mode::Single(ret) => emit(first, ret),
+                        // In a dual pair one block holds the last return, the other the
+                        // strongest; one point when they coincide.
+                        Mode::Dual if first.0 == second.0 => emit(second, Return::Both),
+                        Mode::Dual => {
+                            if first.0 != 0 {
+                                emit(first, Return::Last);
+                            }
+                            if second.0 != 0 {
+                                emit(second, Return::Strongest);
+                            }
                         }
                     }
                 }
             }
-            column = column.wrapping_add(columns_per_block);
+            column = column.wrapping_add(columns_per_group);
         }
         // Columns continue from the last point's (velodyne-decoder's numbering).
         if let Some(c) = last_column {
@@ -438,36 +531,4 @@ fn wrap_us(d: i64) -> i64 {
         d -= hour;
     }
     d
-}
-
-/// The azimuth `dt` seconds after a block's, rounded to 0.01 degree: f32 arithmetic and
-/// round-half-away, exactly as velodyne-decoder, so both pick the same hundredth.
-fn interpolate(block_az: u16, rate: f32, dt: f32) -> u16 {
-    let a = f32::from(block_az) + rate * dt;
-    let r = libm::roundf(a + 36000.0);
-    if !r.is_finite() {
-        return block_az;
-    }
-    (r as i64).rem_euclid(i64::from(AZIMUTH_UNITS)) as u16
-}
-
-/// Azimuth units to radians through f32, as velodyne-decoder's sine table: its angles are
-/// up to 2e-6 rad off the exact hundredth (a hundredth of the 0.01 degree quantisation), which
-/// at 200 m moves a point by 3e-4 m; taking the same angle keeps the two within 1e-4 m.
-fn azimuth_rad(az: u16) -> f64 {
-    let deg2rad = (core::f64::consts::PI / 180.0) as f32;
-    f64::from(0.01f32 * f32::from(az) * deg2rad)
-}
-
-/// A return in the sensor frame: x forward, y left, z up (the ROS convention).
-fn point(beam: &Beam, resolution: f64, raw: u16, az: u16) -> [f64; 3] {
-    let d = f64::from(raw) * resolution + beam.distance_offset;
-    let theta = azimuth_rad(az) + beam.offset_deg.to_radians();
-    let (s, c) = (libm::sin(theta), libm::cos(theta));
-    let xy = d * beam.cos_v;
-    [
-        xy * c + beam.horizontal_offset * s,
-        -xy * s + beam.horizontal_offset * c,
-        d * beam.sin_v + beam.vertical_offset,
-    ]
 }

@@ -1,10 +1,8 @@
-//! The Velodyne models decoded here, their published beam angles and offsets, a per-laser
-//! [`Calibration`] and the decoder's [`Config`].
+//! The Velodyne models decoded here and their published beam angles and offsets (the
+//! per-laser [`super::Calibration`] starts from these).
 
-use crate::error::ConfigError;
-
-/// Lasers of the largest model decoded here.
-pub const MAX_LASERS: usize = 32;
+/// Lasers of the largest model decoded here (the VLS-128).
+pub const MAX_LASERS: usize = 128;
 
 /// A supported model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -16,8 +14,19 @@ pub enum Model {
     PuckHiRes,
     /// VLP-32C (Ultra Puck): 32 lasers, -25 to +15 degrees, per-laser azimuth offsets.
     Vlp32c,
+    /// VLP-32A and VLP-32B (product id 0x23, which does not tell them apart): the VLP-32C's
+    /// packet and timing with the unit's own angles, so its calibration file is needed.
+    Vlp32ab,
     /// HDL-32E: 32 lasers, -30.67 to +10.67 degrees.
     Hdl32e,
+    /// HDL-64E S2: 64 lasers in an upper and a lower block of 32; the unit's calibration file
+    /// gives every laser's angles and distance corrections. No product id in its packets.
+    Hdl64eS2,
+    /// HDL-64E S3: the S2's packet with its own firing timing and a dual-return mode.
+    Hdl64eS3,
+    /// VLS-128 (Alpha Prime): 128 lasers in four banks of 32, fired in groups of eight; its
+    /// calibration file gives the angles.
+    Vls128,
 }
 
 // Vertical angles in firing order, degrees (manuals; the VLP-32C's to the manual's 3 decimals).
@@ -55,47 +64,82 @@ const HDL32E_VERTICAL_OFFSET_MM: [f64; 32] = [
     5.45, -5.45,
 ];
 
+/// The block flags (little-endian `FF EE`, `FF DD`, `FF CC`, `FF BB`) of the lasers 0-31,
+/// 32-63, 64-95 and 96-127 (HDL-64E S3 manual: upper and lower block; VLS-128 manual
+/// 63-9483 section 9.3.2: banks 1 to 4).
+pub const BANK_FLAGS: [u16; 4] = [0xEEFF, 0xDDFF, 0xCCFF, 0xBBFF];
+
 impl Model {
-    /// The model a packet's product-id byte names.
+    /// The model a packet's product-id byte names (HDL-64E packets carry none).
     pub fn from_product(byte: u8) -> Option<Self> {
+        // Factory byte table of the VLP-16 manual 63-9243 (Table 9-2); 0x23 and 0xA1 as
+        // velodyne-decoder's PacketModelId (VLP-32A/B, VLS-128 Alpha Prime); 0x63 is the
+        // VLS-128 manual's.
         match byte {
             0x22 => Some(Self::Vlp16),
             0x24 => Some(Self::PuckHiRes),
             0x28 => Some(Self::Vlp32c),
+            0x23 => Some(Self::Vlp32ab),
             0x21 => Some(Self::Hdl32e),
+            0xA1 | 0x63 => Some(Self::Vls128),
             _ => None,
         }
     }
-    /// The product-id byte the model writes.
-    pub fn product(self) -> u8 {
+    /// The product-id byte the model writes (`None` for the HDL-64E, whose bytes 1204 and
+    /// 1205 are a status type and value instead).
+    pub fn product(self) -> Option<u8> {
         match self {
-            Self::Vlp16 => 0x22,
-            Self::PuckHiRes => 0x24,
-            Self::Vlp32c => 0x28,
-            Self::Hdl32e => 0x21,
+            Self::Vlp16 => Some(0x22),
+            Self::PuckHiRes => Some(0x24),
+            Self::Vlp32c => Some(0x28),
+            Self::Vlp32ab => Some(0x23),
+            Self::Hdl32e => Some(0x21),
+            Self::Vls128 => Some(0xA1),
+            Self::Hdl64eS2 | Self::Hdl64eS3 => None,
         }
     }
     /// Lasers the model fires.
     pub fn lasers(self) -> usize {
         match self {
             Self::Vlp16 | Self::PuckHiRes => 16,
-            Self::Vlp32c | Self::Hdl32e => 32,
+            Self::Vlp32c | Self::Vlp32ab | Self::Hdl32e => 32,
+            Self::Hdl64eS2 | Self::Hdl64eS3 => 64,
+            Self::Vls128 => 128,
         }
     }
-    /// Metres per distance unit.
+    /// Banks of 32 lasers, each in a block of its own flag ([`BANK_FLAGS`]).
+    pub fn banks(self) -> usize {
+        self.lasers().div_ceil(32)
+    }
+    /// Metres per distance unit (the VLP-32C, VLP-32A/B and VLS-128 count 4 mm; the others 2
+    /// mm, the HDL-64E's calibration file may say otherwise).
     pub fn distance_resolution_m(self) -> f64 {
         match self {
-            Self::Vlp32c => 0.004,
+            Self::Vlp32c | Self::Vlp32ab | Self::Vls128 => 0.004,
             _ => 0.002,
         }
     }
-    /// Nominal vertical angle of each laser (firing order), degrees.
+    /// Whether the model needs the unit's calibration file (no nominal angles here).
+    pub fn needs_calibration(self) -> bool {
+        matches!(
+            self,
+            Self::Vlp32ab | Self::Hdl64eS2 | Self::Hdl64eS3 | Self::Vls128
+        )
+    }
+    /// Whether the packets say the return mode (byte 1204); the HDL-64E's show it by their
+    /// azimuths instead (a dual-return packet repeats each firing's azimuth over four blocks).
+    pub fn has_mode_byte(self) -> bool {
+        !matches!(self, Self::Hdl64eS2 | Self::Hdl64eS3)
+    }
+    /// Nominal vertical angle of each laser (firing order), degrees; empty for the models
+    /// that need their calibration file.
     pub fn vertical_deg(self) -> &'static [f64] {
         match self {
             Self::Vlp16 => &VLP16_VERTICAL,
             Self::PuckHiRes => &PUCK_HIRES_VERTICAL,
             Self::Vlp32c => &VLP32C_VERTICAL,
             Self::Hdl32e => &HDL32E_VERTICAL,
+            _ => &[],
         }
     }
     /// Azimuth offset of each laser (added to the block azimuth), degrees.
@@ -121,41 +165,8 @@ impl Model {
             Self::Vlp32c => focal(42.4e-3),
             Self::PuckHiRes => table(&PUCK_HIRES_VERTICAL_OFFSET_MM),
             Self::Hdl32e => table(&HDL32E_VERTICAL_OFFSET_MM),
+            _ => 0.0,
         }
-    }
-    /// Firing cycle and single firing, microseconds: a firing's time after the packet
-    /// timestamp is `cycle * k + firing * p` for the `(k, p)` of [`Self::firing_index`].
-    fn timing_us(self) -> (f64, f64) {
-        match self {
-            // 16 firings of 2.304 us plus recharge: 55.296 us a firing sequence.
-            Self::Vlp16 | Self::PuckHiRes | Self::Vlp32c => (55.296, 2.304),
-            // 32 firings of 1.152 us plus 9.216 us recharge: 46.080 us.
-            Self::Hdl32e => (46.080, 1.152),
-        }
-    }
-    /// Firing sequence `k` and position `p` in it of channel `c` of firing group `g` (the block
-    /// in single-return mode, the block pair in dual mode).
-    fn firing_index(self, g: usize, c: usize) -> (usize, usize) {
-        match self {
-            // Two sequences of 16 lasers a block.
-            Self::Vlp16 | Self::PuckHiRes => (2 * g + c / 16, c % 16),
-            // Two lasers fire at once.
-            Self::Vlp32c => (g, c / 2),
-            Self::Hdl32e => (g, c),
-        }
-    }
-    /// Time of channel `c` of firing group `g` after the packet timestamp, seconds.
-    pub fn firing_time_s(self, g: usize, c: usize) -> f64 {
-        let (cycle, single) = self.timing_us();
-        let (k, p) = self.firing_index(g, c);
-        // Written as the manuals' tables (and velodyne-decoder) compute it.
-        cycle * 1e-6 * k as f64 + single * 1e-6 * p as f64
-    }
-    /// Time from one data packet to the next, microseconds (12 firing groups, or 6 block
-    /// pairs in dual-return mode).
-    pub fn packet_us(self, dual: bool) -> f64 {
-        let groups = if dual { 6.0 } else { 12.0 };
-        self.group_us() * groups
     }
     /// The name the manuals give the model.
     pub fn name(self) -> &'static str {
@@ -163,98 +174,22 @@ impl Model {
             Self::Vlp16 => "VLP-16",
             Self::PuckHiRes => "Puck Hi-Res",
             Self::Vlp32c => "VLP-32C",
+            Self::Vlp32ab => "VLP-32A/B",
             Self::Hdl32e => "HDL-32E",
+            Self::Hdl64eS2 => "HDL-64E S2",
+            Self::Hdl64eS3 => "HDL-64E S3",
+            Self::Vls128 => "VLS-128",
         }
     }
     /// Every supported model.
-    pub const ALL: [Self; 4] = [Self::Vlp16, Self::PuckHiRes, Self::Vlp32c, Self::Hdl32e];
-    /// Time from one firing group to the next, microseconds.
-    pub fn group_us(self) -> f64 {
-        let (cycle, _) = self.timing_us();
-        let (k, _) = self.firing_index(1, 0);
-        cycle * k as f64
-    }
-}
-
-/// One laser's corrections.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Laser {
-    /// Elevation, degrees (positive up).
-    pub vertical_deg: f64,
-    /// Added to the block azimuth, degrees (Velodyne's XML `rotCorrection_` with its sign
-    /// flipped; the ROS YAML's `-rot_correction` in degrees).
-    pub azimuth_offset_deg: f64,
-    /// Added to the distance, metres.
-    pub distance_offset_m: f64,
-    /// Added to z, metres.
-    pub vertical_offset_m: f64,
-    /// Offset across the beam in the horizontal plane, metres.
-    pub horizontal_offset_m: f64,
-}
-
-/// Per-laser corrections for one sensor, in firing order.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Calibration {
-    /// One entry per laser.
-    pub lasers: heapless::Vec<Laser, MAX_LASERS>,
-    /// Metres per distance unit.
-    pub distance_resolution_m: f64,
-}
-
-impl Calibration {
-    /// The manuals' nominal values for `model`: vertical angles, azimuth offsets, beam-origin
-    /// heights.
-    pub fn nominal(model: Model) -> Self {
-        let mut lasers = heapless::Vec::new();
-        for (i, &v) in model.vertical_deg().iter().enumerate() {
-            let laser = Laser {
-                vertical_deg: v,
-                azimuth_offset_deg: model.azimuth_offset_deg(i),
-                vertical_offset_m: model.vertical_offset_m(i),
-                ..Laser::default()
-            };
-            // The tables have at most MAX_LASERS entries.
-            let _ = lasers.push(laser);
-        }
-        Self {
-            lasers,
-            distance_resolution_m: model.distance_resolution_m(),
-        }
-    }
-
-    /// Whether every number is finite and the laser count is one a supported model fires.
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        let finite = self.distance_resolution_m.is_finite()
-            && self.distance_resolution_m > 0.0
-            && self.lasers.iter().all(|l| {
-                [
-                    l.vertical_deg,
-                    l.azimuth_offset_deg,
-                    l.distance_offset_m,
-                    l.vertical_offset_m,
-                    l.horizontal_offset_m,
-                ]
-                .iter()
-                .all(|v| v.is_finite())
-            });
-        if !finite || !matches!(self.lasers.len(), 16 | 32) {
-            return Err(ConfigError::Calibration);
-        }
-        Ok(())
-    }
-}
-
-/// Decoder settings.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Config {
-    /// The model; `None` reads it from the first packet's product-id byte (needed for old
-    /// HDL-32E firmware, which leaves the byte 0).
-    pub model: Option<Model>,
-    /// Per-laser corrections; `None` uses the model's nominal values.
-    pub calibration: Option<Calibration>,
-    /// Azimuth (degrees, `[0, 360)`) at which sweeps end; `None` ends a sweep once it covers
-    /// a full turn from wherever the previous one ended (velodyne-decoder's default). Sweeps
-    /// are whole packets: the packet whose last block passes the cut ends its sweep.
-    pub cut_angle_deg: Option<f64>,
+    pub const ALL: [Self; 8] = [
+        Self::Vlp16,
+        Self::PuckHiRes,
+        Self::Vlp32c,
+        Self::Vlp32ab,
+        Self::Hdl32e,
+        Self::Hdl64eS2,
+        Self::Hdl64eS3,
+        Self::Vls128,
+    ];
 }

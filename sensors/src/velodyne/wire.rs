@@ -1,14 +1,21 @@
-//! The Velodyne data packet (VLP-16, Puck Hi-Res, VLP-32C, HDL-32E): 1206 bytes of UDP
-//! payload, twelve 100-byte blocks, then a timestamp and two factory bytes. All fields
-//! little-endian.
+//! The Velodyne data packet (every model decoded here): 1206 bytes of UDP payload, twelve
+//! 100-byte blocks, then a timestamp and two factory bytes. All fields little-endian.
 //!
 //! ```text
-//! block k (k = 0..12) at 100 k:  flag 0xFFEE | azimuth (0.01 deg) | 32 x (distance u16, reflectivity u8)
+//! block k (k = 0..12) at 100 k:  flag | azimuth (0.01 deg) | 32 x (distance u16, reflectivity u8)
 //! 1200..1204  microseconds past the hour
-//! 1204        return mode (0x37 strongest, 0x38 last, 0x39 dual)
-//! 1205        product id (0x21 HDL-32E, 0x22 VLP-16, 0x24 Puck Hi-Res, 0x28 VLP-32C)
+//! 1204        return mode (0x37 strongest, 0x38 last, 0x39 dual); HDL-64E: status type
+//! 1205        product id (0x21 HDL-32E, 0x22 VLP-16, 0x23 VLP-32A/B, 0x24 Puck Hi-Res,
+//!             0x28 VLP-32C, 0xA1 VLS-128); HDL-64E: status value
 //! ```
+//!
+//! The flag names the block's bank of 32 lasers: `FF EE` (lasers 0-31, the only one of the
+//! 16- and 32-laser models), `FF DD` (32-63, the HDL-64E's lower block), `FF CC` and `FF BB`
+//! (the VLS-128's third and fourth banks). A flag of zero marks a block the packet does not
+//! use (the VLS-128's last four in dual-return mode); which blocks a model reads is its
+//! layout's business.
 
+use super::model::BANK_FLAGS;
 use crate::error::PacketError;
 
 /// Byte ranges of the packet.
@@ -42,8 +49,10 @@ pub mod field {
     pub const LEN: usize = 1206;
 }
 
-/// Block flag value (little-endian `FF EE`).
+/// Block flag value of the first bank (little-endian `FF EE`).
 pub const BLOCK_FLAG: u16 = 0xEEFF;
+/// Flag of a block the packet leaves unused.
+pub const UNUSED_FLAG: u16 = 0;
 /// Azimuth units per turn (hundredths of a degree).
 pub const AZIMUTH_UNITS: u16 = 36000;
 /// Microseconds in the hour the timestamp counts.
@@ -73,7 +82,11 @@ impl<'a> Packet<'a> {
         };
         let p = Self { buf };
         for k in 0..field::BLOCKS {
-            if p.flag(k) != BLOCK_FLAG {
+            let flag = p.flag(k);
+            if flag == UNUSED_FLAG {
+                continue;
+            }
+            if !BANK_FLAGS.contains(&flag) {
                 return Err(PacketError::BlockFlag);
             }
             if p.azimuth(k) >= AZIMUTH_UNITS {
@@ -97,6 +110,10 @@ impl<'a> Packet<'a> {
     /// Block `k`'s azimuth in hundredths of a degree (below 36000 after `new_checked`).
     pub fn azimuth(&self, k: usize) -> u16 {
         u16_at(self.buf, Self::block_at(k) + field::AZIMUTH.start)
+    }
+    /// Block `k`'s azimuth, or `None` past the last block.
+    pub fn azimuth_checked(&self, k: usize) -> Option<u16> {
+        (k < field::BLOCKS).then(|| self.azimuth(k))
     }
     /// Block `k`, channel `c`: raw distance and reflectivity.
     pub fn channel(&self, k: usize, c: usize) -> (u16, u8) {
@@ -163,7 +180,7 @@ mod tests {
         long[..1206].copy_from_slice(&b);
         assert_eq!(Packet::new_checked(&long).unwrap_err(), PacketError::Length);
         let mut flag = b;
-        flag[700] = 0xDD;
+        flag[700] = 0xDE;
         assert_eq!(
             Packet::new_checked(&flag).unwrap_err(),
             PacketError::BlockFlag

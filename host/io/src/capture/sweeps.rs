@@ -21,10 +21,11 @@
 //! capacity), however long the sensor takes to end it.
 
 use super::pcap::{self, Capture, Datagram, Record};
-use super::{hesai_calib, ouster_meta, velodyne_calib};
+use super::{hesai_at128, hesai_calib, ouster_meta, robosense_calib, velodyne_calib};
 use crate::dataset::{Frame, SensorKind, SensorOptions, SweepInfo};
 use crate::imu::ImuSample;
 use anyhow::{anyhow, bail, Result};
+use kiss_odom_sensors::robosense;
 use kiss_odom_sensors::velodyne::{self, Model};
 use kiss_odom_sensors::{
     hesai, livox, ouster, Chunk, Decode, PacketError, PointMeta, Pushed, SweepSink, SweepStart,
@@ -162,8 +163,12 @@ impl PcapReport {
 
 enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
+    Robosense(Box<robosense::Decoder>),
+    RobosenseM1(Box<robosense::m1::Decoder>),
     Ouster(Box<ouster::Decoder>),
     Hesai(Box<hesai::Decoder>),
+    /// The PandarAT128: its angles from the mirror-frame correction.
+    HesaiAt128(Box<hesai::Decoder<hesai::MirrorAngles>>),
     Livox(Box<livox::Decoder>),
 }
 
@@ -175,8 +180,11 @@ impl Decoder {
         for _ in 0..2 {
             r = match self {
                 Self::Velodyne(d) => d.push(bytes, sink),
+                Self::Robosense(d) => d.push(bytes, sink),
+                Self::RobosenseM1(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
                 Self::Hesai(d) => d.push(bytes, sink),
+                Self::HesaiAt128(d) => d.push(bytes, sink),
                 Self::Livox(d) => d.push(bytes, sink),
             };
             if r != Ok(Pushed::Again) {
@@ -188,16 +196,22 @@ impl Decoder {
     fn finish(&mut self, sink: &mut Collect) {
         match self {
             Self::Velodyne(d) => d.finish(sink),
+            Self::Robosense(d) => d.finish(sink),
+            Self::RobosenseM1(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
             Self::Hesai(d) => d.finish(sink),
+            Self::HesaiAt128(d) => d.finish(sink),
             Self::Livox(d) => d.finish(sink),
         }
     }
     fn between_sweeps(&self) -> SweepStats {
         match self {
             Self::Velodyne(d) => *d.between_sweeps(),
+            Self::Robosense(d) => *d.between_sweeps(),
+            Self::RobosenseM1(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
             Self::Hesai(d) => *d.between_sweeps(),
+            Self::HesaiAt128(d) => *d.between_sweeps(),
             Self::Livox(d) => *d.between_sweeps(),
         }
     }
@@ -326,8 +340,9 @@ pub struct PcapSweeps {
 /// hand on.
 struct Survey {
     seen: BTreeMap<(u16, usize), u64>,
-    /// Hesai protocol versions (major, minor) of the `EE FF` packets on port 2368.
-    hesai: BTreeMap<(u8, u8), u64>,
+    /// Hesai models of the packets on port 2368, by their first bytes
+    /// ([`hesai::identify`]).
+    hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
 }
@@ -344,10 +359,8 @@ fn survey(path: &Path) -> Result<Survey> {
         match capture.next_record() {
             Ok(Some(Record::Datagram(d))) => {
                 *s.seen.entry((d.port, d.payload.len())).or_insert(0) += 1;
-                if let (VELODYNE_PORT, [0xEE, 0xFF, major, minor, ..]) =
-                    (d.port, d.payload.as_slice())
-                {
-                    *s.hesai.entry((*major, *minor)).or_insert(0) += 1;
+                if let (VELODYNE_PORT, Some(model)) = (d.port, hesai::identify(&d.payload)) {
+                    s.hesai.entry(model.name()).or_insert((model, 0)).1 += 1;
                 }
             }
             Ok(Some(Record::Damaged { port, .. })) => {
@@ -390,6 +403,10 @@ fn sensor_flag(m: Model) -> &'static str {
         Model::PuckHiRes => "puck-hi-res",
         Model::Vlp32c => "vlp32c",
         Model::Hdl32e => "hdl32e",
+        Model::Vlp32ab => "vlp32ab",
+        Model::Hdl64eS2 => "hdl64e-s2",
+        Model::Hdl64eS3 => "hdl64e-s3",
+        Model::Vls128 => "vls128",
     }
 }
 
@@ -437,10 +454,23 @@ pub fn decode(
             SensorKind::PuckHiRes => Some(Model::PuckHiRes),
             SensorKind::Vlp32c => Some(Model::Vlp32c),
             SensorKind::Hdl32e => Some(Model::Hdl32e),
+            SensorKind::Vlp32ab => Some(Model::Vlp32ab),
+            SensorKind::Hdl64eS2 => Some(Model::Hdl64eS2),
+            SensorKind::Hdl64eS3 => Some(Model::Hdl64eS3),
+            SensorKind::Vls128 => Some(Model::Vls128),
             _ => None,
         };
         if let Some(model) = livox_model(opts.sensor) {
             return livox_decoder(path, capture, opts, model, opts.port);
+        }
+        if let Some(model) = robosense_model(opts.sensor) {
+            return robosense_decoder(path, capture, opts, model);
+        }
+        if opts.sensor == SensorKind::M1 {
+            let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
+            let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
+            let name = "Robosense RS-M1".to_string();
+            return Ok(sweeps(path, capture, dec, opts, (port, name, Vec::new())));
         }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = hesai_model(opts.sensor);
@@ -483,6 +513,14 @@ pub fn decode(
             .as_deref()
             .map(velodyne_calib::read)
             .transpose()?;
+        if let Some(m) = model.filter(|m| m.needs_calibration() && calibration.is_none()) {
+            bail!(
+                "{}: a Velodyne {} needs the unit's calibration file (--calibration: Velodyne's \
+                 XML or the ROS YAML)",
+                path.display(),
+                m.name()
+            );
+        }
         let config = velodyne::Config {
             model,
             calibration,
@@ -504,17 +542,11 @@ pub fn decode(
     ))
 }
 
-/// The Hesai model whose protocol most `EE FF` packets on port 2368 announce. Protocol 1.4
-/// is taken for an OT128: the Pandar128 sends the same packets and differs in firing times
-/// only (`--sensor pandar128`).
+/// The Hesai model most packets on port 2368 come from ([`hesai::identify`]). Protocol 1.4 is
+/// taken for an OT128: the Pandar128 sends the same packets and differs in firing times only
+/// (`--sensor pandar128`).
 fn hesai_in(s: &Survey) -> Option<hesai::Model> {
-    let (&version, _) = s.hesai.iter().max_by_key(|(_, n)| **n)?;
-    match version {
-        hesai::wire::VERSION => Some(hesai::Model::Xt32),
-        hesai::wire128::VERSION_QT => Some(hesai::Model::Qt128),
-        hesai::wire128::VERSION_128 => Some(hesai::Model::Ot128),
-        _ => None,
-    }
+    s.hesai.values().max_by_key(|(_, n)| *n).map(|(m, _)| *m)
 }
 
 /// The Hesai model `--sensor` names, if it names one.
@@ -524,6 +556,12 @@ fn hesai_model(sensor: SensorKind) -> Option<hesai::Model> {
         SensorKind::Qt128 => Some(hesai::Model::Qt128),
         SensorKind::Pandar128 => Some(hesai::Model::Pandar128),
         SensorKind::Ot128 => Some(hesai::Model::Ot128),
+        SensorKind::Xt16 => Some(hesai::Model::Xt16),
+        SensorKind::Xt32m => Some(hesai::Model::Xt32m),
+        SensorKind::Pandar40p => Some(hesai::Model::Pandar40P),
+        SensorKind::Pandar64 => Some(hesai::Model::Pandar64),
+        SensorKind::Qt64 => Some(hesai::Model::PandarQT64),
+        SensorKind::At128 => Some(hesai::Model::At128),
         _ => None,
     }
 }
@@ -586,6 +624,61 @@ fn livox_decoder(
 
 /// The Hesai decoder for `model`, with the angle correction file if one is given (the
 /// 128-channel models need one).
+/// The Robosense model `--sensor` names.
+fn robosense_model(kind: SensorKind) -> Option<robosense::Model> {
+    Some(match kind {
+        SensorKind::Rs16 => robosense::Model::Rs16,
+        SensorKind::Rs32 => robosense::Model::Rs32,
+        SensorKind::Bpearl => robosense::Model::Bpearl,
+        SensorKind::Helios => robosense::Model::Helios,
+        SensorKind::Helios16p => robosense::Model::Helios16p,
+        SensorKind::Ruby => robosense::Model::Ruby,
+        _ => return None,
+    })
+}
+
+/// A Robosense recording: MSOP packets on port 6699, the angles from `--calibration`
+/// (`angle.csv`) or the recording's first DIFOP packet; without either, exit with both named.
+fn robosense_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    model: robosense::Model,
+) -> Result<PcapSweeps> {
+    let calibration = match opts.calibration.as_deref() {
+        Some(csv) => robosense_calib::read(csv, model)?,
+        None => match path
+            .is_file()
+            .then(|| robosense_calib::from_capture(path, model))
+            .transpose()?
+            .flatten()
+        {
+            Some(c) => c,
+            None => bail!(
+                "{}: a {} needs its laser angles: the recording has no DIFOP packet (port \
+                 {}); give the unit's angle.csv with --calibration",
+                path.display(),
+                model.name(),
+                robosense_calib::DIFOP_PORT
+            ),
+        },
+    };
+    let config = robosense::Config {
+        model,
+        calibration: Some(calibration),
+        cut_angle_deg: opts.cut_angle_deg,
+    };
+    let dec = robosense::Decoder::new(config).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
+    Ok(sweeps(
+        path,
+        capture,
+        Decoder::Robosense(Box::new(dec)),
+        opts,
+        (port, format!("Robosense {}", model.name()), Vec::new()),
+    ))
+}
+
 fn hesai_decoder(
     path: &Path,
     capture: Box<dyn DatagramSource>,
@@ -593,6 +686,9 @@ fn hesai_decoder(
     model: hesai::Model,
     port: u16,
 ) -> Result<PcapSweeps> {
+    if model == hesai::Model::At128 {
+        return at128_decoder(path, capture, opts, port);
+    }
     let calibration = match opts.calibration.as_deref() {
         Some(csv) => Some(hesai_calib::read(csv, model.channels())?),
         None if model.nominal_calibration().is_none() => bail!(
@@ -620,6 +716,39 @@ fn hesai_decoder(
     ))
 }
 
+/// The PandarAT128 decoder with its angle correction file (`.dat`, [`hesai_at128`]).
+fn at128_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+    port: u16,
+) -> Result<PcapSweeps> {
+    let name = hesai::Model::At128.name();
+    let Some(dat) = opts.calibration.as_deref() else {
+        bail!(
+            "{}: packets of a {name}: give its angle correction file (the .dat the sensor \
+             hands out and Hesai ships) with --calibration",
+            path.display()
+        );
+    };
+    if opts.cut_angle_deg.is_some() {
+        bail!(
+            "{}: packets of a {name}: its sweeps are its mirror frames, so --cut-angle does not \
+             apply",
+            path.display()
+        );
+    }
+    let correction = hesai_at128::read(dat)?;
+    let dec = hesai::Decoder::at128(&correction).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    Ok(sweeps(
+        path,
+        capture,
+        Decoder::HesaiAt128(Box::new(dec)),
+        opts,
+        (port, name.to_string(), Vec::new()),
+    ))
+}
+
 fn sweeps(
     path: &Path,
     capture: Box<dyn DatagramSource>,
@@ -635,7 +764,14 @@ fn sweeps(
         meta_path: opts.meta.clone(),
         model_given: matches!(
             opts.sensor,
-            SensorKind::Vlp16 | SensorKind::PuckHiRes | SensorKind::Vlp32c | SensorKind::Hdl32e
+            SensorKind::Vlp16
+                | SensorKind::PuckHiRes
+                | SensorKind::Vlp32c
+                | SensorKind::Hdl32e
+                | SensorKind::Vlp32ab
+                | SensorKind::Hdl64eS2
+                | SensorKind::Hdl64eS3
+                | SensorKind::Vls128
         ),
         imu_port: None,
         report: PcapReport {
@@ -713,15 +849,21 @@ impl PcapSweeps {
     fn data_len(&self) -> usize {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
+            Decoder::Robosense(_) => robosense::wire::LEN,
+            Decoder::RobosenseM1(_) => robosense::m1::LEN,
             Decoder::Ouster(d) => d.layout().packet_len(),
             Decoder::Hesai(d) if d.model() == hesai::Model::Xt32 => {
                 hesai::wire::field::LEN_WITH_SEQUENCE
             }
             // The lengths the sensors send by default: QT128C2X 1127 bytes, 1.4 861 bytes.
+            Decoder::Hesai(d) if d.model().fixed_format().is_some() => {
+                d.model().fixed_format().map_or(0, |f| f.default_len())
+            }
             Decoder::Hesai(d) if d.model() == hesai::Model::Qt128 => {
                 hesai::wire128::packet_len(hesai::wire128::VERSION_QT, 0x1D)
             }
             Decoder::Hesai(_) => hesai::wire128::packet_len(hesai::wire128::VERSION_128, 0x07),
+            Decoder::HesaiAt128(_) => hesai::wire_fixed::PANDARAT128.default_len(),
             // The SDKs' default data types: SDK 1's 2, SDK 2's 1 (96 points, the Mid-360's).
             Decoder::Livox(d) if d.model() == livox::Model::Mid360 => {
                 livox::sdk2::packet_len(1, livox::sdk2::MID360_POINTS).unwrap_or(0)

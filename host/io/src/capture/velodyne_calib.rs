@@ -4,8 +4,9 @@
 //! YAML angles are radians and offsets metres; XML angles are degrees and offsets centimetres.
 //! Both store the azimuth correction with the opposite sign of
 //! [`Laser::azimuth_offset_deg`](kiss_odom_sensors::velodyne::Laser::azimuth_offset_deg).
-//! The HDL-64E two-point distance corrections and intensity terms are not used by the models
-//! decoded here and are ignored.
+//! The HDL-64E's two-point distance correction is read when a laser has both near-point
+//! offsets (`dist_correction_x`/`_y`, `distCorrectionX_`/`Y_`) non-zero, as velodyne-decoder
+//! reads it; the intensity terms (focal distance and slope) are ignored.
 
 use anyhow::{anyhow, bail, Context, Result};
 use kiss_odom_sensors::velodyne::{Calibration, Laser, MAX_LASERS};
@@ -24,6 +25,16 @@ struct YamlLaser {
     vert_offset_correction: f64,
     #[serde(default)]
     horiz_offset_correction: f64,
+    #[serde(default)]
+    dist_correction_x: f64,
+    #[serde(default)]
+    dist_correction_y: f64,
+}
+
+/// The two near-point offsets when both are set (velodyne-decoder's
+/// `two_pt_correction_available`).
+fn near(x: f64, y: f64) -> Option<[f64; 2]> {
+    (x != 0.0 && y != 0.0).then_some([x, y])
 }
 
 #[derive(Deserialize)]
@@ -63,6 +74,7 @@ pub fn parse_yaml(text: &str) -> Result<Calibration> {
                 distance_offset_m: l.dist_correction,
                 vertical_offset_m: l.vert_offset_correction,
                 horizontal_offset_m: l.horiz_offset_correction,
+                near_distance_offset_m: near(l.dist_correction_x, l.dist_correction_y),
             };
             (l.laser_id, laser)
         })
@@ -97,6 +109,7 @@ pub fn parse_xml(text: &str) -> Result<Calibration> {
             distance_offset_m: cm("distCorrection_")?,
             vertical_offset_m: cm("vertOffsetCorrection_")?,
             horizontal_offset_m: cm("horizOffsetCorrection_")?,
+            near_distance_offset_m: near(cm("distCorrectionX_")?, cm("distCorrectionY_")?),
         };
         lasers.push((id as usize, laser));
     }

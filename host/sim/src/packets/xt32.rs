@@ -78,7 +78,7 @@ fn civil_from_days(days: i64) -> (i64, u8, u8) {
 
 /// The packet time's fields at `unix_us` (microseconds since the Unix epoch): year - 1900,
 /// month, day, hour, minute, second, and the microseconds within the second.
-fn utc_fields(unix_us: i64) -> ([u8; 6], u32) {
+pub(super) fn utc_fields(unix_us: i64) -> ([u8; 6], u32) {
     let (s, us) = (unix_us.div_euclid(1_000_000), unix_us.rem_euclid(1_000_000));
     let (days, t) = (s.div_euclid(86_400), s.rem_euclid(86_400));
     let (year, month, day) = civil_from_days(days);

@@ -191,3 +191,31 @@ fn the_drone_flies_5_to_11_m_up_and_climbs_at_most_2_5_m_per_s_and_the_walker_st
         assert!(wlo > 1.3 && whi < 1.5, "hand at {wlo}-{whi} m");
     }
 }
+
+#[test]
+fn a_lead_in_enters_the_same_drive_that_many_seconds_in() {
+    let lead_in = 8.0;
+    for profile in profiles() {
+        let from_rest = Trajectory::generate(profile, 5, 30.0);
+        let entered = Trajectory::generate_after(profile, 5, lead_in, 20.0);
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            let t = i as f64 * 0.1;
+            let a = from_rest.pose(lead_in + t);
+            let b = entered.pose(t);
+            worst = worst
+                .max((a.translation.vector - b.translation.vector).amax())
+                .max((a.rotation.matrix() - b.rotation.matrix()).amax());
+        }
+        let driven = entered.arc_length(20.0);
+        let expected = from_rest.arc_length(lead_in + 20.0) - from_rest.arc_length(lead_in);
+        // The same route and motion at the same drive time: the same bits.
+        println!("{profile:?}: worst pose entry {worst:.2e} (tol 0), {driven:.1} m driven");
+        assert_eq!(worst, 0.0, "{profile:?}");
+        assert!((driven - expected).abs() < 1e-9, "{profile:?}: {driven} m");
+        assert!(
+            entered.arc_length(0.0) == 0.0 && entered.speed(0.0) > 0.0,
+            "{profile:?}"
+        );
+    }
+}

@@ -1,0 +1,91 @@
+#!/usr/bin/env python3
+"""Prints BENCHMARKS.md's "Every rule of the accurate preset on real data" table (run by
+bench/ablation.sh): the accurate preset, then the preset with each of its rules off in turn,
+then the default, on every given dataset; ATE and mean RPE against its ground truth or
+reference trajectory, and frames/s in the core.
+
+    python3 bench/ablation.py BIN OUT DATASET...
+
+DATASET: a folder `run` reads, `NAME=PATH` to name it, `@ARGS` after it (one word,
+comma-separated) for more `run` flags. Each variant is `run --preset accurate --config
+VARIANT.toml` (the rule's settings back at the default's values), one thread.
+"""
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+# Each rule of Config::accurate and the settings that turn it off (the default's values).
+RULES = {
+    "r_max/200 voxels": "[mapping]\nvoxel_size = {half}\n",
+    "plane terms every frame": "[registration]\nplane_gate = 0.015\n",
+    "gated motion prior": "[registration]\nlateral_prior = 0.0\nprediction_prior = 0.0\n",
+    "cycle stop": "[registration]\ncycle_stop = false\n",
+    "second deskew": "[data]\nredeskew = false\n",
+    "scan-order clouds": "[mapping]\nreference_order = true\n",
+    "sparse-scan map": "[mapping]\nsparse_scan_points = 0\n",
+    "thinned cloud": "[mapping]\ndesired_source_points = 0\n",
+}
+
+
+def sh(*cmd):
+    return subprocess.run([str(c) for c in cmd], check=True, capture_output=True, text=True)
+
+
+def spec(arg):
+    arg, _, extra = arg.partition("@")
+    name, _, path = arg.rpartition("=")
+    path = Path(path)
+    return name or path.name, path, [a for a in extra.split(",") if a]
+
+
+def run(binary, out, path, extra, preset, config=None):
+    flags = ["--preset", preset, "--threads", "1", "-q", *extra]
+    if config is not None:
+        flags += ["--config", config]
+    sh(binary, "run", path, "--out", out, *flags)
+    s = json.loads((out / "summary.json").read_text())
+    m = s.get("metrics") or {}
+    return m.get("ate_m", math.nan), m.get("rpe_m_mean", math.nan), s["hz"]
+
+
+def main():
+    binary, out, datasets = sys.argv[1], Path(sys.argv[2]), sys.argv[3:]
+    names = ["accurate"] + [f"without {r}" for r in RULES] + ["default"]
+    rows = {n: [] for n in names}
+    heads = []
+    for arg in datasets:
+        name, path, extra = spec(arg)
+        heads.append(name)
+        base = out / name
+        base.mkdir(parents=True, exist_ok=True)
+        rows["accurate"].append(run(binary, base / "accurate", path, extra, "accurate"))
+        cfg = (base / "accurate" / "config.toml").read_text()
+        voxel = float(next(l.split("=")[1] for l in cfg.splitlines()
+                           if l.startswith("voxel_size")))
+        for rule, toml in RULES.items():
+            variant = base / f"without-{rule.replace(' ', '-').replace('/', '')}"
+            variant.mkdir(parents=True, exist_ok=True)
+            conf = variant / "variant.toml"
+            conf.write_text(toml.format(half=repr(2 * voxel)))
+            rows[f"without {rule}"].append(
+                run(binary, variant / "out", path, extra, "accurate", conf))
+        rows["default"].append(run(binary, base / "default", path, extra, "default"))
+        print(f"{name}: done", file=sys.stderr, flush=True)
+    print("| variant | " + " | ".join(heads) + " | ATE and mean RPE over the preset's, "
+          "geometric mean (> 1: the rule helped) |")
+    print("|---|" + "---|" * len(heads) + "---|")
+    acc = rows["accurate"]
+    for n in names:
+        cells = [f"{a:.3f} / {r:.4f} / {hz:.1f}" for a, r, hz in rows[n]]
+        ratios = [(a / a0, r / r0) for (a, r, _), (a0, r0, _) in zip(rows[n], acc)
+                  if a0 > 0 and r0 > 0 and math.isfinite(a) and math.isfinite(r)]
+        gm = lambda xs: math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else math.nan
+        ate_gm, rpe_gm = gm([a for a, _ in ratios]), gm([r for _, r in ratios])
+        print(f"| {n} | " + " | ".join(cells) + f" | {ate_gm:.3f} / {rpe_gm:.3f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,202 @@
+//! The Robosense decoder: angles from a DIFOP packet, points where the geometry puts them,
+//! and bad input (no angles, a malformed DIFOP, another model's packets, truncated packets,
+//! the RS-Ruby's dual return) refused with its reason and counted.
+
+mod common;
+
+use common::{feed, with, Log};
+use kiss_odom_sensors::robosense::{wire, Calibration, Config, Decoder, Model};
+use kiss_odom_sensors::{Decode, PacketError, Return};
+
+/// Laser `i`'s elevation in the test's DIFOP packets, hundredths of a degree: rising with `i`
+/// (the RS-16's lasers 0-7 below the horizon, as its DIFOP says them).
+fn elevation(model: Model, i: usize) -> i32 {
+    if model == Model::Rs16 {
+        (2 * i as i32 - 15) * 100
+    } else {
+        (i as i32 - 16) * 50
+    }
+}
+
+/// A DIFOP packet of `model` with laser `i` at [`elevation`] and no horizontal offset, and
+/// the return-mode byte `mode`.
+fn difop(model: Model, mode: u8) -> Vec<u8> {
+    let mut b = vec![0u8; wire::LEN];
+    b[..8].copy_from_slice(&wire::DIFOP_ID);
+    b[8..10].copy_from_slice(&600u16.to_be_bytes());
+    let at = model.difop();
+    b[at.return_mode] = mode;
+    for i in 0..model.lasers() {
+        let v = elevation(model, i);
+        match at.horizontal {
+            Some(_) => {
+                b[at.vertical + 3 * i] = u8::from(v < 0);
+                b[at.vertical + 3 * i + 1..at.vertical + 3 * i + 3]
+                    .copy_from_slice(&(v.unsigned_abs() as u16).to_be_bytes());
+            }
+            None => {
+                let w = (v.unsigned_abs() * 100).to_be_bytes();
+                b[at.vertical + 3 * i..at.vertical + 3 * i + 3].copy_from_slice(&w[1..]);
+            }
+        }
+    }
+    b
+}
+
+/// An MSOP packet of `model` at UTC second `s` and microsecond `us`, blocks from azimuth `az`
+/// (each firing's blocks `step` apart, `per` blocks a firing), every channel 10 m.
+fn msop(model: Model, (s, us): (u64, u32), az: u16, per: usize) -> Vec<u8> {
+    let l = model.layout();
+    let mut b = vec![0u8; wire::LEN];
+    b[..l.id.len()].copy_from_slice(l.id);
+    let (at, _) = l.stamp;
+    if model.layout().stamp.1 == kiss_odom_sensors::robosense::Stamp::Utc {
+        b[at..at + 6].copy_from_slice(&s.to_be_bytes()[2..]);
+        b[at + 6..at + 10].copy_from_slice(&us.to_be_bytes());
+    } else {
+        // 2024-01-01 00:00:00 plus s seconds (s < 60), ms and us.
+        b[at..at + 6].copy_from_slice(&[24, 1, 1, 0, 0, s as u8]);
+        b[at + 6..at + 8].copy_from_slice(&((us / 1000) as u16).to_be_bytes());
+        b[at + 8..at + 10].copy_from_slice(&((us % 1000) as u16).to_be_bytes());
+    }
+    let raw = (10.0 / model.distance_resolution_m()) as u16;
+    for k in 0..l.blocks {
+        let at = l.header + k * l.block_len();
+        b[at..at + l.block_id.len()].copy_from_slice(l.block_id);
+        let a = az + 20 * (k / per) as u16;
+        b[at + l.azimuth_at..at + l.azimuth_at + 2].copy_from_slice(&a.to_be_bytes());
+        for c in 0..l.channels {
+            let d = at + l.azimuth_at + 2 + 3 * c;
+            b[d..d + 2].copy_from_slice(&raw.to_be_bytes());
+            b[d + 2] = 50;
+        }
+    }
+    b
+}
+
+fn decoder(model: Model) -> Decoder {
+    Decoder::new(Config {
+        model,
+        calibration: None,
+        cut_angle_deg: None,
+    })
+    .unwrap()
+}
+
+#[test]
+fn points_wait_for_the_difop_angles_then_follow_them() {
+    for model in Model::ALL {
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        let single = if model == Model::Ruby {
+            0x02
+        } else if matches!(model, Model::Helios | Model::Helios16p) {
+            0x04
+        } else {
+            0x01
+        };
+        let p = msop(model, (1_704_067_200 % 60, 0), 1000, 1);
+        assert_eq!(
+            feed(&mut dec, &p, &mut log),
+            Err(PacketError::NoCalibration)
+        );
+        assert!(!dec.calibrated());
+        assert_eq!(
+            feed(&mut dec, &difop(model, single), &mut log),
+            Err(PacketError::PacketType)
+        );
+        assert!(dec.calibrated(), "{model:?}");
+        feed(&mut dec, &p, &mut log).unwrap();
+        dec.finish(&mut log);
+        let l = model.layout();
+        assert_eq!(log.points.len(), l.blocks * l.channels, "{model:?}");
+        // Every point 10 m from the lens centre at its laser's elevation.
+        let (rx, rz) = model.lens_m();
+        for (_, p, _, m) in &log.points {
+            // Rings count up from the lowest laser: laser order here.
+            let v = (f64::from(elevation(model, usize::from(m.ring))) * 0.01).to_radians();
+            let z = 10.0 * v.sin() + rz;
+            assert!((p[2] - z).abs() < 1e-3, "{model:?} {p:?} ring {}", m.ring);
+            let rho = p[0].hypot(p[1]);
+            assert!(
+                (rho - (10.0 * v.cos() + rx)).abs() < 1e-3,
+                "{model:?} {p:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_input_is_refused_with_its_reason() {
+    let model = Model::Helios;
+    let mut dec = decoder(model);
+    let mut log = Log::default();
+    // A DIFOP whose angle entries are unset (sign 0xFF): no angles.
+    let unset = with(&difop(model, 0x04), 468, 0xFF);
+    assert_eq!(
+        feed(&mut dec, &unset, &mut log),
+        Err(PacketError::NoCalibration)
+    );
+    assert!(!dec.calibrated());
+    let _ = feed(&mut dec, &difop(model, 0x04), &mut log);
+    let p = msop(model, (1000, 0), 1000, 1);
+    assert_eq!(
+        feed(&mut dec, &p[..1200], &mut log),
+        Err(PacketError::Truncated)
+    );
+    // An RS-32's packet (the 8-byte id): not this model's.
+    let rs32 = msop(Model::Rs32, (10, 0), 1000, 1);
+    assert_eq!(
+        feed(&mut dec, &rs32, &mut log),
+        Err(PacketError::StartBytes)
+    );
+    // A Ruby's (4-byte id, FE blocks): another Robosense model.
+    let ruby = msop(Model::Ruby, (1000, 0), 1000, 1);
+    assert_eq!(
+        feed(&mut dec, &ruby, &mut log),
+        Err(PacketError::OtherSensor)
+    );
+    let mut late_us = p.clone();
+    late_us[26..30].copy_from_slice(&2_000_000u32.to_be_bytes());
+    assert_eq!(
+        feed(&mut dec, &late_us, &mut log),
+        Err(PacketError::Timestamp)
+    );
+    feed(&mut dec, &p, &mut log).unwrap();
+    dec.finish(&mut log);
+    let s = log.ends.last().unwrap();
+    assert_eq!((s.packets, s.bad_packets, s.other_sensor), (1, 5, 1));
+}
+
+#[test]
+fn dual_return_pairs_give_strongest_and_second_and_the_rubys_are_refused() {
+    let mut dec = decoder(Model::Rs32);
+    let mut log = Log::default();
+    let _ = feed(&mut dec, &difop(Model::Rs32, 0x00), &mut log);
+    feed(&mut dec, &msop(Model::Rs32, (10, 0), 1000, 2), &mut log).unwrap();
+    dec.finish(&mut log);
+    let strongest = log.points.iter().filter(|p| p.3.ret == Return::Strongest);
+    assert_eq!(strongest.count(), 6 * 32);
+    assert_eq!(log.points.len(), 12 * 32);
+    let mut dec = decoder(Model::Ruby);
+    let _ = feed(&mut dec, &difop(Model::Ruby, 0x03), &mut log);
+    let p = msop(Model::Ruby, (1000, 0), 1000, 2);
+    assert_eq!(
+        feed(&mut dec, &p, &mut log),
+        Err(PacketError::UnknownReturnMode)
+    );
+}
+
+#[test]
+fn an_angle_table_of_another_length_is_refused() {
+    let c = Calibration {
+        lasers: Default::default(),
+        dual: None,
+    };
+    let r = Decoder::new(Config {
+        model: Model::Rs16,
+        calibration: Some(c),
+        cut_angle_deg: None,
+    });
+    assert!(r.is_err());
+}
