@@ -3,7 +3,7 @@
 # after a change that must not move any pose (a restructuring), then diff the two outputs.
 # Cases: the four kitti-mini sequences, the Ouster OS-1-128 recording, a generated urban drive
 # (deskewed) and a generated hand-held walk with an IMU; modes: the default (f64 and f32), the
-# accurate preset (f64 and f32), robust mode, hold mode, and the gyroscope prior.
+# accurate preset (f64 and f32), robust mode, and the gyroscope prior.
 #
 # Usage: bash bench/identity.sh [KISS_ODOM_BIN] > poses.sha256   (default: target/release/kiss-odom)
 set -euo pipefail
@@ -36,7 +36,6 @@ modes=(
   "accurate|--preset accurate"
   "accurate-f32|--preset accurate --scalar f32"
   "robust|--degeneracy robust"
-  "hold|--degeneracy hold"
 )
 run() { # run NAME INPUT ARGS...
   local name=$1 input=$2

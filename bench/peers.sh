@@ -56,7 +56,7 @@ ours() {
   local gt
   gt=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['input']['ground_truth'])" "$o/summary.json")
   record "$1" "$3" "$o/poses_kitti.txt" "$gt" \
-    "$(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); d=s['degraded_frames']; print(json.dumps({'hz': s['hz'], 'held_frames': d.get('held', 0), 'plane_frames': d.get('planes', 0)}))" "$o/summary.json")" >/dev/null
+    "$(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); d=s['degraded_frames']; print(json.dumps({'hz': s['hz'], 'plane_frames': d.get('planes', 0)}))" "$o/summary.json")" >/dev/null
   echo "$gt"
 }
 

@@ -12,11 +12,6 @@ use crate::error::ConfigError;
 use crate::registration::PLANE_KERNEL_SCALE;
 use crate::scalar::Real;
 
-/// Largest accepted `max_range` (m). The adaptive threshold squares distances of order
-/// `r_max` (Eq. (6)-(7)); beyond about 1e154 m that overflows f64 and sigma would stay
-/// infinite for good. No range sensor reaches a thousand kilometres, so this is the limit.
-pub const MAX_RANGE_LIMIT: f64 = 1.0e6;
-
 /// How registration treats directions the scene does not constrain.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -28,11 +23,8 @@ pub enum Degeneracy {
     /// (observability below `Robust::plane_gate`): those are registered again with
     /// point-to-plane terms wherever the map around a registration point is planar (GenZ-ICP's,
     /// see `registration::planes`), so sparse structure moves the pose along walls and ground;
-    /// for tunnels, corridors, long walls, open ground. Nothing is held.
+    /// for tunnels, corridors, long walls, open ground.
     Robust,
-    /// Kept for comparison with robust mode: directions the scene does not constrain are held
-    /// at the constant-velocity prediction (see `hold`).
-    Hold,
 }
 
 /// Pipeline parameters. [`Config::new`] gives the reference defaults for a maximum range.
@@ -90,17 +82,16 @@ pub struct Config<T> {
     /// information (from map voxel normals) carries less than this fraction of the strongest.
     pub degeneracy_ratio: T,
     /// What ICP does along directions the scene does not constrain: move as the reference
-    /// does ([`Degeneracy::Reference`], the default), register the frames the reference finds
+    /// does ([`Degeneracy::Reference`], the default) or register the frames the reference finds
     /// degenerate again with point-to-plane terms ([`Degeneracy::Robust`], tuned by
-    /// [`Config::robust`]) or hold them at the constant-velocity prediction
-    /// ([`Degeneracy::Hold`]; see [`crate::FrameReport::held`]).
+    /// [`Config::robust`]).
     pub degeneracy: Degeneracy,
     /// Robust mode's parameters; the other modes ignore them.
     pub robust: Robust<T>,
     /// A run whose first scan keeps fewer points than this within range (a sparse sensor's:
     /// a 16-beam ring scanner or a Livox) maps on GenZ-ICP's sparse-sensor map instead, voxels
-    /// [`SPARSE_VOXEL_FACTOR`] times `voxel_size` of at most [`SPARSE_POINTS_PER_VOXEL`] points
-    /// ([`Config::for_first_scan`]); 0 (the reference's) never does. The odometry decides it
+    /// 1.2 times `voxel_size` of at most 3 points ([`Config::for_first_scan`]); 0 (the
+    /// reference's) never does. The odometry decides it
     /// at the first scan, before the map holds anything, and [`crate::Odometry::config`] then
     /// says what it runs.
     pub sparse_scan_points: usize,
@@ -154,8 +145,8 @@ pub struct Robust<T> {
     pub kernel_scale: T,
     /// Where the motion prior acts: only in frames whose scene leaves a translation nearly
     /// unobserved, the weakest translation of the registration cloud's point-to-plane
-    /// information at the prediction (hold mode's measurement, [`crate::FrameReport`]'s
-    /// `weak_ratios`) below this fraction of the strongest. 1 or more: in every registration
+    /// information at the prediction ([`crate::FrameReport`]'s `weak_ratios`) below this
+    /// fraction of the strongest. 1 or more: in every registration
     /// with plane terms, without the measurement.
     pub prior_gate: T,
     /// A registration with plane terms also stops when its iterate comes back within `gamma`
@@ -190,8 +181,17 @@ impl<T: Real> Robust<T> {
     }
 
     /// The `accurate` preset's: plane terms on every frame, the cycle stop, and the motion
-    /// prior of the tunnel setting gated at [`PRIOR_GATE`] (see [`Config::accurate`]).
+    /// prior of the tunnel setting where the weakest translation at the prediction is below a
+    /// tenth of the strongest (see [`Config::accurate`]).
     pub fn accurate() -> Self {
+        // A bare corridor leaves its axis only what the scan pattern leaks in sparsely filled
+        // voxels, and an open field its two ground directions what a few poles and trees
+        // give; they read 0.0006-0.065 and 0-0.02 of the strongest, a tunnel with sparse wall
+        // features 0.001-0.13. A street's buildings, cars and poles face every way: urban
+        // drives read 0.1-0.8 (1 % of frames below 0.2), and hand-held and drone runs through
+        // the same streets 0.09-0.9 (BENCHMARKS.md, "The motion prior where the scene leaves
+        // a translation free").
+        const PRIOR_GATE: f64 = 0.1;
         Self {
             plane_gate: T::one(),
             cycle_stop: true,
@@ -215,49 +215,6 @@ impl<T: Real> Default for Robust<T> {
         Self::new()
     }
 }
-
-/// The `accurate` preset's [`Robust::prior_gate`]: its motion prior acts where the weakest
-/// translation at the prediction is below a tenth of the strongest. A bare corridor leaves its
-/// axis only what the scan pattern leaks in sparsely filled voxels, and an open field its two
-/// ground directions what a few poles and trees give; they read 0.0006-0.065 and 0-0.02 of the
-/// strongest, a tunnel with sparse wall features 0.001-0.13. A street's buildings, cars and
-/// poles face every way: urban drives read 0.1-0.8 (1 % of frames below 0.2), and hand-held
-/// and drone runs through the same streets 0.09-0.9 (BENCHMARKS.md, "The motion prior where
-/// the scene leaves a translation free").
-pub const PRIOR_GATE: f64 = 0.1;
-
-/// The `accurate` preset's [`Config::sparse_scan_points`]: 2^15, half of a 64-beam,
-/// 1024-column sweep. A sweep of a 16-beam scanner at 10 Hz holds at most 28,800 points (16 x
-/// 1,800), a Livox Mid-360's 0.1 s frame about 20,000; a 64 x 1024 sensor's 65,536 less what
-/// finds nothing within range, which over an open field (its upper beams on the sky) left
-/// 56,000 (BENCHMARKS.md, "The accurate preset").
-pub const SPARSE_SCAN_POINTS: usize = 32_768;
-
-/// The `accurate` preset's [`Config::desired_source_points`]: GenZ-ICP's
-/// `desired_num_voxelized_points` in its `outdoor` and `kitti` presets. A 64-beam sweep keeps
-/// 3,700-4,600 points at `beta v` on generated streets and 6,000-12,500 on KITTI's; a 16-beam
-/// one about this many on the sparse-scan map, which keeps them all (BENCHMARKS.md, "The
-/// accurate preset").
-pub const DESIRED_SOURCE_POINTS: usize = 3_000;
-
-/// The sparse-scan map's voxel over the configured one: GenZ-ICP's `outdoor` map of 0.6 m
-/// voxels against the `accurate` preset's `r_max / 200` of a 100 m sensor.
-pub const SPARSE_VOXEL_FACTOR: f64 = 1.2;
-
-/// The sparse-scan map's `N_max`: GenZ-ICP's `outdoor` map's.
-pub const SPARSE_POINTS_PER_VOXEL: u32 = 3;
-
-/// The sparse-scan map's `beta`: its registration cloud on the map's own voxels, where
-/// GenZ-ICP starts its adaptive source voxel (BENCHMARKS.md, "The sparse-scan map").
-pub const SPARSE_BETA: f64 = 1.0;
-
-/// The sparse-scan map's [`Robust::kernel_scale`]: a thirty-third of the paper's 1/3. A 16-beam
-/// sensor's neighbourhoods are often one ring's arc, whose normal is only the arc's flatter
-/// side. A kernel of `sigma / 100` (a Geman-McClure cut-off near 5 cm at the usual sigma of
-/// 0.3 m) leaves such residuals almost no weight. On the tuning seeds every step from 1/4 down
-/// to 1/200 lowered the VLP-16's error, by half at 1/100, and moved the Mid-360's within 10 %
-/// (BENCHMARKS.md, "The sparse-scan map").
-pub const SPARSE_PLANE_KERNEL_SCALE: f64 = 0.01;
 
 impl<T: Real> Config<T> {
     /// The reference defaults for a sensor with range `max_range` (voxel size `r_max / 100`).
@@ -307,18 +264,29 @@ impl<T: Real> Config<T> {
     /// time on urban and KITTI scans (2.6-2.8 in a corridor). Every frame is registered with
     /// point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
     /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
-    /// voxels (GenZ-ICP's sparse-sensor map when the first scan is sparse,
-    /// [`Config::for_first_scan`]); the motion prior acts only where the scene leaves a
+    /// voxels (GenZ-ICP's sparse-sensor map when the first scan keeps fewer than 32,768
+    /// points, [`Config::for_first_scan`]); the motion prior acts only where the scene leaves a
     /// translation nearly free ([`Robust::prior_gate`]: a corridor, a tunnel, open ground),
     /// where its lateral term takes the sensor for a car's (a flying sensor there breaks it)
     /// and its hold acts only along a corridor's lone free axis; a registration that goes
     /// round a loop stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not
     /// the model's is deskewed again with its own ([`Config::redeskew`]), and a dense scan's
-    /// registration cloud is thinned toward [`DESIRED_SOURCE_POINTS`] where the scene measures
-    /// every direction ([`Config::desired_source_points`]; not on the sparse-scan map). Both
-    /// clouds keep the scan's order ([`Config::reference_order`] `false`). Its poses are not
-    /// the reference's.
+    /// registration cloud is thinned toward 3,000 points where the scene measures every
+    /// direction ([`Config::desired_source_points`]; not on the sparse-scan map). Both clouds
+    /// keep the scan's order ([`Config::reference_order`] `false`). Its poses are not the
+    /// reference's.
     pub fn accurate(max_range: T) -> Self {
+        // 2^15, half of a 64-beam, 1024-column sweep. A sweep of a 16-beam scanner at 10 Hz
+        // holds at most 28,800 points (16 x 1,800), a Livox Mid-360's 0.1 s frame about
+        // 20,000; a 64 x 1024 sensor's 65,536 less what finds nothing within range, which over
+        // an open field (its upper beams on the sky) left 56,000 (BENCHMARKS.md, "The accurate
+        // preset").
+        const SPARSE_SCAN_POINTS: usize = 32_768;
+        // GenZ-ICP's `desired_num_voxelized_points` in its `outdoor` and `kitti` presets. A
+        // 64-beam sweep keeps 3,700-4,600 points at `beta v` on generated streets and
+        // 6,000-12,500 on KITTI's; a 16-beam one about this many on the sparse-scan map, which
+        // keeps them all (BENCHMARKS.md, "The accurate preset").
+        const DESIRED_SOURCE_POINTS: usize = 3_000;
         Self {
             voxel_size: max_range / T::of(200.0),
             degeneracy: Degeneracy::Robust,
@@ -331,12 +299,27 @@ impl<T: Real> Config<T> {
         }
     }
 
-    /// This configuration for a run whose first scan kept `points` points within range: with
-    /// the sparse-scan map (see [`Config::sparse_scan_points`]), a registration cloud of every
-    /// voxel of the map's size ([`SPARSE_BETA`]) and the plane terms' kernel
-    /// [`SPARSE_PLANE_KERNEL_SCALE`], when that is fewer than `sparse_scan_points`, else as
-    /// it is.
+    /// This configuration for a run whose first scan kept `points` points within range, when
+    /// that is fewer than `sparse_scan_points`, else as it is: GenZ-ICP's sparse-sensor map
+    /// (see [`Config::sparse_scan_points`]) of voxels 1.2 times `voxel_size` with at most 3
+    /// points each (`N_max` if lower), a registration cloud of every voxel of the map's size
+    /// (`beta` 1, every voxel kept: `desired_source_points` 0) and plane terms with a kernel of
+    /// `sigma / 100` ([`Robust::kernel_scale`] 0.01).
     pub fn for_first_scan(&self, points: usize) -> Self {
+        // GenZ-ICP's `outdoor` map of 0.6 m voxels against the preset's `r_max / 200` of a
+        // 100 m sensor, and its `N_max`.
+        const SPARSE_VOXEL_FACTOR: f64 = 1.2;
+        const SPARSE_POINTS_PER_VOXEL: u32 = 3;
+        // The registration cloud on the map's own voxels, where GenZ-ICP starts its adaptive
+        // source voxel (BENCHMARKS.md, "The sparse-scan map").
+        const SPARSE_BETA: f64 = 1.0;
+        // A thirty-third of the paper's 1/3. A 16-beam sensor's neighbourhoods are often one
+        // ring's arc, whose normal is only the arc's flatter side. A kernel of `sigma / 100` (a
+        // Geman-McClure cut-off near 5 cm at the usual sigma of 0.3 m) leaves such residuals
+        // almost no weight. On the tuning seeds every step from 1/4 down to 1/200 lowered the
+        // VLP-16's error, by half at 1/100, and moved the Mid-360's within 10 % (BENCHMARKS.md,
+        // "The sparse-scan map").
+        const SPARSE_PLANE_KERNEL_SCALE: f64 = 0.01;
         if points >= self.sparse_scan_points {
             return *self;
         }
@@ -364,10 +347,16 @@ impl<T: Real> Config<T> {
         }
     }
 
-    /// Checks that every parameter is finite and in its domain.
+    /// Largest accepted `max_range` (m). The adaptive threshold squares distances of order
+    /// `r_max` (Eq. (6)-(7)); beyond about 1e154 m that overflows f64 and sigma would stay
+    /// infinite for good. No range sensor reaches a thousand kilometres, so this is the limit.
+    pub const MAX_RANGE_LIMIT: f64 = 1.0e6;
+
+    /// Checks that every parameter is finite and in its domain (`max_range` at most
+    /// [`Self::MAX_RANGE_LIMIT`]).
     pub fn validate(&self) -> Result<(), ConfigError> {
         let pos = |x: T| x.is_finite() && x > T::zero();
-        let in_range = pos(self.max_range) && self.max_range <= T::of(MAX_RANGE_LIMIT);
+        let in_range = pos(self.max_range) && self.max_range <= T::of(Self::MAX_RANGE_LIMIT);
         if !(in_range && self.min_range.is_finite() && self.min_range >= T::zero()) {
             return Err(ConfigError::Range);
         }
@@ -567,191 +556,4 @@ impl Capacities {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn robust_is_the_reference_with_planes_and_its_gate_is_checked() {
-        let (r, n) = (Config::<f64>::robust(80.0), Config::<f64>::new(80.0));
-        assert_eq!(r.degeneracy, Degeneracy::Robust);
-        assert_eq!(n.robust.plane_gate, 0.015);
-        assert_eq!(
-            (n.robust.prediction_prior, n.robust.lateral_prior),
-            (0.0, 0.0)
-        );
-        assert_eq!(
-            Config {
-                degeneracy: n.degeneracy,
-                ..r
-            },
-            n
-        );
-        assert!(r.validate().is_ok());
-        assert!(Capacities::ROBUST.validate().is_ok());
-        for bad in [-0.1, f64::NAN, f64::INFINITY] {
-            let with = |robust| Config { robust, ..r };
-            let gate = with(Robust {
-                plane_gate: bad,
-                ..r.robust
-            });
-            let hold = with(Robust {
-                prediction_prior: bad,
-                ..r.robust
-            });
-            let lateral = with(Robust {
-                lateral_prior: bad,
-                ..r.robust
-            });
-            let prior_gate = with(Robust {
-                prior_gate: bad,
-                ..r.robust
-            });
-            let all = [(gate, "plane_gate"), (hold, "hold"), (lateral, "lateral")];
-            for (c, name) in all.into_iter().chain([(prior_gate, "prior_gate")]) {
-                assert_eq!(c.validate(), Err(ConfigError::Threshold), "{name} {bad}");
-            }
-        }
-        let priors = Config {
-            robust: Robust::tunnel(),
-            ..r
-        };
-        assert!(priors.validate().is_ok());
-        // Room for a finer map than the full-scale one (a tunnel's 0.2 m voxels).
-        let full = Capacities::FULL_SCALE;
-        assert!(Capacities::ROBUST.map_voxels >= 4 * full.map_voxels);
-    }
-
-    #[test]
-    fn accurate_is_robust_mode_on_every_frame_on_a_finer_map_with_gated_priors() {
-        let (a, r) = (Config::<f64>::accurate(80.0), Config::<f64>::robust(80.0));
-        assert_eq!(a.voxel_size, 0.4);
-        assert!(a.robust.plane_gate >= 1.0, "every frame with plane terms");
-        let t = Robust::<f64>::tunnel();
-        assert_eq!(
-            (a.robust.prediction_prior, a.robust.lateral_prior),
-            (t.prediction_prior, t.lateral_prior),
-            "the tunnel setting's priors"
-        );
-        assert_eq!(
-            (a.robust.prior_gate, r.robust.prior_gate, t.prior_gate),
-            (PRIOR_GATE, 1.0, 1.0),
-            "gated in the preset only"
-        );
-        assert!(
-            a.robust.cycle_stop && !r.robust.cycle_stop,
-            "the preset's cycle stop only"
-        );
-        assert!(a.redeskew && !r.redeskew, "the preset's second deskew only");
-        assert_eq!(
-            (a.desired_source_points, r.desired_source_points),
-            (DESIRED_SOURCE_POINTS, 0),
-            "the preset's thinned registration cloud only"
-        );
-        assert!(
-            !Config::<f64>::new(80.0).redeskew,
-            "the reference deskews once"
-        );
-        assert!(
-            !a.reference_order && r.reference_order && Config::<f64>::new(80.0).reference_order,
-            "the preset's clouds in scan order only"
-        );
-        let back = Config {
-            voxel_size: r.voxel_size,
-            robust: r.robust,
-            sparse_scan_points: r.sparse_scan_points,
-            desired_source_points: r.desired_source_points,
-            redeskew: r.redeskew,
-            reference_order: r.reference_order,
-            ..a
-        };
-        assert_eq!(back, r, "nothing else differs from robust mode");
-        assert!(a.validate().is_ok());
-        // Its 16-beam capacities: room for plane terms, more of every buffer than TINY's.
-        let (t, ta) = (Capacities::TINY, Capacities::TINY_ACCURATE);
-        assert!(ta.validate().is_ok() && ta.plane_terms);
-        assert_eq!(ta.scan_points, t.scan_points);
-        assert!(ta.merge_points > 2 * t.merge_points && ta.source_points > 2 * t.source_points);
-        assert!(ta.map_voxels > 2 * t.map_voxels && ta.map_points > 2 * t.map_points);
-    }
-
-    #[test]
-    fn the_tunnel_and_tiny_settings_are_what_their_docs_say() {
-        // Robust::tunnel: plane terms on every frame, the vehicle prior 1 and the hold prior
-        // 0.01; the rest robust mode's defaults.
-        let (t, n) = (Robust::<f64>::tunnel(), Robust::<f64>::new());
-        assert_eq!(
-            (t.plane_gate, t.lateral_prior, t.prediction_prior),
-            (1.0, 1.0, 0.01)
-        );
-        let back = Robust {
-            plane_gate: n.plane_gate,
-            lateral_prior: n.lateral_prior,
-            prediction_prior: n.prediction_prior,
-            ..t
-        };
-        assert_eq!(back, n);
-        // Config::tiny: r_max 50 m, 2 m voxels of at most 10 points; the rest the reference's.
-        let (c, r) = (Config::<f64>::tiny(), Config::<f64>::new(50.0));
-        assert_eq!(
-            (c.max_range, c.voxel_size, c.max_points_per_voxel),
-            (50.0, 2.0, 10)
-        );
-        let back = Config {
-            voxel_size: r.voxel_size,
-            max_points_per_voxel: r.max_points_per_voxel,
-            ..c
-        };
-        assert_eq!(back, r);
-    }
-
-    #[test]
-    fn a_sparse_first_scan_gives_the_accurate_preset_genz_icp_s_sparse_sensor_map() {
-        let a = Config::<f64>::accurate(100.0);
-        let sparse = a.for_first_scan(SPARSE_SCAN_POINTS - 1);
-        assert_eq!(
-            (sparse.voxel_size, sparse.max_points_per_voxel),
-            (0.5 * SPARSE_VOXEL_FACTOR, 3)
-        );
-        assert!((sparse.voxel_size - 0.6).abs() < 1e-15, "GenZ-ICP's 0.6 m");
-        assert_eq!(
-            sparse.desired_source_points, 0,
-            "every voxel of a sparse cloud"
-        );
-        assert_eq!(
-            (sparse.beta, sparse.robust.kernel_scale),
-            (1.0, 0.01),
-            "a registration cloud on the map's voxels, a tighter plane kernel"
-        );
-        assert_eq!(
-            Config {
-                voxel_size: a.voxel_size,
-                max_points_per_voxel: a.max_points_per_voxel,
-                desired_source_points: a.desired_source_points,
-                beta: a.beta,
-                robust: Robust {
-                    kernel_scale: a.robust.kernel_scale,
-                    ..sparse.robust
-                },
-                ..sparse
-            },
-            a,
-            "nothing else changes"
-        );
-        assert!(sparse.validate().is_ok());
-        assert_eq!(
-            a.for_first_scan(SPARSE_SCAN_POINTS),
-            a,
-            "the bound is strict"
-        );
-        // A map already coarser in points keeps its own N_max.
-        let two = Config {
-            max_points_per_voxel: 2,
-            ..a
-        };
-        assert_eq!(two.for_first_scan(0).max_points_per_voxel, 2);
-        // The reference's configuration never changes.
-        let n = Config::<f64>::new(100.0);
-        assert_eq!(n.sparse_scan_points, 0);
-        assert_eq!(n.for_first_scan(0), n);
-    }
-}
+mod tests;

@@ -4,7 +4,7 @@
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigError {
-    /// `max_range` must be positive and at most [`crate::config::MAX_RANGE_LIMIT`], and
+    /// `max_range` must be positive and at most [`crate::Config::MAX_RANGE_LIMIT`], and
     /// `0 <= min_range < max_range`: fix the ranges.
     Range,
     /// `voxel_size`, `alpha` and `beta` must be positive and finite.

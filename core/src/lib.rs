@@ -59,7 +59,6 @@ mod downsample;
 mod eigen;
 mod error;
 mod geometry;
-mod hold;
 mod imu;
 mod lie;
 mod local_map;
@@ -72,19 +71,15 @@ mod scalar;
 pub mod storage;
 mod threshold;
 mod voxel;
+mod weakness;
 
 #[cfg(test)]
 mod testutil;
 
-pub use config::{
-    Capacities, Config, Degeneracy, Robust, DESIRED_SOURCE_POINTS, MAX_RANGE_LIMIT, PRIOR_GATE,
-    SPARSE_BETA, SPARSE_PLANE_KERNEL_SCALE, SPARSE_POINTS_PER_VOXEL, SPARSE_SCAN_POINTS,
-    SPARSE_VOXEL_FACTOR,
-};
+pub use config::{Capacities, Config, Degeneracy, Robust};
 pub use deskew::{StampProblem, SweepRotation, SWEEP_KNOTS};
 pub use error::{ConfigError, FrameError};
 pub use geometry::{widen_pose, Point, Pose};
-pub use hold::{Held, AXES, ROTATION_RATIO, TRANSLATION_RATIO};
 pub use imu::{GyroPrior, ImuConfig, ImuSample, Prior};
 pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized};
 pub use odometry::{FrameInput, Layout, Odometry, WhenFull};
@@ -105,7 +100,6 @@ pub mod stages {
         cloud_words, grid_slots_for, reference_order, reference_order_bytes, robin_bucket_count,
         scratch_words_for, voxel_downsample, Dedup, Downsampled,
     };
-    pub use crate::hold::{min_points, weakness, Hold, Weakness};
     pub use crate::lie::{
         hat, left_jacobian, left_jacobian_inverse, renormalize, rotation_angle, se3_exp, se3_log,
         so3_exp, so3_log,
@@ -127,4 +121,5 @@ pub mod stages {
     pub use crate::voxel::{
         point_to_voxel, reference_hash, table_hash, VoxelKey, NEIGHBOUR_SHIFTS,
     };
+    pub use crate::weakness::{min_points, weakness, Weakness};
 }

@@ -62,7 +62,8 @@ pub enum Volumes {
     Isotropic,
     /// Only along its covariance's flattest direction, as a plane would. Two planes meeting
     /// in a voxel (a corridor's wall and floor) fill it like a volume, but say nothing along
-    /// their common edge; hold mode must not read information there.
+    /// their common edge; the measurement of weak directions (`weakness`) must not read
+    /// information there.
     Flattest,
 }
 

@@ -26,7 +26,6 @@ pub use system::SYSTEM_LEN;
 use system::{accumulate, upper};
 
 use crate::geometry::{Point, Pose};
-use crate::hold::Hold;
 use crate::lie::se3_exp;
 use crate::local_map::{MapView, Nearest, PointCodec};
 use crate::scalar::{sqrt_lt, Real};
@@ -52,7 +51,7 @@ impl Executor for Sequential {
     }
 }
 
-/// ICP stopping rule, and hold mode's hold.
+/// ICP's stopping rule and what robust mode adds to its terms.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IcpParams<T: Real> {
     /// `gamma`.
@@ -62,8 +61,6 @@ pub struct IcpParams<T: Real> {
     /// Work units (see `local_map::Nearest::work`) the whole registration may spend;
     /// `None`: no limit. ICP stops with its last complete iterate before exceeding it.
     pub budget: Option<u64>,
-    /// Directions every step is projected off (hold mode, see `robust`); `None`: none.
-    pub hold: Option<Hold<T>>,
     /// Point-to-plane terms where the map is planar (robust mode, see `planes`); `false`:
     /// point-to-point everywhere, as the reference.
     pub planes: bool,
@@ -469,13 +466,10 @@ impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
             } else {
                 T::zero()
             };
-            let dx = match solve(&sum) {
-                Some(dx) => params.hold.map_or(dx, |h| h.step(&dx)),
-                None => {
-                    out.singular = true;
-                    out.converged = true;
-                    break;
-                }
+            let Some(dx) = solve(&sum) else {
+                out.singular = true;
+                out.converged = true;
+                break;
             };
             let estimation = se3_exp(&dx);
             t_icp = estimation * t_icp;

@@ -3,7 +3,6 @@
 
 use crate::deskew::StampProblem;
 use crate::geometry::Pose;
-use crate::hold::Held;
 use crate::local_map::MapCapacity;
 use crate::scalar::Real;
 
@@ -34,9 +33,8 @@ pub enum Flag {
     /// ICP stopped at the frame's work budget (`Config::work_budget`) with its last complete
     /// iterate.
     Budget = 1 << 8,
-    /// Hold mode held some directions at the constant-velocity prediction (see
-    /// [`FrameReport::held`]).
-    Held = 1 << 9,
+    // Bit 9 is not assigned: a status logged as bits (the embedded receiver's datagrams)
+    // keeps the meaning of every other bit.
     /// Robust mode registered the scan with point-to-plane terms where the map is planar: the
     /// reference registration found it degenerate (see `Robust::plane_gate`).
     Planes = 1 << 10,
@@ -48,7 +46,7 @@ pub enum Flag {
 
 impl Flag {
     /// Every flag, in bit order.
-    pub const ALL: [Flag; 12] = [
+    pub const ALL: [Flag; 11] = [
         Flag::TimestampsIgnored,
         Flag::IterationCap,
         Flag::NoCorrespondences,
@@ -58,7 +56,6 @@ impl Flag {
         Flag::ScanTruncated,
         Flag::Capacity,
         Flag::Budget,
-        Flag::Held,
         Flag::Planes,
         Flag::Evicted,
     ];
@@ -75,7 +72,6 @@ impl Flag {
             Flag::ScanTruncated => "scan_truncated",
             Flag::Capacity => "capacity",
             Flag::Budget => "budget",
-            Flag::Held => "held",
             Flag::Planes => "planes",
             Flag::Evicted => "evicted",
         }
@@ -261,14 +257,10 @@ pub struct FrameReport<T: Real> {
     /// Weakest over strongest direction of the point-to-plane information sampled from map
     /// voxel normals (translation and rotation, the smaller); `None` on the first frame.
     pub observability: Option<T>,
-    /// Hold mode only: the directions held at the constant-velocity prediction (none in
-    /// the other modes).
-    pub held: Held,
     /// Weakest over strongest eigenvalue of the point-to-plane information at the prediction,
-    /// for translation and for rotation: in hold mode (directions below `TRANSLATION_RATIO`
-    /// and `ROTATION_RATIO` are held) and in robust mode with a `prior_gate` below 1 (the
-    /// motion prior acts where the first is below it); `None` otherwise, on the first frame,
-    /// or with nothing measured.
+    /// for translation and for rotation: in robust mode with a `prior_gate` below 1 (the
+    /// motion prior acts where the first is below it); `None` otherwise, on the first two
+    /// frames, or with nothing measured.
     pub weak_ratios: Option<[T; 2]>,
     /// Points given.
     pub input_points: u32,
@@ -324,13 +316,22 @@ mod tests {
     }
 
     #[test]
-    fn flag_names_are_unique_and_round_trip() {
-        for (i, f) in Flag::ALL.iter().enumerate() {
-            assert_eq!(Flag::from_name(f.name()), Some(*f));
-            assert_eq!(*f as u16, 1 << i);
+    fn flag_names_round_trip_and_flags_are_single_bits_in_order() {
+        let mut bits = 0u16;
+        for f in Flag::ALL {
+            assert_eq!(Flag::from_name(f.name()), Some(f));
+            let bit = f as u16;
+            assert!(bit.is_power_of_two() && bit > bits, "{f:?}");
+            bits |= bit;
         }
         assert_eq!(Flag::from_name("fine"), None);
         let all: Status = Flag::ALL.into_iter().collect();
-        assert_eq!(all.bits(), 0xfff);
+        assert_eq!(all.bits(), bits);
+        assert_eq!(all.flags().count(), Flag::ALL.len());
+        // The bits a logged status was written with keep their names.
+        assert_eq!(
+            (Flag::Planes as u16, Flag::Evicted as u16),
+            (1 << 10, 1 << 11)
+        );
     }
 }

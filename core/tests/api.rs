@@ -375,7 +375,7 @@ fn robust_mode_needs_room_for_plane_terms_and_only_it_pays_for_them() {
         assert!(odom.register_frame(scan, None).is_ok());
     }
     // The room: per 64 source points a second partial system and 64 cached planes (a voxel key
-    // and a normal each), nothing else; reference and hold mode do without it.
+    // and a normal each), nothing else; reference mode does without it.
     let extra = with.arena_words::<f64, Exact>() - caps.arena_words::<f64, Exact>();
     let per_chunk = SYSTEM_LEN + 6 * CHUNK;
     assert_eq!(extra, chunks_for(caps.source_points) * per_chunk);

@@ -18,7 +18,7 @@ use kiss_odom_core::stages::{
 };
 use kiss_odom_core::{
     Capacities, Config, ConfigError, Exact, FrameError, Odometry, Point, PointCodec, Pose,
-    Quantized, Real, Sequential, MAX_RANGE_LIMIT,
+    Quantized, Real, Sequential,
 };
 use nalgebra::{Translation3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
@@ -135,7 +135,7 @@ proptest! {
         let mut work = vec![0u64; work_words::<f64>(source.len(), false)];
         // The second frame of a run: identity guess, the threshold's seed sigma = 2 m, so the
         // correspondence gate is 3 sigma = 6 m and the kernel sigma = 2 m.
-        let params = IcpParams { convergence_criterion: GAMMA, max_iterations: 500, budget: None, hold: None, planes: false, prior: None, stop_on_cycle: false };
+        let params = IcpParams { convergence_criterion: GAMMA, max_iterations: 500, budget: None, planes: false, prior: None, stop_on_cycle: false };
         let a = align_points_to_map(
             &Sequential, &source, &mut work, &map.view(), &Pose::identity(), 6.0, 2.0, &params,
         );
@@ -628,14 +628,14 @@ proptest! {
 
 /// The threshold squares `2 r_max sin(theta / 2)` (Eq. (6)-(7)), which overflows f64 for
 /// `r_max` beyond about 1e154: `Config::validate` refuses ranges above
-/// [`MAX_RANGE_LIMIT`], and at that limit sigma stays finite.
+/// [`Config::MAX_RANGE_LIMIT`], and at that limit sigma stays finite.
 #[test]
 fn the_threshold_stays_finite_for_every_valid_range() {
     let mut config = Config::new(1e200f64);
     config.voxel_size = 1.0;
     assert_eq!(config.validate(), Err(ConfigError::Range));
     let s = street(7);
-    let mut config = Config::new(MAX_RANGE_LIMIT);
+    let mut config = Config::new(Config::<f64>::MAX_RANGE_LIMIT);
     config.voxel_size = 1.0;
     let caps = common::caps();
     let mut arena = vec![0u64; caps.arena_words::<f64, Exact>()];

@@ -65,7 +65,7 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.convergence_criterion = T::of(pick(u, &[1e-4, 0.0, 1e-2])?);
     c.initial_threshold = T::of(pick(u, &[2.0, 0.1, 50.0, 1e-6])?);
     c.kernel_scale = T::of(pick(u, &[1.0, 1.0 / 3.0, 10.0])?);
-    c.degeneracy = *u.choose(&[Degeneracy::Reference, Degeneracy::Robust, Degeneracy::Hold])?;
+    c.degeneracy = *u.choose(&[Degeneracy::Reference, Degeneracy::Robust])?;
     c.robust.plane_gate = T::of(pick(u, &[0.015, 0.0, 1.0, 0.5])?);
     c.robust.prediction_prior = T::of(pick(u, &[0.0, 0.01, 1e3])?);
     c.robust.lateral_prior = T::of(pick(u, &[0.0, 1.0, 1e-3])?);

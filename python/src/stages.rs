@@ -264,7 +264,6 @@ impl Registration {
                 convergence_criterion,
                 max_iterations: max_num_iterations,
                 budget: None,
-                hold: None,
                 planes: false,
                 prior: None,
                 stop_on_cycle: false,

@@ -2,15 +2,13 @@
 //! (`--degeneracy robust`: frames the reference leaves degenerate registered again with
 //! point-to-plane terms) follows an open field from a standing start where reference mode turns
 //! away, and with its tunnel setting (plane terms on every frame, finer voxels) a tunnel where
-//! reference mode stays stuck; it flags those frames `planes` and holds nothing. On an urban
-//! street it registers nothing again and gives the reference's poses bit for bit. Hold mode
-//! (`--degeneracy hold`): in the corridor it holds the axis (`frames.csv` says so) and the pose
-//! along it is the constant-velocity prediction, where reference mode moves; on an urban street
-//! it holds nothing and gives the reference's poses bit for bit.
+//! reference mode stays stuck; it flags those frames `planes`. On an urban street it registers
+//! nothing again and gives the reference's poses bit for bit. A mode name other than these two is
+//! refused, in a settings file and on the command line, naming the ones there are.
 
 use crate::common;
 
-use common::{distance, run, RunExt};
+use common::{distance, repo, run, RunExt};
 use nalgebra::Matrix4;
 use std::ffi::OsString;
 use std::path::Path;
@@ -89,10 +87,6 @@ fn robust_and_reference(
     let (reference, robust) = both_modes(dir.path(), profile, frames, "robust", args);
     reference.succeeded_with_frames(frames);
     robust.succeeded_with_frames(frames);
-    assert!(
-        held(&robust.out).iter().all(|h| h.is_empty()),
-        "robust mode holds nothing"
-    );
     let planes = plane_frames(&robust);
     println!("{profile}: {planes} of {frames} frames registered with plane terms");
     assert!(planes > frames / 2 && plane_frames(&reference) == 0);
@@ -231,83 +225,6 @@ fn with_the_vehicle_prior_robust_mode_and_the_accurate_preset_learn_a_corridors_
     assert!((never - 1.0).abs() > 2.0 * (gated - 1.0).abs());
 }
 
-/// The `held_axes` column of `frames.csv`.
-fn held(out: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(out.join("frames.csv")).unwrap();
-    let mut lines = text.lines();
-    // No commas in these paths or cells, so a plain split is the CSV.
-    let header = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .position(|h| h == "held_axes");
-    let col = header.expect("frames.csv has a held_axes column");
-    lines
-        .map(|l| l.split(',').nth(col).unwrap().to_string())
-        .collect()
-}
-
-/// Translation of frame `k`'s correction from the constant-velocity prediction, in the
-/// predicted sensor frame (m).
-fn correction(poses: &[Matrix4<f64>], k: usize) -> [f64; 3] {
-    let inv = |m: &Matrix4<f64>| m.try_inverse().unwrap();
-    let prediction = poses[k - 1] * inv(&poses[k - 2]) * poses[k - 1];
-    let c = inv(&prediction) * poses[k];
-    [c[(0, 3)], c[(1, 3)], c[(2, 3)]]
-}
-
-#[test]
-fn hold_mode_holds_the_corridor_axis_at_the_prediction_where_reference_mode_moves() {
-    let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), "corridor", 60, "hold", &[]);
-    reference.succeeded_with_frames(60);
-    robust.succeeded_with_frames(60);
-    let held = held(&robust.out);
-    let (rp, bp) = (reference.poses(), robust.poses());
-    // Frames that held only the axis (tx): robust mode holds the weak eigen-direction, which is
-    // x tilted by the scan's few degrees, so the correction keeps a small x component.
-    let (mut worst_robust, mut largest_reference, mut frames) = (0.0f64, 0.0f64, 0);
-    let rows = robust.rows();
-    for k in 2..60 {
-        let rows_flag = rows[k].flags.contains(&"held".to_string());
-        assert_eq!(
-            rows_flag,
-            !held[k].is_empty(),
-            "frame {k}: flag and column agree"
-        );
-        if held[k] != "tx" {
-            continue;
-        }
-        frames += 1;
-        worst_robust = worst_robust.max(correction(&bp, k)[0].abs());
-        largest_reference = largest_reference.max(correction(&rp, k)[0].abs());
-    }
-    println!(
-        "corridor: {frames} of 58 frames held tx; robust mode's largest correction along it \
-         {worst_robust:.2e} m (tol: a fifth of reference mode's), reference mode's \
-         {largest_reference:.2e} m"
-    );
-    assert!(frames >= 40, "the corridor's axis is weak on most frames");
-    assert!(worst_robust < 0.2 * largest_reference);
-    assert!(
-        largest_reference > 1e-3,
-        "reference mode moves along the axis"
-    );
-}
-
-#[test]
-fn on_an_urban_street_hold_mode_holds_nothing_and_gives_the_reference_poses() {
-    let dir = tempfile::tempdir().unwrap();
-    let (reference, robust) = both_modes(dir.path(), "urban", 40, "hold", &[]);
-    let read = |r: &common::Run| std::fs::read(r.out.join("poses_kitti.txt")).unwrap();
-    assert!(held(&robust.out).iter().all(|h| h.is_empty()));
-    assert_eq!(
-        read(&reference),
-        read(&robust),
-        "hold mode changed an urban run"
-    );
-}
-
 #[test]
 fn on_an_urban_street_robust_mode_registers_nothing_again_and_gives_the_reference_poses() {
     let dir = tempfile::tempdir().unwrap();
@@ -318,5 +235,31 @@ fn on_an_urban_street_robust_mode_registers_nothing_again_and_gives_the_referenc
         read(&reference),
         read(&robust),
         "robust mode changed an urban run"
+    );
+}
+
+#[test]
+fn an_unknown_mode_is_refused_in_a_settings_file_and_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = repo().join("fixtures/kitti-05-reduced");
+    let old = dir.path().join("old.toml");
+    std::fs::write(&old, "[registration]\ndegeneracy = \"hold\"\n").unwrap();
+    let r = run(
+        &data,
+        &dir.path().join("a"),
+        &["--config", old.to_str().unwrap()],
+    );
+    let said = r.failed_naming(&old);
+    println!("{said}");
+    for needle in ["`hold`", "expected `reference` or `robust`"] {
+        assert!(said.contains(needle), "{needle:?} in {said}");
+    }
+    let r = run(&data, &dir.path().join("b"), &["--degeneracy", "hold"]);
+    println!("{}", r.stderr.trim());
+    assert_ne!(r.code, 0, "--degeneracy hold is refused");
+    assert!(
+        r.stderr.contains("hold") && r.stderr.contains("robust"),
+        "{}",
+        r.stderr
     );
 }

@@ -454,7 +454,6 @@ fn registration_converges_to_the_reference_pose() {
         convergence_criterion: num(&reg["convergence_criterion"]),
         max_iterations: reg["max_iterations"].as_u64().unwrap() as u32,
         budget: None,
-        hold: None,
         planes: false,
         prior: None,
         stop_on_cycle: false,

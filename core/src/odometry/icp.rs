@@ -2,26 +2,24 @@
 //! registration cloud against the local map from the prediction.
 //!
 //! - Reference mode ([`Degeneracy::Reference`]): the reference's point-to-point ICP, bit for bit.
-//! - Hold mode ([`Degeneracy::Hold`]): directions the scene leaves weak at the prediction are
-//!   held there (`hold`).
 //! - Robust mode ([`Degeneracy::Robust`]): the reference's registration; where its observability
 //!   is below `plane_gate` (or always, with a gate of 1 or more) a registration from the
 //!   prediction with point-to-plane terms where the map is planar, and the motion prior
-//!   (with a `prior_gate` below 1, only where hold mode's measurement finds a translation
-//!   nearly free).
+//!   (with a `prior_gate` below 1, only where the scene's measurement at the prediction,
+//!   `weakness`, finds a translation nearly free).
 //!
 //! What the paper leaves out lives here too: the convergence floor of a finite scalar and the
 //! fallback for a non-finite ICP result.
 
 use crate::config::{Config, Degeneracy, Robust};
 use crate::geometry::{Point, Pose};
-use crate::hold::{min_points, weakness, Weakness};
 use crate::local_map::{MapView, PointCodec};
 use crate::observability::observability;
 use crate::registration::{
     align_points_to_map, moved_points, Alignment, Executor, IcpParams, MotionPrior,
 };
 use crate::scalar::Real;
+use crate::weakness::{min_points, weakness, Weakness};
 
 /// What step 4 works with, besides the prediction, the map and ICP's work chunks.
 pub(super) struct Step<'a, T: Real, E: Executor> {
@@ -57,7 +55,7 @@ pub(super) struct Registered<T: Real> {
     pub(super) observability: Option<T>,
     /// Registered with robust mode's plane terms.
     pub(super) planes: bool,
-    /// What hold mode held.
+    /// The scene's weakness at the prediction, where the motion prior's gate measured it.
     pub(super) weak: Weakness<T>,
 }
 
@@ -76,19 +74,15 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
     ) -> Registered<T> {
         let cfg = self.cfg;
         let first_frame = map.is_empty();
-        // Hold mode looks for weak directions once there is a prediction: the second frame's
-        // is standing still, whatever the sensor does. Robust mode measures the same where its
-        // motion prior is gated on it, and holds nothing.
-        let measured = !first_frame && at.frames >= 2;
-        let weak = match cfg.degeneracy {
-            Degeneracy::Hold if measured => self.weakness(at, map),
-            Degeneracy::Robust if measured && gated(&cfg.robust) => Weakness {
-                hold: None,
-                ..self.weakness(at, map)
-            },
-            _ => Weakness::NONE,
-        };
         let robust = cfg.degeneracy == Degeneracy::Robust;
+        // Where robust mode's motion prior is gated on the scene, the scene is measured once
+        // there is a prediction: the second frame's is standing still, whatever the sensor
+        // does.
+        let weak = if robust && !first_frame && at.frames >= 2 && gated(&cfg.robust) {
+            self.weakness(at, map)
+        } else {
+            Weakness::NONE
+        };
         let always = robust && !first_frame && cfg.robust.plane_gate >= T::one();
         let first = self.once(at, map, work, always, &weak);
         let degenerate = first
@@ -101,7 +95,7 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
         }
     }
 
-    /// Hold mode's measurement of the scene at the prediction.
+    /// The scene's measurement at the prediction (see `weakness`).
     fn weakness<P: PointCodec<T>>(
         &self,
         at: &Predicted<T>,
@@ -144,9 +138,9 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
             &at.pose,
             max_distance,
             kernel * at.sigma,
-            &icp_params(cfg, &at.pose, weak, planes, prior),
+            &icp_params(cfg, &at.pose, planes, prior),
         );
-        let (pose, finite) = finite_or(weak.apply(&at.pose, icp.pose), at.pose);
+        let (pose, finite) = finite_or(icp.pose, at.pose);
         let first_frame = map.is_empty();
         let observability = if first_frame {
             None
@@ -204,7 +198,6 @@ fn prior_weights<T: Real>(r: &Robust<T>, weak: &Weakness<T>) -> Option<(T, T)> {
 fn icp_params<T: Real>(
     cfg: &Config<T>,
     prediction: &Pose<T>,
-    weak: &Weakness<T>,
     planes: bool,
     prior: Option<MotionPrior<T>>,
 ) -> IcpParams<T> {
@@ -213,7 +206,6 @@ fn icp_params<T: Real>(
         convergence_criterion: cfg.convergence_criterion.max(T::of(8.0) * T::EPS * reach),
         max_iterations: cfg.max_iterations,
         budget: cfg.work_budget,
-        hold: weak.hold,
         planes,
         prior,
         stop_on_cycle: planes && cfg.robust.cycle_stop,
@@ -235,14 +227,11 @@ fn finite_or<T: Real>(pose: Pose<T>, prediction: Pose<T>) -> (Pose<T>, bool) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::PRIOR_GATE;
 
     #[test]
     fn only_a_registration_with_plane_terms_under_cycle_stop_stops_on_a_loop() {
         let at = Pose::<f64>::identity();
-        let stops = |cfg: &Config<f64>, planes| {
-            icp_params(cfg, &at, &Weakness::NONE, planes, None).stop_on_cycle
-        };
+        let stops = |cfg: &Config<f64>, planes| icp_params(cfg, &at, planes, None).stop_on_cycle;
         let (accurate, robust) = (Config::accurate(100.0), Config::robust(100.0));
         assert!(stops(&accurate, true));
         assert!(
@@ -259,7 +248,6 @@ mod tests {
     /// A measurement with the weakest and middle translation ratios `t` and `middle`.
     fn measured(t: f64, middle: f64) -> Weakness<f64> {
         Weakness {
-            hold: None,
             ratio: Some([t, 0.5]),
             middle: Some(middle),
         }
@@ -282,7 +270,11 @@ mod tests {
             "open ground"
         );
         assert_eq!(weights(&measured(0.3, 0.6)), None, "a street");
-        assert_eq!(weights(&measured(PRIOR_GATE, 0.6)), None, "the gate itself");
+        assert_eq!(
+            weights(&measured(preset.prior_gate, 0.6)),
+            None,
+            "the gate itself"
+        );
         assert_eq!(weights(&Weakness::NONE), None, "nothing measured");
         // The tunnel setting's gate of 1 needs no measurement: both terms, always.
         let tunnel = Robust::<f64>::tunnel();

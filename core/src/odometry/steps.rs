@@ -249,7 +249,6 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             rms: f.icp.rms,
             model_error,
             observability: f.observability,
-            held: f.weak.held(),
             weak_ratios: f.weak.ratio,
             input_points: (scan.input + dropped.truncated as usize) as u32,
             out_of_range: scan.out_of_range,
@@ -337,7 +336,6 @@ fn status<T: Real>(
         !f.first_frame && (f.icp.singular || !f.finite),
     );
     status.set(Flag::Degenerate, degenerate(cfg, f));
-    status.set(Flag::Held, f.weak.held().directions() > 0);
     status.set(Flag::Planes, f.planes);
     status.set(Flag::InvalidPoints, dropped.non_finite > 0);
     status.set(Flag::ScanTruncated, dropped.truncated > 0);

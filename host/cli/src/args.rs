@@ -164,12 +164,11 @@ pub struct PipelineArgs {
     /// Do not deskew.
     #[arg(long, overrides_with = "deskew")]
     pub no_deskew: bool,
-    /// Registration along directions the scene does not constrain: `reference` (kiss-icp),
+    /// Registration along directions the scene does not constrain: `reference` (kiss-icp) or
     /// `robust` (the reference, but frames it leaves degenerate are registered again with
     /// point-to-plane terms where the map is planar, flagged `planes`: for open ground, and
     /// with --plane-gate 1 --voxel-size 0.5 for tunnels and corridors; on a car add
-    /// --lateral-prior 1, and in tunnels --prediction-prior 0.01) or `hold` (held at the
-    /// constant-velocity prediction) [default: reference].
+    /// --lateral-prior 1, and in tunnels --prediction-prior 0.01) [default: reference].
     #[arg(long, value_enum)]
     pub degeneracy: Option<DegeneracyMode>,
     /// Robust mode registers a frame again with plane terms when the reference registration's

@@ -19,14 +19,11 @@
 
 use crate::engine::{self, Batch, Call, Engine};
 use crate::growth::{Growth, StateMemory};
-use crate::outcome::{FrameMeta, ImuUse, Outcome, Step};
+use crate::outcome::{FrameMeta, ImuUse, MapInUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
-use kiss_odom_core::{
-    Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior, SPARSE_BETA,
-    SPARSE_PLANE_KERNEL_SCALE,
-};
+use kiss_odom_core::{Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior};
 use kiss_odom_io::{Frame, Item};
 use nalgebra::Isometry3;
 use std::time::Duration;
@@ -315,9 +312,9 @@ impl Driver {
     pub fn high_water(&self) -> HighWater {
         self.engine.high_water()
     }
-    /// The map in use: voxel size (m), points a voxel, and whether a sparse first scan changed
-    /// them from the settings' (`[mapping] sparse_scan_points`).
-    pub fn map_in_use(&self) -> (f64, u32, bool) {
+    /// The map in use and how the run registers on it: what a sparse first scan changed from
+    /// the settings' (`[mapping] sparse_scan_points`).
+    pub fn map_in_use(&self) -> MapInUse {
         self.engine.map_in_use()
     }
 
@@ -326,25 +323,27 @@ impl Driver {
     /// mid-sweep does to a dense sensor's run.
     pub fn sparse_map_warning(&self, outcome: &Outcome) -> Option<String> {
         let report = outcome.report().filter(|r| r.index == 0)?;
-        let (voxel, points, sparse) = self.map_in_use();
+        let map = self.map_in_use();
         let kept = report
             .input_points
             .saturating_sub(report.out_of_range)
             .saturating_sub(report.dropped.non_finite);
-        // The voxel as the core holds it, in its scalar: an f32 run's 0.6 is shown as 0.6, not
+        // Values as the core holds them, in its scalar: an f32 run's 0.6 is shown as 0.6, not
         // as the f64 it widens to.
-        let voxel = match self.build.scalar {
-            Scalar::F32 => (voxel as f32).to_string(),
-            Scalar::F64 => voxel.to_string(),
+        let shown = |x: f64| match self.build.scalar {
+            Scalar::F32 => (x as f32).to_string(),
+            Scalar::F64 => x.to_string(),
         };
-        sparse.then(|| {
+        let (voxel, points) = (shown(map.voxel_size), map.max_points_per_voxel);
+        let (beta, kernel) = (shown(map.beta), shown(map.plane_kernel_scale));
+        map.sparse_scan.then(|| {
             format!(
                 "{}: the first scan kept {kept} points within range, fewer than [mapping] \
                  sparse_scan_points: the run maps on {voxel} m voxels of at most {points} \
-                 points and registers on them with beta {SPARSE_BETA} and plane_kernel_scale \
-                 {SPARSE_PLANE_KERNEL_SCALE} (the sparse-sensor map, in place of the \
-                 configured ones); a recording that begins mid-sweep gives such a first scan \
-                 too, and sparse_scan_points = 0 keeps the configured map",
+                 points and registers on them with beta {beta} and plane_kernel_scale \
+                 {kernel} (the sparse-sensor map, in place of the configured ones); a \
+                 recording that begins mid-sweep gives such a first scan too, and \
+                 sparse_scan_points = 0 keeps the configured map",
                 outcome.meta.source
             )
         })

@@ -6,7 +6,7 @@
 //! (outside the timed call), reports and poses are widened.
 
 use crate::growth::{trim_buffer, Growth};
-use crate::outcome::SweepMotions;
+use crate::outcome::{MapInUse, SweepMotions};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use crate::widen::{widen, widen_report};
@@ -109,9 +109,8 @@ pub(crate) trait Engine: Send + Sync {
     fn sigma(&self) -> f64;
     /// High-water marks since start.
     fn high_water(&self) -> HighWater;
-    /// The map in use: voxel size (m), points a voxel, and whether a sparse first scan gave it
-    /// the sparse-scan map (see `Config::sparse_scan_points`).
-    fn map_in_use(&self) -> (f64, u32, bool);
+    /// The map in use and how the run registers on it.
+    fn map_in_use(&self) -> MapInUse;
     /// Capacities in use.
     fn capacities(&self) -> Capacities;
     /// Bytes of state in use.
@@ -366,10 +365,15 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     fn high_water(&self) -> HighWater {
         self.odom.high_water()
     }
-    fn map_in_use(&self) -> (f64, u32, bool) {
+    fn map_in_use(&self) -> MapInUse {
         let c = self.odom.config();
-        let sparse = self.odom.sparse_scan_map();
-        (c.voxel_size.wide(), c.max_points_per_voxel, sparse)
+        MapInUse {
+            voxel_size: c.voxel_size.wide(),
+            max_points_per_voxel: c.max_points_per_voxel,
+            beta: c.beta.wide(),
+            plane_kernel_scale: c.robust.kernel_scale.wide(),
+            sparse_scan: self.odom.sparse_scan_map(),
+        }
     }
     fn capacities(&self) -> Capacities {
         *self.odom.capacities()

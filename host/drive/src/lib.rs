@@ -22,7 +22,7 @@ pub use capacity::CapacityWarnings;
 pub use driver::{Build, Driver, OnEmpty, Preloaded};
 pub use error::one_line;
 pub use growth::StateMemory;
-pub use outcome::{FrameMeta, ImuUse, Outcome, Step, SweepMotions};
+pub use outcome::{FrameMeta, ImuUse, MapInUse, Outcome, Step, SweepMotions};
 pub use pool::Pool;
 pub use prior::PriorWarnings;
 pub use settings::{Imu, Scalar, Settings, Storage};

@@ -42,9 +42,6 @@ pub enum DegeneracyMode {
     /// Point-to-plane terms where the map is planar (tunnels, corridors, long walls, open
     /// ground); with its own defaults for the voxel size, kernel and capacities.
     Robust,
-    /// Hold unconstrained directions at the constant-velocity prediction (kept for comparison
-    /// with robust mode).
-    Hold,
 }
 
 impl From<DegeneracyMode> for Degeneracy {
@@ -52,7 +49,6 @@ impl From<DegeneracyMode> for Degeneracy {
         match m {
             DegeneracyMode::Reference => Degeneracy::Reference,
             DegeneracyMode::Robust => Degeneracy::Robust,
-            DegeneracyMode::Hold => Degeneracy::Hold,
         }
     }
 }
@@ -88,7 +84,6 @@ impl From<Degeneracy> for DegeneracyMode {
         match d {
             Degeneracy::Reference => DegeneracyMode::Reference,
             Degeneracy::Robust => DegeneracyMode::Robust,
-            Degeneracy::Hold => DegeneracyMode::Hold,
         }
     }
 }
@@ -153,8 +148,7 @@ pub struct Registration {
     pub kernel_scale: Option<f64>,
     /// Correspondence threshold as a multiple of sigma.
     pub max_correspondence_factor: f64,
-    /// Observability ratio below which a frame is flagged degenerate (and, in hold mode,
-    /// below which a direction is held).
+    /// Observability ratio below which a frame is flagged degenerate.
     pub degeneracy_ratio: f64,
     /// Robust mode registers a frame again with plane terms when the reference registration's
     /// observability is below this (`Robust::plane_gate`); 1 or more: every frame.
@@ -175,7 +169,7 @@ pub struct Registration {
     /// Robust mode's cycle stop: a registration with plane terms also stops when its iterate
     /// comes back to one of its last iterates (`Robust::cycle_stop`).
     pub cycle_stop: bool,
-    /// `reference`, `robust` or `hold`.
+    /// `reference` or `robust`.
     pub degeneracy: DegeneracyMode,
     /// ICP's work budget per frame in the core's work units (`FrameReport::work`); absent:
     /// none, the reference's behaviour.

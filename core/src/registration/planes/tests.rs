@@ -166,7 +166,6 @@ fn plane_terms_let_sparse_structure_move_a_corridor_s_free_axis() {
             convergence_criterion: 1e-6,
             max_iterations: 500,
             budget: None,
-            hold: None,
             planes,
             prior: None,
             stop_on_cycle: false,

@@ -313,7 +313,6 @@ fn registration_rows(
         convergence_criterion: cfg.convergence_criterion,
         max_iterations: cfg.max_iterations,
         budget: None,
-        hold: None,
         planes: false,
         prior: None,
         stop_on_cycle: false,

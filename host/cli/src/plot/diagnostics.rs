@@ -1,7 +1,8 @@
 //! `diagnostics.png`: what went wrong where, beside `trajectory.png`. Stacked panels: the
 //! position error against distance travelled (when there is ground truth), then the core's
-//! latency and ICP iterations per frame; frames the core flagged degenerate or stopped at the
-//! iteration cap, stopped by the work budget or held by hold mode are marked in every panel.
+//! latency and ICP iterations per frame; frames the core flagged degenerate, stopped at the
+//! iteration cap or by the work budget, or registered with robust mode's plane terms are marked
+//! in every panel.
 
 use super::style::{font_available, titled, ESTIMATE_COLOR};
 use anyhow::{anyhow, bail, Context, Result};
@@ -16,11 +17,10 @@ pub const WIDTH: u32 = 1000;
 pub const HEIGHT: u32 = 1000;
 
 /// The flags marked, each with its colour.
-pub const MARKED: [(Flag, RGBColor); 5] = [
+pub const MARKED: [(Flag, RGBColor); 4] = [
     (Flag::Degenerate, RGBColor(214, 39, 40)),
     (Flag::IterationCap, RGBColor(148, 103, 189)),
     (Flag::Budget, RGBColor(255, 127, 14)),
-    (Flag::Held, RGBColor(23, 190, 207)),
     (Flag::Planes, RGBColor(140, 86, 75)),
 ];
 
@@ -180,8 +180,6 @@ mod tests {
                     Status::OK.with(Flag::IterationCap)
                 } else if i == 13 {
                     Status::OK.with(Flag::Budget)
-                } else if i == 17 {
-                    Status::OK.with(Flag::Held)
                 } else if i == 19 {
                     Status::OK.with(Flag::Planes)
                 } else {

@@ -403,11 +403,11 @@ impl Run<'_> {
                 "map_point_slots": [hw.map_point_slots, c.map_points],
             }),
             map: {
-                let (voxel_size, points, sparse_scan) = d.map_in_use();
+                let m = d.map_in_use();
                 serde_json::json!({
-                    "voxel_size": voxel_size,
-                    "max_points_per_voxel": points,
-                    "sparse_scan": sparse_scan,
+                    "voxel_size": m.voxel_size,
+                    "max_points_per_voxel": m.max_points_per_voxel,
+                    "sparse_scan": m.sparse_scan,
                 })
             },
             map_radius: MapRadius::of(&o.rows, s.data.max_range),

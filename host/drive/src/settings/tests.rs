@@ -33,10 +33,23 @@ fn degeneracy_mode_is_read_and_reaches_the_core() {
     );
     let d = Settings::default().core_config::<f64>().unwrap();
     assert_eq!(d.degeneracy, Degeneracy::Reference);
-    let h: Settings = toml::from_str("[registration]\ndegeneracy = \"hold\"\n").unwrap();
-    assert_eq!(h.core_config::<f64>().unwrap().degeneracy, Degeneracy::Hold);
-    assert!(!h.capacities().unwrap().plane_terms);
-    assert!(toml::from_str::<Settings>("[registration]\ndegeneracy = \"on\"\n").is_err());
+    let err = toml::from_str::<Settings>("[registration]\ndegeneracy = \"on\"\n").unwrap_err();
+    assert!(
+        err.to_string().contains("expected `reference` or `robust`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_settings_file_naming_an_unknown_mode_is_refused_with_the_modes_there_are() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("old.toml");
+    std::fs::write(&path, "[registration]\ndegeneracy = \"hold\"\n").unwrap();
+    let err = format!("{:#}", Settings::load(&path).unwrap_err());
+    println!("{err}");
+    for said in ["old.toml", "`hold`", "expected `reference` or `robust`"] {
+        assert!(err.contains(said), "{said:?} in {err}");
+    }
 }
 
 #[test]
