@@ -113,6 +113,11 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "hdl64e-s3"))]
     #[serde(rename = "hdl64e-s3")]
     Hdl64e,
+    /// Velodyne HDL-64E S2: the S3's packets with the S2's firing timing (calibration YAML
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "hdl64e-s2"))]
+    #[serde(rename = "hdl64e-s2")]
+    Hdl64eS2,
     /// Velodyne VLS-128: four banks of 32 lasers, strongest return, 4 mm ranges (calibration
     /// YAML beside).
     #[cfg_attr(feature = "clap", value(name = "vls128"))]
@@ -265,6 +270,7 @@ impl PacketSensor {
         match self {
             Self::Vlp32c => Model::Vlp32c,
             Self::Hdl64e => Model::Hdl64eS3,
+            Self::Hdl64eS2 => Model::Hdl64eS2,
             Self::Vls128 => Model::Vls128,
             _ => Model::Vlp16,
         }
@@ -273,7 +279,7 @@ impl PacketSensor {
     /// The Velodyne calibration file a HDL-64E or VLS-128 needs (the ROS YAML), to write
     /// beside the capture as [`crate::capture::CALIBRATION_NAME`]; `None` for the others.
     pub fn calibration_file(self) -> Option<String> {
-        matches!(self, Self::Hdl64e | Self::Vls128)
+        matches!(self, Self::Hdl64e | Self::Hdl64eS2 | Self::Vls128)
             .then(|| velodyne_wide::yaml(&velodyne_wide::calibration(self.model())))
     }
 
@@ -433,7 +439,7 @@ impl<'a> PacketSim<'a> {
             }
             PacketSensor::Xt32 => xt32::last_offset(last),
             s if s.robosense().is_some() => self.robosense_last_offset(last),
-            PacketSensor::Hdl64e | PacketSensor::Vls128 => {
+            PacketSensor::Hdl64e | PacketSensor::Hdl64eS2 | PacketSensor::Vls128 => {
                 let groups = velodyne::Layout {
                     model: self.model,
                     dual: false,
@@ -473,7 +479,9 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Xt32 => self.xt32_packet(p),
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
                 s if s.robosense().is_some() => self.robosense_packet(p),
-                PacketSensor::Hdl64e | PacketSensor::Vls128 => self.wide_packet(p),
+                PacketSensor::Hdl64e | PacketSensor::Hdl64eS2 | PacketSensor::Vls128 => {
+                    self.wide_packet(p)
+                }
                 s if s.hesai_fixed() => self.hesai_fixed_packet(p),
                 PacketSensor::At128 => self.at128_packet(p),
                 _ => self.velodyne_packet(p),
