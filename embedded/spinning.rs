@@ -1,5 +1,5 @@
 //! Build-script part for the `velodyne` and `robosense` features: a generated Velodyne HDL-64E
-//! S3 or VLS-128, or Robosense RS-Helios, recording (the model `KISS_EMBED_MODEL` names, as
+//! or VLS-128, or Robosense spinning, recording (the model `KISS_EMBED_MODEL` names, as
 //! `kiss-odom simulate --sensor` names it), and the unit's angles `simulate` wrote with it, as
 //! constants in `frames.rs`: the Velodyne calibration YAML beside the pcap (`packets.yaml`) as
 //! `LASERS`, or the Robosense DIFOP packet of the pcap (port 7788) as `DIFOP`.
@@ -62,6 +62,7 @@ impl Family {
 /// `rot_correction` with the sign flipped, as `kiss-odom-io` reads it).
 fn velodyne(dir: &Path, model: &str) -> String {
     let name = match model {
+        "hdl64e-s2" => "Hdl64eS2",
         "hdl64e-s3" => "Hdl64eS3",
         "vls128" => "Vls128",
         m => panic!("KISS_EMBED_MODEL={m}: not a Velodyne model whose calibration simulate writes"),
@@ -117,7 +118,12 @@ fn velodyne(dir: &Path, model: &str) -> String {
 /// lasers' angles.
 fn robosense(model: &str, difop: Option<&[u8]>) -> String {
     let name = match model {
+        "rs16" => "Rs16",
+        "rs32" => "Rs32",
+        "bpearl" => "Bpearl",
         "helios" => "Helios",
+        "helios16p" => "Helios16p",
+        "ruby" => "Ruby",
         m => panic!("KISS_EMBED_MODEL={m}: not a Robosense model the simulator writes"),
     };
     let difop = difop.expect("no DIFOP packet (port 7788) in the Robosense pcap");

@@ -1,6 +1,6 @@
 //! The `packets` profile: a Velodyne VLP-16 recording's UDP payloads (with `mid360`, a Livox
 //! Mid-360's; with `hesai`, the Hesai model `KISS_EMBED_HESAI` names; with `velodyne` or
-//! `robosense`, the HDL-64E S3, VLS-128 or RS-Helios `KISS_EMBED_MODEL` names), embedded in the
+//! `robosense`, the HDL-64E, VLS-128 or Robosense model `KISS_EMBED_MODEL` names), embedded in the
 //! image, streamed packet by packet through `kiss-odom-sensors` into the core, as a sensor on the network would deliver them. A sweep is never held whole:
 //! each chunk the decoder emits goes straight into the odometry's `FrameInput`.
 //!
@@ -118,7 +118,7 @@ fn decoder() -> Option<kiss_odom_sensors::hesai::Decoder<kiss_odom_sensors::hesa
     kiss_odom_sensors::hesai::Decoder::at128(&crate::frames::CORRECTION).ok()
 }
 
-/// A Velodyne HDL-64E S3 or VLS-128 decoder with the generated unit's calibration
+/// A Velodyne HDL-64E or VLS-128 decoder with the generated unit's calibration
 /// (`build.rs`); the simulator's sweeps start at azimuth 0.
 #[cfg(feature = "velodyne")]
 fn decoder() -> Option<kiss_odom_sensors::velodyne::Decoder> {
