@@ -12,6 +12,8 @@
 
 #[path = "kitti.rs"]
 mod kitti;
+#[path = "spinning.rs"]
+mod spinning;
 
 use std::env;
 use std::fmt::Write as _;
@@ -310,7 +312,8 @@ fn imu(dir: &std::path::Path, ends: &[(f64, f64)], out: &std::path::Path) -> Str
 /// each, in `packets.bin`. The pcap is the simulator's: Ethernet, IPv4 without options, UDP.
 /// With `far`, the odometry runs at r_max 100 m with 1.5 m voxels. With `mid360` the recording
 /// is a Mid-360's (`--sensor mid360`): 1380-byte Livox SDK 2 packets, about `packets_per_sweep`
-/// to a 0.1 s frame (the decoder cuts the frames by time).
+/// to a 0.1 s frame (the decoder cuts the frames by time). With `velodyne` or `robosense`, the
+/// model `KISS_EMBED_MODEL` names, its angles as constants (`spinning.rs`).
 fn packets(out: &std::path::Path) {
     let (dir, first, n) = generated("KISS_EMBED_PCAP");
     // `far`: the range and voxels at which TINY's map fills (Config::tiny's otherwise).
@@ -334,7 +337,10 @@ fn packets(out: &std::path::Path) {
     let hesai = env::var_os("CARGO_FEATURE_HESAI").map(|_| {
         env::var("KISS_EMBED_HESAI").expect("KISS_EMBED_HESAI: the Hesai model (run.sh sets it)")
     });
-    let (payload, sequence) = if let Some(model) = &hesai {
+    let family = spinning::Family::from_features();
+    let (payload, sequence) = if let Some(f) = &family {
+        (f.payload(), format!("{}-pcap", f.name()))
+    } else if let Some(model) = &hesai {
         // Every packet of a generated Hesai recording has its model's default length.
         let first = b
             .get(24 + 8..24 + 12)
@@ -346,10 +352,18 @@ fn packets(out: &std::path::Path) {
     } else {
         (1206, "vlp16-pcap".to_string())
     };
-    let (mut at, mut payloads) = (24, Vec::new());
+    let (mut at, mut payloads, mut difop) = (24, Vec::new(), None);
     while at + 16 <= b.len() {
         let incl = u32::from_le_bytes(b[at + 8..at + 12].try_into().unwrap()) as usize;
         let frame = &b[at + 16..at + 16 + incl];
+        // A Robosense recording's device packets: the first is kept for its angles.
+        if frame.len() > HEADERS
+            && u16::from_be_bytes([frame[36], frame[37]]) == spinning::DIFOP_PORT
+        {
+            difop.get_or_insert(&frame[HEADERS..]);
+            at += 16 + incl;
+            continue;
+        }
         assert_eq!(
             incl,
             HEADERS + payload,
@@ -396,7 +410,11 @@ fn packets(out: &std::path::Path) {
          /// The simulator's sweeps, in packets (the program finds them itself, by azimuth).\n\
          pub const FRAMES: [FrameInfo; {n}] = [\n{ranges}];\n"
     );
-    let angles = hesai.map_or(String::new(), |model| hesai_angles(&dir, &model));
+    let angles = match (&family, hesai) {
+        (Some(f), _) => f.constants(&dir, difop),
+        (None, Some(model)) => hesai_angles(&dir, &model),
+        (None, None) => String::new(),
+    };
     std::fs::write(out.join("frames.rs"), rs + &budget_line() + &angles).unwrap();
 }
 

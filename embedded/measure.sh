@@ -6,7 +6,10 @@
 # Cases (target:features): m4-small m4-full m4-full-f64 m4-baseline m7-small m7-small-f64 m7-tiny
 # m7-imu m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64
 # rv-full (default: all), and m7-hesai-MODEL-decode for MODEL xt32 xt16 xt32m pandar40p pandar64
-# qt64 at128 (not in the default list: `embedded/measure.sh $(embedded/measure.sh --hesai)`).
+# qt64 at128 (not in the default list: `embedded/measure.sh $(embedded/measure.sh --hesai)`), and
+# m7-velodyne-MODEL-decode (hdl64e-s2 hdl64e-s3 vls128), m7-robosense-MODEL-decode (rs16 rs32
+# bpearl helios helios16p ruby): `embedded/
+# measure.sh $(embedded/measure.sh --spinning)`.
 # m7-packets streams a generated VLP-16 recording packet by packet through the decoder and the
 # core, m7-mid360 a Livox Mid-360 one; the -decode cases run the decoder alone; all four add a
 # per-packet line below the table. Outputs go to embedded/target/measure/.
@@ -21,6 +24,14 @@ mkdir -p "$out"
 hesai=(xt32 xt16 xt32m pandar40p pandar64 qt64 at128)
 if [ "${1:-}" = --hesai ]; then
   for m in "${hesai[@]}"; do printf 'm7-hesai-%s-decode ' "$m"; done
+  echo
+  exit 0
+fi
+velodyne=(hdl64e-s2 hdl64e-s3 vls128)
+robosense=(rs16 rs32 bpearl helios helios16p ruby)
+if [ "${1:-}" = --spinning ]; then
+  for m in "${velodyne[@]}"; do printf 'm7-velodyne-%s-decode ' "$m"; done
+  for m in "${robosense[@]}"; do printf 'm7-robosense-%s-decode ' "$m"; done
   echo
   exit 0
 fi
@@ -43,6 +54,8 @@ spec() {
     m7-mid360-decode) echo "m7:packets,mid360,baseline" ;;
     # A generated Hesai recording through the decoder alone (KISS_EMBED_HESAI, below).
     m7-hesai-*-decode) echo "m7:packets,hesai,baseline" ;;
+    m7-velodyne-*-decode) echo "m7:packets,velodyne,baseline" ;;
+    m7-robosense-*-decode) echo "m7:packets,robosense,baseline" ;;
     a53-full) echo "aarch64:f64,exact,full" ;;
     a53-small) echo "aarch64:" ;;
     rv-small) echo "riscv32:" ;;
@@ -56,8 +69,8 @@ for c in "${cases[@]}"; do
   s="$(spec "$c")"
   t0=$(date +%s)
   model=""
-  case "$c" in m7-hesai-*-decode) model="${c#m7-hesai-}"; model="${model%-decode}" ;; esac
-  KISS_EMBED_HESAI="$model" KISS_FEATURES="${s#*:}" "$here/run.sh" "${s%%:*}" > "$out/$c.txt"
+  case "$c" in m7-*-*-decode) model="${c#m7-*-}"; model="${model%-decode}" ;; esac
+  KISS_EMBED_MODEL="$model" KISS_EMBED_HESAI="$model" KISS_FEATURES="${s#*:}" "$here/run.sh" "${s%%:*}" > "$out/$c.txt"
   echo "$c: $(( $(date +%s) - t0 )) s" >&2
 done
 
@@ -101,13 +114,16 @@ for c in m7-packets m7-packets-decode m7-mid360 m7-mid360-decode; do
           printf "%s: %.2f M instructions per sweep (sweeps 1-%d, mean), %d packets per sweep, %.0f k instructions per packet\n",
             c, sum/n/1e6, n, pk/n, sum/pk/1e3 }' "$out/$c.txt"
 done
-hesai_rows=()
-for m in "${hesai[@]}"; do [ -f "$out/m7-hesai-$m-decode.txt" ] && hesai_rows+=("$m"); done
-if [ ${#hesai_rows[@]} -gt 0 ]; then
+# One table a family: a row per model measured.
+for family in hesai velodyne robosense; do
+rows=()
+declare -n models="$family"
+for m in "${models[@]}"; do [ -f "$out/m7-$family-$m-decode.txt" ] && rows+=("$m"); done
+if [ ${#rows[@]} -gt 0 ]; then
   echo
-  echo "| Hesai model (generated, decoder alone, M7) | packet bytes | packets/sweep | points/sweep | k insns/packet | insns/point | decoder state bytes |"
+  echo "| ${family^} model (generated, decoder alone, M7) | packet bytes | packets/sweep | points/sweep | k insns/packet | insns/point | decoder state bytes |"
   echo "|---|---|---|---|---|---|---|"
-  for m in "${hesai_rows[@]}"; do
+  for m in "${rows[@]}"; do
     # Sweeps 1 on (sweep 0 is whatever the embedded packets begin with).
     awk -v m="$m" '
       /^decoder /{ for (i=2;i<=NF;i++) { split($i,kv,"="); if (kv[1]=="state_bytes") st=kv[2]; if (kv[1]=="packet_len") len=kv[2] } }
@@ -115,6 +131,7 @@ if [ ${#hesai_rows[@]} -gt 0 ]; then
       /^cost /{ split($3,kv,"="); c[$2]=kv[2] }
       END { for (s in c) if (s>0) { n++; sum+=c[s]; pk+=p[s]; pt+=q[s] }
             printf "| %s | %s | %.0f | %.0f | %.1f | %.0f | %s |\n", m, len, pk/n, pt/n, sum/pk/1e3, sum/pt, st }
-    ' "$out/m7-hesai-$m-decode.txt"
+    ' "$out/m7-$family-$m-decode.txt"
   done
 fi
+done

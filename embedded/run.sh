@@ -110,7 +110,8 @@ if [[ ",$features," == *",tiny,"* ]] || [[ ",$features," == *",imu,"* ]]; then
 fi
 # The packets profile embeds the UDP payloads of a generated VLP-16 recording (the same drive).
 # `far`: a suburban drive, 36 sweeps from the fifth, over which TINY's map fills at 100 m.
-# `mid360`: the same drive seen by a Livox Mid-360; `hesai`: by a Hesai (KISS_EMBED_HESAI).
+# `mid360`: the same drive seen by a Livox Mid-360; `hesai`: by a Hesai (KISS_EMBED_HESAI);
+# `velodyne`, `robosense`: by the Velodyne or Robosense model KISS_EMBED_MODEL names.
 if [[ ",$features," == *",packets,"* ]]; then
   sensor=vlp16
   if [[ ",$features," == *",far,"* ]]; then
@@ -126,6 +127,14 @@ if [[ ",$features," == *",packets,"* ]]; then
     frames=3; [ "$sensor" = at128 ] && frames=2
     export KISS_EMBED_HESAI="$sensor" KISS_EMBED_FIRST="${KISS_EMBED_FIRST:-2}" \
       KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-$frames}"
+  elif [[ ",$features," == *",velodyne,"* ]] || [[ ",$features," == *",robosense,"* ]]; then
+    # `velodyne`, `robosense`: the model KISS_EMBED_MODEL names (hdl64e-s2, hdl64e-s3, vls128;
+    # rs16, rs32, bpearl, helios, helios16p, ruby),
+    # sweeps 2-4 of a 6-sweep drive.
+    sensor="${KISS_EMBED_MODEL:?KISS_EMBED_MODEL: the model (hdl64e-s3, vls128, helios...)}"
+    pcapdir="${KISS_EMBED_PCAP:-$here/target/$sensor-pcap}"; sim=(--frames 6)
+    export KISS_EMBED_MODEL="$sensor" KISS_EMBED_FIRST="${KISS_EMBED_FIRST:-2}" \
+      KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-3}"
   else
     pcapdir="${KISS_EMBED_PCAP:-$here/target/vlp16-pcap}"; sim=(--frames 36)
   fi

@@ -1,6 +1,7 @@
 //! The `packets` profile: a Velodyne VLP-16 recording's UDP payloads (with `mid360`, a Livox
-//! Mid-360's; with `hesai`, the Hesai model `KISS_EMBED_HESAI` names), embedded in the image, streamed packet by packet through `kiss-odom-sensors`
-//! into the core, as a sensor on the network would deliver them. A sweep is never held whole:
+//! Mid-360's; with `hesai`, the Hesai model `KISS_EMBED_HESAI` names; with `velodyne` or
+//! `robosense`, the HDL-64E, VLS-128 or Robosense model `KISS_EMBED_MODEL` names), embedded in the
+//! image, streamed packet by packet through `kiss-odom-sensors` into the core, as a sensor on the network would deliver them. A sweep is never held whole:
 //! each chunk the decoder emits goes straight into the odometry's `FrameInput`.
 //!
 //! The span rule: the core needs a sweep's (first, last) capture time when the sweep begins,
@@ -66,7 +67,12 @@ impl<F: FnMut(&[[Scalar; 3]], &[f64])> SweepSink for Feed<F> {
 }
 
 /// The VLP-16 decoder: the simulator's sweeps start at azimuth 0.
-#[cfg(not(any(feature = "mid360", feature = "hesai")))]
+#[cfg(not(any(
+    feature = "mid360",
+    feature = "hesai",
+    feature = "velodyne",
+    feature = "robosense"
+)))]
 fn decoder() -> Option<kiss_odom_sensors::velodyne::Decoder> {
     use kiss_odom_sensors::velodyne;
     let config = velodyne::Config {
@@ -110,6 +116,49 @@ fn decoder() -> Option<kiss_odom_sensors::hesai::Decoder> {
 #[cfg(all(feature = "hesai", hesai_at128))]
 fn decoder() -> Option<kiss_odom_sensors::hesai::Decoder<kiss_odom_sensors::hesai::MirrorAngles>> {
     kiss_odom_sensors::hesai::Decoder::at128(&crate::frames::CORRECTION).ok()
+}
+
+/// A Velodyne HDL-64E or VLS-128 decoder with the generated unit's calibration
+/// (`build.rs`); the simulator's sweeps start at azimuth 0.
+#[cfg(feature = "velodyne")]
+fn decoder() -> Option<kiss_odom_sensors::velodyne::Decoder> {
+    use crate::frames::{DISTANCE_RESOLUTION_M, LASERS, VELODYNE_MODEL};
+    use kiss_odom_sensors::velodyne::{Calibration, Config, Decoder, Laser};
+    let mut lasers = kiss_odom_sensors::heapless::Vec::new();
+    for [v, a, dz, dx] in LASERS {
+        let laser = Laser {
+            vertical_deg: v,
+            azimuth_offset_deg: a,
+            vertical_offset_m: dz,
+            horizontal_offset_m: dx,
+            ..Laser::default()
+        };
+        lasers.push(laser).ok()?;
+    }
+    let config = Config {
+        model: Some(VELODYNE_MODEL),
+        calibration: Some(Calibration {
+            lasers,
+            distance_resolution_m: DISTANCE_RESOLUTION_M,
+        }),
+        cut_angle_deg: Some(0.0),
+    };
+    Decoder::new(config).ok()
+}
+
+/// A Robosense decoder with the angles of the recording's DIFOP packet (`build.rs`); the
+/// simulator's sweeps start at azimuth 0.
+#[cfg(feature = "robosense")]
+fn decoder() -> Option<kiss_odom_sensors::robosense::Decoder> {
+    use crate::frames::{DIFOP, ROBOSENSE_MODEL};
+    use kiss_odom_sensors::robosense::{wire::Difop, Calibration, Config, Decoder};
+    let difop = Difop::new_checked(&DIFOP).ok()?;
+    let config = Config {
+        model: ROBOSENSE_MODEL,
+        calibration: Some(Calibration::from_difop(ROBOSENSE_MODEL, &difop).ok()?),
+        cut_angle_deg: Some(0.0),
+    };
+    Decoder::new(config).ok()
 }
 
 /// Streams every embedded packet; the total instruction count where measured, or the exit

@@ -36,6 +36,7 @@ use crate::rng::{key, Purpose, Stream};
 use crate::sensor::Frame;
 use crate::simulation::Simulation;
 use crate::trajectory::PoseM;
+use kiss_odom_sensors::robosense::Model as RobosenseModel;
 use kiss_odom_sensors::velodyne::{self, Calibration, Model};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -86,11 +87,37 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "helios"))]
     #[serde(rename = "helios")]
     Helios,
+    /// Robosense RS-LiDAR-16: the Helios's MSOP and DIFOP ports, blocks of two 16-laser
+    /// firings, 5 mm ranges, calendar-date stamps.
+    #[cfg_attr(feature = "clap", value(name = "rs16"))]
+    #[serde(rename = "rs16")]
+    Rs16,
+    /// Robosense RS-LiDAR-32: twelve 32-laser blocks, 5 mm ranges, calendar-date stamps.
+    #[cfg_attr(feature = "clap", value(name = "rs32"))]
+    #[serde(rename = "rs32")]
+    Rs32,
+    /// Robosense RS-Bpearl: the RS-32's packets, 0 to 89 degrees up.
+    #[cfg_attr(feature = "clap", value(name = "bpearl"))]
+    #[serde(rename = "bpearl")]
+    Bpearl,
+    /// Robosense RS-Helios-16P: the Helios's packets, blocks of two 16-laser firings.
+    #[cfg_attr(feature = "clap", value(name = "helios16p"))]
+    #[serde(rename = "helios16p")]
+    Helios16p,
+    /// Robosense RS-Ruby: three 128-laser blocks a packet, 5 mm ranges, single return.
+    #[cfg_attr(feature = "clap", value(name = "ruby"))]
+    #[serde(rename = "ruby")]
+    Ruby,
     /// Velodyne HDL-64E S3: upper and lower blocks of 32 lasers, strongest return, 2 mm
     /// ranges (calibration YAML beside).
     #[cfg_attr(feature = "clap", value(name = "hdl64e-s3"))]
     #[serde(rename = "hdl64e-s3")]
     Hdl64e,
+    /// Velodyne HDL-64E S2: the S3's packets with the S2's firing timing (calibration YAML
+    /// beside).
+    #[cfg_attr(feature = "clap", value(name = "hdl64e-s2"))]
+    #[serde(rename = "hdl64e-s2")]
+    Hdl64eS2,
     /// Velodyne VLS-128: four banks of 32 lasers, strongest return, 4 mm ranges (calibration
     /// YAML beside).
     #[cfg_attr(feature = "clap", value(name = "vls128"))]
@@ -210,6 +237,30 @@ pub struct PacketSim<'a> {
 }
 
 impl PacketSensor {
+    /// The Robosense sensors the simulator writes.
+    pub const ROBOSENSE: [Self; 6] = [
+        Self::Rs16,
+        Self::Rs32,
+        Self::Bpearl,
+        Self::Helios,
+        Self::Helios16p,
+        Self::Ruby,
+    ];
+
+    /// The Robosense model of a Robosense sensor; `None` for the others.
+    pub fn robosense(self) -> Option<kiss_odom_sensors::robosense::Model> {
+        use kiss_odom_sensors::robosense::Model as R;
+        Some(match self {
+            Self::Rs16 => R::Rs16,
+            Self::Rs32 => R::Rs32,
+            Self::Bpearl => R::Bpearl,
+            Self::Helios => R::Helios,
+            Self::Helios16p => R::Helios16p,
+            Self::Ruby => R::Ruby,
+            _ => return None,
+        })
+    }
+
     /// Velodyne packet period (s), single return.
     fn velodyne_packet_s(model: Model) -> f64 {
         model.packet_us(false) * 1e-6
@@ -219,6 +270,7 @@ impl PacketSensor {
         match self {
             Self::Vlp32c => Model::Vlp32c,
             Self::Hdl64e => Model::Hdl64eS3,
+            Self::Hdl64eS2 => Model::Hdl64eS2,
             Self::Vls128 => Model::Vls128,
             _ => Model::Vlp16,
         }
@@ -227,7 +279,7 @@ impl PacketSensor {
     /// The Velodyne calibration file a HDL-64E or VLS-128 needs (the ROS YAML), to write
     /// beside the capture as [`crate::capture::CALIBRATION_NAME`]; `None` for the others.
     pub fn calibration_file(self) -> Option<String> {
-        matches!(self, Self::Hdl64e | Self::Vls128)
+        matches!(self, Self::Hdl64e | Self::Hdl64eS2 | Self::Vls128)
             .then(|| velodyne_wide::yaml(&velodyne_wide::calibration(self.model())))
     }
 
@@ -258,8 +310,9 @@ impl PacketSensor {
             }
             // Frames by time: any rate, read back with `--frame-period` 1 / rate.
             Self::Mid360 | Self::Avia => Ok(rate_hz),
-            Self::Helios => {
-                let packet = robosense::packet_us() * 1e-6;
+            s if s.robosense().is_some() => {
+                let packet =
+                    robosense::packet_us(s.robosense().unwrap_or(RobosenseModel::Helios)) * 1e-6;
                 let per_turn = libm::round(1.0 / (rate_hz * packet)).max(1.0);
                 Ok(1.0 / (per_turn * packet))
             }
@@ -283,9 +336,9 @@ impl PacketSensor {
     /// The device-information packet a sensor sends beside its points, with the lasers'
     /// angles its decoder needs (the Helios's DIFOP, to port 7788); `None` for the others.
     pub fn device_packet(self, rate_hz: f64) -> Option<Packet> {
-        (self == Self::Helios).then(|| Packet {
+        self.robosense().map(|model| Packet {
             offset: 0.0,
-            payload: robosense::difop(rate_hz),
+            payload: robosense::difop(model, rate_hz),
         })
     }
 
@@ -313,9 +366,13 @@ impl PacketSensor {
     /// with a UTC date (from 2024-01-01 00:00:00); the other sensors' clocks read sequence time.
     pub const fn clock_origin_s(self) -> i64 {
         match self {
-            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::Helios | Self::At128 => {
-                xt32::CLOCK_ORIGIN_S
-            }
+            Self::Xt32 | Self::Qt128 | Self::Ot128 | Self::At128 => xt32::CLOCK_ORIGIN_S,
+            Self::Rs16
+            | Self::Rs32
+            | Self::Bpearl
+            | Self::Helios
+            | Self::Helios16p
+            | Self::Ruby => xt32::CLOCK_ORIGIN_S,
             s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
@@ -335,7 +392,10 @@ impl<'a> PacketSim<'a> {
             s if s.hesai_fixed() => per_period(hesai_fixed::packet_ns(sensor)),
             PacketSensor::At128 => at128::PACKETS_PER_FRAME,
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
-            PacketSensor::Helios => libm::round(period * 1e6 / robosense::packet_us()) as u64,
+            s if s.robosense().is_some() => {
+                let model = s.robosense().unwrap_or(RobosenseModel::Helios);
+                libm::round(period * 1e6 / robosense::packet_us(model)) as u64
+            }
             _ => libm::round(period / PacketSensor::velodyne_packet_s(model)) as u64,
         };
         Self {
@@ -378,8 +438,8 @@ impl<'a> PacketSim<'a> {
                 self.timed_offset(last, self.sensor.timing().points - 1)
             }
             PacketSensor::Xt32 => xt32::last_offset(last),
-            PacketSensor::Helios => self.robosense_last_offset(last),
-            PacketSensor::Hdl64e | PacketSensor::Vls128 => {
+            s if s.robosense().is_some() => self.robosense_last_offset(last),
+            PacketSensor::Hdl64e | PacketSensor::Hdl64eS2 | PacketSensor::Vls128 => {
                 let groups = velodyne::Layout {
                     model: self.model,
                     dual: false,
@@ -418,8 +478,10 @@ impl<'a> PacketSim<'a> {
                 PacketSensor::Avia => self.avia_packet(p),
                 PacketSensor::Xt32 => self.xt32_packet(p),
                 PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_packet(p),
-                PacketSensor::Helios => self.robosense_packet(p),
-                PacketSensor::Hdl64e | PacketSensor::Vls128 => self.wide_packet(p),
+                s if s.robosense().is_some() => self.robosense_packet(p),
+                PacketSensor::Hdl64e | PacketSensor::Hdl64eS2 | PacketSensor::Vls128 => {
+                    self.wide_packet(p)
+                }
                 s if s.hesai_fixed() => self.hesai_fixed_packet(p),
                 PacketSensor::At128 => self.at128_packet(p),
                 _ => self.velodyne_packet(p),

@@ -1,96 +1,171 @@
-//! The Robosense RS-Helios as the simulator fires it: 32 lasers on a rotor, MSOP packets of
-//! twelve blocks (port 6699) and a DIFOP packet with the unit's angles (port 7788).
+//! The Robosense spinning models as the simulator fires them (RS-LiDAR-16, RS-LiDAR-32,
+//! RS-Bpearl, RS-Helios, RS-Helios-16P, RS-Ruby): MSOP packets of the model's blocks (port
+//! 6699) and a DIFOP packet with the unit's angles (port 7788).
 //!
-//! Laser `i` looks [`vertical_deg`]`(i)` up and [`horizontal_deg`]`(i)` along the rotation from
-//! its block's azimuth (angles in whole hundredths of a degree, as the DIFOP packet writes
-//! them). A block fires every 55.56 us, its lasers 1.73 us apart (rs_driver's Helios timing);
-//! the packet's UTC time stamps its first firing in whole microseconds. Each laser is cast from
-//! the lens centre (34.98 mm off the axis, turning with the rotor) along the azimuth the
-//! decoders interpolate from the packet's quantised block azimuths (the block's plus its share
-//! of the rotation to the next block's; the last block the step before), so the exact point
-//! lies on the decoded ray; it is the point at the range the packet writes (2.5 mm units).
-//! The rotor turns a whole number of packets a turn, a turn starting 1.5 blocks after azimuth
-//! 0, as the simulated Velodynes do: a cut at 0 degrees gives the simulator's sweeps.
+//! Laser `i` looks [`vertical_deg`] up and [`horizontal_deg`] along the rotation from its
+//! block's azimuth (angles in whole hundredths of a degree, as the DIFOP packet writes them).
+//! Blocks and channels fire at the model's times (rs_driver's, `Model::firing_us`); the
+//! packet stamps its first firing in whole microseconds (a UTC count, or the RS-16, RS-32 and
+//! Bpearl's calendar date). Each laser is cast from the lens centre (off the axis, turning
+//! with the rotor) along the azimuth the decoders interpolate from the packet's quantised
+//! block azimuths (the block's plus its share of the rotation to the next block's; the last
+//! block the step before), so the exact point lies on the decoded ray; it is the point at the
+//! range the packet writes. The rotor turns a whole number of packets a turn, a turn starting
+//! 1.5 blocks after azimuth 0, as the simulated Velodynes do: a cut at 0 degrees gives the
+//! simulator's sweeps.
 
 use super::{Firing, Packet, PacketSim, Truth};
-use kiss_odom_sensors::robosense::{wire, Model};
+use kiss_odom_sensors::robosense::{wire, Model, Stamp};
 use nalgebra::Vector3;
 
-/// The model simulated.
-pub const MODEL: Model = Model::Helios;
-/// Return-mode byte of the DIFOP packet: strongest (Helios).
-const STRONGEST: u8 = 0x04;
-/// Where the MSOP blocks begin, and their length.
-const HEADER: usize = 42;
-const BLOCK: usize = 100;
-
-/// Laser `i`'s elevation, degrees: -55 to +15 in 31 steps, to 0.01 degree.
-pub fn vertical_deg(i: usize) -> f64 {
-    libm::round((-55.0 + 70.0 * i as f64 / 31.0) * 100.0) / 100.0
-}
-
-/// Laser `i`'s azimuth offset, degrees: +-0.5 in turn.
-pub fn horizontal_deg(i: usize) -> f64 {
-    if i % 2 == 0 {
-        0.5
-    } else {
-        -0.5
+/// The return-mode byte of the DIFOP packet for single strongest return.
+fn strongest(model: Model) -> u8 {
+    match model {
+        Model::Helios | Model::Helios16p => 0x04,
+        Model::Ruby => 0x02,
+        _ => 0x01,
     }
 }
 
-/// Time of a packet, us: its twelve blocks.
-pub fn packet_us() -> f64 {
-    MODEL.packet_us(false)
+/// Laser `i`'s elevation, degrees: spread evenly over the model's field of view, to 0.01
+/// degree (the RS-16's lasers 0-7 below the horizon, as its DIFOP packet has them).
+pub fn vertical_deg(model: Model, i: usize) -> f64 {
+    let (low, high) = match model {
+        Model::Rs16 | Model::Helios16p => (-15.0, 15.0),
+        Model::Rs32 | Model::Ruby => (-25.0, 15.0),
+        Model::Bpearl => (0.0, 89.0),
+        Model::Helios => (-55.0, 15.0),
+    };
+    let n = (model.lasers() - 1) as f64;
+    libm::round((low + (high - low) * i as f64 / n) * 100.0) / 100.0
+}
+
+/// Laser `i`'s azimuth offset, degrees: +-0.5 in turn (0 for the RS-16, whose DIFOP packet
+/// has no horizontal angles).
+pub fn horizontal_deg(model: Model, i: usize) -> f64 {
+    match model {
+        Model::Rs16 => 0.0,
+        _ if i % 2 == 0 => 0.5,
+        _ => -0.5,
+    }
+}
+
+/// Time of a packet, us: its blocks.
+pub fn packet_us(model: Model) -> f64 {
+    model.packet_us(false)
 }
 
 /// The DIFOP packet: its id, the rotation speed, strongest return, every laser's angles.
-pub fn difop(rate_hz: f64) -> Vec<u8> {
+pub fn difop(model: Model, rate_hz: f64) -> Vec<u8> {
     let mut b = vec![0u8; wire::LEN];
     b[..8].copy_from_slice(&wire::DIFOP_ID);
     let rpm = libm::round(rate_hz * 60.0) as u16;
     b[wire::DIFOP_RPM..wire::DIFOP_RPM + 2].copy_from_slice(&rpm.to_be_bytes());
-    let at = MODEL.difop();
-    b[at.return_mode] = STRONGEST;
+    let at = model.difop();
+    b[at.return_mode] = strongest(model);
     let entry = |b: &mut [u8], at: usize, deg: f64| {
         let v = libm::round(deg * 100.0) as i32;
         b[at] = u8::from(v < 0);
         b[at + 1..at + 3].copy_from_slice(&(v.unsigned_abs() as u16).to_be_bytes());
     };
-    for i in 0..MODEL.lasers() {
-        entry(&mut b, at.vertical + 3 * i, vertical_deg(i));
-        if let Some(h) = at.horizontal {
-            entry(&mut b, h + 3 * i, horizontal_deg(i));
+    for i in 0..model.lasers() {
+        let v = vertical_deg(model, i);
+        match at.horizontal {
+            Some(h) => {
+                entry(&mut b, at.vertical + 3 * i, v);
+                entry(&mut b, h + 3 * i, horizontal_deg(model, i));
+            }
+            // RS-16: |elevation| in 0.0001 degree, 3 bytes (the sign from the laser's index).
+            None => {
+                let u = libm::round(v.abs() * 1e4) as u32;
+                b[at.vertical + 3 * i..at.vertical + 3 * i + 3]
+                    .copy_from_slice(&u.to_be_bytes()[1..]);
+            }
         }
     }
     b
 }
 
+/// The 10 stamp bytes of `unix_us` in the model's format.
+fn stamp(model: Model, unix_us: i64) -> [u8; 10] {
+    let (secs, us) = (unix_us.div_euclid(1_000_000), unix_us.rem_euclid(1_000_000));
+    let mut t = [0u8; 10];
+    match model.layout().stamp.1 {
+        Stamp::Utc => {
+            t[..6].copy_from_slice(&(secs as u64).to_be_bytes()[2..]);
+            t[6..].copy_from_slice(&(us as u32).to_be_bytes());
+        }
+        Stamp::Ymd => {
+            let (days, s) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+            let (y, m, d) = civil_from_days(days);
+            t[..6].copy_from_slice(&[
+                (y - 2000) as u8,
+                m,
+                d,
+                (s / 3600) as u8,
+                (s / 60 % 60) as u8,
+                (s % 60) as u8,
+            ]);
+            t[6..8].copy_from_slice(&((us / 1000) as u16).to_be_bytes());
+            t[8..].copy_from_slice(&((us % 1000) as u16).to_be_bytes());
+        }
+    }
+    t
+}
+
+/// The calendar date of a day count since 1970-01-01 (Hinnant's `civil_from_days`).
+fn civil_from_days(z: i64) -> (i64, u8, u8) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u8;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u8;
+    (yoe + era * 400 + i64::from(m <= 2), m, d)
+}
+
+/// The latest firing of a block after its first, us.
+fn last_firing_us(model: Model) -> f64 {
+    (0..model.layout().channels)
+        .map(|c| model.firing_us(c, false))
+        .fold(0.0, f64::max)
+}
+
 impl PacketSim<'_> {
+    /// The Robosense model simulated.
+    fn robosense_model(&self) -> Model {
+        self.sensor.robosense().unwrap_or(Model::Helios)
+    }
+
     /// Trajectory time of packet `p`'s stamp: whole microseconds.
     fn robosense_stamp(&self, p: u64) -> f64 {
-        libm::floor(p as f64 * packet_us()) * 1e-6
+        libm::floor(p as f64 * packet_us(self.robosense_model())) * 1e-6
     }
 
     /// Trajectory time of packet `p`'s last firing.
     pub(super) fn robosense_last_offset(&self, p: u64) -> f64 {
-        let blocks = MODEL.layout().blocks;
+        let model = self.robosense_model();
+        let blocks = model.layout().blocks;
         self.robosense_stamp(p)
-            + ((blocks - 1) as f64 * MODEL.block_us(false) + MODEL.firing_us(31, false)) * 1e-6
+            + ((blocks - 1) as f64 * model.block_us(false) + last_firing_us(model)) * 1e-6
     }
 
     /// Rotor azimuth at trajectory time `t`, hundredths of a degree (unwrapped).
     fn robosense_rotor(&self, t: f64) -> f64 {
-        let blocks = MODEL.layout().blocks as f64;
+        let blocks = self.robosense_model().layout().blocks as f64;
         let block = 36000.0 / (self.per_sweep as f64 * blocks);
         1.5 * block + 36000.0 * t * self.sim.params().sensor.rate_hz
     }
 
     pub(super) fn robosense_packet(&self, p: u64) -> (Packet, Vec<Truth>) {
-        let l = MODEL.layout();
-        let block_us = MODEL.block_us(false);
-        let (rx, rz) = MODEL.lens_m();
-        let unit = MODEL.distance_resolution_m();
-        let (min, max) = MODEL.range_m();
+        let model = self.robosense_model();
+        let l = model.layout();
+        let block_us = model.block_us(false);
+        let (rx, rz) = model.lens_m();
+        let unit = model.distance_resolution_m();
+        let (min, max) = model.range_m();
         let t0 = self.robosense_stamp(p);
         let az: Vec<u16> = (0..l.blocks)
             .map(|k| {
@@ -103,27 +178,26 @@ impl PacketSim<'_> {
         let start_us = libm::round(self.sim.params().start_time * 1e6) as i64;
         let unix_us =
             super::xt32::CLOCK_ORIGIN_S * 1_000_000 + start_us + libm::round(t0 * 1e6) as i64;
-        let (secs, us) = (unix_us.div_euclid(1_000_000), unix_us.rem_euclid(1_000_000));
         let (at, _) = l.stamp;
-        buf[at..at + 6].copy_from_slice(&(secs as u64).to_be_bytes()[2..]);
-        buf[at + 6..at + 10].copy_from_slice(&(us as u32).to_be_bytes());
+        buf[at..at + 10].copy_from_slice(&stamp(model, unix_us));
         let mut truth = Vec::new();
         let mut gap = 0.0;
         for k in 0..l.blocks {
-            let b = HEADER + k * BLOCK;
-            buf[b..b + 2].copy_from_slice(l.block_id);
-            buf[b + 2..b + 4].copy_from_slice(&az[k].to_be_bytes());
+            let b = l.header + k * l.block_len();
+            buf[b..b + l.block_id.len()].copy_from_slice(l.block_id);
+            buf[b + l.azimuth_at..b + l.azimuth_at + 2].copy_from_slice(&az[k].to_be_bytes());
             if let Some(next) = az.get(k + 1) {
                 gap = f64::from((i32::from(*next) - i32::from(az[k])).rem_euclid(36000));
             }
             for c in 0..l.channels {
-                let fire = MODEL.firing_us(c, false);
+                let fire = model.firing_us(c, false);
+                let laser = model.laser(c);
                 let offset = t0 + (k as f64 * block_us + fire) * 1e-6;
                 // The decoders' azimuth, and the ray from the lens centre.
                 let a = f64::from(az[k]) + gap * fire / block_us;
                 let rotor = (a * 0.01).to_radians();
-                let theta = rotor + horizontal_deg(c).to_radians();
-                let v = vertical_deg(c).to_radians();
+                let theta = rotor + horizontal_deg(model, laser).to_radians();
+                let v = vertical_deg(model, laser).to_radians();
                 let origin = Vector3::new(rx * libm::cos(rotor), -rx * libm::sin(rotor), rz);
                 let dir = Vector3::new(
                     libm::cos(v) * libm::cos(theta),
@@ -144,7 +218,7 @@ impl PacketSim<'_> {
                 if !(min..=max).contains(&d) || raw > f64::from(u16::MAX) {
                     continue;
                 }
-                let at = b + 4 + 3 * c;
+                let at = b + l.azimuth_at + 2 + 3 * c;
                 buf[at..at + 2].copy_from_slice(&(raw as u16).to_be_bytes());
                 buf[at + 2] = libm::roundf(intensity * 255.0) as u8;
                 let q = origin + dir * d;
@@ -155,8 +229,11 @@ impl PacketSim<'_> {
                 ));
             }
         }
-        buf[HEADER + l.blocks * BLOCK..HEADER + l.blocks * BLOCK + 4]
-            .copy_from_slice(&(p as u32).to_be_bytes());
+        // The Helios's tail: the packet's sequence number.
+        let tail = l.header + l.blocks * l.block_len();
+        if matches!(model, Model::Helios | Model::Helios16p) {
+            buf[tail..tail + 4].copy_from_slice(&(p as u32).to_be_bytes());
+        }
         (
             Packet {
                 offset: self.robosense_last_offset(p),
@@ -197,16 +274,23 @@ mod tests {
     }
 
     #[test]
-    fn generated_helios_packets_decode_to_the_simulated_points() {
-        let sim = sim(PacketSensor::Helios, 10.0, 0.0);
-        let ps = PacketSim::new(&sim, PacketSensor::Helios);
+    fn generated_robosense_packets_decode_to_the_simulated_points() {
+        for sensor in PacketSensor::ROBOSENSE {
+            decodes_to_the_simulated_points(sensor);
+        }
+    }
+
+    fn decodes_to_the_simulated_points(sensor: PacketSensor) {
+        let model = sensor.robosense().unwrap();
+        let sim = sim(sensor, 10.0, 0.0);
+        let ps = PacketSim::new(&sim, sensor);
         let rate = sim.params().sensor.rate_hz;
-        let difop = difop(rate);
+        let difop = difop(model, rate);
         let calibration =
-            Calibration::from_difop(MODEL, &Difop::new_checked(&difop).unwrap()).unwrap();
+            Calibration::from_difop(model, &Difop::new_checked(&difop).unwrap()).unwrap();
         assert_eq!(calibration.dual, Some(false));
         let mut dec = Decoder::new(Config {
-            model: MODEL,
+            model,
             calibration: Some(calibration),
             cut_angle_deg: Some(0.0),
         })
@@ -223,8 +307,13 @@ mod tests {
         dec.finish(&mut got);
         let truth: Vec<_> = sweeps.iter().flat_map(|s| s.frame.points.clone()).collect();
         let stamps: Vec<_> = sweeps.iter().flat_map(|s| s.frame.stamps.clone()).collect();
-        assert_eq!(got.xyz.len(), truth.len());
-        assert_eq!(got.packets, [ps.packets_per_sweep() as u32; 2]);
+        assert!(!truth.is_empty(), "{sensor:?}: no points");
+        assert_eq!(got.xyz.len(), truth.len(), "{sensor:?}");
+        assert_eq!(
+            got.packets,
+            [ps.packets_per_sweep() as u32; 2],
+            "{sensor:?}"
+        );
         let (mut worst, mut worst_ratio, mut worst_t) = (0f64, 0f64, 0f64);
         let origin_ns = super::super::xt32::CLOCK_ORIGIN_S * 1_000_000_000;
         let mut sweep = 0;
@@ -244,11 +333,11 @@ mod tests {
             worst_t = worst_t.max((t - stamps[i]).abs());
         }
         println!(
-            "Helios: {} points; worst |dxyz| {worst:.2e} m ({worst_ratio:.2} of the f32 \
+            "{sensor:?}: {} points; worst |dxyz| {worst:.2e} m ({worst_ratio:.2} of the f32 \
              truth's resolution at its range), worst |dt| {worst_t:.2e} s (tolerance 1e-9 s)",
             truth.len()
         );
-        assert!(worst_ratio <= 1.0 && worst <= 1e-4);
-        assert!(worst_t <= 1e-9);
+        assert!(worst_ratio <= 1.0 && worst <= 1e-4, "{sensor:?}");
+        assert!(worst_t <= 1e-9, "{sensor:?}");
     }
 }

@@ -1,4 +1,4 @@
-//! The Velodyne HDL-64E S3 and VLS-128 as the simulator fires them: banks of 32 lasers in
+//! The Velodyne HDL-64E S2 and S3 and VLS-128 as the simulator fires them: banks of 32 lasers in
 //! blocks of their own flag, the models' firing tables ([`velodyne::Model::firing_s`]) and a
 //! unit calibration the simulator makes up and writes beside the capture (the ROS YAML the
 //! decoder reads with `--calibration`).
@@ -198,8 +198,12 @@ mod tests {
     }
 
     #[test]
-    fn generated_hdl64e_and_vls128_packets_decode_to_the_simulated_points() {
-        for sensor in [PacketSensor::Hdl64e, PacketSensor::Vls128] {
+    fn generated_hdl64e_s2_s3_and_vls128_packets_decode_to_the_simulated_points() {
+        for sensor in [
+            PacketSensor::Hdl64e,
+            PacketSensor::Hdl64eS2,
+            PacketSensor::Vls128,
+        ] {
             let sim = sim(sensor, 10.0, 0.0);
             let ps = PacketSim::new(&sim, sensor);
             let model = sensor.model();
