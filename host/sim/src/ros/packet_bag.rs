@@ -2,7 +2,7 @@
 //! packets a pcap of the drive holds, stamped with the times it holds them at
 //! ([`capture_ns`]), so that a reader decodes the same frames from either.
 //!
-//! - VLP-16, VLP-32C, HDL-64E S3, VLS-128: a `velodyne_msgs/VelodyneScan` a sweep on
+//! - VLP-16, VLP-32C, HDL-64E S2 and S3, VLS-128: a `velodyne_msgs/VelodyneScan` a sweep on
 //!   `/velodyne_packets`;
 //! - the Hesai models (XT16, XT32, XT32M, Pandar40P, Pandar64, QT64, QT128, OT128, AT128): a
 //!   `pandar_msgs/PandarScan` a sweep on `/pandar_packets` (nebula's);
@@ -20,7 +20,7 @@ use super::drivers::{self, Stamped};
 use super::{Container, Outgoing, RosWriter, Topic};
 use crate::capture::{capture_ns, clock_start, PacketSink};
 use crate::packets::{Packet, PacketSensor};
-use anyhow::Result;
+use anyhow::{bail, Result};
 use std::path::Path;
 
 /// How the sensor's driver records its packets.
@@ -34,11 +34,13 @@ enum Driver {
 }
 
 impl Driver {
-    fn of(sensor: PacketSensor) -> Self {
-        match sensor {
+    /// The driver that records `sensor`'s packets here, if one does.
+    fn of(sensor: PacketSensor) -> Option<Self> {
+        Some(match sensor {
             PacketSensor::Vlp16
             | PacketSensor::Vlp32c
             | PacketSensor::Hdl64e
+            | PacketSensor::Hdl64eS2
             | PacketSensor::Vls128 => Self::Velodyne,
             PacketSensor::Xt32
             | PacketSensor::Qt128
@@ -52,7 +54,13 @@ impl Driver {
             PacketSensor::Os1 => Self::Ouster,
             PacketSensor::Helios => Self::Robosense,
             PacketSensor::Mid360 | PacketSensor::Avia => Self::Nebula,
-        }
+            // nebula records the Helios' packets with its model's name; these are not written.
+            PacketSensor::Rs16
+            | PacketSensor::Rs32
+            | PacketSensor::Bpearl
+            | PacketSensor::Helios16p
+            | PacketSensor::Ruby => return None,
+        })
     }
 
     fn topics(self) -> &'static [Topic] {
@@ -91,7 +99,13 @@ impl PacketBag {
         start_time: f64,
         meta: Option<String>,
     ) -> Result<Self> {
-        let driver = Driver::of(sensor);
+        let Some(driver) = Driver::of(sensor) else {
+            bail!(
+                "--messages packets: the {sensor:?}'s packets are not written as a driver's \
+                 messages (of the Robosense models, nebula's RS-Helios only); write them as a \
+                 pcap (--format pcap)"
+            );
+        };
         let mut writer = RosWriter::create(path, container, driver.topics(), Vec::new())?;
         let clock_start = clock_start(sensor, start_time);
         if let Some(json) = meta.filter(|_| driver == Driver::Ouster) {
