@@ -177,3 +177,22 @@ impl PacketSink for PacketBag {
         self.writer.finish()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_robosense_model_nebula_records_is_written_as_messages() {
+        let dir = tempfile::tempdir().unwrap();
+        for sensor in PacketSensor::ROBOSENSE {
+            let path = dir.path().join(format!("{sensor:?}.mcap"));
+            let made = PacketBag::create(&path, Container::Mcap, sensor, 0.0, None);
+            match (sensor, made) {
+                (PacketSensor::Helios, made) => assert!(made.is_ok(), "{sensor:?}"),
+                (_, Ok(_)) => panic!("{sensor:?}: written as messages no driver records"),
+                (_, Err(e)) => assert!(e.to_string().contains("--format pcap"), "{e}"),
+            }
+        }
+    }
+}
