@@ -28,7 +28,7 @@ mod strategy;
 
 pub use input::FrameInput;
 pub use layout::Layout;
-pub use rehome::WhenFull;
+pub use state::WhenFull;
 
 use crate::config::{Capacities, Config, Degeneracy};
 use crate::error::{ConfigError, FrameError};

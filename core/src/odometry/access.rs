@@ -94,7 +94,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.threshold.in_use().sigma()
     }
     /// The local map (kiss-icp's `local_map`): its points, occupancy and search. An empty
-    /// view if the storage no longer holds the layout (see [`FrameError::Storage`]).
+    /// view if the storage no longer holds the layout (see [`FrameError::Storage`](crate::FrameError::Storage)).
     pub fn map(&self) -> MapView<'_, T, P> {
         let words = self.buffers.storage.as_ref();
         let map_words = words

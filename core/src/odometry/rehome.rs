@@ -9,7 +9,7 @@
 //! would have given: no step reads a capacity it has not reached (the map's search, admission
 //! and pruning find voxels by key, the clouds are as long as their points).
 
-use super::state::Buffers;
+use super::state::{Buffers, WhenFull};
 use super::Odometry;
 use crate::config::{Capacities, Degeneracy};
 use crate::downsample::cloud_words;
@@ -17,21 +17,6 @@ use crate::error::{ConfigError, FrameError};
 use crate::local_map::{MapMut, PointCodec, BLOCK};
 use crate::scalar::Real;
 use crate::storage::{Region, Storage};
-
-/// What a frame that would overfill a buffer does.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum WhenFull {
-    /// Each full buffer drops by its documented rule and the report says so: fixed storage, a
-    /// board's choice.
-    #[default]
-    Drop,
-    /// The frame is refused ([`FrameError::Full`]) with the state unchanged, so that the caller
-    /// can move the odometry into larger storage ([`Odometry::rehome`]) and register it again:
-    /// a host's choice. A scan pushed in pieces ([`Odometry::begin_frame`]) whose points
-    /// overflowed is refused too, and cannot be registered again from the odometry alone.
-    Refuse,
-}
 
 impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// Chooses what a frame that would overfill a buffer does (default [`WhenFull::Drop`]).

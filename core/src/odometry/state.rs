@@ -12,7 +12,20 @@ use crate::report::HighWater;
 use crate::scalar::Real;
 use crate::storage::Storage;
 
-use super::rehome::WhenFull;
+/// What a frame that would overfill a buffer does.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum WhenFull {
+    /// Each full buffer drops by its documented rule and the report says so: fixed storage, a
+    /// board's choice.
+    #[default]
+    Drop,
+    /// The frame is refused ([`FrameError::Full`](crate::FrameError::Full)) with the state unchanged, so that the caller
+    /// can move the odometry into larger storage ([`Odometry::rehome`](super::Odometry::rehome)) and register it again:
+    /// a host's choice. A scan pushed in pieces ([`Odometry::begin_frame`](super::Odometry::begin_frame)) whose points
+    /// overflowed is refused too, and cannot be registered again from the odometry alone.
+    Refuse,
+}
 
 /// `T_{t-1}`, the constant-velocity model `dT_{t-1} = T_{t-2}^-1 T_{t-1}` (Eq. (1)) and the
 /// frames registered or skipped so far.

@@ -1,7 +1,7 @@
 //! ROS 1 bags (format 2.0) as a [`Recording`]: `sensor_msgs/PointCloud2`, sensor packets,
 //! Livox points and IMU samples, read by [`frames`].
 //!
-//! The container (records, chunks, compression, index) is read by [`bag_records`], in place,
+//! The container (records, chunks, compression, index) is read by [`bag_records`](super::bag_records), in place,
 //! also when the bag is cut short or was never closed; the message bodies are in the ROS 1 wire
 //! format. A topic's messages are streamed in receive-time order (as `rosbag play` plays
 //! them), whatever order they were written in; a bag written out of order says so in a

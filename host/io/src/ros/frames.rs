@@ -9,7 +9,7 @@
 //! - Livox `CustomMsg` messages are frames one or several at a time ([`livox`](super::livox)).
 //!
 //! With `--imu`, the samples of its `sensor_msgs/Imu` topic are read first, in one pass, and
-//! handed on with the frames ([`imu_topic`](super::imu_topic)).
+//! handed on with the frames (`imu_topic`).
 
 use super::imu_msg;
 use super::imu_topic;

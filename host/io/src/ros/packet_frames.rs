@@ -1,9 +1,9 @@
 //! Sensor packets recorded in a ROS recording, decoded as a pcap of the same packets is: the
-//! packet messages ([`packets`](super::packets)) become the UDP datagrams a capture of the
+//! packet messages ([`packets`]) become the UDP datagrams a capture of the
 //! sensor would hold, on the ports the sensor sends to, timed by the driver's stamps (the
 //! message's receive time where a packet has none), and go through the same decoders, sweep
 //! assembly and options (`--sensor`, `--meta`, `--calibration`, `--cut-angle`) as a pcap
-//! ([`sweeps`](crate::capture::sweeps), [`SweepFrames`]), so a bag of packets and a pcap of
+//! ([`sweeps`], [`SweepFrames`]), so a bag of packets and a pcap of
 //! the same packets give the same frames.
 //!
 //! An Ouster's IMU packets come from the topic beside its lidar packets' (`.../imu_packets`),
