@@ -6,21 +6,10 @@ layout, for BENCHMARKS.md's "Every rule on real data" (bench/ablation.sh with RE
 BALM is GPL-2.0 (github hku-mars/BALM, commit 5dc1bf9); the converted data is not shipped."""
 import sys, os, numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
-from pcd import read_pcd
+from pcd import write_generic
 src, out = sys.argv[1], sys.argv[2]
 vals = [list(map(float, l.strip().strip(',').split(','))) for l in open(os.path.join(src, 'alidarPose.csv')) if l.strip()]
 A = np.array(vals).reshape(-1, 4, 4)
 stamps = A[:, 3, 3].copy()
 T = A.copy(); T[:, 3, :] = [0, 0, 0, 1]
-T0inv = np.linalg.inv(T[0])
-os.makedirs(os.path.join(out, 'velodyne'), exist_ok=True)
-with open(os.path.join(out, 'poses.txt'), 'w') as fp, open(os.path.join(out, 'times.txt'), 'w') as ft:
-    for k in range(len(T)):
-        a, _ = read_pcd(os.path.join(src, 'full%d.pcd' % k))
-        pts = np.stack([a['x'], a['y'], a['z'], a['intensity']], 1).astype('<f4')
-        pts = pts[np.isfinite(pts).all(1)]
-        pts.tofile(os.path.join(out, 'velodyne', '%06d.bin' % k))
-        R = T0inv @ T[k]
-        fp.write(' '.join('%.9e' % v for v in R[:3, :].reshape(-1)) + '\n')
-        ft.write('%.6f\n' % (stamps[k] - stamps[0]))
-print(len(T), 'frames')
+write_generic(out, [os.path.join(src, 'full%d.pcd' % k) for k in range(len(T))], T, stamps)

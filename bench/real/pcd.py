@@ -1,5 +1,6 @@
 """Reads a PCD file (ASCII or binary) into a numpy structured array: the converters' helper."""
-import numpy as np, sys
+import os, sys
+import numpy as np
 def read_pcd(path):
     with open(path,'rb') as f:
         hdr={}
@@ -25,3 +26,22 @@ def read_pcd(path):
         return out,hdr
     else:
         raise ValueError('unsupported '+hdr['DATA'][0])
+
+
+def write_generic(out, pcd_paths, T, stamps):
+    """Writes kiss-odom's generic layout to `out`: each PCD's finite points as
+    velodyne/NNNNNN.bin (f32 x y z intensity), the 4x4 poses `T` relative to the first as
+    poses.txt (KITTI 3x4 rows), the stamps relative to the first as times.txt."""
+    T0inv = np.linalg.inv(T[0])
+    os.makedirs(os.path.join(out, 'velodyne'), exist_ok=True)
+    with open(os.path.join(out, 'poses.txt'), 'w') as fp, \
+            open(os.path.join(out, 'times.txt'), 'w') as ft:
+        for k, path in enumerate(pcd_paths):
+            a, _ = read_pcd(path)
+            pts = np.stack([a['x'], a['y'], a['z'], a['intensity']], 1).astype('<f4')
+            pts = pts[np.isfinite(pts).all(1)]
+            pts.tofile(os.path.join(out, 'velodyne', '%06d.bin' % k))
+            R = T0inv @ T[k]
+            fp.write(' '.join('%.9e' % v for v in R[:3, :].reshape(-1)) + '\n')
+            ft.write('%.6f\n' % (stamps[k] - stamps[0]))
+    print(len(T), 'frames')
