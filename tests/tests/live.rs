@@ -171,9 +171,10 @@ fn live_fed_by_replay_gives_runs_poses_for_a_hesai_and_a_livox_recording() {
             1,
         ),
         (
+            // The recording ends 0.07 s into a fourth 0.1 s frame, which is not registered.
             sensors.join("livox/livox_tele15_small.pcap"),
             vec!["--sensor", "livox"],
-            4,
+            3,
         ),
     ] {
         let file = pcap.display().to_string();

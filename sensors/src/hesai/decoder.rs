@@ -18,6 +18,10 @@ use crate::sweep::{
 /// new one: the sensor stopped, or the recording has a hole.
 pub const GAP_NS: u64 = 300_000_000;
 
+/// The longest step between two AT128 packets of one timeline: the pause between mirror frames
+/// is under a frame's time at 10 Hz, and a packet further ahead is still held out as a stray.
+const MIRROR_PAUSE_NS: u64 = 100_000_000;
+
 /// A sequence number this far ahead of the last is not a count of lost packets (a sensor
 /// restart): losses are then counted from the times.
 const MAX_SEQUENCE_STEP: u32 = 1 << 20;
@@ -198,10 +202,12 @@ impl<A: Angles> Decoder<A> {
         self.consistent(&p, returns)?;
         let period = self.period_ns(&p, returns);
         let sequence = self.sequence_step(&p);
-        let step = match self
-            .timeline
-            .judge(t, max_step_ns(period, sequence), GAP_NS)?
-        {
+        let mut max_step = max_step_ns(period, sequence);
+        if self.angles.sweeps_are_frames() {
+            // The AT128 pauses between mirror frames: a pause within a frame's time is its own.
+            max_step = max_step.max(MIRROR_PAUSE_NS);
+        }
+        let step = match self.timeline.judge(t, max_step, GAP_NS)? {
             Step::First => None,
             Step::After(s) => Some(s),
             Step::Resync if self.resync(sink) => return Ok(Pushed::Again),
@@ -223,7 +229,8 @@ impl<A: Angles> Decoder<A> {
             self.asm.end(sink, SweepEnd::Complete);
             return Ok(Pushed::Again);
         }
-        if self.asm.open.is_none() {
+        let begins = self.asm.open.is_none();
+        if begins {
             let (earliest, _) = self.model.firing_span_ns(0, &p.firing(0, returns));
             let start = t.saturating_add_signed(earliest);
             self.asm.begin(sink, start, None);
@@ -231,7 +238,13 @@ impl<A: Angles> Decoder<A> {
             self.sweep_frame = frame;
             self.column = 0;
         }
-        let lost = step.map_or(0, |s| lost_between(s, period, sequence));
+        let lost = match step {
+            // The pause before an AT128 mirror frame is not packets lost: only its sequence
+            // number can say.
+            Some(_) if by_frame && begins => sequence.map_or(0, |d| d - 1),
+            Some(s) => lost_between(s, period, sequence),
+            None => 0,
+        };
         self.decode(&p, t, mode, sink);
         let stats = self.asm.stats();
         stats.packets = stats.packets.saturating_add(1);
