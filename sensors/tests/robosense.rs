@@ -162,10 +162,14 @@ fn bad_input_is_refused_with_its_reason() {
         feed(&mut dec, &late_us, &mut log),
         Err(PacketError::DateTime)
     );
+    // 2^48 - 1 seconds: more microseconds than a u64 holds.
+    let mut far = p.clone();
+    far[20..26].fill(0xFF);
+    assert_eq!(feed(&mut dec, &far, &mut log), Err(PacketError::DateTime));
     feed(&mut dec, &p, &mut log).unwrap();
     dec.finish(&mut log);
     let s = log.ends.last().unwrap();
-    assert_eq!((s.packets, s.bad_packets, s.other_sensor), (1, 5, 1));
+    assert_eq!((s.packets, s.bad_packets, s.other_sensor), (1, 6, 1));
 }
 
 #[test]

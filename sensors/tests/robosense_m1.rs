@@ -1,6 +1,7 @@
 //! The RS-M1 decoder on synthetic packets: each return at its own pitch and yaw, times from
 //! the packet and block offsets, frames cut where the sequence starts again, and bad input
-//! (truncated, another packet kind, late, a return mode changed midway) refused and counted.
+//! (truncated, another packet kind, late, a return mode changed midway, a time past what a
+//! `u64` of microseconds holds) refused and counted.
 
 mod common;
 
@@ -107,10 +108,14 @@ fn bad_input_is_refused_with_its_reason() {
         feed(&mut dec, &packet(6, 1160, 0x07), &mut log),
         Err(PacketError::UnknownReturnMode)
     );
+    // 2^48 - 1 seconds: more microseconds than a u64 holds.
+    let mut far = packet(7, 1320, 0x04);
+    far[10..16].fill(0xFF);
+    assert_eq!(feed(&mut dec, &far, &mut log), Err(PacketError::DateTime));
     dec.finish(&mut log);
     let s = log.ends.last().unwrap();
     assert_eq!(
         (s.packets, s.bad_packets, s.out_of_order, s.other_sensor),
-        (1, 4, 1, 1)
+        (1, 5, 1, 1)
     );
 }

@@ -74,12 +74,10 @@ impl<'a> Packet<'a> {
     pub fn return_mode(&self) -> u8 {
         self.buf[RETURN_MODE]
     }
-    /// The packet time, microseconds since the Unix epoch.
+    /// The packet time, microseconds since the Unix epoch (`None` past what a `u64` holds or
+    /// for microseconds of a second or more).
     pub fn time_us(&self) -> Option<u64> {
-        let t = &self.buf[STAMP..STAMP + 10];
-        let secs = t[..6].iter().fold(0u64, |a, &b| a << 8 | u64::from(b));
-        let us = t[6..].iter().fold(0u64, |a, &b| a << 8 | u64::from(b));
-        (us < 1_000_000).then(|| secs.saturating_mul(1_000_000).saturating_add(us))
+        super::wire::utc_us(&self.buf[STAMP..STAMP + 10])
     }
     /// Block `k`: its time offset (us) and return sequence number.
     pub fn block(&self, k: usize) -> (u8, u8) {

@@ -34,6 +34,21 @@ fn be16(b: &[u8], at: usize) -> u16 {
     }
 }
 
+/// A 10-byte UTC stamp (6 bytes of seconds, 4 of microseconds, big-endian) in microseconds
+/// since the Unix epoch; `None` when the microseconds reach a second or the time (48 bits of
+/// seconds hold 2^48) does not fit a `u64` of nanoseconds, the unit of the sweeps (the year
+/// 2554).
+pub(super) fn utc_us(t: &[u8]) -> Option<u64> {
+    let (secs, us) = (t.get(..6)?, t.get(6..10)?);
+    let secs = secs.iter().fold(0u64, |a, &b| a << 8 | u64::from(b));
+    let us = us.iter().fold(0u64, |a, &b| a << 8 | u64::from(b));
+    if us >= 1_000_000 {
+        return None;
+    }
+    let t = secs.checked_mul(1_000_000)?.checked_add(us)?;
+    t.checked_mul(1000).map(|_| t)
+}
+
 fn fixed(bytes: &[u8]) -> Result<&[u8; LEN], PacketError> {
     match bytes.try_into() {
         Ok(b) => Ok(b),
@@ -105,17 +120,10 @@ impl<'a> Msop<'a> {
                 if h > 23 || m > 59 || s > 60 || ms > 999 || us > 999 {
                     return None;
                 }
-                let secs = u64::try_from(days).ok()? * 86_400 + h * 3600 + m * 60 + s;
-                Some(secs * 1_000_000 + ms * 1000 + us)
+                let secs = u64::try_from(days).ok()?.checked_mul(86_400)? + h * 3600 + m * 60 + s;
+                secs.checked_mul(1_000_000)?.checked_add(ms * 1000 + us)
             }
-            Stamp::Utc => {
-                let secs = t[..6].iter().fold(0u64, |a, &b| a << 8 | u64::from(b));
-                let us = t[6..10].iter().fold(0u64, |a, &b| a << 8 | u64::from(b));
-                if us >= 1_000_000 {
-                    return None;
-                }
-                Some(secs * 1_000_000 + us)
-            }
+            Stamp::Utc => utc_us(t),
         }
     }
 }
