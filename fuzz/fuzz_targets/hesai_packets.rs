@@ -1,6 +1,7 @@
 //! The Hesai decoder (`kiss_odom_sensors::hesai::Decoder::push`) for every model: the first
 //! byte's bits 1-2 pick the model (XT32, QT128, Pandar128, OT128), bit 3 whether to seal each
-//! 128-channel packet's CRCs again (so that mutated packets get past the QT128's CRC check),
+//! 128-channel packet's CRCs again (so that mutated packets get past the CRC checks of protocol
+//! 3.2, the QT128's, and 1.4, the Pandar128's and OT128's; unsealed, they reach those checks),
 //! bit 0 whether to cut at the angle its bits 4-7 give; the rest is cut into packets, each
 //! prefixed by a little-endian u16 length (below 0x8000: the model's usual length, so that the
 //! decoding runs). Asserts that nothing panics, every point and time is finite and the sink

@@ -3,12 +3,14 @@
 //! CRC-32 written before the push (bit 2: so that mutations reach past the CRC check) and the
 //! frame period; the rest is cut into packets, each prefixed by a little-endian u16 length
 //! (below 0x8000: the model's usual packet, 1362 or 1380 bytes; else the low 11 bits). Asserts
-//! that nothing panics, every point and time is finite and the sink protocol holds.
+//! that nothing panics, every point and time is finite, the sink protocol holds and no sweep
+//! counts more packets lost than its packets' time steps can hold: each step is at most the
+//! frame gap (`GAP_NS`) and a packet spans at least 100 ns (SDK 2's unit of `time_interval`).
 #![no_main]
 
 mod sensor_sink;
 
-use kiss_odom_sensors::livox::{sdk2, Config, Decoder, Model};
+use kiss_odom_sensors::livox::{sdk2, Config, Decoder, Model, GAP_NS};
 use kiss_odom_sensors::Decode;
 use libfuzzer_sys::fuzz_target;
 
@@ -27,7 +29,7 @@ fuzz_target!(|data: &[u8]| {
         frame_period_ns: 1_000_000 * (1 + u64::from(head >> 3)),
     })
     .expect("valid configuration");
-    let mut sink = sensor_sink::Checked::default();
+    let mut sink = sensor_sink::Checked::with_lost_per_packet(GAP_NS / 100);
     let mut packet = Vec::new();
     while rest.len() >= 2 {
         let len = match u16::from_le_bytes([rest[0], rest[1]]) {

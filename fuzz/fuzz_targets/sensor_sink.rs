@@ -18,6 +18,18 @@ pub fn feed(sink: &mut Checked, mut push: impl FnMut(&mut Checked) -> Result<Pus
 pub struct Checked {
     open: Option<SweepStart>,
     points: u32,
+    /// The most packets one accepted packet may count as lost before it (no bound if `None`).
+    lost_per_packet: Option<u64>,
+}
+
+impl Checked {
+    /// A sink that also checks that no sweep counts more than `most` packets lost per packet.
+    pub fn with_lost_per_packet(most: u64) -> Self {
+        Self {
+            lost_per_packet: Some(most),
+            ..Self::default()
+        }
+    }
 }
 
 impl SweepSink for Checked {
@@ -37,5 +49,9 @@ impl SweepSink for Checked {
         let start = self.open.take().expect("end outside a sweep");
         assert_eq!(s.index, start.index);
         assert_eq!(s.points, self.points);
+        if let Some(most) = self.lost_per_packet {
+            let (lost, packets) = (u64::from(s.lost_packets), u64::from(s.packets));
+            assert!(lost <= most * packets, "{lost} packets lost in a sweep of {packets}");
+        }
     }
 }

@@ -104,6 +104,10 @@ fn gaps_missing_or_disordered_samples_give_no_prior_and_leave_the_model() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "over ten minutes of software floating point under Miri; no unsafe on this path"
+)]
 fn the_bias_estimate_converges_to_the_gyroscopes_bias() {
     let mut odom = odometry();
     let r_li = UnitQuaternion::from_euler_angles(0.0, 0.0, 1.0);
