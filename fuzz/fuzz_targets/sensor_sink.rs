@@ -51,7 +51,10 @@ impl SweepSink for Checked {
         assert_eq!(s.points, self.points);
         if let Some(most) = self.lost_per_packet {
             let (lost, packets) = (u64::from(s.lost_packets), u64::from(s.packets));
-            assert!(lost <= most * packets, "{lost} packets lost in a sweep of {packets}");
+            assert!(
+                lost <= most * packets,
+                "{lost} packets lost in a sweep of {packets}"
+            );
         }
     }
 }
