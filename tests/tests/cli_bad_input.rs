@@ -652,6 +652,34 @@ fn no_frames_or_no_such_path_exit_1_with_the_reason() {
     assert!(line.contains("no frames"), "{line}");
 }
 
+/// Robust mode's settings given to a run in reference mode are not used: a warning names
+/// each (and `--strict` stops the run on it); in robust mode they are used, without a word.
+#[test]
+fn robust_only_options_in_reference_mode_are_said_unused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    bin_folder(&data, 2);
+    let opts = ["--lateral-prior", "1", "--prior-gate", "0.5"];
+    let r = run(&data, &dir.path().join("out-ref"), &opts);
+    r.ok();
+    assert_eq!(r.warnings().len(), 2, "{}", r.stderr);
+    r.warning_with(&[
+        "lateral_prior = 1",
+        "--lateral-prior",
+        "not used",
+        "robust mode only",
+    ]);
+    r.warning_with(&["prior_gate = 0.5", "--prior-gate", "not used"]);
+    let strict = [&opts[..], &["--strict"]].concat();
+    let s = run(&data, &dir.path().join("out-strict"), &strict);
+    assert!(s.stderr.contains("--strict"), "{}", s.stderr);
+    assert_ne!(s.code, 0);
+    let robust = [&opts[..], &["--degeneracy", "robust"]].concat();
+    let r = run(&data, &dir.path().join("out-robust"), &robust);
+    r.ok();
+    assert!(r.warnings().is_empty(), "{}", r.stderr);
+}
+
 /// `kiss-odom eval` on finite poses far enough apart for the error sums to overflow fails
 /// naming the metric, rather than writing the ATE as `null` (JSON has no inf) with exit 0.
 #[test]

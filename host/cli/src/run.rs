@@ -105,7 +105,11 @@ pub(crate) fn execute_on(
         warn(&mut record, &hidden, &w);
     }
     let mut end = End::Finished;
-    for w in &dataset.info.warnings {
+    for w in settings
+        .unused_warnings()
+        .iter()
+        .chain(&dataset.info.warnings)
+    {
         warn(&mut record, &hidden, w);
         if args.run.strict {
             end = End::Failed(anyhow!("{w} (--strict)"));

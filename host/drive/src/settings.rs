@@ -693,6 +693,65 @@ impl Settings {
         }
     }
 
+    /// The robust mode's settings given other values than their defaults while the run is in
+    /// reference mode, which does not use them: one warning each, naming the flag too.
+    pub fn unused_warnings(&self) -> Vec<String> {
+        if self.registration.degeneracy != DegeneracyMode::Reference {
+            return Vec::new();
+        }
+        let (r, d) = (&self.registration, Registration::default());
+        let robust_only: [(&str, Option<&str>, bool, String); 6] = [
+            (
+                "plane_gate",
+                Some("--plane-gate"),
+                r.plane_gate != d.plane_gate,
+                r.plane_gate.to_string(),
+            ),
+            (
+                "prediction_prior",
+                Some("--prediction-prior"),
+                r.prediction_prior != d.prediction_prior,
+                r.prediction_prior.to_string(),
+            ),
+            (
+                "lateral_prior",
+                Some("--lateral-prior"),
+                r.lateral_prior != d.lateral_prior,
+                r.lateral_prior.to_string(),
+            ),
+            (
+                "prior_gate",
+                Some("--prior-gate"),
+                r.prior_gate != d.prior_gate,
+                r.prior_gate.to_string(),
+            ),
+            (
+                "plane_kernel_scale",
+                None,
+                r.plane_kernel_scale != d.plane_kernel_scale,
+                r.plane_kernel_scale.to_string(),
+            ),
+            (
+                "cycle_stop",
+                None,
+                r.cycle_stop != d.cycle_stop,
+                r.cycle_stop.to_string(),
+            ),
+        ];
+        robust_only
+            .into_iter()
+            .filter(|(_, _, set, _)| *set)
+            .map(|(key, flag, _, value)| {
+                let flag = flag.map_or(String::new(), |f| format!(" ({f})"));
+                format!(
+                    "[registration] {key} = {value}{flag} not used: it acts in robust mode only \
+                     (--degeneracy robust, or --preset accurate), and this run is in reference \
+                     mode"
+                )
+            })
+            .collect()
+    }
+
     /// The warning to print when [`Self::threads`] capped the count asked for.
     pub fn threads_warning(&self) -> Option<String> {
         let (asked, cores) = (self.runtime.threads, cores());

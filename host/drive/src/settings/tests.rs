@@ -284,3 +284,31 @@ fn the_accurate_preset_gives_its_defaults_and_what_is_given_wins() {
     let bad = file("e.toml", "[pipeline]\npreset = \"fastest\"\n");
     assert!(Settings::load(&bad).is_err());
 }
+
+#[test]
+fn robust_settings_in_reference_mode_are_said_unused_and_in_robust_mode_not() {
+    let mut s = Settings::default();
+    assert!(s.unused_warnings().is_empty());
+    s.registration.lateral_prior = 1.0;
+    s.registration.cycle_stop = !s.registration.cycle_stop;
+    let w = s.unused_warnings();
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(
+        w[0].contains("lateral_prior = 1 (--lateral-prior) not used"),
+        "{w:?}"
+    );
+    assert!(
+        w[1].contains("cycle_stop") && w[1].contains("robust mode only"),
+        "{w:?}"
+    );
+    // Every robust-only setting is named when set.
+    let mut all = Settings::default();
+    let r = &mut all.registration;
+    (r.plane_gate, r.prediction_prior, r.lateral_prior) = (0.5, 0.5, 0.5);
+    (r.prior_gate, r.plane_kernel_scale) = (0.5, 0.5);
+    r.cycle_stop = !r.cycle_stop;
+    assert_eq!(all.unused_warnings().len(), 6);
+    // Robust mode uses them: nothing to say.
+    s.registration.degeneracy = DegeneracyMode::Robust;
+    assert!(s.unused_warnings().is_empty());
+}
