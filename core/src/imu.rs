@@ -110,8 +110,9 @@ pub struct GyroPrior<T: Real> {
     bias: Vector3<T>,
     /// The last sweep's end, LiDAR clock, s.
     last_end: Option<f64>,
-    /// The rotation handed over for the frame being registered, and its interval (s).
-    pending: Option<(UnitQuaternion<T>, f64)>,
+    /// The rotation measured for the frame being registered, its interval (s), and whether
+    /// it was handed over to predict and deskew the frame.
+    pending: Option<(UnitQuaternion<T>, f64, bool)>,
 }
 
 impl<T: Real> GyroPrior<T> {
@@ -146,6 +147,30 @@ impl<T: Real> GyroPrior<T> {
         samples: &[ImuSample<T>],
         end: f64,
     ) -> Prior {
+        self.begin(odom, samples, end, true)
+    }
+
+    /// [`Self::before_frame`] that only measures: the rotation is kept for
+    /// [`Self::measured`], `odom` predicts and deskews the frame as the reference does, and
+    /// [`Self::after_frame`] learns nothing from it. For a gyroscope the caller does not trust
+    /// (it disagreed with ICP), so that it can tell when it agrees again. Returns what
+    /// [`Self::before_frame`] would have.
+    pub fn measure_frame<P: PointCodec<T>, S: Storage>(
+        &mut self,
+        odom: &mut Odometry<T, P, S>,
+        samples: &[ImuSample<T>],
+        end: f64,
+    ) -> Prior {
+        self.begin(odom, samples, end, false)
+    }
+
+    fn begin<P: PointCodec<T>, S: Storage>(
+        &mut self,
+        odom: &mut Odometry<T, P, S>,
+        samples: &[ImuSample<T>],
+        end: f64,
+        hand_over: bool,
+    ) -> Prior {
         let start = self.last_end.replace(end);
         self.pending = None;
         odom.set_sweep_rotation(None);
@@ -156,16 +181,30 @@ impl<T: Real> GyroPrior<T> {
             Ok(r) => r,
             Err(why) => return why,
         };
-        let mut delta = *odom.last_delta();
-        delta.rotation = rotation;
-        if !odom.set_measured_delta(delta) {
-            return Prior::BadSamples;
+        if hand_over {
+            let mut delta = *odom.last_delta();
+            delta.rotation = rotation;
+            if !odom.set_measured_delta(delta) {
+                return Prior::BadSamples;
+            }
+            if self.config.point_deskew {
+                odom.set_sweep_rotation(Some(sweep));
+            }
         }
-        if self.config.point_deskew {
-            odom.set_sweep_rotation(Some(sweep));
-        }
-        self.pending = Some((rotation, end - start));
+        self.pending = Some((rotation, end - start, hand_over));
         Prior::Used(samples.len() as u32)
+    }
+
+    /// The rotation the gyroscope measured over the frame being registered (less the bias,
+    /// LiDAR axes) and its interval (s), until [`Self::after_frame`] or [`Self::discard`].
+    pub fn measured(&self) -> Option<(UnitQuaternion<T>, f64)> {
+        self.pending.map(|(q, dt, _)| (q, dt))
+    }
+
+    /// Forgets the frame's measured rotation without learning from it: the bias stays as it
+    /// was (for a frame whose gyroscope the caller found wrong).
+    pub fn discard(&mut self) {
+        self.pending = None;
     }
 
     /// After the frame: the rotation ICP registered (`odom`'s new motion model) against the
@@ -177,7 +216,10 @@ impl<T: Real> GyroPrior<T> {
         odom: &Odometry<T, P, S>,
     ) -> Option<T> {
         // `dt` is positive: `rotation` refused an empty interval.
-        let (gyro, dt) = self.pending.take()?;
+        let (gyro, dt, handed) = self.pending.take()?;
+        if !handed {
+            return None;
+        }
         let (err, _) = so3_log(&(gyro.inverse() * odom.last_delta().rotation));
         // The gyroscope turned by (rate - bias_est) where the sensor turned by (rate - bias):
         // the registered rotation is short by (bias - bias_est) dt.

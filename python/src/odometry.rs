@@ -166,10 +166,11 @@ impl Odometry {
             .map_err(|e| PyRuntimeError::new_err(kiss_odom_drive::one_line(&e)))?;
         let report = report_dict(py, outcome.report(), index, self.input.len())?;
         if let (Some(u), Some(_)) = (outcome.imu, &stamps) {
-            report.set_item("imu_prior", u.prior.name())?;
+            report.set_item("imu_prior", u.state())?;
             report.set_item("imu_samples", u.samples)?;
             report.set_item("gyro_bias", u.bias)?;
             report.set_item("imu_residual", u.residual)?;
+            report.set_item("imu_disagreement", u.disagreement)?;
         }
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
         let keep = self.driver.build().capacities.scan_points;

@@ -334,6 +334,13 @@ fn frame_loop(
             break End::Failed(anyhow!("{first} (--strict)"));
         }
         // So does a frame the gyroscope prior, asked for, could not predict.
+        // And the first time the IMU consistency check rejects the gyroscope.
+        if let Some(w) = driver.imu_check_warning() {
+            warn(record, &bar, &w);
+            if args.run.strict {
+                break End::Failed(anyhow!("{w} (--strict)"));
+            }
+        }
         if let Some(w) = prior.check(&outcome) {
             warn(record, &bar, &w);
             if args.run.strict {

@@ -19,13 +19,14 @@
 
 use crate::engine::{self, Batch, Call, Engine};
 use crate::growth::{Growth, StateMemory};
+use crate::imu_check::{ImuCheck, Measured};
 use crate::outcome::{FrameMeta, ImuUse, MapInUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
 use kiss_odom_core::{Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior};
 use kiss_odom_io::{Frame, Item};
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector3};
 use std::time::Duration;
 
 /// Frames held in memory in one driver build's scalar (see [`Driver::preload`]).
@@ -65,6 +66,8 @@ pub struct Driver {
     pool: Pool,
     build: Build,
     growth: Growth,
+    imu_check: ImuCheck,
+    imu_rejected: u64,
 }
 
 /// What a driver runs, fixed when it is made.
@@ -105,6 +108,8 @@ impl Driver {
             on_empty: OnEmpty::Advance,
             pool: Pool::new(threads)?,
             build,
+            imu_check: ImuCheck::default(),
+            imu_rejected: 0,
         })
     }
 
@@ -147,16 +152,51 @@ impl Driver {
         end: Option<f64>,
         samples: &[CoreImu<f64>],
     ) -> Result<Outcome> {
-        let prior = end.and_then(|end| self.engine.prior_before(samples, end));
+        let hand_over = !self.imu_check.rejecting();
+        let prior = end.and_then(|end| self.engine.prior_before(samples, end, hand_over));
         let mut outcome = self.register_points(meta, points, stamps)?;
-        let residual = self.engine.prior_after();
+        // The check, on a registered frame whose gyroscope rotation was measured.
+        let measured = self
+            .engine
+            .prior_measured()
+            .filter(|_| outcome.report().is_some());
+        let verdict = measured.map(|(gyro, dt)| {
+            let rates = samples.iter().map(|s| Vector3::from(s.gyro));
+            let mean = rates.clone().sum::<Vector3<f64>>() / samples.len().max(1) as f64;
+            let m = Measured {
+                gyro: gyro.into(),
+                icp: self.engine.last_delta().rotation.scaled_axis(),
+                dt,
+                mean_rate: mean.norm(),
+                peak_rate: rates.map(|r| r.norm()).fold(0.0, f64::max),
+            };
+            self.imu_check.judge(&outcome.meta, &m)
+        });
+        // A frame that disagrees teaches the bias nothing.
+        let residual = self.engine.prior_after(verdict.is_none_or(|(_, ok)| ok));
+        let rejected = !hand_over && matches!(prior, Some(Prior::Used(_)));
+        self.imu_rejected += u64::from(rejected);
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
             prior: prior.unwrap_or(Prior::NoSamples),
             samples: samples.len(),
             bias,
             residual,
+            rejected,
+            disagreement: verdict.map(|(off, _)| off),
         });
         Ok(outcome)
+    }
+
+    /// Frames the IMU consistency check predicted without the gyroscope prior (see
+    /// `imu_check`).
+    pub fn imu_rejected_frames(&self) -> u64 {
+        self.imu_rejected
+    }
+
+    /// The warning that the IMU consistency check rejected the gyroscope, the first time it
+    /// did.
+    pub fn imu_check_warning(&mut self) -> Option<String> {
+        self.imu_check.warning()
     }
 
     /// Registers a scan given as points (sensor frame, m) with optional per-point capture
@@ -290,6 +330,8 @@ impl Driver {
     /// the same poses.
     pub fn reset(&mut self) {
         self.engine.reset();
+        self.imu_check = ImuCheck::default();
+        self.imu_rejected = 0;
     }
     /// The latest motion: previous pose to latest, in the previous sensor frame.
     pub fn last_delta(&self) -> Isometry3<f64> {

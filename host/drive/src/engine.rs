@@ -16,7 +16,7 @@ use kiss_odom_core::{
     Capacities, Exact, FrameError, FrameReport, GyroPrior, HighWater, ImuSample as CoreImu,
     Odometry, PointCodec, Prior, Quantized, Real, WhenFull,
 };
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Translation3};
 use std::time::{Duration, Instant};
 
 /// What one frame call of the core gave, and how long the call took.
@@ -143,10 +143,21 @@ pub(crate) trait Engine: Send + Sync {
     /// Frames registered or skipped so far.
     fn frames(&self) -> u64;
     /// The gyroscope prior, if on, before a frame whose sweep ends at `end` (s): what it did.
-    fn prior_before(&mut self, samples: &[CoreImu<f64>], end: f64) -> Option<Prior>;
-    /// The gyroscope prior after the frame (its bias learns from the registered rotation):
-    /// how far ICP's rotation rate was from the gyroscope's, rad/s, if the frame used it.
-    fn prior_after(&mut self) -> Option<f64>;
+    /// Without `hand_over` the gyroscope's rotation is only measured and the frame is
+    /// predicted as without the prior.
+    fn prior_before(
+        &mut self,
+        samples: &[CoreImu<f64>],
+        end: f64,
+        hand_over: bool,
+    ) -> Option<Prior>;
+    /// The rotation vector the gyroscope measured over the frame (rad, LiDAR axes, less the
+    /// bias) and the frame's interval (s), before [`Self::prior_after`].
+    fn prior_measured(&self) -> Option<([f64; 3], f64)>;
+    /// The gyroscope prior after the frame (its bias learns from the registered rotation
+    /// when `learn`): how far ICP's rotation rate was from the gyroscope's, rad/s, if the
+    /// frame used it.
+    fn prior_after(&mut self, learn: bool) -> Option<f64>;
     /// The gyroscope prior's bias estimate, if it is on.
     fn imu_bias(&self) -> Option<[f64; 3]>;
 }
@@ -435,7 +446,12 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     fn frames(&self) -> u64 {
         self.odom.frames()
     }
-    fn prior_before(&mut self, samples: &[CoreImu<f64>], end: f64) -> Option<Prior> {
+    fn prior_before(
+        &mut self,
+        samples: &[CoreImu<f64>],
+        end: f64,
+        hand_over: bool,
+    ) -> Option<Prior> {
         let prior = self.prior.as_mut()?;
         self.imu.clear();
         self.imu.extend(samples.iter().map(|s| CoreImu {
@@ -443,13 +459,24 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
             gyro: s.gyro.map(T::of),
             accel: s.accel.map(T::of),
         }));
-        Some(prior.before_frame(&mut self.odom, &self.imu, end))
+        Some(if hand_over {
+            prior.before_frame(&mut self.odom, &self.imu, end)
+        } else {
+            prior.measure_frame(&mut self.odom, &self.imu, end)
+        })
     }
-    fn prior_after(&mut self) -> Option<f64> {
-        self.prior
-            .as_mut()?
-            .after_frame(&self.odom)
-            .map(|r| r.wide())
+    fn prior_measured(&self) -> Option<([f64; 3], f64)> {
+        let (q, dt) = self.prior.as_ref()?.measured()?;
+        let turn = widen(&Isometry3::from_parts(Translation3::identity(), q)).rotation;
+        Some((turn.scaled_axis().into(), dt))
+    }
+    fn prior_after(&mut self, learn: bool) -> Option<f64> {
+        let prior = self.prior.as_mut()?;
+        if !learn {
+            prior.discard();
+            return None;
+        }
+        prior.after_frame(&self.odom).map(|r| r.wide())
     }
     fn imu_bias(&self) -> Option<[f64; 3]> {
         self.prior.as_ref().map(|p| p.bias().map(|b| b.wide()))

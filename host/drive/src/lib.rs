@@ -12,6 +12,7 @@ pub mod driver;
 mod engine;
 pub mod error;
 pub mod growth;
+pub mod imu_check;
 pub mod outcome;
 pub mod pool;
 pub mod prior;

@@ -114,6 +114,24 @@ pub struct ImuUse {
     pub bias: [f64; 3],
     /// How far ICP's rotation rate was from the gyroscope's, rad/s, if the frame used it.
     pub residual: Option<f64>,
+    /// Whether the IMU consistency check had rejected the gyroscope: the frame was predicted
+    /// and deskewed without it, which it could have been (its rotation was measured).
+    pub rejected: bool,
+    /// The angle between the gyroscope's rotation over the frame and ICP's (rad), when the
+    /// check measured it.
+    pub disagreement: Option<f64>,
+}
+
+impl ImuUse {
+    /// What the prior did, as reports name it: `rejected` for a frame the IMU consistency
+    /// check kept from it, else [`Prior::name`].
+    pub fn state(&self) -> &'static str {
+        if self.rejected {
+            "rejected"
+        } else {
+            self.prior.name()
+        }
+    }
 }
 
 impl Outcome {

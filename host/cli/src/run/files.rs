@@ -87,6 +87,9 @@ pub struct Summary {
     pub map_radius: MapRadius,
     /// Warnings printed.
     pub warnings: usize,
+    /// With `--imu` other than `off`: frames predicted without the gyroscope prior because
+    /// the IMU consistency check found it disagreeing with ICP.
+    pub imu_rejected_frames: Option<u64>,
     /// Sensor packets over the run's sweeps (a pcap recording or `live`).
     pub packets: Option<PacketTotals>,
     /// `live`: time from a sweep's last packet to its pose (ms).
@@ -412,6 +415,7 @@ impl Run<'_> {
             },
             map_radius: MapRadius::of(&o.rows, s.data.max_range),
             warnings: o.warnings,
+            imu_rejected_frames: d.gyro_bias().map(|_| d.imu_rejected_frames()),
             packets: PacketTotals::of(&o.rows),
             pose_latency_ms: Latency::of(o.rows.iter().filter_map(|r| r.pose_latency_ms).collect()),
             interrupted: self.interrupted.is_some(),

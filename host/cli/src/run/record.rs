@@ -126,7 +126,8 @@ pub struct FrameRow {
     /// Whether it was deskewed a second time with the motion its first registration found.
     pub redeskewed: bool,
     /// With `--imu auto`: `used` (the gyroscope's rotation predicted and deskewed the frame),
-    /// or why not (`first`, `no_samples`, `gap`, `bad_samples`); empty otherwise.
+    /// or why not (`first`, `no_samples`, `gap`, `bad_samples`, `rejected`: the IMU
+    /// consistency check found the gyroscope disagreeing with ICP); empty otherwise.
     pub imu_prior: Option<&'static str>,
     /// With `--imu auto`: IMU samples that came with the frame.
     pub imu_samples: Option<usize>,
@@ -139,6 +140,9 @@ pub struct FrameRow {
     /// With `--imu auto`, on frames that used the prior: how far ICP's rotation rate was from
     /// the gyroscope's (rad/s).
     pub imu_residual: Option<f64>,
+    /// With `--imu auto`: the angle between the gyroscope's rotation over the frame and the
+    /// rotation ICP registered (rad), which the IMU consistency check judges.
+    pub imu_disagreement: Option<f64>,
     /// The core's flags, written as one column each.
     #[serde(skip)]
     pub status: Status,
@@ -191,12 +195,13 @@ impl FrameRow {
             pose_latency_ms: None,
             deskewed: r.is_some_and(|r| r.deskewed),
             redeskewed: r.is_some_and(|r| r.redeskewed),
-            imu_prior: o.imu.map(|u| u.prior.name()),
+            imu_prior: o.imu.map(|u| u.state()),
             imu_samples: o.imu.map(|u| u.samples),
             gyro_bias_x: o.imu.map(|u| u.bias[0]),
             gyro_bias_y: o.imu.map(|u| u.bias[1]),
             gyro_bias_z: o.imu.map(|u| u.bias[2]),
             imu_residual: o.imu.and_then(|u| u.residual),
+            imu_disagreement: o.imu.and_then(|u| u.disagreement),
             status: o.status().unwrap_or_default(),
         }
     }
