@@ -18,6 +18,7 @@ mod db3_nebula;
 mod degeneracy;
 mod embedded;
 mod golden;
+mod imu_check;
 mod imu_pcaps;
 mod imu_prior;
 mod imu_readers;

@@ -25,6 +25,21 @@ fn turn() -> Vector3<f64> {
     Vector3::new(0.01, -0.02, 0.075)
 }
 
+/// A check past its first frame (an agreeing one).
+fn started() -> ImuCheck {
+    let mut check = ImuCheck::default();
+    check.judge(&meta(), &frame(turn(), turn(), 0.0));
+    check
+}
+
+#[test]
+fn the_first_measured_frame_is_not_judged_the_second_is() {
+    let mut check = ImuCheck::default();
+    let dead = frame(Vector3::zeros(), turn(), 0.0);
+    assert!(check.judge(&meta(), &dead).1 && !check.rejecting());
+    assert!(!check.judge(&meta(), &dead).1 && check.rejecting());
+}
+
 #[test]
 fn a_correct_gyroscope_with_bias_noise_and_scale_error_agrees() {
     let mut worst: f64 = 0.0;
@@ -82,7 +97,7 @@ fn each_wrong_gyroscope_disagrees_and_is_named() {
 
 #[test]
 fn a_disagreement_rejects_warns_once_and_resumes_after_turning_frames_that_agree() {
-    let mut check = ImuCheck::default();
+    let mut check = started();
     let r = turn();
     let (off, ok) = check.judge(&meta(), &frame(Vector3::zeros(), r, 0.0));
     assert!(!ok && off > tolerance(&r));
@@ -115,7 +130,7 @@ fn a_disagreement_rejects_warns_once_and_resumes_after_turning_frames_that_agree
 
 #[test]
 fn a_non_finite_disagreement_is_a_disagreement() {
-    let mut check = ImuCheck::default();
+    let mut check = started();
     let (_, ok) = check.judge(
         &meta(),
         &frame(Vector3::new(f64::NAN, 0.0, 0.0), turn(), 0.0),
