@@ -337,3 +337,33 @@ fn each_outcome_has_its_own_report_name() {
     let names = all.map(Prior::name);
     assert_eq!(names, ["used", "first", "no_samples", "gap", "bad_samples"]);
 }
+
+#[test]
+fn a_measured_frame_keeps_the_reference_prediction_and_teaches_the_bias_nothing() {
+    let rate = |_| [0.0, 0.0, 2.0];
+    let mut prior = GyroPrior::new(ImuConfig::new());
+    let mut odom = odometry();
+    let before = *odom.last_delta();
+    assert_eq!(
+        prior.measure_frame(&mut odom, &aligned(0.0, 0.1, 400.0, rate), 0.1),
+        Prior::First
+    );
+    let p = prior.measure_frame(&mut odom, &aligned(0.1, 0.2, 400.0, rate), 0.2);
+    assert_eq!(p, Prior::Used(40));
+    // The motion model is untouched: the reference's prediction.
+    assert_eq!(*odom.last_delta(), before);
+    // The rotation is measured all the same: 2 rad/s over 0.1 s about z.
+    let (q, dt) = prior.measured().unwrap();
+    let err = (q.scaled_axis() - Vector3::new(0.0, 0.0, 0.2)).norm();
+    println!("measured rotation {:?}, {err:.1e} rad off", q.scaled_axis());
+    assert!(err < 1e-9 && (dt - 0.1).abs() < 1e-12);
+    // ICP turned by nothing: a used prior would learn a bias of 0.2 rad/s, a measured one none.
+    assert_eq!(prior.after_frame(&odom), None);
+    assert_eq!(prior.bias(), [0.0; 3]);
+    // And a frame the caller discards teaches nothing either.
+    prior.before_frame(&mut odom, &aligned(0.2, 0.3, 400.0, rate), 0.3);
+    assert!(prior.measured().is_some());
+    prior.discard();
+    assert_eq!(prior.after_frame(&odom), None);
+    assert_eq!(prior.bias(), [0.0; 3]);
+}

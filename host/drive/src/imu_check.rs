@@ -151,6 +151,9 @@ pub struct ImuCheck {
     agreeing: u32,
     /// Rejections so far (each begins when the gyroscope disagrees while in use).
     episodes: u32,
+    /// The first rejection (frame, source, disagreement and tolerance), until the next
+    /// measured frame names its cause.
+    first: Option<(usize, String, f64, f64)>,
     warning: Option<String>,
 }
 
@@ -178,25 +181,26 @@ impl ImuCheck {
             return (off, true);
         }
         let ok = off <= tolerance(&m.icp) && off.is_finite();
+        // The frame that disagreed was registered with the wrong rotation, which ICP follows
+        // part of the way: the cause is read from the next measured frame, registered
+        // without it.
+        if let Some((index, source, first_off, first_tol)) = self.first.take() {
+            self.warning = Some(format!(
+                "frame {index} ({source}): the gyroscope's rotation over the frame is \
+                 {first_off:.3} rad away from the one ICP registered (a correct gyroscope stays \
+                 within {first_tol:.3} rad): {}; the next frames are predicted and deskewed \
+                 without the gyroscope prior while it disagrees (frames.csv imu_prior = \
+                 rejected, summary.json imu_rejected_frames)",
+                cause(m).describe()
+            ));
+        }
         if !ok {
             self.agreeing = 0;
             if !self.rejecting {
                 self.rejecting = true;
                 self.episodes += 1;
                 if self.episodes == 1 {
-                    self.warning = Some(format!(
-                        "frame {} ({}): the gyroscope's rotation over the frame is {:.3} rad \
-                         away from the one ICP registered ({:.3} rad; a correct gyroscope \
-                         stays within {:.3}): {}; the next frames are predicted and deskewed \
-                         without the gyroscope prior while it disagrees (frames.csv imu_prior \
-                         = rejected, summary.json imu_rejected_frames)",
-                        meta.index,
-                        meta.source,
-                        off,
-                        m.icp.norm(),
-                        tolerance(&m.icp),
-                        cause(m).describe()
-                    ));
+                    self.first = Some((meta.index, meta.source.clone(), off, tolerance(&m.icp)));
                 }
             }
         } else if self.rejecting && m.icp.norm() >= TELLING_RAD {
