@@ -42,6 +42,7 @@ use crate::storage::Storage;
 use crate::threshold::Thresholds;
 use core::marker::PhantomData;
 use state::{Buffers, Motion, Sweep};
+use steps::Registration;
 use strategy::Strategy;
 
 /// KISS-ICP odometry over storage it owns or borrows (see [`crate::storage`]).
@@ -142,6 +143,44 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         stamps: Option<&[f64]>,
     ) -> Result<FrameReport<T>, FrameError> {
         self.room_for_scan(points.len())?;
+        let registered = self.predict_and_register(exec, points, stamps)?;
+        // Sec. III-C and III-D: the map update at T_t and the threshold's sample (Eq. (13)).
+        self.update(registered)
+    }
+
+    /// [`Self::register_frame_with`], the registration put to `accept` before the map takes
+    /// it. `accept` is given the motion registered over the frame (`T_{t-1}^-1 T_t`) and may
+    /// refuse it: a motion another sensor measured and set as the prediction
+    /// ([`Self::set_measured_delta`], [`Self::set_sweep_rotation`]) that the registration
+    /// contradicts, say. The scan is then registered again as without that prediction: from
+    /// `fallback` (the constant-velocity model's motion, as [`Self::set_last_delta`] sets
+    /// it), deskewed at its constant rate, and that registration is the frame's. Returns the
+    /// report and whether the first registration was accepted. A `fallback` that is not
+    /// finite leaves the first registration the frame's.
+    pub fn register_frame_checked<E: Executor>(
+        &mut self,
+        exec: &E,
+        points: &[[T; 3]],
+        stamps: Option<&[f64]>,
+        fallback: Pose<T>,
+        accept: impl FnOnce(&Pose<T>) -> bool,
+    ) -> Result<(FrameReport<T>, bool), FrameError> {
+        self.room_for_scan(points.len())?;
+        let mut registered = self.predict_and_register(exec, points, stamps)?;
+        let accepted = accept(&(self.motion.pose.inverse() * registered.pose()));
+        if !accepted && self.set_last_delta(fallback) {
+            registered = self.predict_and_register(exec, points, stamps)?;
+        }
+        Ok((self.update(registered)?, accepted))
+    }
+
+    /// Steps 1-4 of the paper for one scan, up to the pose it registers at.
+    fn predict_and_register<E: Executor>(
+        &mut self,
+        exec: &E,
+        points: &[[T; 3]],
+        stamps: Option<&[f64]>,
+    ) -> Result<Registration<T>, FrameError> {
         // Step 1 (Sec. III-A): predict with the constant-velocity model (Eq. (1)) and deskew
         // the sweep with it (Eq. (2)-(4)); step 2 (Sec. III-B) starts as the points arrive.
         let scan = self.deskew(points, stamps, self.motion.delta);
@@ -152,8 +191,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             let scan = self.deskew(points, stamps, motion);
             registered = self.register(exec, scan, Some(registered.pose()))?;
         }
-        // Sec. III-C and III-D: the map update at T_t and the threshold's sample (Eq. (13)).
-        self.update(registered)
+        Ok(registered)
     }
 
     /// Starts a scan that arrives in pieces (sensor packets), for callers that cannot hold a

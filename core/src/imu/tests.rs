@@ -2,6 +2,7 @@ use super::*;
 use crate::config::{Capacities, Config};
 use crate::geometry::Pose;
 use crate::local_map::Exact;
+use crate::registration::Sequential;
 use crate::testutil::{yard, Rng};
 use std::println;
 use std::vec;
@@ -366,4 +367,72 @@ fn a_measured_frame_keeps_the_reference_prediction_and_teaches_the_bias_nothing(
     prior.discard();
     assert_eq!(prior.after_frame(&odom), None);
     assert_eq!(prior.bias(), [0.0; 3]);
+}
+
+/// The yard seen from frame `k` of a drive of 0.3 m and 0.04 rad a frame.
+fn yard_scan(k: usize) -> Vec<[f64; 3]> {
+    let mut scene = vec![[0.0; 3]; 4000];
+    let n = yard(&mut scene);
+    let at = Pose::new(
+        Vector3::new(0.3 * k as f64, 0.05 * k as f64, 0.0),
+        Vector3::new(0.0, 0.0, 0.04 * k as f64),
+    );
+    scene[..n]
+        .iter()
+        .map(|p| {
+            let local = at.inverse() * crate::geometry::Point::from(*p);
+            [local.x, local.y, local.z]
+        })
+        .collect()
+}
+
+#[test]
+#[cfg_attr(miri, ignore = "an ICP run per frame")]
+fn a_refused_registration_is_the_fallbacks_and_an_accepted_one_the_predictions() {
+    let (mut a, mut b) = (odometry(), odometry());
+    for k in 0..3 {
+        let scan = yard_scan(k);
+        assert_eq!(a.register_frame(&scan, None), b.register_frame(&scan, None));
+    }
+    // A wrong measured motion: a quarter turn the wrong way.
+    let wrong = Pose::new(Vector3::zeros(), Vector3::new(0.0, 0.0, -1.5));
+    let scan = yard_scan(3);
+    // Refused: registered again from the fallback, as `b` with that motion set: the same bits.
+    let (fallback, before) = (*a.last_delta(), *a.last_pose());
+    assert!(a.set_measured_delta(wrong));
+    let mut seen = None;
+    let (refused, accepted) = a
+        .register_frame_checked(&Sequential, &scan, None, fallback, |m| {
+            seen = Some(*m);
+            false
+        })
+        .unwrap();
+    assert!(!accepted);
+    assert!(b.set_last_delta(fallback));
+    let want = b.register_frame(&scan, None).unwrap();
+    assert_eq!(refused, want);
+    assert_eq!((a.map().points(), a.sigma()), (b.map().points(), b.sigma()));
+    // `accept` saw the first registration's motion, which the wrong prediction led astray.
+    let seen = seen.unwrap();
+    let good = before.inverse() * want.pose;
+    println!(
+        "motion registered from the wrong prediction: {:.3} rad from the fallback's",
+        seen.rotation.angle_to(&good.rotation)
+    );
+    assert!(seen.rotation.angle_to(&good.rotation) > 0.01);
+    // Accepted: the frame is the prediction's, as `register_frame` gives it.
+    let (mut c, mut d) = (odometry(), odometry());
+    for k in 0..3 {
+        let scan = yard_scan(k);
+        c.register_frame(&scan, None).unwrap();
+        d.register_frame(&scan, None).unwrap();
+    }
+    let fallback = *c.last_delta();
+    assert!(c.set_measured_delta(wrong) && d.set_measured_delta(wrong));
+    let (kept, accepted) = c
+        .register_frame_checked(&Sequential, &scan, None, fallback, |_| true)
+        .unwrap();
+    assert!(accepted);
+    assert_eq!(kept, d.register_frame(&scan, None).unwrap());
+    assert_ne!(kept.pose, want.pose);
 }

@@ -335,7 +335,7 @@ fn frame_loop(
         }
         // So does a frame the gyroscope prior, asked for, could not predict.
         // And the first time the IMU consistency check rejects the gyroscope.
-        if let Some(w) = driver.imu_check_warning() {
+        if let Some(w) = driver.imu_check_warning(false) {
             warn(record, &bar, &w);
             if args.run.strict {
                 break End::Failed(anyhow!("{w} (--strict)"));
@@ -384,6 +384,10 @@ fn frame_loop(
             bar.set_message(format!("{hz:.1} Hz"));
         }
     };
+    // A rejection in the run's last frames names its cause from the frames it had.
+    if let Some(w) = driver.imu_check_warning(true) {
+        warn(record, &bar, &w);
+    }
     bar.finish_and_clear();
     end
 }

@@ -19,14 +19,14 @@
 
 use crate::engine::{self, Batch, Call, Engine};
 use crate::growth::{Growth, StateMemory};
-use crate::imu_check::{ImuCheck, Measured};
+use crate::imu_check::{self, ImuCheck, Measured};
 use crate::outcome::{FrameMeta, ImuUse, MapInUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
 use kiss_odom_core::{Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior};
 use kiss_odom_io::{Frame, Item};
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::time::Duration;
 
 /// Frames held in memory in one driver build's scalar (see [`Driver::preload`]).
@@ -68,6 +68,8 @@ pub struct Driver {
     growth: Growth,
     imu_check: ImuCheck,
     imu_rejected: u64,
+    /// The IMU's axes turned into the LiDAR's (`[imu] extrinsic`), for the check's rates.
+    lidar_from_imu: UnitQuaternion<f64>,
 }
 
 /// What a driver runs, fixed when it is made.
@@ -110,6 +112,10 @@ impl Driver {
             build,
             imu_check: ImuCheck::default(),
             imu_rejected: 0,
+            lidar_from_imu: {
+                let [.., roll, pitch, yaw] = settings.imu.extrinsic.map(f64::to_radians);
+                UnitQuaternion::from_euler_angles(roll, pitch, yaw)
+            },
         })
     }
 
@@ -152,9 +158,23 @@ impl Driver {
         end: Option<f64>,
         samples: &[CoreImu<f64>],
     ) -> Result<Outcome> {
-        let hand_over = !self.imu_check.rejecting();
+        // Rates beyond any gyroscope's range (a corrupt sample, deg/s on a fast turn) are not
+        // handed to the odometry: the check counts the frame as a disagreement.
+        let implausible = samples.iter().any(|s| !imu_check::plausible(&s.gyro));
+        let hand_over = !self.imu_check.rejecting() && !implausible;
+        let model = self.engine.last_delta();
         let prior = end.and_then(|end| self.engine.prior_before(samples, end, hand_over));
+        // A registration that contradicts the gyroscope's prior is redone from the
+        // constant-velocity model before the map takes it (the wrong prior leads ICP astray).
+        let used = matches!(prior, Some(Prior::Used(_)));
+        if let Some((gyro, _)) = self.engine.prior_measured() {
+            if used && hand_over {
+                let first = !self.imu_check.judging();
+                self.engine.check_next(gyro, &model, first);
+            }
+        }
         let mut outcome = self.register_points(meta, points, stamps)?;
+        let redone = self.engine.take_refused() || implausible;
         // The check, on a registered frame whose gyroscope rotation was measured.
         let measured = self
             .engine
@@ -167,14 +187,14 @@ impl Driver {
                 gyro: gyro.into(),
                 icp: self.engine.last_delta().rotation.scaled_axis(),
                 dt,
-                mean_rate: mean.norm(),
+                rate: self.lidar_from_imu * mean,
                 peak_rate: rates.map(|r| r.norm()).fold(0.0, f64::max),
             };
-            self.imu_check.judge(&outcome.meta, &m)
+            self.imu_check.judge(&outcome.meta, &m, redone)
         });
         // A frame that disagrees teaches the bias nothing.
         let residual = self.engine.prior_after(verdict.is_none_or(|(_, ok)| ok));
-        let rejected = !hand_over && matches!(prior, Some(Prior::Used(_)));
+        let rejected = used && (!hand_over || redone);
         self.imu_rejected += u64::from(rejected);
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {
             prior: prior.unwrap_or(Prior::NoSamples),
@@ -194,9 +214,10 @@ impl Driver {
     }
 
     /// The warning that the IMU consistency check rejected the gyroscope, the first time it
-    /// did.
-    pub fn imu_check_warning(&mut self) -> Option<String> {
-        self.imu_check.warning()
+    /// did, once the frames after it named the likely cause; at the `end` of a run, with what
+    /// those frames tell.
+    pub fn imu_check_warning(&mut self, end: bool) -> Option<String> {
+        self.imu_check.warning(end)
     }
 
     /// Registers a scan given as points (sensor frame, m) with optional per-point capture

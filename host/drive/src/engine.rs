@@ -160,6 +160,12 @@ pub(crate) trait Engine: Send + Sync {
     fn prior_after(&mut self, learn: bool) -> Option<f64>;
     /// The gyroscope prior's bias estimate, if it is on.
     fn imu_bias(&self) -> Option<[f64; 3]>;
+    /// Puts the next registration to the IMU consistency check before the map takes it: one
+    /// that disagrees with the gyroscope's rotation `gyro` (rad, LiDAR axes) is redone from
+    /// `fallback` (see `imu_check`).
+    fn check_next(&mut self, gyro: [f64; 3], fallback: &Isometry3<f64>, first: bool);
+    /// Whether the last registration was refused by the check and redone (and clears it).
+    fn take_refused(&mut self) -> bool;
 }
 
 /// The build `settings.runtime` asks for.
@@ -191,6 +197,19 @@ struct Core<T: Real, P: PointCodec<T>> {
     keep: usize,
     prior: Option<GyroPrior<T>>,
     imu: Vec<kiss_odom_core::ImuSample<T>>,
+    /// The check the next registration is put to, and whether the last one was refused.
+    check: Option<Check>,
+    refused: bool,
+}
+
+/// The IMU consistency check for one registration: the gyroscope's rotation over the frame
+/// and the motion to register from if the registration disagrees with it.
+#[derive(Clone, Copy, Debug)]
+struct Check {
+    gyro: nalgebra::Vector3<f64>,
+    fallback: Isometry3<f64>,
+    /// The first frame the gyroscope measured (see `imu_check::tolerance`).
+    first: bool,
 }
 
 impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
@@ -207,6 +226,8 @@ impl<T: HostScalar, P: PointCodec<T>> Core<T, P> {
             deskewed: Vec::new(),
             prior: settings.imu.core::<T>()?.map(GyroPrior::new),
             imu: Vec::new(),
+            check: None,
+            refused: false,
         })
     }
 }
@@ -264,9 +285,25 @@ fn register_growing<T: Real, P: PointCodec<T>>(
     pts: &[[T; 3]],
     stamps: Option<&[f64]>,
     growth: &mut Growth,
+    check: Option<Check>,
+    refused: &mut bool,
 ) -> Result<FrameReport<T>, FrameError> {
     loop {
-        match odom.register_frame_with(pool, pts, stamps) {
+        let registered = match check {
+            None => odom.register_frame_with(pool, pts, stamps),
+            Some(c) => {
+                let agrees = |m: &kiss_odom_core::Pose<T>| {
+                    crate::imu_check::agrees(&c.gyro, &widen(m).rotation.scaled_axis(), c.first)
+                };
+                let fallback = narrow_pose(&c.fallback);
+                odom.register_frame_checked(pool, pts, stamps, fallback, agrees)
+                    .map(|(report, accepted)| {
+                        *refused = !accepted;
+                        report
+                    })
+            }
+        };
+        match registered {
             Err(FrameError::Full) => {
                 let caps = *odom.capacities();
                 let next = growth.next(&caps, &odom.room_needed(), state_bytes_for::<T, P>);
@@ -312,9 +349,10 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         growth: &mut Growth,
     ) -> Call {
         narrow(points, &mut self.points);
-        let (odom, pts) = (&mut self.odom, &self.points);
+        let (odom, pts, refused) = (&mut self.odom, &self.points, &mut self.refused);
+        let check = self.check.take();
         let call = timed(
-            || register_growing(odom, pool, pts, stamps, growth),
+            || register_growing(odom, pool, pts, stamps, growth, check, refused),
             pts.len(),
         );
         trim_buffer(&mut self.points, self.keep);
@@ -330,9 +368,10 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         growth: &mut Growth,
     ) -> Option<Call> {
         let pts = T::frames(batch)?.get(k)?;
-        let odom = &mut self.odom;
+        let (odom, refused) = (&mut self.odom, &mut self.refused);
+        let check = self.check.take();
         Some(timed(
-            || register_growing(odom, pool, pts, stamps, growth),
+            || register_growing(odom, pool, pts, stamps, growth, check, refused),
             pts.len(),
         ))
     }
@@ -480,5 +519,15 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     }
     fn imu_bias(&self) -> Option<[f64; 3]> {
         self.prior.as_ref().map(|p| p.bias().map(|b| b.wide()))
+    }
+    fn check_next(&mut self, gyro: [f64; 3], fallback: &Isometry3<f64>, first: bool) {
+        self.check = Some(Check {
+            gyro: gyro.into(),
+            fallback: *fallback,
+            first,
+        });
+    }
+    fn take_refused(&mut self) -> bool {
+        core::mem::take(&mut self.refused)
     }
 }

@@ -1,13 +1,16 @@
-//! The IMU consistency check: after each frame the gyroscope prior predicted, the rotation the
-//! gyroscope measured over the frame is compared with the rotation ICP registered. ICP aligns
-//! the scan with the map whatever the prior said, so the registration measures how wrong the
-//! prior is. A correct gyroscope disagrees with ICP by its noise and bias over one frame (a
-//! few thousandths of a radian) plus ICP's rotation error (about a tenth of a degree); a
-//! gyroscope in deg/s, with a flipped axis, dead, corrupt or another recording's disagrees by a
-//! large part of the frame's rotation. On such a frame the check rejects the IMU: the next
-//! frames are predicted and deskewed as without the prior (the constant-velocity model) while
-//! the gyroscope's rotation, still measured, disagrees, and the first rejection warns once with
-//! the likely cause. The prior comes back after enough frames that turn and agree.
+//! The IMU consistency check: on each frame the gyroscope prior predicted, the rotation the
+//! gyroscope measured over the frame is compared with the rotation ICP registered, before the
+//! map takes the frame. ICP aligns the scan with the map whatever the prior said, so the
+//! registration measures how wrong the prior is. A correct gyroscope disagrees with ICP by its
+//! noise and bias over one frame (a few thousandths of a radian) plus ICP's rotation error
+//! (about a tenth of a degree); a gyroscope in deg/s, with a flipped axis, dead, corrupt or
+//! another recording's disagrees by a large part of the frame's rotation. Such a frame is
+//! registered again from the constant-velocity model, as without the prior
+//! (`Odometry::register_frame_checked`), so a wrong prior never reaches the map; a frame whose
+//! samples are beyond any gyroscope's range is not given the prior at all. Either rejects the
+//! IMU: the next frames are predicted and deskewed without it while the gyroscope's rotation,
+//! still measured, disagrees; the first rejection warns once, with the likely cause read from
+//! the frames after it. The prior comes back after enough frames that turn and agree.
 //!
 //! The driver runs it only with the prior on: a run without an IMU never reaches this module.
 
@@ -43,8 +46,9 @@ pub struct Measured {
     pub icp: Vector3<f64>,
     /// The frame's interval (s).
     pub dt: f64,
-    /// Length of the mean of the samples' rates as given (rad/s).
-    pub mean_rate: f64,
+    /// The mean of the samples' rates as given, in LiDAR axes (rad/s): unlike `gyro`, not
+    /// wrapped past half a turn when the rates are far too large (deg/s read as rad/s).
+    pub rate: Vector3<f64>,
     /// The largest sample rate as given (rad/s).
     pub peak_rate: f64,
 }
@@ -95,6 +99,13 @@ impl Cause {
     }
 }
 
+/// Whether a sample's rates (rad/s) are within what a gyroscope measures: finite and below
+/// [`FULL_SCALE`].
+pub fn plausible(gyro: &[f64; 3]) -> bool {
+    let rate = Vector3::from(*gyro).norm();
+    rate.is_finite() && rate <= FULL_SCALE
+}
+
 /// The angle (rad) between the gyroscope's rotation and ICP's over a frame.
 pub fn disagreement(gyro: &Vector3<f64>, icp: &Vector3<f64>) -> f64 {
     let g = UnitQuaternion::from_scaled_axis(*gyro);
@@ -102,41 +113,66 @@ pub fn disagreement(gyro: &Vector3<f64>, icp: &Vector3<f64>) -> f64 {
     g.angle_to(&r)
 }
 
-/// The largest disagreement (rad) a correct gyroscope gives on a frame ICP turned by `icp`.
-pub fn tolerance(icp: &Vector3<f64>) -> f64 {
-    FLOOR_RAD + SCALE * icp.norm()
+/// The largest disagreement (rad) a correct gyroscope gives on a frame ICP turned by `icp`;
+/// on the `first` frame measured, registered against a first scan that nothing deskewed, as
+/// much again as ICP's rotation (its error there is most of the sweep's turn).
+pub fn tolerance(icp: &Vector3<f64>, first: bool) -> f64 {
+    FLOOR_RAD + if first { 1.0 } else { SCALE } * icp.norm()
 }
 
-/// Whether the gyroscope's rotation agrees with ICP's.
-pub fn agrees(gyro: &Vector3<f64>, icp: &Vector3<f64>) -> bool {
-    disagreement(gyro, icp) <= tolerance(icp)
+/// Whether the gyroscope's rotation agrees with ICP's (on the `first` frame measured or a
+/// later one).
+pub fn agrees(gyro: &Vector3<f64>, icp: &Vector3<f64>, first: bool) -> bool {
+    disagreement(gyro, icp) <= tolerance(icp, first)
 }
 
-/// The likely cause of a disagreement.
-pub fn cause(m: &Measured) -> Cause {
-    let icp_rate = m.icp.norm() / m.dt;
-    let ratio = m.mean_rate / icp_rate;
-    if icp_rate > 0.0 && (40.0..80.0).contains(&ratio) {
-        return Cause::Degrees;
-    }
-    if m.peak_rate > FULL_SCALE {
+/// Frames registered without the gyroscope after its first rejection from which the warning
+/// names the cause: ICP then follows the LiDAR alone, while on the frame that disagreed it
+/// followed the wrong prior part of the way (and the frame after, predicted from that one).
+pub const CAUSE_FRAMES: usize = 5;
+
+/// The likely cause of a disagreement, read from frames registered without the gyroscope
+/// (its rotation over each taken from the mean rate, which does not wrap past half a turn):
+/// a sample beyond full scale that stands out from its frame's mean; no rotation while ICP
+/// turns; one or two axes whose rotations run against ICP's over the frames (a correlation
+/// below -0.3 on an axis that turned); else rotations along ICP's (a correlation above 0.3)
+/// but 30-120 times as large (deg/s: 57.3); else unknown. ICP's rotations on these frames lag and err (their prediction came
+/// from a frame that followed the wrong prior), but keep their signs and rough size: hence
+/// sums over the frames, not a frame's agreement.
+pub fn cause(frames: &[Measured]) -> Cause {
+    if frames
+        .iter()
+        .any(|m| m.peak_rate > FULL_SCALE && m.peak_rate > 4.0 * m.rate.norm())
+    {
         return Cause::Spike;
     }
-    if m.mean_rate * m.dt < 0.2 * m.icp.norm() {
+    let sum = |f: &dyn Fn(&Measured) -> f64| frames.iter().map(f).sum::<f64>();
+    let turned = sum(&|m| m.icp.norm_squared());
+    if turned < TELLING_RAD * TELLING_RAD {
+        return Cause::Unknown;
+    }
+    let gyro = sum(&|m| (m.rate * m.dt).norm_squared());
+    if gyro < 0.04 * turned {
         return Cause::Dead;
     }
-    let flipped = |axes: &[usize]| {
-        let mut g = m.gyro;
-        for &a in axes {
-            g[a] = -g[a];
-        }
-        agrees(&g, &m.icp)
-    };
-    if let Some(a) = (0..3).find(|&a| flipped(&[a])) {
-        return Cause::FlippedAxis(a);
+    let against: Vec<usize> = (0..3)
+        .filter(|&i| {
+            let icp = sum(&|m| m.icp[i] * m.icp[i]);
+            let g = sum(&|m| (m.rate[i] * m.dt).powi(2));
+            let both = sum(&|m| m.rate[i] * m.dt * m.icp[i]);
+            icp >= 0.05 * turned && both < -0.3 * (icp * g).sqrt()
+        })
+        .collect();
+    match against[..] {
+        [a] => return Cause::FlippedAxis(a),
+        [a, b] => return Cause::Rotated180(3 - a - b),
+        _ => {}
     }
-    if let Some(a) = (0..3).find(|&a| flipped(&[(a + 1) % 3, (a + 2) % 3])) {
-        return Cause::Rotated180(a);
+    // The least-squares scale from the gyroscope's rotations to ICP's, and their correlation.
+    let both = sum(&|m| (m.rate * m.dt).dot(&m.icp));
+    let (scale, correlation) = (both / gyro, both / (gyro * turned).sqrt());
+    if against.is_empty() && correlation > 0.3 && (30.0..120.0).contains(&scale.recip()) {
+        return Cause::Degrees;
     }
     Cause::Unknown
 }
@@ -151,21 +187,46 @@ pub struct ImuCheck {
     agreeing: u32,
     /// Rejections so far (each begins when the gyroscope disagrees while in use).
     episodes: u32,
-    /// The first rejection (frame, source, disagreement and tolerance), until the next
-    /// measured frame names its cause.
+    /// The first rejection (frame, source, disagreement and tolerance), until the frames
+    /// after it name its cause.
     first: Option<(usize, String, f64, f64)>,
+    /// The frames measured since the first rejection, up to [`CAUSE_FRAMES`].
+    after: Vec<Measured>,
     warning: Option<String>,
 }
 
 impl ImuCheck {
+    /// Whether frames are judged yet (the first measured one is not).
+    pub fn judging(&self) -> bool {
+        self.started
+    }
+
     /// Whether the next frame is to be predicted without the prior.
     pub fn rejecting(&self) -> bool {
         self.rejecting
     }
 
-    /// The warning of the first rejection, once.
-    pub fn warning(&mut self) -> Option<String> {
+    /// The warning of the first rejection, once, when the frames after it named the cause;
+    /// at the end of a run (`end`), with what those frames tell.
+    pub fn warning(&mut self, end: bool) -> Option<String> {
+        if end && self.warning.is_none() {
+            self.name_cause();
+        }
         self.warning.take()
+    }
+
+    fn name_cause(&mut self) {
+        let Some((index, source, off, tol)) = self.first.take() else {
+            return;
+        };
+        self.warning = Some(format!(
+            "frame {index} ({source}): the gyroscope's rotation over the frame is {off:.3} rad \
+             away from the one ICP registered (a correct gyroscope stays within {tol:.3} rad): \
+             {}; the next frames are predicted and deskewed without the gyroscope prior while \
+             it disagrees (frames.csv imu_prior = rejected, summary.json imu_rejected_frames)",
+            cause(&self.after).describe()
+        ));
+        self.after = Vec::new();
     }
 
     /// Judges a registered frame whose gyroscope rotation was measured (whether or not it
@@ -174,25 +235,19 @@ impl ImuCheck {
     /// registered against the first scan alone, which no motion deskewed, and a turning
     /// sensor's first scan is smeared by its turn: ICP's rotation then is off by a large
     /// part of the sweep's own (0.087 rad of 0.1 with a correct gyroscope on a generated
-    /// drone flight).
-    pub fn judge(&mut self, meta: &FrameMeta, m: &Measured) -> (f64, bool) {
+    /// drone flight). A frame whose registration the check `refused` before the map took it
+    /// (and redid without the prior) disagrees, whatever the redone registration reads.
+    pub fn judge(&mut self, meta: &FrameMeta, m: &Measured, refused: bool) -> (f64, bool) {
         let off = disagreement(&m.gyro, &m.icp);
-        if !core::mem::replace(&mut self.started, true) {
-            return (off, true);
-        }
-        let ok = off <= tolerance(&m.icp) && off.is_finite();
-        // The frame that disagreed was registered with the wrong rotation, which ICP follows
-        // part of the way: the cause is read from the next measured frame, registered
-        // without it.
-        if let Some((index, source, first_off, first_tol)) = self.first.take() {
-            self.warning = Some(format!(
-                "frame {index} ({source}): the gyroscope's rotation over the frame is \
-                 {first_off:.3} rad away from the one ICP registered (a correct gyroscope stays \
-                 within {first_tol:.3} rad): {}; the next frames are predicted and deskewed \
-                 without the gyroscope prior while it disagrees (frames.csv imu_prior = \
-                 rejected, summary.json imu_rejected_frames)",
-                cause(m).describe()
-            ));
+        let first = !core::mem::replace(&mut self.started, true);
+        let ok = !refused && off <= tolerance(&m.icp, first) && off.is_finite();
+        // The cause is read from the frames after the first rejection, registered without
+        // the gyroscope.
+        if self.first.is_some() {
+            self.after.push(*m);
+            if self.after.len() >= CAUSE_FRAMES {
+                self.name_cause();
+            }
         }
         if !ok {
             self.agreeing = 0;
@@ -200,7 +255,12 @@ impl ImuCheck {
                 self.rejecting = true;
                 self.episodes += 1;
                 if self.episodes == 1 {
-                    self.first = Some((meta.index, meta.source.clone(), off, tolerance(&m.icp)));
+                    self.first = Some((
+                        meta.index,
+                        meta.source.clone(),
+                        off,
+                        tolerance(&m.icp, first),
+                    ));
                 }
             }
         } else if self.rejecting && m.icp.norm() >= TELLING_RAD {
