@@ -154,20 +154,37 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// ([`Self::set_measured_delta`], [`Self::set_sweep_rotation`]) that the registration
     /// contradicts, say. The scan is then registered again as without that prediction: from
     /// `fallback` (the constant-velocity model's motion, as [`Self::set_last_delta`] sets
-    /// it), deskewed at its constant rate, and that registration is the frame's. Returns the
-    /// report and whether the first registration was accepted. A `fallback` that is not
-    /// finite leaves the first registration the frame's.
+    /// it), deskewed at its constant rate, and that registration is the frame's. With
+    /// `against_fallback`, the scan is first registered from `fallback` too and `accept` is
+    /// also given that motion, which the prediction did not lead (a registration may follow
+    /// a wrong prediction all the way); the prediction's registration is the same bits
+    /// either way. Returns the report and whether the prediction's registration was
+    /// accepted. A `fallback` that is not finite leaves the prediction's registration the
+    /// frame's.
     pub fn register_frame_checked<E: Executor>(
         &mut self,
         exec: &E,
         points: &[[T; 3]],
         stamps: Option<&[f64]>,
         fallback: Pose<T>,
-        accept: impl FnOnce(&Pose<T>) -> bool,
+        against_fallback: bool,
+        accept: impl FnOnce(&Pose<T>, Option<&Pose<T>>) -> bool,
     ) -> Result<(FrameReport<T>, bool), FrameError> {
         self.room_for_scan(points.len())?;
+        let from = self.motion.pose;
+        let mut judge = None;
+        if against_fallback {
+            let prediction = (self.motion.delta, self.sweep, self.threshold);
+            let registered = if self.set_last_delta(fallback) {
+                Some(self.predict_and_register(exec, points, stamps))
+            } else {
+                None
+            };
+            (self.motion.delta, self.sweep, self.threshold) = prediction;
+            judge = registered.transpose()?.map(|r| from.inverse() * r.pose());
+        }
         let mut registered = self.predict_and_register(exec, points, stamps)?;
-        let accepted = accept(&(self.motion.pose.inverse() * registered.pose()));
+        let accepted = accept(&(from.inverse() * registered.pose()), judge.as_ref());
         if !accepted && self.set_last_delta(fallback) {
             registered = self.predict_and_register(exec, points, stamps)?;
         }

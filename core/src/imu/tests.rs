@@ -402,7 +402,8 @@ fn a_refused_registration_is_the_fallbacks_and_an_accepted_one_the_predictions()
     assert!(a.set_measured_delta(wrong));
     let mut seen = None;
     let (refused, accepted) = a
-        .register_frame_checked(&Sequential, &scan, None, fallback, |m| {
+        .register_frame_checked(&Sequential, &scan, None, fallback, false, |m, judge| {
+            assert!(judge.is_none());
             seen = Some(*m);
             false
         })
@@ -429,10 +430,20 @@ fn a_refused_registration_is_the_fallbacks_and_an_accepted_one_the_predictions()
     }
     let fallback = *c.last_delta();
     assert!(c.set_measured_delta(wrong) && d.set_measured_delta(wrong));
+    // Against the fallback's registration: `accept` gets it (the motion `b` registered), and
+    // the prediction's registration, accepted, is the same bits as without it.
+    let mut judged = None;
     let (kept, accepted) = c
-        .register_frame_checked(&Sequential, &scan, None, fallback, |_| true)
+        .register_frame_checked(&Sequential, &scan, None, fallback, true, |_, judge| {
+            judged = judge.copied();
+            true
+        })
         .unwrap();
     assert!(accepted);
     assert_eq!(kept, d.register_frame(&scan, None).unwrap());
     assert_ne!(kept.pose, want.pose);
+    let judged = judged.unwrap();
+    assert!((judged.translation.vector - good.translation.vector).norm() < 1e-12);
+    assert!(judged.rotation.angle_to(&good.rotation) < 1e-12);
+    assert_eq!((c.map().points(), c.sigma()), (d.map().points(), d.sigma()));
 }

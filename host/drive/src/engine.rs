@@ -292,11 +292,15 @@ fn register_growing<T: Real, P: PointCodec<T>>(
         let registered = match check {
             None => odom.register_frame_with(pool, pts, stamps),
             Some(c) => {
-                let agrees = |m: &kiss_odom_core::Pose<T>| {
-                    crate::imu_check::agrees(&c.gyro, &widen(m).rotation.scaled_axis(), c.first)
-                };
+                // The first measured frame is judged by the registration the prior did not
+                // lead: on a map of one undeskewed scan, ICP follows any prior.
+                let agrees =
+                    |m: &kiss_odom_core::Pose<T>, judge: Option<&kiss_odom_core::Pose<T>>| {
+                        let icp = widen(judge.unwrap_or(m)).rotation.scaled_axis();
+                        crate::imu_check::agrees(&c.gyro, &icp, c.first)
+                    };
                 let fallback = narrow_pose(&c.fallback);
-                odom.register_frame_checked(pool, pts, stamps, fallback, agrees)
+                odom.register_frame_checked(pool, pts, stamps, fallback, c.first, agrees)
                     .map(|(report, accepted)| {
                         *refused = !accepted;
                         report

@@ -22,6 +22,10 @@ use nalgebra::{UnitQuaternion, Vector3};
 /// turn-on bias (before the prior learns it) to 1e-3 rad, and ICP's rotation error per frame
 /// is a few thousandths; 0.02 rad (1.1 degrees) is several times their sum.
 pub const FLOOR_RAD: f64 = 0.02;
+/// The first measured frame's floor (rad): a sweep's turn at 1 rad/s and 10 Hz, which ICP
+/// on a map of one undeskewed scan may miss entirely (a generated drone's right gyroscope
+/// turned 0.03 rad over its first frame while that registration turned about none).
+pub const FIRST_FLOOR_RAD: f64 = 0.1;
 /// The part of the frame's rotation a correct gyroscope may add to the disagreement: scale
 /// errors of a few percent and a clock offset of a few milliseconds on a fast turn.
 pub const SCALE: f64 = 0.2;
@@ -114,10 +118,15 @@ pub fn disagreement(gyro: &Vector3<f64>, icp: &Vector3<f64>) -> f64 {
 }
 
 /// The largest disagreement (rad) a correct gyroscope gives on a frame ICP turned by `icp`;
-/// on the `first` frame measured, registered against a first scan that nothing deskewed, as
-/// much again as ICP's rotation (its error there is most of the sweep's turn).
+/// on the `first` frame measured, registered against a first scan that nothing deskewed (and
+/// judged by its registration from the constant-velocity model), [`FIRST_FLOOR_RAD`] and as
+/// much again as ICP's rotation: ICP there misses most of the sweep's turn.
 pub fn tolerance(icp: &Vector3<f64>, first: bool) -> f64 {
-    FLOOR_RAD + if first { 1.0 } else { SCALE } * icp.norm()
+    if first {
+        FIRST_FLOOR_RAD + icp.norm()
+    } else {
+        FLOOR_RAD + SCALE * icp.norm()
+    }
 }
 
 /// Whether the gyroscope's rotation agrees with ICP's (on the `first` frame measured or a

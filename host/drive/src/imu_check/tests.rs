@@ -39,14 +39,14 @@ fn the_first_measured_frame_is_judged_with_room_for_its_undeskewed_map() {
     let dead = frame(Vector3::zeros(), turn(), 0.0);
     assert!(check.judge(&meta(), &dead, false).1 && !check.rejecting());
     assert!(!check.judge(&meta(), &dead, false).1 && check.rejecting());
-    // Two and a half times ICP's rotation is beyond it, and so is a frame the check refused.
+    // Four times ICP's rotation is beyond it, and so is a frame the check refused.
     let mut check = ImuCheck::default();
-    let twice = frame(turn() * 2.5, turn(), 0.0);
+    let twice = frame(turn() * 4.0, turn(), 0.0);
     assert!(!check.judge(&meta(), &twice, false).1 && check.rejecting());
     let mut check = ImuCheck::default();
     assert!(!check.judge(&meta(), &frame(turn(), turn(), 0.0), true).1);
     let icp = turn();
-    assert_eq!(tolerance(&icp, true), FLOOR_RAD + icp.norm());
+    assert_eq!(tolerance(&icp, true), FIRST_FLOOR_RAD + icp.norm());
     assert_eq!(tolerance(&icp, false), FLOOR_RAD + SCALE * icp.norm());
 }
 
