@@ -112,10 +112,10 @@ impl Driver {
             build,
             imu_check: ImuCheck::default(),
             imu_rejected: 0,
-            lidar_from_imu: {
-                let [.., roll, pitch, yaw] = settings.imu.extrinsic.map(f64::to_radians);
-                UnitQuaternion::from_euler_angles(roll, pitch, yaw)
-            },
+            lidar_from_imu: settings
+                .imu
+                .core::<f64>()?
+                .map_or_else(UnitQuaternion::identity, |c| c.lidar_from_imu),
         })
     }
 
