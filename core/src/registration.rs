@@ -100,6 +100,23 @@ pub struct Alignment<T: Real> {
     pub budget_spent: bool,
 }
 
+impl<T: Real> Alignment<T> {
+    /// No registration: `pose` as it was given, no iteration run.
+    pub fn at(pose: Pose<T>) -> Self {
+        Alignment {
+            pose,
+            iterations: 0,
+            correspondences: 0,
+            plane_correspondences: 0,
+            converged: true,
+            singular: false,
+            rms: T::zero(),
+            work: 0,
+            budget_spent: false,
+        }
+    }
+}
+
 /// The system ICP solves from the summed chunk systems: the point-to-point one as it is when
 /// there are no planar terms (the reference), else `(1 - a) point + a plane`, `a` the share of
 /// planar correspondences (GenZ-ICP's weight, see `planes`).
@@ -385,17 +402,7 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
     kernel: T,
     params: &IcpParams<T>,
 ) -> Alignment<T> {
-    let mut out = Alignment {
-        pose: *initial_guess,
-        iterations: 0,
-        correspondences: 0,
-        plane_correspondences: 0,
-        converged: true,
-        singular: false,
-        rms: T::zero(),
-        work: 0,
-        budget_spent: false,
-    };
+    let mut out = Alignment::at(*initial_guess);
     if map.is_empty() {
         return out;
     }

@@ -42,11 +42,14 @@ pub enum Flag {
     /// its radius below `r_max` (see [`FrameReport::map_radius`] and
     /// [`FrameReport::map_filled`]).
     Evicted = 1 << 11,
+    /// Robust mode's registration cloud lay on one plane, which measures nothing along it: the
+    /// scan was not registered, its pose is the constant-velocity prediction.
+    OnePlane = 1 << 12,
 }
 
 impl Flag {
     /// Every flag, in bit order.
-    pub const ALL: [Flag; 11] = [
+    pub const ALL: [Flag; 12] = [
         Flag::TimestampsIgnored,
         Flag::IterationCap,
         Flag::NoCorrespondences,
@@ -58,6 +61,7 @@ impl Flag {
         Flag::Budget,
         Flag::Planes,
         Flag::Evicted,
+        Flag::OnePlane,
     ];
 
     /// The flag's name in reports and `frames.csv` (`snake_case`).
@@ -74,6 +78,7 @@ impl Flag {
             Flag::Budget => "budget",
             Flag::Planes => "planes",
             Flag::Evicted => "evicted",
+            Flag::OnePlane => "one_plane",
         }
     }
 

@@ -646,3 +646,61 @@ fn only_the_first_registration_is_run_twice_and_its_report_counts_both() {
     let exact = run(every[1].source_points as usize);
     assert_eq!((exact[1].iterations, exact[1].pose), (1, every[1].pose));
 }
+
+/// A scan of flat ground and nothing else, the street's, 1.8 m below the sensor, out to 40 m.
+fn ground_only() -> Vec<[f64; 3]> {
+    let mut rng = Rng(5);
+    (0..20_000)
+        .map(|_| {
+            let (r, a) = (
+                3.0 + 37.0 * rng.uniform(),
+                std::f64::consts::TAU * rng.uniform(),
+            );
+            [
+                r * a.cos(),
+                r * a.sin(),
+                -1.8 + 0.02 * (rng.uniform() - 0.5),
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn robust_mode_holds_a_scan_of_one_plane_to_the_prediction_and_flags_it() {
+    let mut scans = scans()[..6].to_vec();
+    scans[4] = ground_only();
+    let (reports, _) = accurate_on(&scans, |c| c);
+    let (r2, r3, r4) = (reports[2].pose, reports[3].pose, reports[4].pose);
+    let prediction = r3 * (r2.inverse() * r3);
+    let held = gap(&r4, &prediction);
+    println!(
+        "the ground-only frame: {held:.1e} m from the constant-velocity prediction (bound \
+         1e-9 m), {:.3} m from the truth",
+        error_at(&r4, 4)
+    );
+    assert!(held < 1e-9, "{held}");
+    let s = reports[4].status;
+    assert!(
+        s.contains(Flag::OnePlane) && s.contains(Flag::Degenerate),
+        "{s:?}"
+    );
+    assert!(!s.contains(Flag::NoCorrespondences), "{s:?}");
+    assert_eq!(reports[4].iterations, 0);
+    for (i, r) in reports.iter().enumerate().filter(|(i, _)| *i != 4) {
+        assert!(
+            !r.status.contains(Flag::OnePlane),
+            "frame {i}: {:?}",
+            r.status
+        );
+    }
+    // The street after it is registered again, from the held pose.
+    assert!(error_at(&reports[5].pose, 5) < 0.05);
+    // Reference mode registers every scan, as the reference does.
+    let mut words = vec![0u64; caps().arena_words::<f64, Exact>()];
+    let mut odom =
+        Odometry::<f64, Exact, _>::new(Config::new(100.0), caps(), &mut words[..]).unwrap();
+    for s in &scans {
+        let r = odom.register_frame(s, None).unwrap();
+        assert!(!r.status.contains(Flag::OnePlane));
+    }
+}

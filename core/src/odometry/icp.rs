@@ -2,11 +2,12 @@
 //! registration cloud against the local map from the prediction.
 //!
 //! - Reference mode ([`Degeneracy::Reference`]): the reference's point-to-point ICP, bit for bit.
-//! - Robust mode ([`Degeneracy::Robust`]): the reference's registration; where its observability
-//!   is below `plane_gate` (or always, with a gate of 1 or more) a registration from the
-//!   prediction with point-to-plane terms where the map is planar, and the motion prior
-//!   (with a `prior_gate` below 1, only where the scene's measurement at the prediction,
-//!   `weakness`, finds a translation nearly free).
+//! - Robust mode ([`Degeneracy::Robust`]): a registration cloud of one plane held to the
+//!   prediction (it measures nothing along the plane); else the reference's registration;
+//!   where its observability is below `plane_gate` (or always, with a gate of 1 or more) a
+//!   registration from the prediction with point-to-plane terms where the map is planar, and
+//!   the motion prior (with a `prior_gate` below 1, only where the scene's measurement at the
+//!   prediction, `weakness`, finds a translation nearly free).
 //!
 //! What the paper leaves out lives here too: the convergence floor of a finite scalar and the
 //! fallback for a non-finite ICP result.
@@ -19,7 +20,7 @@ use crate::registration::{
     align_points_to_map, moved_points, Alignment, Executor, IcpParams, MotionPrior,
 };
 use crate::scalar::Real;
-use crate::weakness::{min_points, weakness, Weakness};
+use crate::weakness::{min_points, one_plane, weakness, Weakness};
 
 /// What step 4 works with, besides the prediction, the map and ICP's work chunks.
 pub(super) struct Step<'a, T: Real, E: Executor> {
@@ -57,6 +58,9 @@ pub(super) struct Registered<T: Real> {
     pub(super) planes: bool,
     /// The scene's weakness at the prediction, where the motion prior's gate measured it.
     pub(super) weak: Weakness<T>,
+    /// Held to the prediction, unregistered: robust mode's registration cloud was one plane
+    /// (see `weakness::one_plane`).
+    pub(super) held: bool,
 }
 
 impl<'a, T: Real, E: Executor> Step<'a, T, E> {
@@ -75,6 +79,9 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
         let cfg = self.cfg;
         let first_frame = map.is_empty();
         let robust = cfg.degeneracy == Degeneracy::Robust;
+        if robust && !first_frame && one_plane(self.source, cfg.voxel_size) {
+            return held(at);
+        }
         // Where robust mode's motion prior is gated on the scene, the scene is measured once
         // there is a prediction: the second frame's is standing still, whatever the sensor
         // does.
@@ -159,7 +166,23 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
             observability,
             planes,
             weak: *weak,
+            held: false,
         }
+    }
+}
+
+/// A frame held to its prediction: nothing registered, nothing measured.
+fn held<T: Real>(at: &Predicted<T>) -> Registered<T> {
+    Registered {
+        sigma: at.sigma,
+        first_frame: false,
+        icp: Alignment::at(at.pose),
+        pose: at.pose,
+        finite: true,
+        observability: None,
+        planes: false,
+        weak: Weakness::NONE,
+        held: true,
     }
 }
 

@@ -329,7 +329,7 @@ fn status<T: Real>(
     status.set(Flag::Budget, f.icp.budget_spent);
     status.set(
         Flag::NoCorrespondences,
-        !f.first_frame && f.icp.correspondences == 0,
+        !f.first_frame && !f.held && f.icp.correspondences == 0,
     );
     status.set(
         Flag::Singular,
@@ -337,6 +337,7 @@ fn status<T: Real>(
     );
     status.set(Flag::Degenerate, degenerate(cfg, f));
     status.set(Flag::Planes, f.planes);
+    status.set(Flag::OnePlane, f.held);
     status.set(Flag::InvalidPoints, dropped.non_finite > 0);
     status.set(Flag::ScanTruncated, dropped.truncated > 0);
     status.set(Flag::Capacity, dropped.capacity());

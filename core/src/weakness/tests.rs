@@ -141,3 +141,45 @@ fn min_points_needs_more_than_one_sweep() {
     assert_eq!(min_points(0.5f32), 5);
     assert_eq!(min_points(0.0f64), usize::MAX);
 }
+
+/// `n` points of a tilted plane (rough by 2 cm) out to 40 m, then `off` of them lifted 2 m off
+/// it (a wall's worth of structure).
+fn tilted_plane(n: usize, off: usize) -> std::vec::Vec<[f64; 3]> {
+    let mut rng = crate::testutil::Rng(7);
+    let normal = Vector3::new(0.1, -0.2, 1.0).normalize();
+    let (u, w) = (normal.cross(&Vector3::x()).normalize(), normal);
+    let v = w.cross(&u);
+    (0..n)
+        .map(|i| {
+            let (a, b) = (80.0 * rng.next() - 40.0, 80.0 * rng.next() - 40.0);
+            let lift = if i < off {
+                2.0
+            } else {
+                0.04 * rng.next() - 0.02
+            };
+            let p = u * a + v * b + w * (lift - 1.7);
+            [p.x, p.y, p.z]
+        })
+        .collect()
+}
+
+#[test]
+fn a_cloud_is_one_plane_until_more_than_one_point_in_a_thousand_stands_off_it() {
+    assert!(one_plane(&tilted_plane(3000, 0), 0.5));
+    assert!(one_plane(&tilted_plane(3000, 3), 0.5), "0.1 % off");
+    assert!(
+        !one_plane(&tilted_plane(3000, 4), 0.5),
+        "just over 0.1 % off"
+    );
+    // An open field's sparsest scans: about 1 % on poles and trees.
+    assert!(!one_plane(&tilted_plane(3000, 27), 0.5));
+    // The plane's roughness counts against a voxel finer than it.
+    assert!(!one_plane(&tilted_plane(3000, 0), 0.01));
+    // Too few points to say.
+    assert!(!one_plane(&tilted_plane(2, 0), 0.5));
+    let f32_plane: std::vec::Vec<[f32; 3]> = tilted_plane(3000, 0)
+        .iter()
+        .map(|p| p.map(|x| x as f32))
+        .collect();
+    assert!(one_plane(&f32_plane, 0.5f32));
+}

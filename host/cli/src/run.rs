@@ -321,6 +321,10 @@ fn frame_loop(
         if let Some(w) = driver.sparse_map_warning(&outcome) {
             warn(record, &bar, &w);
         }
+        // So does the first scan of one plane, held to the prediction (robust mode).
+        if let Some(w) = driver.one_plane_warning(&outcome) {
+            warn(record, &bar, &w);
+        }
         // Growth stopped by the memory limit warns once, before what the fixed rule then does.
         if let Some(w) = driver.growth_warning() {
             warn(record, &bar, &w);

@@ -24,7 +24,7 @@ use crate::outcome::{FrameMeta, ImuUse, MapInUse, Outcome, Step};
 use crate::pool::Pool;
 use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
-use kiss_odom_core::{Capacities, FrameError, HighWater, ImuSample as CoreImu, Prior};
+use kiss_odom_core::{Capacities, Flag, FrameError, HighWater, ImuSample as CoreImu, Prior};
 use kiss_odom_io::{Frame, Item};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::time::Duration;
@@ -68,6 +68,8 @@ pub struct Driver {
     growth: Growth,
     imu_check: ImuCheck,
     imu_rejected: u64,
+    /// Frames held to the prediction as scans of one plane (`Flag::OnePlane`).
+    one_plane: u64,
     /// The IMU's axes turned into the LiDAR's (`[imu] extrinsic`), for the check's rates.
     lidar_from_imu: UnitQuaternion<f64>,
 }
@@ -112,6 +114,7 @@ impl Driver {
             build,
             imu_check: ImuCheck::default(),
             imu_rejected: 0,
+            one_plane: 0,
             lidar_from_imu: settings
                 .imu
                 .core::<f64>()?
@@ -379,6 +382,21 @@ impl Driver {
     /// the settings' (`[mapping] sparse_scan_points`).
     pub fn map_in_use(&self) -> MapInUse {
         self.engine.map_in_use()
+    }
+
+    /// The warning that robust mode held `outcome`'s scan to the prediction because it was
+    /// one plane (`Flag::OnePlane`): on the first such frame of the run.
+    pub fn one_plane_warning(&mut self, outcome: &Outcome) -> Option<String> {
+        let held = outcome.status()?.contains(Flag::OnePlane);
+        self.one_plane += u64::from(held);
+        (held && self.one_plane == 1).then(|| {
+            format!(
+                "{}: the registration points lie on one plane, which measures nothing along \
+                 it: the scan is held to the constant-velocity prediction, not registered \
+                 (frames.csv one_plane counts such frames, summary.json degraded_frames)",
+                outcome.meta.source
+            )
+        })
     }
 
     /// The warning that the first registered frame, `outcome`, gave the run the sparse-scan

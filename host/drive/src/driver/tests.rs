@@ -2,6 +2,7 @@
 //! so the tests stay quick): the same poses bit for bit, whichever way the frames come.
 
 use super::*;
+use crate::settings::PresetName;
 use crate::widen::widen;
 use kiss_odom_core::{Config, Exact, Flag, FrameReport, Odometry};
 use kiss_odom_io::pose::pose_difference;
@@ -200,3 +201,38 @@ fn a_driver_can_move_to_another_thread() {
 }
 
 mod growth;
+
+#[test]
+fn a_scan_of_one_plane_under_the_accurate_preset_is_held_and_warned_once() {
+    let mut frames = scans(5);
+    // The third and fourth scans: flat ground 1.73 m below the sensor (KITTI's mount), nothing
+    // else.
+    for k in [2, 3] {
+        let ground: Vec<[f64; 3]> = (0..8000)
+            .map(|i| {
+                let (r, a) = (3.0 + (i % 80) as f64 * 0.45, i as f64 * 0.0123);
+                [r * a.cos(), r * a.sin(), -1.73]
+            })
+            .collect();
+        frames[k].stamps = None;
+        frames[k].points = ground;
+    }
+    let mut s = Settings::preset(PresetName::Accurate);
+    s.runtime.threads = 1;
+    let mut driver = Driver::new(&s).unwrap();
+    let mut warnings = Vec::new();
+    for f in &frames {
+        let o = driver.register(f).unwrap();
+        let held = o.status().unwrap().contains(Flag::OnePlane);
+        assert_eq!(held, f.index == 2 || f.index == 3, "frame {}", f.index);
+        warnings.extend(driver.one_plane_warning(&o));
+    }
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("000002.bin") && warnings[0].contains("one plane"));
+    // Reference mode registers it and says nothing.
+    let mut driver = Driver::new(&settings(Scalar::F64, Storage::Exact)).unwrap();
+    for f in &frames {
+        let o = driver.register(f).unwrap();
+        assert!(driver.one_plane_warning(&o).is_none());
+    }
+}
