@@ -8,7 +8,7 @@ Used by bench/imu_check.sh; standard library only.
 VARIANT: right (the file as it is), degs (gyroscope in deg/s), flipx / flipz (that axis's
 sign flipped), dead (gyroscope all zeros), spike (one sample of 1e6 rad/s at 0.5 s), other
 (OTHER's imu.csv: another flight's), dup (each sample followed by another at the same time
-with OTHER's rates).
+with OTHER's rates), stopT (the right samples before T s, then none).
 """
 import math
 import os
@@ -50,6 +50,8 @@ def main():
     elif variant == "dup":
         o = rows(os.path.join(other, "imu.csv"))
         r = [row for a, b in zip(r, o) for row in (a, [a[0]] + b[1:])]
+    elif variant.startswith("stop"):
+        r = [x for x in r if float(x[0]) < float(variant[4:])]
     else:
         sys.exit(f"unknown variant {variant}")
     with open(os.path.join(out, "imu.csv"), "w") as f:

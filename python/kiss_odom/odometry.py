@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import threading
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional, Tuple
 
@@ -44,7 +45,8 @@ class FrameReport:
 
     ``status`` is ``"ok"``, ``"empty"`` or the set flags joined by ``|``; ``flags`` lists
     them (``timestamps_ignored``, ``iteration_cap``, ``no_correspondences``, ``singular``,
-    ``degenerate``, ``invalid_points``, ``scan_truncated``, ``capacity``). ``dropped``
+    ``degenerate``, ``invalid_points``, ``scan_truncated``, ``capacity``, ``budget``,
+    ``planes``, ``evicted``, ``one_plane``: the last warns once too). ``dropped``
     counts points and voxels dropped by reason."""
 
     index: int
@@ -74,11 +76,15 @@ class FrameReport:
     dropped: Mapping[str, int] = field(default_factory=dict)
     #: With the gyroscope prior on: ``"used"`` or why not (``"first"``, ``"no_samples"``,
     #: ``"gap"``, ``"bad_samples"``), the samples it had, the bias estimate after the frame
-    #: and how far ICP's rotation rate was from the gyroscope's (rad/s) when it was used.
+    #: and how far ICP's rotation rate was from the gyroscope's (rad/s) when it was used;
+    #: ``"rejected"`` when the gyroscope's rotation over the frame disagreed with the one ICP
+    #: registered (``imu_disagreement``, rad) and the frame went without it (a ``RuntimeWarning``
+    #: names the likely cause once).
     imu_prior: Optional[str] = None
     imu_samples: int = 0
     gyro_bias: Optional[Tuple[float, float, float]] = None
     imu_residual: Optional[float] = None
+    imu_disagreement: Optional[float] = None
 
     @property
     def ok(self) -> bool:
@@ -161,7 +167,10 @@ class KissICP:
         deskewed, cropped frame and the registration points (both sensor frame, Nx3)."""
         with self._lock:
             deskewed, source, report = self._odom.register_frame(frame, timestamps)
+            said = report.pop("warnings", [])
             self.last_report = FrameReport.from_dict(report)
+        for w in said:
+            warnings.warn(w, RuntimeWarning, stacklevel=2)
         return deskewed, source
 
     def add_imu(self, time: float, gyro, accel) -> None:

@@ -172,6 +172,14 @@ impl Odometry {
             report.set_item("imu_residual", u.residual)?;
             report.set_item("imu_disagreement", u.disagreement)?;
         }
+        let warnings: Vec<String> = [
+            self.driver.imu_check_warning(false),
+            self.driver.one_plane_warning(&outcome),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        report.set_item("warnings", warnings)?;
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
         let keep = self.driver.build().capacities.scan_points;
         trim_buffer(&mut self.input, keep);

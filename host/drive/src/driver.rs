@@ -162,8 +162,13 @@ impl Driver {
         samples: &[CoreImu<f64>],
     ) -> Result<Outcome> {
         // Rates beyond any gyroscope's range (a corrupt sample, deg/s on a fast turn) are not
-        // handed to the odometry: the check counts the frame as a disagreement.
+        // handed to the odometry. The check counts the frame as a disagreement, unless one
+        // sample stands out from the rest: a corrupt sample, which says nothing of the others.
         let implausible = samples.iter().any(|s| !imu_check::plausible(&s.gyro));
+        let rates = samples.iter().map(|s| Vector3::from(s.gyro));
+        let mean = rates.clone().sum::<Vector3<f64>>() / samples.len().max(1) as f64;
+        let peak = rates.map(|r| r.norm()).fold(0.0, f64::max);
+        let corrupt = imu_check::corrupt(peak, &mean);
         let hand_over = !self.imu_check.rejecting() && !implausible;
         let model = self.engine.last_delta();
         let prior = end.and_then(|end| self.engine.prior_before(samples, end, hand_over));
@@ -183,20 +188,22 @@ impl Driver {
             .engine
             .prior_measured()
             .filter(|_| outcome.report().is_some());
-        let verdict = measured.map(|(gyro, dt)| {
-            let rates = samples.iter().map(|s| Vector3::from(s.gyro));
-            let mean = rates.clone().sum::<Vector3<f64>>() / samples.len().max(1) as f64;
+        if corrupt && measured.is_some() {
+            self.imu_check.corrupt_sample(&outcome.meta);
+        }
+        let verdict = measured.filter(|_| !corrupt).map(|(gyro, dt)| {
             let m = Measured {
                 gyro: gyro.into(),
                 icp: self.engine.last_delta().rotation.scaled_axis(),
                 dt,
                 rate: self.lidar_from_imu * mean,
-                peak_rate: rates.map(|r| r.norm()).fold(0.0, f64::max),
+                peak_rate: peak,
             };
             self.imu_check.judge(&outcome.meta, &m, redone)
         });
-        // A frame that disagrees teaches the bias nothing.
-        let residual = self.engine.prior_after(verdict.is_none_or(|(_, ok)| ok));
+        // A frame that disagrees (or holds a corrupt sample) teaches the bias nothing.
+        let learn = !corrupt && verdict.is_none_or(|(_, ok)| ok);
+        let residual = self.engine.prior_after(learn);
         let rejected = used && (!hand_over || redone);
         self.imu_rejected += u64::from(rejected);
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {

@@ -10,7 +10,7 @@
 //! samples are beyond any gyroscope's range is not given the prior at all. Either rejects the
 //! IMU: the next frames are predicted and deskewed without it while the gyroscope's rotation,
 //! still measured, disagrees; the first rejection warns once, with the likely cause read from
-//! the frames after it. The prior comes back after enough frames that turn and agree.
+//! it and the frames after it. The prior comes back after enough frames that turn and agree.
 //!
 //! The driver runs it only with the prior on: a run without an IMU never reaches this module.
 
@@ -88,12 +88,13 @@ impl Cause {
             ),
             Self::Dead => "it measures no rotation while ICP turns: a dead gyroscope".into(),
             Self::FlippedAxis(a) => format!(
-                "its {} axis (LiDAR axes) turns opposite to ICP's: a flipped axis in the data or \
-                 in the extrinsic",
+                "its {} axis (LiDAR axes) turned opposite to ICP's: a flipped axis in the data \
+                 or in the extrinsic, or another recording's IMU",
                 AXIS[a]
             ),
             Self::Rotated180(a) => format!(
-                "two of its axes turn opposite to ICP's: an extrinsic off by 180 degrees about {}",
+                "two of its axes turned opposite to ICP's: an extrinsic off by 180 degrees about \
+                 {}, or another recording's IMU",
                 AXIS[a]
             ),
             Self::Unknown => "it turns otherwise than ICP: another recording's IMU, a wrong \
@@ -135,24 +136,21 @@ pub fn agrees(gyro: &Vector3<f64>, icp: &Vector3<f64>, first: bool) -> bool {
     disagreement(gyro, icp) <= tolerance(icp, first)
 }
 
-/// Frames registered without the gyroscope after its first rejection from which the warning
-/// names the cause: ICP then follows the LiDAR alone, while on the frame that disagreed it
-/// followed the wrong prior part of the way (and the frame after, predicted from that one).
+/// Frames registered without the gyroscope after its first rejection from which, with the
+/// rejected frame itself (registered again from the constant-velocity model), the warning
+/// names the cause: ICP then follows the LiDAR alone.
 pub const CAUSE_FRAMES: usize = 5;
 
 /// The likely cause of a disagreement, read from frames registered without the gyroscope
 /// (its rotation over each taken from the mean rate, which does not wrap past half a turn):
 /// a sample beyond full scale that stands out from its frame's mean; no rotation while ICP
-/// turns; one or two axes whose rotations run against ICP's over the frames (a correlation
-/// below -0.3 on an axis that turned); else rotations along ICP's (a correlation above 0.3)
-/// but 30-120 times as large (deg/s: 57.3); else unknown. ICP's rotations on these frames lag and err (their prediction came
-/// from a frame that followed the wrong prior), but keep their signs and rough size: hence
-/// sums over the frames, not a frame's agreement.
+/// turns; rotations along ICP's (a correlation above 0.3) but 30-120 times as large (deg/s:
+/// 57.3); one or two axes whose rotations run against ICP's over the frames (a correlation
+/// below -0.3 on an axis that turned); else unknown. ICP's rotations on these frames lag and
+/// err (their prediction came from a frame that followed the wrong prior), but keep their
+/// signs and rough size: hence sums over the frames, not a frame's agreement.
 pub fn cause(frames: &[Measured]) -> Cause {
-    if frames
-        .iter()
-        .any(|m| m.peak_rate > FULL_SCALE && m.peak_rate > 4.0 * m.rate.norm())
-    {
+    if frames.iter().any(|m| corrupt(m.peak_rate, &m.rate)) {
         return Cause::Spike;
     }
     let sum = |f: &dyn Fn(&Measured) -> f64| frames.iter().map(f).sum::<f64>();
@@ -164,6 +162,14 @@ pub fn cause(frames: &[Measured]) -> Cause {
     if gyro < 0.04 * turned {
         return Cause::Dead;
     }
+    // Rates 30-120 times as large as ICP's (the RMS ratio: 57.3 for deg/s) along its rotations
+    // (a correlation above 0.3 over the frames): read before the axes, as ICP's smaller axes
+    // can run a frame late on a fast-rocking sensor and look flipped beside a 57-fold gyroscope.
+    let both = sum(&|m| (m.rate * m.dt).dot(&m.icp));
+    let correlation = both / (gyro * turned).sqrt();
+    if correlation > 0.3 && (30.0..120.0).contains(&(gyro / turned).sqrt()) {
+        return Cause::Degrees;
+    }
     let against: Vec<usize> = (0..3)
         .filter(|&i| {
             let icp = sum(&|m| m.icp[i] * m.icp[i]);
@@ -173,17 +179,17 @@ pub fn cause(frames: &[Measured]) -> Cause {
         })
         .collect();
     match against[..] {
-        [a] => return Cause::FlippedAxis(a),
-        [a, b] => return Cause::Rotated180(3 - a - b),
-        _ => {}
+        [a] => Cause::FlippedAxis(a),
+        [a, b] => Cause::Rotated180(3 - a - b),
+        _ => Cause::Unknown,
     }
-    // The least-squares scale from the gyroscope's rotations to ICP's, and their correlation.
-    let both = sum(&|m| (m.rate * m.dt).dot(&m.icp));
-    let (scale, correlation) = (both / gyro, both / (gyro * turned).sqrt());
-    if against.is_empty() && correlation > 0.3 && (30.0..120.0).contains(&scale.recip()) {
-        return Cause::Degrees;
-    }
-    Cause::Unknown
+}
+
+/// Whether a frame's samples, of largest rate `peak` and mean rate `mean` (rad/s), hold a
+/// corrupt sample: one beyond any gyroscope's range that stands out from the frame's mean
+/// (rates in deg/s on a fast turn are all beyond it, none standing out).
+pub fn corrupt(peak: f64, mean: &Vector3<f64>) -> bool {
+    peak > FULL_SCALE && peak > 4.0 * mean.norm()
 }
 
 /// The check's state over a run: see the module doc.
@@ -199,12 +205,32 @@ pub struct ImuCheck {
     /// The first rejection (frame, source, disagreement and tolerance), until the frames
     /// after it name its cause.
     first: Option<(usize, String, f64, f64)>,
-    /// The frames measured since the first rejection, up to [`CAUSE_FRAMES`].
+    /// The first rejected frame and those measured after it, up to [`CAUSE_FRAMES`] more.
     after: Vec<Measured>,
     warning: Option<String>,
+    /// Whether a corrupt sample was warned about.
+    corrupt_said: bool,
 }
 
 impl ImuCheck {
+    /// A frame with a corrupt sample (see [`corrupt`]): predicted without the prior and not
+    /// judged, as one sample says nothing of the gyroscope's others; the next frame has the
+    /// prior again. Warns on the first, unless a rejection's warning is due.
+    pub fn corrupt_sample(&mut self, meta: &FrameMeta) {
+        if self.corrupt_said || self.first.is_some() || self.warning.is_some() {
+            return;
+        }
+        self.corrupt_said = true;
+        self.warning = Some(format!(
+            "frame {} ({}): {}; the frame is predicted and deskewed without the gyroscope \
+             prior, the next ones with it (frames.csv imu_prior = rejected, summary.json \
+             imu_rejected_frames)",
+            meta.index,
+            meta.source,
+            Cause::Spike.describe()
+        ));
+    }
+
     /// Whether frames are judged yet (the first measured one is not).
     pub fn judging(&self) -> bool {
         self.started
@@ -250,11 +276,11 @@ impl ImuCheck {
         let off = disagreement(&m.gyro, &m.icp);
         let first = !core::mem::replace(&mut self.started, true);
         let ok = !refused && off <= tolerance(&m.icp, first) && off.is_finite();
-        // The cause is read from the frames after the first rejection, registered without
+        // The cause is read from the frames from the first rejection on, registered without
         // the gyroscope.
         if self.first.is_some() {
             self.after.push(*m);
-            if self.after.len() >= CAUSE_FRAMES {
+            if self.after.len() > CAUSE_FRAMES {
                 self.name_cause();
             }
         }
@@ -270,6 +296,9 @@ impl ImuCheck {
                         off,
                         tolerance(&m.icp, first),
                     ));
+                    // Redone without the gyroscope, the frame tells the cause too (and a
+                    // corrupt sample is in it alone).
+                    self.after.push(*m);
                 }
             }
         } else if self.rejecting && m.icp.norm() >= TELLING_RAD {

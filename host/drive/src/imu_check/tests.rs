@@ -142,6 +142,17 @@ fn each_wrong_gyroscope_disagrees_and_is_named() {
             assert_eq!(cause(&frames), want, "lagging {lagging}: {frames:?}");
         }
     }
+    // A rocking sensor whose ICP rotation about x runs a frame late (a generated drone flight
+    // registered without the gyroscope): beside rates 57 times as large, x looks flipped, but
+    // the size names deg/s.
+    let rocking = [0.025, -0.03, 0.02, -0.035, 0.03, -0.02].map(|x| Vector3::new(x, -0.02, -0.06));
+    let late: Vec<Measured> = (1..rocking.len())
+        .map(|k| {
+            let icp = Vector3::new(rocking[k - 1].x, rocking[k].y, rocking[k].z);
+            frame(rocking[k] * 57.2958, icp, 0.0)
+        })
+        .collect();
+    assert_eq!(cause(&late), Cause::Degrees, "{late:?}");
     // A spike: the rates are judged, not the rotation (which may agree).
     let mut frames = after(|g| g, r, false);
     frames[1].peak_rate = 1e6;
@@ -175,7 +186,7 @@ fn a_disagreement_rejects_warns_once_and_resumes_after_turning_frames_that_agree
     let (off, ok) = check.judge(&meta(), &frame(Vector3::zeros(), r, 0.0), false);
     assert!(!ok && off > tolerance(&r, false));
     assert!(check.rejecting());
-    // The cause comes from the frames after it, registered without the gyroscope.
+    // The cause comes from it and the frames after it, registered without the gyroscope.
     for _ in 0..CAUSE_FRAMES {
         assert!(check.warning(false).is_none());
         check.judge(&meta(), &frame(Vector3::zeros(), turn(), 0.0), false);
@@ -233,9 +244,50 @@ fn a_rejection_in_the_last_frames_warns_at_the_end_with_what_they_tell() {
     let w = check.warning(true).expect("a warning at the end");
     assert!(w.contains("dead") && w.contains("7.bin"), "{w}");
     assert!(check.warning(true).is_none());
-    // Without any frame after it: named as unknown, still said.
+    // Without any frame after it: named from the rejected frame alone.
     let mut check = started();
     check.judge(&meta(), &frame(Vector3::zeros(), turn(), 0.0), false);
     let w = check.warning(true).expect("a warning at the end");
+    assert!(w.contains("dead"), "{w}");
+    // A frame too slight to tell anything: named as unknown, still said.
+    let mut check = started();
+    let slight = turn() * 0.1;
+    check.judge(&meta(), &frame(slight * 3.0, slight, 0.0), true);
+    let w = check.warning(true).expect("a warning at the end");
     assert!(w.contains("otherwise than ICP"), "{w}");
+}
+
+#[test]
+fn a_corrupt_sample_is_named_from_the_frame_it_was_in() {
+    let mut check = started();
+    let r = turn();
+    let mut spiked = frame(r, r, 1e6);
+    spiked.rate = r / 0.1 + Vector3::new(1e6, 0.0, 0.0) / 20.0;
+    // The check refused the frame (a sample beyond full scale is not handed over).
+    let (_, ok) = check.judge(&meta(), &spiked, true);
+    assert!(!ok);
+    for _ in 0..CAUSE_FRAMES {
+        check.judge(&meta(), &frame(r, r, 0.0), false);
+    }
+    let w = check.warning(false).expect("a warning");
+    assert!(w.contains("corrupt sample"), "{w}");
+}
+
+#[test]
+fn a_frame_with_a_corrupt_sample_warns_once_and_does_not_reject_the_gyroscope() {
+    let r = turn();
+    assert!(corrupt(1e6, &(r / 0.1 + Vector3::new(5e4, 0.0, 0.0))));
+    // Rates in deg/s on a fast turn: all beyond full scale, none standing out.
+    assert!(!corrupt(60.0, &Vector3::new(0.0, 0.0, 57.0)));
+    assert!(!corrupt(30.0, &Vector3::zeros()));
+    let mut check = started();
+    check.corrupt_sample(&meta());
+    assert!(!check.rejecting());
+    let w = check.warning(false).expect("a warning");
+    assert!(w.contains("corrupt sample") && w.contains("7.bin"), "{w}");
+    check.corrupt_sample(&meta());
+    assert!(check.warning(true).is_none(), "warned once");
+    // A rejection after it still warns.
+    check.judge(&meta(), &frame(Vector3::zeros(), r, 0.0), false);
+    assert!(check.warning(true).is_some_and(|w| w.contains("dead")));
 }
