@@ -282,3 +282,20 @@ pub fn wait_listening(child: &mut std::process::Child, addr: &str, name: &str) {
     });
     assert!(listening, "{name} never listened");
 }
+
+/// The x y z of a binary PCD file of three float fields.
+pub fn pcd_points(bytes: &[u8]) -> Vec<[f64; 3]> {
+    let marker = b"DATA binary\n";
+    let at = bytes
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .expect("a binary PCD")
+        + marker.len();
+    bytes[at..]
+        .chunks_exact(12)
+        .map(|c| {
+            let f = |i: usize| f64::from(f32::from_le_bytes(c[i..i + 4].try_into().unwrap()));
+            [f(0), f(4), f(8)]
+        })
+        .collect()
+}

@@ -2,29 +2,13 @@
 //! convert` finds the sensor in the bag's `PandarScan` message, decodes it with Hesai's angle
 //! correction file, and gives TIER IV nebula's points for it.
 
+use crate::common::pcd_points;
 use kiss_odom_tests::{kiss_odom, repo};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {
     repo().join("fixtures/nebula-xt32").join(name)
-}
-
-/// The x y z of a binary PCD file of three float fields.
-fn pcd_points(bytes: &[u8]) -> Vec<[f64; 3]> {
-    let marker = b"DATA binary\n";
-    let at = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .expect("a binary PCD")
-        + marker.len();
-    bytes[at..]
-        .chunks_exact(12)
-        .map(|c| {
-            let f = |i: usize| f64::from(f32::from_le_bytes(c[i..i + 4].try_into().unwrap()));
-            [f(0), f(4), f(8)]
-        })
-        .collect()
 }
 
 /// The points of a converted frame (`velodyne/NNNNNN.bin`: f32 x y z intensity).

@@ -2,6 +2,7 @@
 //! found by its protocol, decoded through the reader with Hesai's angle correction file, and
 //! point by point against TIER IV nebula's decoder.
 
+use crate::common::pcd_points;
 use kiss_odom_io::capture::sweeps;
 use kiss_odom_io::dataset::{SensorKind, SensorOptions};
 use kiss_odom_sensors::Return;
@@ -11,23 +12,6 @@ use std::path::PathBuf;
 
 fn fixture(name: &str) -> PathBuf {
     repo().join("fixtures/hesai-qt128").join(name)
-}
-
-/// The x y z of a binary PCD file of three float fields.
-fn pcd_points(bytes: &[u8]) -> Vec<[f64; 3]> {
-    let marker = b"DATA binary\n";
-    let at = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .expect("a binary PCD")
-        + marker.len();
-    bytes[at..]
-        .chunks_exact(12)
-        .map(|c| {
-            let f = |i: usize| f64::from(f32::from_le_bytes(c[i..i + 4].try_into().unwrap()));
-            [f(0), f(4), f(8)]
-        })
-        .collect()
 }
 
 fn options(sensor: SensorKind) -> SensorOptions {

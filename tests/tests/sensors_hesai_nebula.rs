@@ -5,6 +5,7 @@
 //! folder of whole captures (`bench/hesai/nebula_captures.py` writes it from nebula's bags)
 //! the same comparison runs on each whole bag and prints its figures.
 
+use crate::common::pcd_points;
 use kiss_odom_io::capture::sweeps;
 use kiss_odom_io::dataset::{SensorKind, SensorOptions};
 use kiss_odom_tests::repo;
@@ -122,23 +123,6 @@ fn ours_as_nebula_keeps(pcap: &Path, case: &Case, calib_dir: &Path) -> Vec<([f64
         }
     }
     out
-}
-
-/// The x y z of a binary PCD file of three float fields.
-fn pcd_points(bytes: &[u8]) -> Vec<[f64; 3]> {
-    let marker = b"DATA binary\n";
-    let at = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .expect("a binary PCD")
-        + marker.len();
-    bytes[at..]
-        .chunks_exact(12)
-        .map(|c| {
-            let f = |i: usize| f64::from(f32::from_le_bytes(c[i..i + 4].try_into().unwrap()));
-            [f(0), f(4), f(8)]
-        })
-        .collect()
 }
 
 /// How nebula's points and ours agree.

@@ -8,6 +8,7 @@
 //! leaves uninterpolated, the VLP-32's channel timing), our point is the manual's reading of
 //! that same return, and the count of each departure is printed.
 
+use crate::common::pcd_points;
 use crate::nebula_reading::{read, Departure, Laser, Neb, Reading};
 use kiss_odom_io::capture::{pcap, sweeps, velodyne_calib};
 use kiss_odom_io::dataset::{SensorKind, SensorOptions};
@@ -22,23 +23,6 @@ const F32_TOL_M: f64 = 4e-5;
 
 fn fixture(name: &str) -> PathBuf {
     repo().join("fixtures/velodyne-nebula").join(name)
-}
-
-/// The x y z of a binary PCD file of three float fields.
-fn pcd_points(bytes: &[u8]) -> Vec<[f64; 3]> {
-    let marker = b"DATA binary\n";
-    let at = bytes
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .expect("a binary PCD")
-        + marker.len();
-    bytes[at..]
-        .chunks_exact(12)
-        .map(|c| {
-            let f = |i: usize| f64::from(f32::from_le_bytes(c[i..i + 4].try_into().unwrap()));
-            [f(0), f(4), f(8)]
-        })
-        .collect()
 }
 
 /// Points hashed on a 1 cm grid, for nearest-point look-ups within a few millimetres.
