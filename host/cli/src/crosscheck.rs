@@ -18,7 +18,7 @@ mod sequence;
 mod stage_kit;
 mod stages;
 
-pub use report::{Outcome, Report, Row, Section, TableStyle};
+pub use report::{Report, TableStyle};
 
 use crate::args::{CommonArgs, ReferenceArgs};
 use anyhow::{bail, Context, Result};

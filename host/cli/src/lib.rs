@@ -4,25 +4,27 @@
 //! drives `kiss-odom-sim`. This crate is glue: argument parsing, the run loop and its outputs.
 //!
 //! [`run`] feeds a recording's frames to the driver and writes what each command writes;
-//! [`live`] is `run` on a socket, watching each pose as it comes; [`mod@bench`] and
-//! [`crosscheck`] time and compare the same frames against the reference kiss-icp;
-//! [`listen`] collects the poses a receiver that runs the odometry itself sends.
+//! `live` is `run` on a socket, watching each pose as it comes; `bench` and `crosscheck` time
+//! and compare the same frames against the reference kiss-icp; `listen` collects the poses a
+//! receiver that runs the odometry itself sends. Only what the workspace's tests and the
+//! binary reach is public: [`cli::main_with`], the outputs' names, the ROS 2 node's parts,
+//! `eval`, the memory and signal helpers.
 
-pub mod args;
-pub mod bench;
+pub(crate) mod args;
+pub(crate) mod bench;
 pub mod cli;
-pub mod convert;
-pub mod crosscheck;
+pub(crate) mod convert;
+pub(crate) mod crosscheck;
 pub mod eval;
 pub mod interrupt;
-pub mod listen;
-pub mod live;
+pub(crate) mod listen;
+pub(crate) mod live;
 pub mod memory;
 pub mod plot;
-pub mod replay;
+pub(crate) mod replay;
 #[cfg(feature = "ros2")]
 pub mod ros2;
 pub mod run;
-pub mod simulate;
-pub mod size;
-pub mod stats;
+pub(crate) mod simulate;
+pub(crate) mod size;
+pub(crate) mod stats;

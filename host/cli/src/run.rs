@@ -2,10 +2,10 @@
 //! metrics against ground truth and a plot written to the output folder.
 //!
 //! The frames go through the [`Driver`]; this module decides what stops a run and what is
-//! written ([`record`], `files`), and hands every outcome to its [`observe::Observer`]s: those
-//! of [`viz`] (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds
-//! (`live` prints each pose as it comes). The rules (the book's failure reference): a frame-level problem is a warning and a
-//! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
+//! written (`record`, `files`), and hands every outcome to its [`observe::Observer`]s: those
+//! of `viz` (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds (`live`
+//! prints each pose as it comes). The rules (the book's failure reference): a frame-level
+//! problem is a warning and a counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
 //! in which no frame could be registered ends with exit 1 and its own reason, never an output
 //! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
 //! every case the outputs hold the frames processed so far (pose files and the plot only when
@@ -16,12 +16,12 @@
 mod files;
 pub mod observe;
 mod options;
-pub mod record;
-pub mod viz;
+pub(crate) mod record;
+pub(crate) mod viz;
 
-pub use files::{Latency, Summary, OUTPUTS};
-pub use options::{PoseTime, RunArgs, RunOptions};
-pub use record::{FrameRow, PacketTotals, Record, RowKind};
+pub use files::OUTPUTS;
+pub(crate) use options::{PoseTime, RunArgs, RunOptions};
+pub(crate) use record::{FrameRow, Record, RowKind};
 
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};

@@ -34,8 +34,6 @@ pub struct RefRun {
 pub struct Ready {
     /// Frames loaded.
     pub frames: usize,
-    /// Points loaded.
-    pub points: usize,
     /// kiss-icp, numpy and Python versions.
     pub versions: serde_json::Value,
 }

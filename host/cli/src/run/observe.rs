@@ -1,5 +1,5 @@
 //! What watches a run as it goes: an [`Observer`] is called after every frame and once at the
-//! end. `--save-map`, `--save-cloud` and `--rerun` are observers ([`super::viz`]), and so is
+//! end. `--save-map`, `--save-cloud` and `--rerun` are observers (`run::viz`), and so is
 //! `live`, which prints each pose as its sweep completes. Observers never change what the
 //! driver computes.
 
