@@ -161,14 +161,23 @@ impl Driver {
         end: Option<f64>,
         samples: &[CoreImu<f64>],
     ) -> Result<Outcome> {
-        // Rates beyond any gyroscope's range (a corrupt sample, deg/s on a fast turn) are not
-        // handed to the odometry. The check counts the frame as a disagreement, unless one
-        // sample stands out from the rest: a corrupt sample, which says nothing of the others.
+        // A corrupt sample (beyond any gyroscope's range, standing out from the frame's others)
+        // is left out, and said once: the frame goes on with the rest.
+        let corrupt = imu_check::corrupt_samples(samples);
+        let kept: Vec<CoreImu<f64>>;
+        let samples = if corrupt {
+            kept = samples
+                .iter()
+                .filter(|s| imu_check::plausible(&s.gyro))
+                .copied()
+                .collect();
+            &kept[..]
+        } else {
+            samples
+        };
+        // Other rates beyond any gyroscope's range (deg/s on a fast turn) are not handed to the
+        // odometry: the check counts the frame as a disagreement.
         let implausible = samples.iter().any(|s| !imu_check::plausible(&s.gyro));
-        let rates = samples.iter().map(|s| Vector3::from(s.gyro));
-        let mean = rates.clone().sum::<Vector3<f64>>() / samples.len().max(1) as f64;
-        let peak = rates.map(|r| r.norm()).fold(0.0, f64::max);
-        let corrupt = imu_check::corrupt(peak, &mean);
         let hand_over = !self.imu_check.rejecting() && !implausible;
         let model = self.engine.last_delta();
         let prior = end.and_then(|end| self.engine.prior_before(samples, end, hand_over));
@@ -188,22 +197,22 @@ impl Driver {
             .engine
             .prior_measured()
             .filter(|_| outcome.report().is_some());
-        if corrupt && measured.is_some() {
+        if corrupt {
             self.imu_check.corrupt_sample(&outcome.meta);
         }
-        let verdict = measured.filter(|_| !corrupt).map(|(gyro, dt)| {
+        let verdict = measured.map(|(gyro, dt)| {
+            let rates = samples.iter().map(|s| Vector3::from(s.gyro));
+            let mean = rates.sum::<Vector3<f64>>() / samples.len().max(1) as f64;
             let m = Measured {
                 gyro: gyro.into(),
                 icp: self.engine.last_delta().rotation.scaled_axis(),
                 dt,
                 rate: self.lidar_from_imu * mean,
-                peak_rate: peak,
             };
             self.imu_check.judge(&outcome.meta, &m, redone)
         });
-        // A frame that disagrees (or holds a corrupt sample) teaches the bias nothing.
-        let learn = !corrupt && verdict.is_none_or(|(_, ok)| ok);
-        let residual = self.engine.prior_after(learn);
+        // A frame that disagrees teaches the bias nothing.
+        let residual = self.engine.prior_after(verdict.is_none_or(|(_, ok)| ok));
         let rejected = used && (!hand_over || redone);
         self.imu_rejected += u64::from(rejected);
         outcome.imu = self.engine.imu_bias().map(|bias| ImuUse {

@@ -3,11 +3,12 @@
 //! map takes the frame. ICP aligns the scan with the map whatever the prior said, so the
 //! registration measures how wrong the prior is. A correct gyroscope disagrees with ICP by its
 //! noise and bias over one frame (a few thousandths of a radian) plus ICP's rotation error
-//! (about a tenth of a degree); a gyroscope in deg/s, with a flipped axis, dead, corrupt or
-//! another recording's disagrees by a large part of the frame's rotation. Such a frame is
-//! registered again from the constant-velocity model, as without the prior
+//! (about a tenth of a degree); a gyroscope in deg/s, with a flipped axis, dead or another
+//! recording's disagrees by a large part of the frame's rotation. Such a frame is registered
+//! again from the constant-velocity model, as without the prior
 //! (`Odometry::register_frame_checked`), so a wrong prior never reaches the map; a frame whose
-//! samples are beyond any gyroscope's range is not given the prior at all. Either rejects the
+//! rates are beyond any gyroscope's range is not given the prior at all (a lone corrupt sample
+//! is left out instead, see [`corrupt_samples`]). Either rejects the
 //! IMU: the next frames are predicted and deskewed without it while the gyroscope's rotation,
 //! still measured, disagrees; the first rejection warns once, with the likely cause read from
 //! it and the frames after it. The prior comes back after enough frames that turn and agree.
@@ -15,6 +16,7 @@
 //! The driver runs it only with the prior on: a run without an IMU never reaches this module.
 
 use crate::outcome::FrameMeta;
+use kiss_odom_core::ImuSample;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Disagreement (rad) a correct gyroscope stays under on a frame that does not turn: white
@@ -41,7 +43,7 @@ pub const RESUME_FRAMES: u32 = 10;
 pub const FULL_SCALE: f64 = 35.0;
 
 /// What one frame gave the check: the gyroscope's rotation and ICP's over the frame, and the
-/// raw samples' rates.
+/// samples' mean rate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Measured {
     /// The gyroscope's rotation vector over the frame (rad, LiDAR axes, less the bias).
@@ -53,8 +55,6 @@ pub struct Measured {
     /// The mean of the samples' rates as given, in LiDAR axes (rad/s): unlike `gyro`, not
     /// wrapped past half a turn when the rates are far too large (deg/s read as rad/s).
     pub rate: Vector3<f64>,
-    /// The largest sample rate as given (rad/s).
-    pub peak_rate: f64,
 }
 
 /// The likely reason a gyroscope disagrees with ICP.
@@ -62,8 +62,6 @@ pub struct Measured {
 pub enum Cause {
     /// Rates about 57.3 times ICP's: degrees per second.
     Degrees,
-    /// A sample beyond any gyroscope's range.
-    Spike,
     /// No rotation while ICP turns.
     Dead,
     /// One axis (0 x, 1 y, 2 z, LiDAR axes) turning the other way.
@@ -82,10 +80,6 @@ impl Cause {
             Self::Degrees => "its rates are about 57.3 times ICP's: a gyroscope in degrees per \
                               second, where rad/s is expected"
                 .into(),
-            Self::Spike => format!(
-                "a sample beyond {FULL_SCALE} rad/s, more than any gyroscope measures: a corrupt \
-                 sample"
-            ),
             Self::Dead => "it measures no rotation while ICP turns: a dead gyroscope".into(),
             Self::FlippedAxis(a) => format!(
                 "its {} axis (LiDAR axes) turned opposite to ICP's: a flipped axis in the data \
@@ -143,16 +137,12 @@ pub const CAUSE_FRAMES: usize = 5;
 
 /// The likely cause of a disagreement, read from frames registered without the gyroscope
 /// (its rotation over each taken from the mean rate, which does not wrap past half a turn):
-/// a sample beyond full scale that stands out from its frame's mean; no rotation while ICP
-/// turns; rotations along ICP's (a correlation above 0.3) but 30-120 times as large (deg/s:
+/// no rotation while ICP turns; rotations along ICP's (a correlation above 0.3) but 30-120 times as large (deg/s:
 /// 57.3); one or two axes whose rotations run against ICP's over the frames (a correlation
 /// below -0.3 on an axis that turned); else unknown. ICP's rotations on these frames lag and
 /// err (their prediction came from a frame that followed the wrong prior), but keep their
 /// signs and rough size: hence sums over the frames, not a frame's agreement.
 pub fn cause(frames: &[Measured]) -> Cause {
-    if frames.iter().any(|m| corrupt(m.peak_rate, &m.rate)) {
-        return Cause::Spike;
-    }
     let sum = |f: &dyn Fn(&Measured) -> f64| frames.iter().map(f).sum::<f64>();
     let turned = sum(&|m| m.icp.norm_squared());
     if turned < TELLING_RAD * TELLING_RAD {
@@ -185,10 +175,13 @@ pub fn cause(frames: &[Measured]) -> Cause {
     }
 }
 
-/// Whether a frame's samples, of largest rate `peak` and mean rate `mean` (rad/s), hold a
-/// corrupt sample: one beyond any gyroscope's range that stands out from the frame's mean
-/// (rates in deg/s on a fast turn are all beyond it, none standing out).
-pub fn corrupt(peak: f64, mean: &Vector3<f64>) -> bool {
+/// Whether a frame's samples hold a corrupt one: a rate beyond any gyroscope's range that
+/// stands out from the frame's mean rate (rates in deg/s on a fast turn are all beyond it,
+/// none standing out).
+pub fn corrupt_samples(samples: &[ImuSample<f64>]) -> bool {
+    let rates = samples.iter().map(|s| Vector3::from(s.gyro));
+    let mean = rates.clone().sum::<Vector3<f64>>() / samples.len().max(1) as f64;
+    let peak = rates.map(|r| r.norm()).fold(0.0, f64::max);
     peak > FULL_SCALE && peak > 4.0 * mean.norm()
 }
 
@@ -213,21 +206,19 @@ pub struct ImuCheck {
 }
 
 impl ImuCheck {
-    /// A frame with a corrupt sample (see [`corrupt`]): predicted without the prior and not
-    /// judged, as one sample says nothing of the gyroscope's others; the next frame has the
-    /// prior again. Warns on the first, unless a rejection's warning is due.
+    /// A frame with a corrupt sample (see [`corrupt_samples`]), left out of its samples: one
+    /// sample says nothing of the gyroscope's others. Warns on the first, unless a
+    /// rejection's warning is due.
     pub fn corrupt_sample(&mut self, meta: &FrameMeta) {
         if self.corrupt_said || self.first.is_some() || self.warning.is_some() {
             return;
         }
         self.corrupt_said = true;
         self.warning = Some(format!(
-            "frame {} ({}): {}; the frame is predicted and deskewed without the gyroscope \
-             prior, the next ones with it (frames.csv imu_prior = rejected, summary.json \
-             imu_rejected_frames)",
-            meta.index,
-            meta.source,
-            Cause::Spike.describe()
+            "frame {} ({}): an IMU sample beyond {FULL_SCALE} rad/s, more than any gyroscope \
+             measures and far from the frame's others: a corrupt sample, left out (the \
+             gyroscope prior goes on with the others)",
+            meta.index, meta.source
         ));
     }
 

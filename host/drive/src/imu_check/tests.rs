@@ -1,14 +1,13 @@
 use super::*;
 
 /// A frame of 0.1 s turning by `icp`, the gyroscope measuring `gyro` (rad) with samples of
-/// that mean rate and `peak` at most.
-fn frame(gyro: Vector3<f64>, icp: Vector3<f64>, peak: f64) -> Measured {
+/// that mean rate.
+fn frame(gyro: Vector3<f64>, icp: Vector3<f64>) -> Measured {
     Measured {
         gyro,
         icp,
         dt: 0.1,
         rate: gyro / 0.1,
-        peak_rate: peak.max(gyro.norm() / 0.1),
     }
 }
 
@@ -28,7 +27,7 @@ fn turn() -> Vector3<f64> {
 /// A check past its first frame (an agreeing one).
 fn started() -> ImuCheck {
     let mut check = ImuCheck::default();
-    check.judge(&meta(), &frame(turn(), turn(), 0.0), false);
+    check.judge(&meta(), &frame(turn(), turn()), false);
     check
 }
 
@@ -36,15 +35,15 @@ fn started() -> ImuCheck {
 fn the_first_measured_frame_is_judged_with_room_for_its_undeskewed_map() {
     // A dead gyroscope is within the first frame's room (ICP's whole rotation), not the next's.
     let mut check = ImuCheck::default();
-    let dead = frame(Vector3::zeros(), turn(), 0.0);
+    let dead = frame(Vector3::zeros(), turn());
     assert!(check.judge(&meta(), &dead, false).1 && !check.rejecting());
     assert!(!check.judge(&meta(), &dead, false).1 && check.rejecting());
     // Four times ICP's rotation is beyond it, and so is a frame the check refused.
     let mut check = ImuCheck::default();
-    let twice = frame(turn() * 4.0, turn(), 0.0);
+    let twice = frame(turn() * 4.0, turn());
     assert!(!check.judge(&meta(), &twice, false).1 && check.rejecting());
     let mut check = ImuCheck::default();
-    assert!(!check.judge(&meta(), &frame(turn(), turn(), 0.0), true).1);
+    assert!(!check.judge(&meta(), &frame(turn(), turn()), true).1);
     let icp = turn();
     assert_eq!(tolerance(&icp, true), FIRST_FLOOR_RAD + icp.norm());
     assert_eq!(tolerance(&icp, false), FLOOR_RAD + SCALE * icp.norm());
@@ -98,7 +97,7 @@ fn after(
         Vector3::new(r.x, -r.z, r.y) * 0.7,
         Vector3::new(r.y, r.x, r.z) * 1.2,
     ];
-    let mut frames: Vec<Measured> = turns.iter().map(|&t| frame(read(t), t, 0.0)).collect();
+    let mut frames: Vec<Measured> = turns.iter().map(|&t| frame(read(t), t)).collect();
     if lagging {
         let across = Vector3::new(0.01, -0.01, 0.0);
         frames[0].icp = frames[0].icp * 0.5 + across;
@@ -149,17 +148,13 @@ fn each_wrong_gyroscope_disagrees_and_is_named() {
     let late: Vec<Measured> = (1..rocking.len())
         .map(|k| {
             let icp = Vector3::new(rocking[k - 1].x, rocking[k].y, rocking[k].z);
-            frame(rocking[k] * 57.2958, icp, 0.0)
+            frame(rocking[k] * 57.2958, icp)
         })
         .collect();
     assert_eq!(cause(&late), Cause::Degrees, "{late:?}");
-    // A spike: the rates are judged, not the rotation (which may agree).
-    let mut frames = after(|g| g, r, false);
-    frames[1].peak_rate = 1e6;
-    assert_eq!(cause(&frames), Cause::Spike);
-    // A gyroscope in deg/s on a fast turn is beyond full scale on every sample: not a spike.
+    // A gyroscope in deg/s on a fast turn, beyond full scale on every sample.
     let fast = after(|g| g * 57.2958, r * 10.0, false);
-    assert!(fast.iter().all(|m| m.peak_rate > FULL_SCALE));
+    assert!(fast.iter().all(|m| m.rate.norm() > FULL_SCALE));
     assert_eq!(cause(&fast), Cause::Degrees);
     // Rates in deg/s turn the gyroscope's integrated rotation past half a turn, which wraps:
     // the mean rate still names them.
@@ -183,36 +178,36 @@ fn each_wrong_gyroscope_disagrees_and_is_named() {
 fn a_disagreement_rejects_warns_once_and_resumes_after_turning_frames_that_agree() {
     let mut check = started();
     let r = turn();
-    let (off, ok) = check.judge(&meta(), &frame(Vector3::zeros(), r, 0.0), false);
+    let (off, ok) = check.judge(&meta(), &frame(Vector3::zeros(), r), false);
     assert!(!ok && off > tolerance(&r, false));
     assert!(check.rejecting());
     // The cause comes from it and the frames after it, registered without the gyroscope.
     for _ in 0..CAUSE_FRAMES {
         assert!(check.warning(false).is_none());
-        check.judge(&meta(), &frame(Vector3::zeros(), turn(), 0.0), false);
+        check.judge(&meta(), &frame(Vector3::zeros(), turn()), false);
     }
     let w = check.warning(false).expect("a warning");
     assert!(w.contains("dead") && w.contains("7.bin"), "{w}");
     let still = Vector3::new(0.0, 0.0, 0.01);
     // Frames that barely turn tell nothing: still rejecting after many.
     for _ in 0..100 {
-        check.judge(&meta(), &frame(still, still, 0.0), false);
+        check.judge(&meta(), &frame(still, still), false);
     }
     assert!(check.rejecting());
     for k in 1..=RESUME_FRAMES {
         assert!(check.rejecting(), "resumed after {k} frames");
-        check.judge(&meta(), &frame(r, r, 0.0), false);
+        check.judge(&meta(), &frame(r, r), false);
     }
     assert!(!check.rejecting());
     // A second rejection does not warn again and needs twice the frames.
-    check.judge(&meta(), &frame(r * 57.3, r, 0.0), false);
+    check.judge(&meta(), &frame(r * 57.3, r), false);
     assert!(check.rejecting() && check.warning(true).is_none());
     for _ in 0..RESUME_FRAMES {
-        check.judge(&meta(), &frame(r, r, 0.0), false);
+        check.judge(&meta(), &frame(r, r), false);
     }
     assert!(check.rejecting());
     for _ in 0..RESUME_FRAMES {
-        check.judge(&meta(), &frame(r, r, 0.0), false);
+        check.judge(&meta(), &frame(r, r), false);
     }
     assert!(!check.rejecting());
 }
@@ -222,7 +217,7 @@ fn a_non_finite_disagreement_is_a_disagreement() {
     let mut check = started();
     let (_, ok) = check.judge(
         &meta(),
-        &frame(Vector3::new(f64::NAN, 0.0, 0.0), turn(), 0.0),
+        &frame(Vector3::new(f64::NAN, 0.0, 0.0), turn()),
         false,
     );
     assert!(!ok && check.rejecting());
@@ -231,55 +226,47 @@ fn a_non_finite_disagreement_is_a_disagreement() {
 #[test]
 fn a_frame_the_check_refused_disagrees_whatever_its_redone_registration_reads() {
     let mut check = started();
-    let (_, ok) = check.judge(&meta(), &frame(turn(), turn(), 0.0), true);
+    let (_, ok) = check.judge(&meta(), &frame(turn(), turn()), true);
     assert!(!ok && check.rejecting());
 }
 
 #[test]
 fn a_rejection_in_the_last_frames_warns_at_the_end_with_what_they_tell() {
     let mut check = started();
-    check.judge(&meta(), &frame(Vector3::zeros(), turn(), 0.0), false);
-    check.judge(&meta(), &frame(Vector3::zeros(), turn(), 0.0), false);
+    check.judge(&meta(), &frame(Vector3::zeros(), turn()), false);
+    check.judge(&meta(), &frame(Vector3::zeros(), turn()), false);
     assert!(check.warning(false).is_none());
     let w = check.warning(true).expect("a warning at the end");
     assert!(w.contains("dead") && w.contains("7.bin"), "{w}");
     assert!(check.warning(true).is_none());
     // Without any frame after it: named from the rejected frame alone.
     let mut check = started();
-    check.judge(&meta(), &frame(Vector3::zeros(), turn(), 0.0), false);
+    check.judge(&meta(), &frame(Vector3::zeros(), turn()), false);
     let w = check.warning(true).expect("a warning at the end");
     assert!(w.contains("dead"), "{w}");
     // A frame too slight to tell anything: named as unknown, still said.
     let mut check = started();
     let slight = turn() * 0.1;
-    check.judge(&meta(), &frame(slight * 3.0, slight, 0.0), true);
+    check.judge(&meta(), &frame(slight * 3.0, slight), true);
     let w = check.warning(true).expect("a warning at the end");
     assert!(w.contains("otherwise than ICP"), "{w}");
 }
 
 #[test]
-fn a_corrupt_sample_is_named_from_the_frame_it_was_in() {
-    let mut check = started();
-    let r = turn();
-    let mut spiked = frame(r, r, 1e6);
-    spiked.rate = r / 0.1 + Vector3::new(1e6, 0.0, 0.0) / 20.0;
-    // The check refused the frame (a sample beyond full scale is not handed over).
-    let (_, ok) = check.judge(&meta(), &spiked, true);
-    assert!(!ok);
-    for _ in 0..CAUSE_FRAMES {
-        check.judge(&meta(), &frame(r, r, 0.0), false);
-    }
-    let w = check.warning(false).expect("a warning");
-    assert!(w.contains("corrupt sample"), "{w}");
-}
-
-#[test]
-fn a_frame_with_a_corrupt_sample_warns_once_and_does_not_reject_the_gyroscope() {
-    let r = turn();
-    assert!(corrupt(1e6, &(r / 0.1 + Vector3::new(5e4, 0.0, 0.0))));
+fn a_corrupt_sample_is_told_from_rates_in_degrees_and_warned_once() {
+    let sample = |z: f64| ImuSample {
+        time: 0.0,
+        gyro: [0.1, 0.0, z],
+        accel: [0.0, 0.0, 9.8],
+    };
+    let mut samples: std::vec::Vec<_> = (0..20).map(|_| sample(0.8)).collect();
+    assert!(!corrupt_samples(&samples));
+    samples[7] = sample(1e6);
+    assert!(corrupt_samples(&samples));
     // Rates in deg/s on a fast turn: all beyond full scale, none standing out.
-    assert!(!corrupt(60.0, &Vector3::new(0.0, 0.0, 57.0)));
-    assert!(!corrupt(30.0, &Vector3::zeros()));
+    let degrees: std::vec::Vec<_> = (0..20).map(|k| sample(57.0 + k as f64)).collect();
+    assert!(!corrupt_samples(&degrees));
+    assert!(!corrupt_samples(&[]));
     let mut check = started();
     check.corrupt_sample(&meta());
     assert!(!check.rejecting());
@@ -288,6 +275,6 @@ fn a_frame_with_a_corrupt_sample_warns_once_and_does_not_reject_the_gyroscope() 
     check.corrupt_sample(&meta());
     assert!(check.warning(true).is_none(), "warned once");
     // A rejection after it still warns.
-    check.judge(&meta(), &frame(Vector3::zeros(), r, 0.0), false);
+    check.judge(&meta(), &frame(Vector3::zeros(), turn()), false);
     assert!(check.warning(true).is_some_and(|w| w.contains("dead")));
 }
