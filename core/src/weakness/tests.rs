@@ -164,6 +164,10 @@ fn tilted_plane(n: usize, off: usize) -> std::vec::Vec<[f64; 3]> {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "18,000 points of soft-float arithmetic: the Miri lane ran out of time on it; no unsafe on this path"
+)]
 fn a_cloud_is_one_plane_until_more_than_one_point_in_a_thousand_stands_off_it() {
     assert!(one_plane(&tilted_plane(3000, 0), 0.5));
     assert!(one_plane(&tilted_plane(3000, 3), 0.5), "0.1 % off");
