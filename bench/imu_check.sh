@@ -97,9 +97,8 @@ for d, n, f, r, w, a, c in rows:
         continue
     runs[(n, d.rsplit("-", 1)[0])].append((int(f), int(r), w != "0", ratio, c == named.get(n)))
     # A corrupt sample is left out, not rejected: it warns, and the run keeps the prior.
-    rejects = n != "spike" or int(f) >= 0
-    ok = (int(r) == 0 and w == "0") if n == "right" else \
-        ((0 <= int(f) <= 10 or not rejects) and w != "0" and ratio <= 1.1)
+    in_time = 0 <= int(f) <= 10 or (n == "spike" and int(f) < 0)
+    ok = (int(r) == 0 and w == "0") if n == "right" else (in_time and w != "0" and ratio <= 1.1)
     if not ok:
         bad.append(f"{d} {n}: first rejected {f}, {r} rejected, warned {w != '0'}, ATE x{ratio:.2f}")
 print("| IMU | drone: first frame rejected | warned | cause named | ATE / `--imu off` "

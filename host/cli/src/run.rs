@@ -1,17 +1,17 @@
 //! `kiss-odom run`: odometry over a recording, with poses, per-frame records, a summary,
 //! metrics against ground truth and a plot written to the output folder.
 //!
-//! The frames go through the [`Driver`]; this module decides what stops a run and what is
-//! written (`record`, `files`), and hands every outcome to its [`observe::Observer`]s: those
-//! of `viz` (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds (`live`
-//! prints each pose as it comes). The rules (the book's failure reference): a frame-level
-//! problem is a warning and a counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run
-//! in which no frame could be registered ends with exit 1 and its own reason, never an output
-//! error in its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In
-//! every case the outputs hold the frames processed so far (pose files and the plot only when
-//! a frame was registered), written atomically, and no output of an earlier run stays beside
-//! them; a file in the output folder that no earlier command wrote (a hand-written
-//! `config.toml`, the data set's own) refuses the run before anything is removed.
+//! The frames go through the [`Driver`]; this module decides what stops a run and what is written
+//! (`record`, `files`), and hands every outcome to its [`observe::Observer`]s: those of `viz`
+//! (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds (`live` prints each pose
+//! as it comes). The rules (the book's failure reference): a frame-level problem is a warning and a
+//! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run in
+//! which no frame could be registered ends with exit 1 and its own reason, never an output error in
+//! its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In every case the
+//! outputs hold the frames processed so far (pose files and the plot only when a frame was
+//! registered), written atomically, and no output of an earlier run stays beside them; a file in
+//! the output folder that no earlier command wrote (a hand-written `config.toml`, the data set's
+//! own) refuses the run before anything is removed.
 
 mod files;
 pub mod observe;

@@ -26,7 +26,7 @@ use crate::settings::{Scalar, Settings, Storage};
 use anyhow::{bail, Result};
 use kiss_odom_core::{Capacities, Flag, FrameError, HighWater, ImuSample as CoreImu, Prior};
 use kiss_odom_io::{Frame, Item};
-use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, UnitQuaternion};
 use std::time::Duration;
 
 /// Frames held in memory in one driver build's scalar (see [`Driver::preload`]).
@@ -68,8 +68,8 @@ pub struct Driver {
     growth: Growth,
     imu_check: ImuCheck,
     imu_rejected: u64,
-    /// Frames held to the prediction as scans of one plane (`Flag::OnePlane`).
-    one_plane: u64,
+    /// Whether a scan of one plane was warned about (`Flag::OnePlane`).
+    one_plane_said: bool,
     /// The IMU's axes turned into the LiDAR's (`[imu] extrinsic`), for the check's rates.
     lidar_from_imu: UnitQuaternion<f64>,
 }
@@ -114,7 +114,7 @@ impl Driver {
             build,
             imu_check: ImuCheck::default(),
             imu_rejected: 0,
-            one_plane: 0,
+            one_plane_said: false,
             lidar_from_imu: settings
                 .imu
                 .core::<f64>()?
@@ -201,13 +201,11 @@ impl Driver {
             self.imu_check.corrupt_sample(&outcome.meta);
         }
         let verdict = measured.map(|(gyro, dt)| {
-            let rates = samples.iter().map(|s| Vector3::from(s.gyro));
-            let mean = rates.sum::<Vector3<f64>>() / samples.len().max(1) as f64;
             let m = Measured {
                 gyro: gyro.into(),
                 icp: self.engine.last_delta().rotation.scaled_axis(),
                 dt,
-                rate: self.lidar_from_imu * mean,
+                rate: self.lidar_from_imu * imu_check::mean_rate(samples),
             };
             self.imu_check.judge(&outcome.meta, &m, redone)
         });
@@ -403,9 +401,9 @@ impl Driver {
     /// The warning that robust mode held `outcome`'s scan to the prediction because it was
     /// one plane (`Flag::OnePlane`): on the first such frame of the run.
     pub fn one_plane_warning(&mut self, outcome: &Outcome) -> Option<String> {
-        let held = outcome.status()?.contains(Flag::OnePlane);
-        self.one_plane += u64::from(held);
-        (held && self.one_plane == 1).then(|| {
+        let first = outcome.status()?.contains(Flag::OnePlane) && !self.one_plane_said;
+        self.one_plane_said |= first;
+        first.then(|| {
             format!(
                 "{}: the registration points lie on one plane, which measures nothing along \
                  it: the scan is held to the constant-velocity prediction, not registered \

@@ -137,9 +137,9 @@ pub const CAUSE_FRAMES: usize = 5;
 
 /// The likely cause of a disagreement, read from frames registered without the gyroscope
 /// (its rotation over each taken from the mean rate, which does not wrap past half a turn):
-/// no rotation while ICP turns; rotations along ICP's (a correlation above 0.3) but 30-120 times as large (deg/s:
-/// 57.3); one or two axes whose rotations run against ICP's over the frames (a correlation
-/// below -0.3 on an axis that turned); else unknown. ICP's rotations on these frames lag and
+/// no rotation while ICP turns; rotations along ICP's (a correlation above 0.3) but 30-120
+/// times as large (deg/s: 57.3); one or two axes whose rotations run against ICP's over the
+/// frames (a correlation below -0.3 on an axis that turned); else unknown. ICP's rotations on these frames lag and
 /// err (their prediction came from a frame that followed the wrong prior), but keep their
 /// signs and rough size: hence sums over the frames, not a frame's agreement.
 pub fn cause(frames: &[Measured]) -> Cause {
@@ -179,10 +179,20 @@ pub fn cause(frames: &[Measured]) -> Cause {
 /// stands out from the frame's mean rate (rates in deg/s on a fast turn are all beyond it,
 /// none standing out).
 pub fn corrupt_samples(samples: &[ImuSample<f64>]) -> bool {
-    let rates = samples.iter().map(|s| Vector3::from(s.gyro));
-    let mean = rates.clone().sum::<Vector3<f64>>() / samples.len().max(1) as f64;
-    let peak = rates.map(|r| r.norm()).fold(0.0, f64::max);
-    peak > FULL_SCALE && peak > 4.0 * mean.norm()
+    let peak = samples
+        .iter()
+        .map(|s| Vector3::from(s.gyro).norm())
+        .fold(0.0, f64::max);
+    peak > FULL_SCALE && peak > 4.0 * mean_rate(samples).norm()
+}
+
+/// The mean of the samples' rates as given (rad/s, IMU axes; zero without samples).
+pub fn mean_rate(samples: &[ImuSample<f64>]) -> Vector3<f64> {
+    let sum = samples
+        .iter()
+        .map(|s| Vector3::from(s.gyro))
+        .sum::<Vector3<f64>>();
+    sum / samples.len().max(1) as f64
 }
 
 /// The check's state over a run: see the module doc.
