@@ -2,7 +2,7 @@
 `accurate` preset and of the default mode against kiss-icp 1.3.0, one thread each, same frames,
 in the same run. bench/accurate_fps.sh makes the data and the venv and runs it; by hand:
 
-    BIN=target/release/kiss-odom target/pyvenv/bin/python bench/accurate_fps.py [--repeats N] DATA...
+    DEV=target/release/kiss-odom-dev target/pyvenv/bin/python bench/accurate_fps.py [--repeats N] DATA...
 
 DATA is a KITTI `sequences/NN` folder or a `kiss-odom simulate` folder (its per-point times
 deskew, as they do for kiss-odom). kiss-icp runs in this process on frames read beforehand
@@ -30,7 +30,7 @@ from kiss_icp.config import load_config
 from kiss_icp.kiss_icp import KissICP
 
 REPO = Path(__file__).resolve().parents[1]
-BIN = os.environ.get("BIN", str(REPO / "target/release/kiss-odom"))
+DEV = os.environ.get("DEV", str(REPO / "target/release/kiss-odom-dev"))
 
 
 def frames(data: Path):
@@ -60,7 +60,7 @@ def kiss_icp_seconds(loaded) -> float:
 def kiss_odom_seconds(data: Path, preset: str) -> float:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "bench.json"
-        subprocess.run([BIN, "bench", str(data), "--no-reference", "--threads", "1",
+        subprocess.run([DEV, "bench", str(data), "--no-reference", "--threads", "1",
                         "--repeats", "1", "--preset", preset, "--json", str(out)],
                        check=True, capture_output=True)
         j = json.loads(out.read_text())

@@ -10,11 +10,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash bench/python.sh venv
-cargo build --release -q -p kiss-odom
+cargo build --release -q -p kiss-odom --features dev
 BIN=${CARGO_TARGET_DIR:-target}/release/kiss-odom
 GEN=${GEN:-target/bench/accurate}
 d=$GEN/urban-500-s1
 [ -f "$d/poses.txt" ] || "$BIN" simulate --out "$d" --frames 500 --seed 1 --profile urban >/dev/null
 K=../shared/data/kitti-mini/sequences
-BIN=$BIN "${PY:-target/pyvenv}/bin/python" bench/accurate_fps.py --repeats "${REPEATS:-5}" \
+DEV=${CARGO_TARGET_DIR:-target}/release/kiss-odom-dev "${PY:-target/pyvenv}/bin/python" bench/accurate_fps.py --repeats "${REPEATS:-5}" \
   "$K/01" "$K/02" "$K/04" "$K/05" "$d"

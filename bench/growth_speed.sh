@@ -11,12 +11,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OLD=${1:?a kiss-odom built before the change}
-NEW=${2:-target/release/kiss-odom}
+NEW=${2:-target/release/kiss-odom-dev}
 : "${KISS_ODOM_PYTHON:?a venv with kiss-icp 1.3.0}"
 OUT=target/bench/growth-speed
 mkdir -p "$OUT"
 U=$OUT/urban-100-s61
-[ -f "$U/poses.txt" ] || "$NEW" simulate --profile urban --frames 100 --seed 61 --out "$U" \
+[ -f "$U/poses.txt" ] || target/release/kiss-odom simulate --profile urban --frames 100 --seed 61 --out "$U" \
   --overwrite >/dev/null
 K=../shared/data/kitti-mini/sequences
 echo "| dataset | before: ours / kiss-icp frames/s | after: ours / kiss-icp frames/s |"

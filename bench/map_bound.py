@@ -95,7 +95,7 @@ def defaults(binary, python, driver, datasets):
         sh(binary, "run", d, "--out", out, "-q", "--threads", "1", *extra)
         s = json.loads((out / "summary.json").read_text())
         cc = out / "crosscheck.json"
-        sh(binary, "crosscheck", d, "--only", "end-to-end", "--quiet", "--json", cc, *extra)
+        sh(os.environ.get("KISS_ODOM_DEV", binary + "-dev"), "crosscheck", d, "--only", "end-to-end", "--quiet", "--json", cc, *extra)
         worst = crosscheck_worst(json.loads(cc.read_text()))
         degraded = s["degraded_frames"]
         lost = degraded.get("capacity", 0) + degraded.get("evicted", 0)

@@ -14,8 +14,9 @@
 # reference comes from $KISS_ODOM_PYTHON (a venv from tests/reference/requirements.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p kiss-odom
+cargo build --release -q -p kiss-odom --features dev
 B=target/release/kiss-odom
+export KISS_ODOM_DEV=target/release/kiss-odom-dev
 GEN=${GEN:-target/bench/map-bound}
 PY=${KISS_ODOM_PYTHON:?a venv with kiss-icp 1.3.0}
 DATA=../shared/data

@@ -12,18 +12,19 @@
 # the budget table used 5) and BUDGETS (default "300000 150000 100000 50000") can be set.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p kiss-odom
+cargo build --release -q -p kiss-odom --features dev
 B=target/release/kiss-odom
+D=target/release/kiss-odom-dev
 DATA=${DATA:-target/bench/realtime}; mkdir -p "$DATA"
 U="$DATA/urban-7-200"
 [ -f "$U/sim.toml" ] || $B simulate --out "$U" --frames 200 --seed 7 >/dev/null
 REPEATS=${REPEATS:-3}
 for s in 01 02 04 05; do
   echo "== kitti-mini $s f64 exact"
-  $B bench ../shared/data/kitti-mini/sequences/$s --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 1
+  $D bench ../shared/data/kitti-mini/sequences/$s --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 1
 done
 echo "== urban-7-200 f64 exact"
-$B bench "$U" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10
+$D bench "$U" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10
 # The latency spread with and without a budget (no reference: it has no budget), on the urban
 # drive and a fast one. bench prints wall-clock and this thread's CPU time per frame; on a
 # shared machine the CPU time is the figure other processes do not inflate.
@@ -33,10 +34,10 @@ for d in "$U" "$F"; do
   for b in none ${BUDGETS:-300000 150000 100000 50000}; do
     echo "== $d f64 exact, budget $b"
     flag=(); [ "$b" = none ] || flag=(--budget "$b")
-    $B bench "$d" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10 "${flag[@]}" --no-reference
+    $D bench "$d" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10 "${flag[@]}" --no-reference
   done
 done
 for d in ../shared/data/kitti-mini/sequences/01 "$U"; do
   echo "== $d f64 quantized (map bytes)"
-  $B bench "$d" --threads 1 --scalar f64 --storage quantized --repeats 1 --latency-from 1
+  $D bench "$d" --threads 1 --scalar f64 --storage quantized --repeats 1 --latency-from 1
 done

@@ -38,8 +38,9 @@ REPEATS_SIM=${REPEATS_SIM:-3}
 has() { [[ " $STEPS " == *" $1 "* ]]; }
 log() { printf '\n=== %s\n' "$*"; }
 
-cargo build --release -p kiss-odom
+cargo build --release -p kiss-odom --features dev
 BIN=$CARGO_TARGET_DIR/release/kiss-odom
+DEV=$CARGO_TARGET_DIR/release/kiss-odom-dev
 mkdir -p "$OUT" "$GEN"
 
 # The generated sequences (the simulator's bytes depend on the seed and flags only).
@@ -70,14 +71,14 @@ if has crosscheck; then
   mkdir -p "$OUT/crosscheck"
   for s in 01 02 04 05; do
     log "crosscheck kitti-mini $s"
-    "$BIN" crosscheck "$KITTI/sequences/$s" --scalar f32 --table markdown \
+    "$DEV" crosscheck "$KITTI/sequences/$s" --scalar f32 --table markdown \
       --json "$OUT/crosscheck/kitti-$s.json"
   done
   log "crosscheck ncd-ouster-deskew"
-  "$BIN" crosscheck ../shared/data/ncd-ouster-deskew --table markdown \
+  "$DEV" crosscheck ../shared/data/ncd-ouster-deskew --table markdown \
     --json "$OUT/crosscheck/ouster.json"
   log "crosscheck urban-1000"
-  "$BIN" crosscheck "$GEN/crosscheck-urban-1000" --scalar f32 --table markdown \
+  "$DEV" crosscheck "$GEN/crosscheck-urban-1000" --scalar f32 --table markdown \
     --json "$OUT/crosscheck/urban-1000.json"
 fi
 
@@ -92,7 +93,7 @@ if has speed; then
       for scalar in f64 f32; do
         name=$ds-t$threads-$scalar
         log "bench $name"
-        "$BIN" bench "$path" --threads "$threads" --scalar "$scalar" --repeats "$rep" \
+        "$DEV" bench "$path" --threads "$threads" --scalar "$scalar" --repeats "$rep" \
           --latency-from "$from" --json "$OUT/speed/$name.json" | tee "$OUT/speed/$name.txt"
       done
     done

@@ -19,7 +19,7 @@
 #                                 DATA/crosscheck.txt)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ -z "${KISS_ODOM_BIN:-}" ]; then cargo build --release -q -p kiss-odom; fi
+if [ -z "${KISS_ODOM_BIN:-}" ]; then cargo build --release -q -p kiss-odom --features dev; fi
 B=${KISS_ODOM_BIN:-target/release/kiss-odom}
 DATA=${DATA:-target/bench/sensors-pcap}; mkdir -p "$DATA"
 FRAMES=${FRAMES:-500}
@@ -51,7 +51,7 @@ for spec in "${specs[@]}"; do
     done
     if [ "${CROSSCHECK:-0}" = 1 ]; then
       echo "== $1 $2 seed $seed" >> "$DATA/crosscheck.txt"
-      $B crosscheck "$d/packets.pcap" "${src[@]}" --only end-to-end --table markdown \
+      "${KISS_ODOM_DEV:-target/release/kiss-odom-dev}" crosscheck "$d/packets.pcap" "${src[@]}" --only end-to-end --table markdown \
         >> "$DATA/crosscheck.txt"
     fi
     [ "${KEEP:-0}" = 1 ] || rm -rf "$d"

@@ -3,7 +3,7 @@
 
 kiss-odom checks itself against the reference stage by stage and end to end. This driver is the
 only place that talks to the reference: every command reads its inputs from files, runs one
-reference entry point, and writes the outputs to files. `kiss-odom crosscheck` calls it, and
+reference entry point, and writes the outputs to files. `kiss-odom-dev crosscheck` calls it, and
 `gen_golden.py` imports it to produce the committed goldens under `fixtures/golden/`.
 
     python driver.py <command> [options]      (python: a venv made from requirements.txt)
@@ -59,7 +59,7 @@ batch        Several of the commands above in one process, in order (saves the i
              [["downsample", "--points", "a.f64", "--voxel", "0.5", "--out", "b.f64"], ...].
              The first command that builds a Preprocessor or Registration fixes the reference's
              thread count for the whole batch (see Threads).
-bench        KissICP.register_frame timed on preloaded frames, for `kiss-odom bench`.
+bench        KissICP.register_frame timed on preloaded frames, for `kiss-odom-dev bench`.
                (--frames-dir DIR | --dataset DIR --format kitti|generic [--frames A:B]
                [--bin-layout L]) [--max-range R] [--min-range R] [--voxel-size V]
                [--deskew|--no-deskew] [--threads N] (--serve | [--repeats 3] --out results.json)
@@ -569,7 +569,7 @@ def versions() -> dict:
 
 
 def load_frames_dir(folder: Path):
-    """Frames written by `kiss-odom bench`: `frames.json` ({"frames": [{"name", "points",
+    """Frames written by `kiss-odom-dev bench`: `frames.json` ({"frames": [{"name", "points",
     "stamps"}]}) with the counts, `points.f64` (all points, x y z, little-endian f64) and
     `stamps.f64` (all per-point times, concatenated), in frame order. Same tuples as
     `load_frames`."""
@@ -822,7 +822,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="JSON list of argument lists, run in order")  # fmt: skip
 
     p = sub.add_parser("bench", help="timed register_frame runs on preloaded frames")
-    p.add_argument("--frames-dir", type=Path, help="frames written by kiss-odom bench")
+    p.add_argument("--frames-dir", type=Path, help="frames written by kiss-odom-dev bench")
     p.add_argument("--dataset", type=Path)
     p.add_argument("--format", choices=["kitti", "generic"])
     p.add_argument("--frames", help="A:B, Python slice of the sorted frames (B exclusive)")

@@ -85,16 +85,25 @@ pub fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
         .unwrap_or_else(|| "(non-string panic payload)".into())
 }
 
-/// `kiss-odom ARGS...` in process; a panic fails the test naming the command.
+/// `kiss-odom ARGS...` in process (`kiss-odom-dev` for its commands, `bench` and
+/// `crosscheck`); a panic fails the test naming the command.
 pub fn kiss_odom(args: &[OsString], out: &Path) -> Run {
-    let mut argv: Vec<OsString> = vec!["kiss-odom".into()];
+    let developer = matches!(
+        args.first().and_then(|a| a.to_str()),
+        Some("bench" | "crosscheck")
+    );
+    let (name, main_with): (&str, fn(Vec<OsString>, &mut dyn std::io::Write) -> i32) = if developer
+    {
+        ("kiss-odom-dev", kiss_odom::dev::main_with)
+    } else {
+        ("kiss-odom", kiss_odom::cli::main_with)
+    };
+    let mut argv: Vec<OsString> = vec![name.into()];
     argv.extend(args.iter().cloned());
     let shown: Vec<String> = argv.iter().map(|a| a.to_string_lossy().into()).collect();
     let mut err = Vec::new();
-    let code = catch_unwind(AssertUnwindSafe(|| {
-        kiss_odom::cli::main_with(argv, &mut err)
-    }))
-    .unwrap_or_else(|p| panic!("`{}` panicked: {}", shown.join(" "), panic_text(p.as_ref())));
+    let code = catch_unwind(AssertUnwindSafe(|| main_with(argv, &mut err)))
+        .unwrap_or_else(|p| panic!("`{}` panicked: {}", shown.join(" "), panic_text(p.as_ref())));
     Run {
         code,
         stderr: String::from_utf8_lossy(&err).into_owned(),

@@ -15,10 +15,10 @@ fn repo() -> PathBuf {
 }
 
 fn cli(args: &[&OsString]) -> (i32, String) {
-    let mut argv: Vec<OsString> = vec!["kiss-odom".into(), "crosscheck".into()];
+    let mut argv: Vec<OsString> = vec!["kiss-odom-dev".into(), "crosscheck".into()];
     argv.extend(args.iter().map(|a| (*a).clone()));
     let mut err = Vec::new();
-    let code = kiss_odom::cli::main_with(argv, &mut err);
+    let code = kiss_odom::dev::main_with(argv, &mut err);
     (code, String::from_utf8_lossy(&err).into_owned())
 }
 

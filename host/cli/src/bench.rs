@@ -1,4 +1,4 @@
-//! `kiss-odom bench`: speed, latency and memory of kiss-odom next to the reference kiss-icp
+//! `kiss-odom-dev bench`: speed, latency and memory of kiss-odom next to the reference kiss-icp
 //! 1.3.0 on the same frames.
 //!
 //! The frames are read into memory first (file reading is never timed) and handed to the
@@ -13,8 +13,9 @@ mod print;
 pub mod reference;
 pub mod report;
 
-use crate::args::{CommonArgs, ReferenceArgs};
+use crate::args::CommonArgs;
 use crate::memory::{peak_rss_bytes, reset_peak_rss, rss_bytes};
+use crate::reference::ReferenceArgs;
 use crate::stats::median;
 use anyhow::{bail, Context, Result};
 use kiss_odom_core::Capacities;
@@ -28,11 +29,11 @@ use report::{first_counted, Memory, OurRun, Report, SideStats, Spread};
 use std::io::Write;
 use std::path::PathBuf;
 
-/// `kiss-odom bench` arguments.
+/// `kiss-odom-dev bench` arguments.
 #[derive(Debug, clap::Args)]
 #[command(
-    mut_arg("config", |a| a.help(crate::args::CONFIG_HELP_WITH_REFERENCE)),
-    mut_arg("threads", |a| a.help(crate::args::THREADS_HELP_WITH_REFERENCE)),
+    mut_arg("config", |a| a.help(crate::reference::CONFIG_HELP_WITH_REFERENCE)),
+    mut_arg("threads", |a| a.help(crate::reference::THREADS_HELP_WITH_REFERENCE)),
 )]
 pub struct BenchArgs {
     /// Dataset: a KITTI `sequences/XX` folder, a folder of .bin/.ply/.pcd frames, a .bag or an
@@ -83,7 +84,7 @@ pub fn load(args: &BenchArgs, scan_points: usize, err: &mut dyn Write) -> Result
     Ok(out)
 }
 
-/// Runs `kiss-odom bench`.
+/// Runs `kiss-odom-dev bench`.
 pub fn execute(args: &BenchArgs, err: &mut dyn Write) -> Result<i32> {
     if args.repeats == 0 {
         bail!("--repeats must be at least 1");
@@ -93,7 +94,7 @@ pub fn execute(args: &BenchArgs, err: &mut dyn Write) -> Result<i32> {
     }
     let settings = args.common.settings(Some(1))?;
     if !args.no_reference {
-        crate::args::check_reference_compatible(&settings)?;
+        crate::reference::check_reference_compatible(&settings)?;
     }
     if let Some(w) = settings.threads_warning() {
         writeln!(err, "warning: {w}")?;

@@ -33,10 +33,6 @@ pub enum Command {
     Eval(crate::eval::EvalArgs),
     /// Generate a LiDAR dataset with exact ground truth by ray casting a synthetic scene.
     Simulate(crate::simulate::SimulateArgs),
-    /// Run kiss-odom and the reference kiss-icp 1.3.0 on the same frames and compare them.
-    Crosscheck(crate::crosscheck::CrosscheckArgs),
-    /// Time kiss-odom against the reference on preloaded frames.
-    Bench(crate::bench::BenchArgs),
     /// The smallest fixed capacities that held a run, and their bytes of state on each target
     /// (to size firmware from a recording).
     Size(crate::size::SizeArgs),
@@ -49,35 +45,45 @@ pub enum Command {
 /// printed to `err` as one line naming the file and the reason; nothing here panics on bad
 /// input.
 pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
-    let cli = match Cli::try_parse_from(args) {
+    let cli = match parse::<Cli>(args, err) {
         Ok(c) => c,
-        Err(e) => {
-            // --help and --version exit 0; usage errors exit 1 like every other error.
-            let code = if e.use_stderr() { 1 } else { 0 };
-            // Help read through a pipe that closes early (`--help | head`) is no error: a write
-            // that fails is not reported, where `print!` would panic.
-            let _ = if e.use_stderr() {
-                write!(err, "{e}")
-            } else {
-                write!(std::io::stdout(), "{e}")
-            };
-            return code;
-        }
+        Err(code) => return code,
     };
-    let result = match cli.command {
-        Command::Run(a) => crate::run::execute(&a, err),
-        Command::Live(a) => crate::live::execute(&a, err),
-        Command::Replay(a) => crate::replay::execute(&a),
-        Command::ListenPoses(a) => crate::listen::execute(&a, err),
-        Command::Convert(a) => crate::convert::execute(&a, err),
-        Command::Eval(a) => crate::eval::execute(&a),
-        Command::Simulate(a) => crate::simulate::execute(&a),
-        Command::Crosscheck(a) => crate::crosscheck::execute(&a, err),
-        Command::Bench(a) => crate::bench::execute(&a, err),
-        Command::Size(a) => crate::size::execute(&a, err),
-        #[cfg(feature = "ros2")]
-        Command::Ros2(a) => crate::ros2::execute(&a, err),
-    };
+    exit_code(
+        match cli.command {
+            Command::Run(a) => crate::run::execute(&a, err),
+            Command::Live(a) => crate::live::execute(&a, err),
+            Command::Replay(a) => crate::replay::execute(&a),
+            Command::ListenPoses(a) => crate::listen::execute(&a, err),
+            Command::Convert(a) => crate::convert::execute(&a, err),
+            Command::Eval(a) => crate::eval::execute(&a),
+            Command::Simulate(a) => crate::simulate::execute(&a),
+            Command::Size(a) => crate::size::execute(&a, err),
+            #[cfg(feature = "ros2")]
+            Command::Ros2(a) => crate::ros2::execute(&a, err),
+        },
+        err,
+    )
+}
+
+/// The command line as `C`, or the exit status when it is not one (help and version exit 0,
+/// usage errors 1 like every other error).
+pub(crate) fn parse<C: Parser>(args: Vec<OsString>, err: &mut dyn Write) -> Result<C, i32> {
+    C::try_parse_from(args).map_err(|e| {
+        let code = if e.use_stderr() { 1 } else { 0 };
+        // Help read through a pipe that closes early (`--help | head`) is no error: a write
+        // that fails is not reported, where `print!` would panic.
+        let _ = if e.use_stderr() {
+            write!(err, "{e}")
+        } else {
+            write!(std::io::stdout(), "{e}")
+        };
+        code
+    })
+}
+
+/// A command's exit status; an error is printed to `err` as one line.
+pub(crate) fn exit_code(result: anyhow::Result<i32>, err: &mut dyn Write) -> i32 {
     match result {
         Ok(code) => code,
         Err(e) => {
@@ -92,47 +98,25 @@ mod tests {
     use super::*;
     use clap::CommandFactory;
 
-    fn help(command: &str) -> String {
-        let mut cli = Cli::command();
-        let sub = cli.find_subcommand_mut(command).unwrap();
-        sub.render_long_help().to_string()
-    }
-
     #[test]
     fn the_command_line_is_consistent() {
         Cli::command().debug_assert();
     }
 
     #[test]
-    fn each_command_states_its_own_defaults_for_the_shared_options() {
-        let (run, bench, cross) = (help("run"), help("bench"), help("crosscheck"));
-        for h in [&run, &bench, &cross] {
-            for flag in [
-                "--frames",
-                "--max-range",
-                "--voxel-size",
-                "--scalar",
-                "--threads",
-            ] {
-                assert!(h.contains(flag), "{flag} missing:\n{h}");
-            }
-        }
-        assert!(
-            run.contains("[default: the settings' (all cores)]"),
-            "{run}"
-        );
-        for h in [&bench, &cross] {
+    fn the_users_command_has_no_developer_command() {
+        for developer in ["crosscheck", "bench"] {
             assert!(
-                h.contains("[default: 1: the reference is nondeterministic"),
-                "{h}"
+                Cli::command().find_subcommand(developer).is_none(),
+                "{developer}"
             );
-            assert!(h.contains("The reference gets only the range"), "{h}");
-            assert!(h.contains("--python") && h.contains("--driver"), "{h}");
+            let mut err = Vec::new();
+            let code = main_with(vec!["kiss-odom".into(), developer.into()], &mut err);
+            let err = String::from_utf8_lossy(&err);
+            assert!(
+                code == 1 && err.contains("unrecognized subcommand"),
+                "{err}"
+            );
         }
-        assert!(cross.contains("f32 also runs the f64 build"), "{cross}");
-        assert!(
-            !run.contains("The reference gets") && !run.contains("--python"),
-            "{run}"
-        );
     }
 }

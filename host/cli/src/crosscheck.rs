@@ -1,4 +1,4 @@
-//! `kiss-odom crosscheck`: kiss-odom against the reference kiss-icp 1.3.0 on the same data.
+//! `kiss-odom-dev crosscheck`: kiss-odom against the reference kiss-icp 1.3.0 on the same data.
 //!
 //! It sits beside the pipeline as its referee. Stage checks run the core's public stage APIs
 //! and the matching reference entry points (through `tests/reference/driver.py`) on identical
@@ -20,7 +20,8 @@ mod stages;
 
 pub use report::{Report, TableStyle};
 
-use crate::args::{CommonArgs, ReferenceArgs};
+use crate::args::CommonArgs;
+use crate::reference::ReferenceArgs;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use kiss_odom_drive::settings::{Scalar, Settings};
@@ -29,11 +30,11 @@ use nalgebra::Isometry3;
 use std::io::Write;
 use std::path::PathBuf;
 
-/// `kiss-odom crosscheck` arguments.
+/// `kiss-odom-dev crosscheck` arguments.
 #[derive(Debug, clap::Args)]
 #[command(
-    mut_arg("config", |a| a.help(crate::args::CONFIG_HELP_WITH_REFERENCE)),
-    mut_arg("threads", |a| a.help(crate::args::THREADS_HELP_WITH_REFERENCE)),
+    mut_arg("config", |a| a.help(crate::reference::CONFIG_HELP_WITH_REFERENCE)),
+    mut_arg("threads", |a| a.help(crate::reference::THREADS_HELP_WITH_REFERENCE)),
     mut_arg("scalar", |a| a.help(
         "Scalar of the end-to-end run [default: f64]; f32 also runs the f64 build and \
          reports against both (stage checks always use f64)"
@@ -84,7 +85,7 @@ pub enum Only {
 
 fn settings_of(args: &CrosscheckArgs) -> Result<Settings> {
     let s = args.common.settings(Some(1))?;
-    crate::args::check_reference_compatible(&s)?;
+    crate::reference::check_reference_compatible(&s)?;
     Ok(s)
 }
 
@@ -109,7 +110,7 @@ fn parse_motion(text: &str) -> Result<Isometry3<f64>> {
     Ok(kiss_odom_io::pose::pose_of(&m))
 }
 
-/// Runs `kiss-odom crosscheck`: prints the table to stdout, breaches to `err`; 1 on a breach.
+/// Runs `kiss-odom-dev crosscheck`: prints the table to stdout, breaches to `err`; 1 on a breach.
 pub fn execute(args: &CrosscheckArgs, err: &mut dyn Write) -> Result<i32> {
     if let Some(path) = &args.json {
         kiss_odom_io::write::remove_stale_file(path)?;
@@ -214,7 +215,7 @@ fn progress(args: &CrosscheckArgs, err: &mut dyn Write, what: &str) -> Result<()
 /// The command that reproduces this run (paths of Python, driver and JSON left out: they do
 /// not change the figures).
 pub fn command_of(args: &CrosscheckArgs) -> String {
-    let mut c = format!("kiss-odom crosscheck {}", args.dataset.display());
+    let mut c = format!("kiss-odom-dev crosscheck {}", args.dataset.display());
     let mut flag = |name: &str, value: Option<String>| {
         if let Some(v) = value {
             c.push_str(&format!(" --{name}"));
@@ -431,11 +432,11 @@ mod tests {
         ];
         assert_eq!(
             command_of(&parse(&argv)),
-            "kiss-odom crosscheck data/seq --frames 3.. --threads 2 --scalar f32 --only stages"
+            "kiss-odom-dev crosscheck data/seq --frames 3.. --threads 2 --scalar f32 --only stages"
         );
         assert_eq!(
             command_of(&parse(&["d"])),
-            "kiss-odom crosscheck d",
+            "kiss-odom-dev crosscheck d",
             "defaults are left out"
         );
     }

@@ -1,4 +1,4 @@
-//! Order statistics of timings: the latency figures of `run` and `bench`.
+//! Order statistics of timings: the latency figures of `run` and `bench` (the median: `bench`'s).
 
 /// Percentile by nearest rank of sorted values (0 when empty).
 pub fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -10,6 +10,7 @@ pub fn percentile(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// Median of unsorted values (the mean of the middle two for an even count; 0 when empty).
+#[cfg(feature = "dev")]
 pub fn median(v: &[f64]) -> f64 {
     if v.is_empty() {
         return 0.0;
@@ -38,6 +39,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(feature = "dev")]
     fn medians_of_odd_and_even_counts() {
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);

@@ -1,4 +1,4 @@
-//! The table `kiss-odom bench` prints.
+//! The table `kiss-odom-dev bench` prints.
 
 use super::report::{Report, SideStats};
 

@@ -1,4 +1,4 @@
-//! The reference side of `kiss-odom bench`: kiss-icp 1.3.0 in a long-lived Python process
+//! The reference side of `kiss-odom-dev bench`: kiss-icp 1.3.0 in a long-lived Python process
 //! (`driver.py bench --serve`) that holds the same frames in memory and runs on request, so the
 //! two implementations can take turns.
 
