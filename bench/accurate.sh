@@ -53,7 +53,7 @@ for p in $PROFILES; do
     echo "== $name" >&2
     ours "$name" "$d" default >/dev/null
     ours "$name" "$d" accurate --preset accurate "${extra[@]}" >/dev/null
-    [ "${F32:-1}" = 0 ] || ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
+    [ "${F32:-1}" = 0 ] || ours "$name" "$d" accuratef32 --preset accurate --set runtime.scalar=f32 "${extra[@]}" >/dev/null
     genz "$name" "$d" "$preset" "$d/poses.txt"
     mad "$name" "$d" "$d/poses.txt"
   done
@@ -64,7 +64,7 @@ for sq in $( [[ " $PROFILES " == *" kitti "* ]] && ls "$KITTI/sequences"); do
   echo "== $name" >&2
   gt=$(ours "$name" "$d" default)
   ours "$name" "$d" accurate --preset accurate "${extra[@]}" >/dev/null
-  [ "${F32:-1}" = 0 ] || ours "$name" "$d" accuratef32 --preset accurate --scalar f32 "${extra[@]}" >/dev/null
+  [ "${F32:-1}" = 0 ] || ours "$name" "$d" accuratef32 --preset accurate --set runtime.scalar=f32 "${extra[@]}" >/dev/null
   genz "$name" "$d" kitti "$gt" --no-deskew
   mad "$name" "$d" "$gt" --kitti
 done

@@ -28,10 +28,10 @@ runs=(../shared/data/kitti-mini/sequences/01 ../shared/data/kitti-mini/sequences
 echo "| budget | run | ATE m | KITTI t err % | frames stopped by the budget | worst frame work |"
 echo "|---|---|---|---|---|---|"
 for b in "${budgets[@]}"; do
-  flag=(); [ "$b" = none ] || flag=(--budget "$b")
+  flag=(); [ "$b" = none ] || flag=(--set registration.work_budget="$b")
   for r in "${runs[@]}"; do
     o="$out/$b-$(basename "$r")"
-    $B run "$r" --out "$o" -q --threads 1 --capacities small --scalar f32 --storage quantized \
+    $B run "$r" --out "$o" -q --threads 1 --set capacities=small --set runtime.scalar=f32 --set runtime.map_storage=quantized \
       --max-range 50 --voxel-size 1 "${flag[@]}" >/dev/null 2>&1 || true
     python3 - "$o" "$b" "$(basename "$r")" <<'P'
 import csv, json, sys

@@ -9,9 +9,9 @@
 # PROFILES picks the runs (default "corridor plane tunnel field urban fast kitti"; `kitti` is
 # every kitti-mini sequence). GenZ-ICP runs its `corridor` preset on corridor, plane and tunnel,
 # `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini; robust mode runs with
-# its vehicle prior everywhere (--lateral-prior 1: every run is a car's) and its tunnel setting
+# its vehicle prior everywhere (--set registration.lateral_prior=1: every run is a car's) and its tunnel setting
 # where GenZ-ICP has its corridor preset: every frame with plane terms, r_max / 200 voxels and
-# the hold prior (--plane-gate 1 --voxel-size 0.5 --prediction-prior 0.01).
+# the hold prior (--set registration.plane_gate=1 --voxel-size 0.5 --set registration.prediction_prior=0.01).
 #
 # The drives are generated into $GEN (default target/bench/degeneracy; kept for reruns).
 # Writes $OUT/results.jsonl (one line per run and system, with the estimated over the true
@@ -35,16 +35,16 @@ for p in $PROFILES; do
   case $p in
     kitti) continue ;;
     corridor | plane | tunnel)
-      preset=corridor fine=(--lateral-prior 1 --plane-gate 1 --voxel-size 0.5 --prediction-prior 0.01) ;;
-    *) preset=outdoor fine=(--lateral-prior 1) ;;
+      preset=corridor fine=(--set registration.lateral_prior=1 --set registration.plane_gate=1 --voxel-size 0.5 --set registration.prediction_prior=0.01) ;;
+    *) preset=outdoor fine=(--set registration.lateral_prior=1) ;;
   esac
   for s in $SEEDS; do
     d=$GEN/$p-$FRAMES-s$s
     [ -f "$d/poses.txt" ] || "$BIN" simulate --out "$d" --frames "$FRAMES" --seed "$s" --profile "$p" >/dev/null
     name=$p-s$s
     echo "== $name" >&2
-    ours "$name" "$d" reference --degeneracy reference >/dev/null
-    ours "$name" "$d" robust --degeneracy robust "${fine[@]}" >/dev/null
+    ours "$name" "$d" reference --set registration.degeneracy=reference >/dev/null
+    ours "$name" "$d" robust --set registration.degeneracy=robust "${fine[@]}" >/dev/null
     genz "$name" "$d" "$preset" "$d/poses.txt"
   done
 done
@@ -52,8 +52,8 @@ for sq in $( [[ " $PROFILES " == *" kitti "* ]] && ls "$KITTI/sequences"); do
   d=$KITTI/sequences/$sq
   name=kitti-$sq
   echo "== $name" >&2
-  gt=$(ours "$name" "$d" reference --degeneracy reference)
-  ours "$name" "$d" robust --degeneracy robust --lateral-prior 1 >/dev/null
+  gt=$(ours "$name" "$d" reference --set registration.degeneracy=reference)
+  ours "$name" "$d" robust --set registration.degeneracy=robust --set registration.lateral_prior=1 >/dev/null
   genz "$name" "$d" kitti "$gt" --no-deskew
 done
 python3 bench/degeneracy_table.py "$OUT/results.jsonl"

@@ -32,10 +32,10 @@ inputs=(
 )
 modes=(
   "default|"
-  "default-f32|--scalar f32"
+  "default-f32|--set runtime.scalar=f32"
   "accurate|--preset accurate"
-  "accurate-f32|--preset accurate --scalar f32"
-  "robust|--degeneracy robust"
+  "accurate-f32|--preset accurate --set runtime.scalar=f32"
+  "robust|--set registration.degeneracy=robust"
 )
 run() { # run NAME INPUT ARGS...
   local name=$1 input=$2

@@ -36,7 +36,7 @@ run() { # run DATA DRIVE NAME ARGS...: one run of DATA, its row under DRIVE's na
   local data=$1 d=$2 name=$3; shift 3
   local out="$d.$name"
   rm -rf "$out"
-  $B run "$data" --deskew "$@" --out "$out" -q 2>"$out.err" >/dev/null || true
+  $B run "$data" --set data.deskew=true "$@" --out "$out" -q 2>"$out.err" >/dev/null || true
   local first rejected
   first=$(python3 -c "import csv,sys; r=[x['imu_prior'] for x in csv.DictReader(open('$out/frames.csv'))] if '$name' not in ('off','acc_off') else []; print(next((k for k,v in enumerate(r) if v=='rejected'), -1))")
   rejected=$(python3 -c "import json; print(json.load(open('$out/summary.json')).get('imu_rejected_frames', 0))")
@@ -58,7 +58,7 @@ for prof in drone handheld; do
       --profile "$prof" --imu-rate 200 --overwrite >/dev/null
     run "$d" "$d" off
     run "$d" "$d" right --imu auto
-    run "$d" "$d" ext180 --imu auto --imu-extrinsic 0,0,0,180,0,0
+    run "$d" "$d" ext180 --imu auto --set "imu.extrinsic=[0,0,0,180,0,0]"
     run "$d" "$d" acc_off --preset accurate
     # The right IMU for the first frames only, then none: how far --imu off's ATE moves when
     # only its first frames change (the noise a wrong IMU's ratio is read against).

@@ -28,11 +28,11 @@ for spec in "drone 500" "handheld 1000"; do
       --imu-rate 200 --overwrite >/dev/null
     for variant in "off:" "prior:--imu auto" "mean rate:--imu auto --config $DATA/mean.toml" \
                    "gain 0.02:--imu auto --config $DATA/g002.toml" \
-                   "gain 0:--imu auto --config $DATA/g0.toml" "prior, no deskew:--imu auto --no-deskew"; do
+                   "gain 0:--imu auto --config $DATA/g0.toml" "prior, no deskew:--imu auto --set data.deskew=false"; do
       name=${variant%%:*}; args=${variant#*:}
       out="$d.${name// /_}"; out=${out//,/}
       # shellcheck disable=SC2086
-      $B run "$d" --deskew $args --out "$out" -q 2>/dev/null >/dev/null
+      $B run "$d" --set data.deskew=true $args --out "$out" -q 2>/dev/null >/dev/null
       printf '%s\t%s\t%s\t%s\n' "$1" "$seed" "$name" "$(tr -d '\n ' < "$out/summary.json")" >> "$rows"
     done
   done

@@ -38,9 +38,9 @@ d="$DATA/drone-$SEED"
   --imu-rate 200 --overwrite >/dev/null
 $B run "$d" --out "$d.off" -q 2>/dev/null; row "drone $SEED" "LiDAR only" "$d.off"
 $B run "$d" --imu auto --out "$d.prior" -q 2>/dev/null; row "drone $SEED" "prior" "$d.prior"
-$B run "$d" --imu auto --imu-extrinsic 0,0,0,5,0,0 --out "$d.rot5" -q 2>/dev/null
+$B run "$d" --imu auto --set "imu.extrinsic=[0,0,0,5,0,0]" --out "$d.rot5" -q 2>/dev/null
 row "drone $SEED" "prior, extrinsic off by 5 deg (roll)" "$d.rot5"
-$B run "$d" --imu auto --imu-time-offset 0.02 --out "$d.shift20" -q 2>/dev/null
+$B run "$d" --imu auto --set imu.time_offset=0.02 --out "$d.shift20" -q 2>/dev/null
 row "drone $SEED" "prior, clock off by 20 ms" "$d.shift20"
 # The IMU stops after each of STOPS s (default: 25, half-way): the later samples are gone.
 for t in ${STOPS:-25}; do

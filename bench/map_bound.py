@@ -145,12 +145,16 @@ def filled(binary, old, python, driver, datasets):
         for caps, more in sets:
             for scalar, storage in (("f64", "exact"), ("f32", "quantized")):
                 tag = f"{d.name}-{caps}-{scalar}"
-                flags = ["--capacities", caps, *more, "--scalar", scalar, "--storage", storage,
-                         "--threads", "1", "-q", *extra]
+                common = [*more, "--threads", "1", "-q", *extra]
+                flags = ["--set", f"capacities={caps}", "--set", f"runtime.scalar={scalar}",
+                         "--set", f"runtime.map_storage={storage}", *common]
+                # A build from before `--set` took these as flags of their own.
+                old_flags = ["--capacities", caps, "--scalar", scalar, "--storage", storage,
+                             *common]
                 new, was = OUT / "filled" / tag, OUT / "filled" / f"{tag}-old"
                 run = sh(binary, "run", d, "--out", new, *flags)
                 if old != "-":
-                    sh(old, "run", d, "--out", was, *flags)
+                    sh(old, "run", d, "--out", was, *old_flags)
                 s = json.loads((new / "summary.json").read_text())
                 cfg = (new / "config.toml").read_text()
                 voxel = float(next(l.split("=")[1] for l in cfg.splitlines()

@@ -22,8 +22,8 @@ d="$DATA/$sensor-$profile-$seed"
   --profile "$profile" --sensor "$sensor" --format pcap --overwrite >/dev/null
 kitti() { $B eval --json "$1/poses_kitti.txt" "$d/poses.txt" | $PY -c \
   'import json, sys; m = json.load(sys.stdin); print("%.4f %.4f" % (m["kitti_t_err_pct"], m["ate_m"]))'; }
-$B run "$d/packets.pcap" --deskew --out "$d.pcap" -q >/dev/null
-$B run "$d" --deskew --out "$d.direct" -q >/dev/null
+$B run "$d/packets.pcap" --set data.deskew=true --out "$d.pcap" -q >/dev/null
+$B run "$d" --set data.deskew=true --out "$d.direct" -q >/dev/null
 echo "pcap $(kitti "$d.pcap")"
 echo "direct $(kitti "$d.direct")"
 for k in $(seq 1 "$N"); do
@@ -43,7 +43,7 @@ for name in sorted(os.listdir(src + "/velodyne")):
     p[:, :3] += rng.uniform(-5e-4, 5e-4, size=(len(p), 3)).astype("<f4")
     p.tofile(f"{dst}/velodyne/{name}")
 P
-  $B run "$p" --deskew --out "$p.run" -q >/dev/null
+  $B run "$p" --set data.deskew=true --out "$p.run" -q >/dev/null
   echo "moved$k $(kitti "$p.run")"
   rm -rf "$p/velodyne"
 done | tee "$d.moved.txt"

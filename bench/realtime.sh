@@ -21,10 +21,10 @@ U="$DATA/urban-7-200"
 REPEATS=${REPEATS:-3}
 for s in 01 02 04 05; do
   echo "== kitti-mini $s f64 exact"
-  $D bench ../shared/data/kitti-mini/sequences/$s --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 1
+  $D bench ../shared/data/kitti-mini/sequences/$s --threads 1 --set runtime.scalar=f64 --repeats "$REPEATS" --latency-from 1
 done
 echo "== urban-7-200 f64 exact"
-$D bench "$U" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10
+$D bench "$U" --threads 1 --set runtime.scalar=f64 --repeats "$REPEATS" --latency-from 10
 # The latency spread with and without a budget (no reference: it has no budget), on the urban
 # drive and a fast one. bench prints wall-clock and this thread's CPU time per frame; on a
 # shared machine the CPU time is the figure other processes do not inflate.
@@ -33,11 +33,11 @@ F="$DATA/fast-5-500"
 for d in "$U" "$F"; do
   for b in none ${BUDGETS:-300000 150000 100000 50000}; do
     echo "== $d f64 exact, budget $b"
-    flag=(); [ "$b" = none ] || flag=(--budget "$b")
-    $D bench "$d" --threads 1 --scalar f64 --repeats "$REPEATS" --latency-from 10 "${flag[@]}" --no-reference
+    flag=(); [ "$b" = none ] || flag=(--set registration.work_budget="$b")
+    $D bench "$d" --threads 1 --set runtime.scalar=f64 --repeats "$REPEATS" --latency-from 10 "${flag[@]}" --no-reference
   done
 done
 for d in ../shared/data/kitti-mini/sequences/01 "$U"; do
   echo "== $d f64 quantized (map bytes)"
-  $D bench "$d" --threads 1 --scalar f64 --storage quantized --repeats 1 --latency-from 1
+  $D bench "$d" --threads 1 --set runtime.scalar=f64 --set runtime.map_storage=quantized --repeats 1 --latency-from 1
 done

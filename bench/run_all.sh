@@ -71,14 +71,14 @@ if has crosscheck; then
   mkdir -p "$OUT/crosscheck"
   for s in 01 02 04 05; do
     log "crosscheck kitti-mini $s"
-    "$DEV" crosscheck "$KITTI/sequences/$s" --scalar f32 --table markdown \
+    "$DEV" crosscheck "$KITTI/sequences/$s" --set runtime.scalar=f32 --table markdown \
       --json "$OUT/crosscheck/kitti-$s.json"
   done
   log "crosscheck ncd-ouster-deskew"
   "$DEV" crosscheck ../shared/data/ncd-ouster-deskew --table markdown \
     --json "$OUT/crosscheck/ouster.json"
   log "crosscheck urban-1000"
-  "$DEV" crosscheck "$GEN/crosscheck-urban-1000" --scalar f32 --table markdown \
+  "$DEV" crosscheck "$GEN/crosscheck-urban-1000" --set runtime.scalar=f32 --table markdown \
     --json "$OUT/crosscheck/urban-1000.json"
 fi
 
@@ -93,7 +93,7 @@ if has speed; then
       for scalar in f64 f32; do
         name=$ds-t$threads-$scalar
         log "bench $name"
-        "$DEV" bench "$path" --threads "$threads" --scalar "$scalar" --repeats "$rep" \
+        "$DEV" bench "$path" --threads "$threads" --set runtime.scalar="$scalar" --repeats "$rep" \
           --latency-from "$from" --json "$OUT/speed/$name.json" | tee "$OUT/speed/$name.txt"
       done
     done
@@ -121,7 +121,7 @@ if has state; then
       set -- $build
       o="$OUT/state/$c-$1"
       "$BIN" run fixtures/kitti-05-reduced --out "$o" --quiet --frames ..1 \
-        --capacities "$c" --scalar "$1" --storage "$2" >/dev/null
+        --set capacities="$c" --set runtime.scalar="$1" --set runtime.map_storage="$2" >/dev/null
       row="$row | $(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["state_bytes"], "B")' "$o/summary.json")"
     done
     echo "$row |"
@@ -141,7 +141,7 @@ if has small; then
     "$BIN" run "$path" --quiet --threads 1 --max-range 50 --voxel-size 1 \
       --out "$OUT/small/$ds-full-50m"
     "$BIN" run "$path" --quiet --threads 1 --max-range 50 --voxel-size 1 \
-      --capacities small --scalar f32 --storage quantized --out "$OUT/small/$ds-small"
+      --set capacities=small --set runtime.scalar=f32 --set runtime.map_storage=quantized --out "$OUT/small/$ds-small"
   done
 fi
 

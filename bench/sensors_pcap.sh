@@ -39,7 +39,7 @@ for spec in "${specs[@]}"; do
       # AT128's: the .dat).
       qt128|ot128|xt16|xt32m|pandar40p|pandar64|qt64) src=(--calibration "$d/packets.csv") ;;
       at128) src=(--calibration "$d/packets.dat") ;;
-      *) src=(--cut-angle 0) ;;
+      *) src=(--set input.cut_angle=0) ;;
     esac
     for deskew in deskew no-deskew; do
       $B run "$d/packets.pcap" "${src[@]}" --"$deskew" --out "$d.pcap.$deskew" -q >/dev/null

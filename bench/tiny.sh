@@ -21,8 +21,8 @@ for spec in "urban 11" "urban 12" "urban 13" "fast 11"; do
   [ -f "$d/sim.toml" ] || $B simulate --out "$d" --frames 500 --seed "$2" --profile "$1" \
     --beams 16 --columns 1800 --fov-up 15 --fov-down -15 --max-range 100 --overwrite >/dev/null
   $B run "$d" --out "$out/full-$1-$2" -q --threads 1 --config "$out/full.toml" >/dev/null
-  $B run "$d" --out "$out/tiny-$1-$2" -q --threads 1 --capacities tiny --scalar f32 \
-    --storage quantized >/dev/null
+  $B run "$d" --out "$out/tiny-$1-$2" -q --threads 1 --set capacities=tiny --set runtime.scalar=f32 \
+    --set runtime.map_storage=quantized >/dev/null
   python3 - "$out/full-$1-$2" "$out/tiny-$1-$2" "vlp16-$1-$2" <<'P'
 import csv, json, sys
 full, tiny, name = sys.argv[1:]

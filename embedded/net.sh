@@ -79,7 +79,7 @@ short="$(gen vlp16-20 20)"
 tools="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | awk '/^host:/{print $2}')/bin"
 # The firmware's configuration, as `run` options: a VLP-16 (the real recording's product byte
 # says HDL-32E, its timing VLP-16), sweeps cut at azimuth 0, Config::tiny in f32.
-config=(--sensor vlp16 --cut-angle 0 --capacities tiny --scalar f32 --storage quantized --budget "$budget")
+config=(--sensor vlp16 --set input.cut_angle=0 --set capacities=tiny --set runtime.scalar=f32 --set runtime.map_storage=quantized --set registration.work_budget="$budget")
 
 # boot NAME PCAP RATE [plugin args...]: one fresh boot fed one replay; the firmware's output in
 # $out/NAME/firmware.txt, the poses in $out/NAME/poses_kitti.txt. Sets `sent` and `stats`.

@@ -36,37 +36,37 @@ VELODYNE_CAL = "src/nebula_velodyne/nebula_velodyne_decoders/calibration"
 # ours.
 MODELS = [
     ("Hesai XT32", f"{HESAI}/xt32/1673400677802009732", f"{HESAI}/xt32/1673400678101968885.pcd",
-     f"{HESAI_CAL}/PandarXT32.csv", ["--cut-angle", "0"], (0.05, 120.0, 0, 360, 0.1)),
+     f"{HESAI_CAL}/PandarXT32.csv", ["--set", "input.cut_angle=0"], (0.05, 120.0, 0, 360, 0.1)),
     ("Hesai XT16", f"{HESAI}/xt16/1732848127890747768", f"{HESAI}/xt16/1732848128093928016.pcd",
-     f"{HESAI_CAL}/PandarXT16.csv", ["--cut-angle", "0"], (0.05, 120.0, 0, 360, 0.1)),
+     f"{HESAI_CAL}/PandarXT16.csv", ["--set", "input.cut_angle=0"], (0.05, 120.0, 0, 360, 0.1)),
     ("Hesai XT32M", f"{HESAI}/xt32m/1660893203042895158", f"{HESAI}/xt32m/1660893203292679064.pcd",
-     f"{HESAI_CAL}/PandarXT32M.csv", ["--cut-angle", "0"], (0.5, 300.0, 0, 360, 0.1)),
+     f"{HESAI_CAL}/PandarXT32M.csv", ["--set", "input.cut_angle=0"], (0.5, 300.0, 0, 360, 0.1)),
     ("Hesai QT128", f"{HESAI}/qt128/1730273789074637152", f"{HESAI}/qt128/1730273789174759609.pcd",
-     f"{HESAI_CAL}/PandarQT128.csv", ["--cut-angle", "0"], (0.3, 300.0, 0, 360, 0.1)),
+     f"{HESAI_CAL}/PandarQT128.csv", ["--set", "input.cut_angle=0"], (0.3, 300.0, 0, 360, 0.1)),
     ("Hesai OT128", f"{HESAI}/ot128/1730271167765338806", f"{HESAI}/ot128/1730271167863837186.pcd",
-     f"{HESAI_CAL}/Pandar128E4X.csv", ["--cut-angle", "0", "--sensor", "ot128"],
+     f"{HESAI_CAL}/Pandar128E4X.csv", ["--set", "input.cut_angle=0", "--sensor", "ot128"],
      (0.3, 300.0, 0, 360, 0.1)),
     ("Hesai Pandar40P", f"{HESAI}/40p/1673400149412331409", f"{HESAI}/40p/1673400149711850138.pcd",
-     f"{HESAI_CAL}/Pandar40P.csv", ["--cut-angle", "0"], (0.3, 200.0, 0, 360, 0.1)),
+     f"{HESAI_CAL}/Pandar40P.csv", ["--set", "input.cut_angle=0"], (0.3, 200.0, 0, 360, 0.1)),
     ("Hesai Pandar64", f"{HESAI}/64/1673403880599376836", f"{HESAI}/64/1673403880898440686.pcd",
-     f"{HESAI_CAL}/Pandar64.csv", ["--cut-angle", "0"], (0.3, 200.0, 0, 360, 0.1)),
+     f"{HESAI_CAL}/Pandar64.csv", ["--set", "input.cut_angle=0"], (0.3, 200.0, 0, 360, 0.1)),
     ("Hesai PandarQT64", f"{HESAI}/qt64/1673401195788312575",
      f"{HESAI}/qt64/1673401196087570870.pcd", f"{HESAI_CAL}/PandarQT64.csv",
-     ["--cut-angle", "0"], (0.1, 60.0, 0, 360, 0.1)),
+     ["--set", "input.cut_angle=0"], (0.1, 60.0, 0, 360, 0.1)),
     # Nebula cuts the AT128's scans at 150 degrees and keeps 30 to 150 degrees of azimuth.
     ("Hesai PandarAT128", f"{HESAI}/at128/1679653308406038376",
      f"{HESAI}/at128/1679653308704927652.pcd", f"{HESAI_CAL}/PandarAT128.dat",
-     ["--cut-angle", "150"], (1.0, 180.0, 30, 150, 0.1)),
+     ["--set", "input.cut_angle=150"], (1.0, 180.0, 30, 150, 0.1)),
     # Their clouds cover every azimuth whatever cloud_min_angle and cloud_max_angle say.
     ("Velodyne VLP-16", f"{VELODYNE}/vlp16/1673400471837873222",
      f"{VELODYNE}/vlp16/1673400472138016708.pcd", f"{VELODYNE_CAL}/VLP16.yaml",
-     ["--cut-angle", "0"], (0.3, 300.0, 0, 360, None)),
+     ["--set", "input.cut_angle=0"], (0.3, 300.0, 0, 360, None)),
     ("Velodyne VLP-32C", f"{VELODYNE}/vlp32/1713492677464078412",
      f"{VELODYNE}/vlp32/1713492677464078412.pcd", f"{VELODYNE_CAL}/VLP32.yaml",
-     ["--cut-angle", "180"], (0.4, 50.0, 0, 360, None)),
+     ["--set", "input.cut_angle=180"], (0.4, 50.0, 0, 360, None)),
     ("Velodyne VLS-128", f"{VELODYNE}/vls128/1614315746471294674",
      f"{VELODYNE}/vls128/1585897255376374245.pcd", f"{VELODYNE_CAL}/VLS128.yaml",
-     ["--cut-angle", "0", "--sensor", "vls128"], (0.3, 300.0, 0, 360, None)),
+     ["--set", "input.cut_angle=0", "--sensor", "vls128"], (0.3, 300.0, 0, 360, None)),
 ]
 
 
@@ -174,7 +174,8 @@ def compare(name, root, kiss_odom, scratch, model):
 
 
 def cut_deg(options):
-    return float(options[options.index("--cut-angle") + 1]) if "--cut-angle" in options else None
+    cut = [o.split("=", 1)[1] for o in options if o.startswith("input.cut_angle=")]
+    return float(cut[0]) if cut else None
 
 
 def spread(cal):

@@ -7,7 +7,7 @@
 //! ```
 //!
 //! Each sweep is registered whole, with its own time span, as `kiss-odom run` registers the
-//! same recording (`--capacities tiny --precision f32 --map-points quantized`), so the poses
+//! same recording (`--set capacities=tiny --set runtime.scalar=f32 --set runtime.map_storage=quantized`), so the poses
 //! can be compared bit for bit. The sweep buffer (`scan_points` points, 640 KB) is the price;
 //! the `packets` profile shows the streamed alternative, which needs none but deskews each
 //! sweep with the previous sweep's span.
@@ -102,7 +102,7 @@ impl SweepSink for Collect<'_> {
     }
 }
 
-/// The VLP-16 decoder, sweeps cut at azimuth 0 (`kiss-odom run --cut-angle 0`).
+/// The VLP-16 decoder, sweeps cut at azimuth 0 (`kiss-odom run input.cut_angle 0`).
 fn decoder() -> Option<Decoder> {
     Decoder::new(velodyne::Config {
         model: Some(velodyne::Model::Vlp16),

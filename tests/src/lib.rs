@@ -92,18 +92,23 @@ pub fn kiss_odom(args: &[OsString], out: &Path) -> Run {
         args.first().and_then(|a| a.to_str()),
         Some("bench" | "crosscheck")
     );
-    let (name, main_with): (&str, fn(Vec<OsString>, &mut dyn std::io::Write) -> i32) = if developer
-    {
-        ("kiss-odom-dev", kiss_odom::dev::main_with)
+    let name = if developer {
+        "kiss-odom-dev"
     } else {
-        ("kiss-odom", kiss_odom::cli::main_with)
+        "kiss-odom"
     };
     let mut argv: Vec<OsString> = vec![name.into()];
     argv.extend(args.iter().cloned());
     let shown: Vec<String> = argv.iter().map(|a| a.to_string_lossy().into()).collect();
     let mut err = Vec::new();
-    let code = catch_unwind(AssertUnwindSafe(|| main_with(argv, &mut err)))
-        .unwrap_or_else(|p| panic!("`{}` panicked: {}", shown.join(" "), panic_text(p.as_ref())));
+    let code = catch_unwind(AssertUnwindSafe(|| {
+        if developer {
+            kiss_odom::dev::main_with(argv, &mut err)
+        } else {
+            kiss_odom::cli::main_with(argv, &mut err)
+        }
+    }))
+    .unwrap_or_else(|p| panic!("`{}` panicked: {}", shown.join(" "), panic_text(p.as_ref())));
     Run {
         code,
         stderr: String::from_utf8_lossy(&err).into_owned(),

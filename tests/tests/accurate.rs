@@ -107,7 +107,7 @@ fn the_accurate_preset_maps_a_sparse_sensor_on_genz_icp_s_sparse_sensor_map() {
     let f32 = run(
         &vlp,
         &tmp.path().join("f"),
-        &[&accurate[..], &["--scalar", "f32"]].concat(),
+        &[&accurate[..], &["--set", "runtime.scalar=f32"]].concat(),
     );
     map_of(&f32);
     for said in [

@@ -65,7 +65,11 @@ fn truncated_and_empty_bin_frames_are_skipped_warned_about_and_counted() {
     assert!(gap < 0.1, "frame 6 is {gap:.3} m off the undamaged run");
 
     // --strict: the first damaged file ends the run, exit 1 naming it; frames 0-1 are written.
-    let s = run(&data, &dir.path().join("out-strict"), &["--strict"]);
+    let s = run(
+        &data,
+        &dir.path().join("out-strict"),
+        &["--set", "output.strict=true"],
+    );
     let line = s.failed_naming(&truncated);
     assert!(line.contains("not a multiple of 16"), "{line}");
     assert_eq!(s.poses().len(), 2, "the frames before the damaged one");
@@ -119,7 +123,11 @@ fn garbage_ply_and_pcd_headers_are_skipped_warned_about_and_counted() {
         skipped_poses_are_predictions(&r, &[2, 4]);
         assert_eq!(r.summary()["input"]["format"], ext, "read as {ext}");
 
-        let s = run(&data, &dir.path().join("out-strict"), &["--strict"]);
+        let s = run(
+            &data,
+            &dir.path().join("out-strict"),
+            &["--set", "output.strict=true"],
+        );
         s.failed_naming(&name(2));
         assert_eq!(
             s.poses().len(),
@@ -173,7 +181,11 @@ fn timestamps_files_of_the_wrong_length_are_ignored_with_a_warning() {
         assert_eq!(row.outcome, "registered", "{row:?}");
     }
 
-    let s = run(&data, &dir.path().join("out-strict"), &["--strict"]);
+    let s = run(
+        &data,
+        &dir.path().join("out-strict"),
+        &["--set", "output.strict=true"],
+    );
     s.failed_naming(&side(1));
     assert_eq!(s.poses().len(), 1, "the frame before the bad timestamps");
 }
@@ -216,7 +228,11 @@ fn timestamps_all_equal_or_not_finite_are_flagged_in_frames_csv() {
     );
 
     // Under --strict the first unusable stamps stop the run, naming the frame's file.
-    let s = run(&data, &dir.path().join("out-strict"), &["--strict"]);
+    let s = run(
+        &data,
+        &dir.path().join("out-strict"),
+        &["--set", "output.strict=true"],
+    );
     s.failed_naming(&data.join("velodyne").join("000001.bin"));
     assert_eq!(s.poses().len(), 1, "the frame before the unusable stamps");
 }
@@ -659,22 +675,25 @@ fn robust_only_options_in_reference_mode_are_said_unused() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     bin_folder(&data, 2);
-    let opts = ["--lateral-prior", "1", "--prior-gate", "0.5"];
+    let opts = [
+        "--set",
+        "registration.lateral_prior=1",
+        "--set",
+        "registration.prior_gate=0.5",
+    ];
     let r = run(&data, &dir.path().join("out-ref"), &opts);
     r.ok();
     assert_eq!(r.warnings().len(), 2, "{}", r.stderr);
     r.warning_with(&[
-        "lateral_prior = 1",
-        "--lateral-prior",
-        "not used",
+        "registration.lateral_prior = 1.0 not used",
         "robust mode only",
     ]);
-    r.warning_with(&["prior_gate = 0.5", "--prior-gate", "not used"]);
-    let strict = [&opts[..], &["--strict"]].concat();
+    r.warning_with(&["registration.prior_gate = 0.5 not used"]);
+    let strict = [&opts[..], &["--set", "output.strict=true"]].concat();
     let s = run(&data, &dir.path().join("out-strict"), &strict);
-    assert!(s.stderr.contains("--strict"), "{}", s.stderr);
+    assert!(s.stderr.contains("output.strict"), "{}", s.stderr);
     assert_ne!(s.code, 0);
-    let robust = [&opts[..], &["--degeneracy", "robust"]].concat();
+    let robust = [&opts[..], &["--set", "registration.degeneracy=robust"]].concat();
     let r = run(&data, &dir.path().join("out-robust"), &robust);
     r.ok();
     assert!(r.warnings().is_empty(), "{}", r.stderr);

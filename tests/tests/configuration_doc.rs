@@ -2,7 +2,7 @@
 //! section, no key that does not exist, and an `accurate` value exactly where that preset
 //! changes the key.
 
-use kiss_odom_drive::settings::{Caps, PresetName, Settings};
+use kiss_odom_drive::settings::{Caps, Input, PresetName, Settings};
 use serde_json::Value;
 use std::collections::BTreeMap;
 
@@ -56,6 +56,13 @@ fn keys(preset: PresetName) -> BTreeMap<String, BTreeMap<String, Value>> {
     s.runtime.memory_limit.get_or_insert(1);
     s.capacities = Caps::from(kiss_odom_core::Capacities::SMALL);
     s.imu.enabled = true; // left out of the file while off
+                          // [input] and [output] are left out while at their defaults, and so are absent keys.
+    s.input = Input {
+        port: Some(1),
+        cut_angle: Some(0.0),
+        frame_period: Some(0.1),
+    };
+    s.output.strict = true;
     let v = serde_json::to_value(&s).expect("settings serialize");
     let mut out = BTreeMap::new();
     for (section, table) in v.as_object().expect("sections") {

@@ -87,7 +87,11 @@ fn a_frame_lost_from_a_kitti_sequence_is_skipped_and_later_frames_keep_their_gro
     assert_eq!(gap.number("metrics.frames"), 10.0);
 
     // Under --strict the lost frame is an error naming it.
-    let strict = run(&data, &dir.path().join("out-strict"), &["--strict"]);
+    let strict = run(
+        &data,
+        &dir.path().join("out-strict"),
+        &["--set", "output.strict=true"],
+    );
     strict.failed_with(&["000005.bin"]);
 }
 

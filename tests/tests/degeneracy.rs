@@ -49,7 +49,8 @@ fn both_modes(
 
 /// Runs degeneracy `mode` (with `args`, one thread) on `data`, writing to `out`.
 fn run_mode(data: &Path, out: &Path, mode: &str, args: &[&str]) -> common::Run {
-    let argv: Vec<&str> = ["--threads", "1", "--degeneracy", mode]
+    let mode = format!("registration.degeneracy={mode}");
+    let argv: Vec<&str> = ["--threads", "1", "--set", &mode]
         .into_iter()
         .chain(args.iter().copied())
         .collect();
@@ -110,7 +111,7 @@ fn ate(data: &Path, r: &common::Run) -> f64 {
     ignore = "heavy: cargo test --release --test workspace degeneracy::"
 )]
 fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
-    let tunnel = ["--plane-gate", "1", "--voxel-size", "0.5"];
+    let tunnel = ["--set", "registration.plane_gate=1", "--voxel-size", "0.5"];
     let (robust, reference) = robust_and_reference("tunnel", 80, &tunnel, worst_error);
     println!(
         "tunnel, 80 frames: worst position error robust {robust:.3} m (tol: a fifth of \
@@ -154,8 +155,13 @@ fn with_the_vehicle_prior_robust_mode_and_the_accurate_preset_learn_a_corridors_
     // changes on a straight, nothing tells), while reference mode stays stuck and plane terms
     // alone step along the axis at random.
     let frames = 160;
-    let tunnel = ["--plane-gate", "1", "--voxel-size", "0.5"];
-    let vehicle = ["--lateral-prior", "1", "--prediction-prior", "0.01"];
+    let tunnel = ["--set", "registration.plane_gate=1", "--voxel-size", "0.5"];
+    let vehicle = [
+        "--set",
+        "registration.lateral_prior=1",
+        "--set",
+        "registration.prediction_prior=0.01",
+    ];
     let dir = tempfile::tempdir().unwrap();
     let with: Vec<&str> = tunnel.iter().chain(&vehicle).copied().collect();
     let (reference, robust) = both_modes(dir.path(), "corridor", frames, "robust", &with);
@@ -197,11 +203,12 @@ fn with_the_vehicle_prior_robust_mode_and_the_accurate_preset_learn_a_corridors_
     // this corridor's frames. With its gate at 0 the prior never acts.
     let preset = |name: &str, gate: &str| {
         let out = dir.path().join(name);
+        let gate = format!("registration.prior_gate={gate}");
         let r = run_mode(
             &data,
             &out,
             "robust",
-            &["--preset", "accurate", "--prior-gate", gate],
+            &["--preset", "accurate", "--set", &gate],
         );
         r.succeeded_with_frames(frames);
         r
@@ -254,7 +261,11 @@ fn an_unknown_mode_is_refused_in_a_settings_file_and_on_the_command_line() {
     for needle in ["`hold`", "expected `reference` or `robust`"] {
         assert!(said.contains(needle), "{needle:?} in {said}");
     }
-    let r = run(&data, &dir.path().join("b"), &["--degeneracy", "hold"]);
+    let r = run(
+        &data,
+        &dir.path().join("b"),
+        &["--set", "registration.degeneracy=hold"],
+    );
     println!("{}", r.stderr.trim());
     assert_ne!(r.code, 0, "--degeneracy hold is refused");
     assert!(

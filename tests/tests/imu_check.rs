@@ -52,10 +52,14 @@ fn a_wrong_gyroscope_is_rejected_within_a_second_and_the_right_one_never() {
         ],
     );
     let out = |name: &str| tmp.path().join(name);
-    let off = run(&sim, &out("off"), &["--deskew"]);
+    let off = run(&sim, &out("off"), &["--set", "data.deskew=true"]);
     let a_off = off.ok().number("metrics.ate_m");
 
-    let right = run(&sim, &out("right"), &["--deskew", "--imu", "auto"]);
+    let right = run(
+        &sim,
+        &out("right"),
+        &["--set", "data.deskew=true", "--imu", "auto"],
+    );
     right.ok();
     let states = right.column("imu_prior");
     assert!(states[1..].iter().all(|s| s == "used"), "{states:?}");
@@ -84,7 +88,7 @@ fn a_wrong_gyroscope_is_rejected_within_a_second_and_the_right_one_never() {
         let r = run(
             &sim,
             &out(name),
-            &["--deskew", "--imu", csv.to_str().unwrap()],
+            &["--set", "data.deskew=true", "--imu", csv.to_str().unwrap()],
         );
         r.ok();
         let frames = rejected(&r);

@@ -109,7 +109,7 @@ fn without_samples_the_prior_changes_nothing_and_an_imu_that_stops_is_survived()
     let tilted = run(
         &sim,
         &tmp.path().join("tilted"),
-        &["--imu", "auto", "--imu-extrinsic", "0,0,0,5,0,0"],
+        &["--imu", "auto", "--set", "imu.extrinsic=[0,0,0,5,0,0]"],
     );
     let (r, t) = (mean(right.ok()), mean(tilted.ok()));
     println!("mean disagreement: {r:.4} rad/s with the right extrinsic, {t:.4} with it 5 deg off");
@@ -117,25 +117,32 @@ fn without_samples_the_prior_changes_nothing_and_an_imu_that_stops_is_survived()
     let bad = run(
         &sim,
         &tmp.path().join("bad"),
-        &["--imu", "auto", "--imu-extrinsic", "0,0,5"],
+        &["--imu", "auto", "--set", "imu.extrinsic=[0,0,5]"],
     );
-    bad.failed_with(&["--imu-extrinsic", "6 numbers"]);
+    bad.failed_with(&["--set imu.extrinsic=[0,0,5]", "imu.extrinsic"]);
     // A clock offset the prior cannot bridge (0.2 s) is flagged frame by frame, not used.
     std::fs::write(sim.join("imu.csv"), &csv).unwrap();
     let shifted = run(
         &sim,
         &tmp.path().join("shifted"),
-        &["--imu", "auto", "--imu-time-offset", "0.2"],
+        &["--imu", "auto", "--set", "imu.time_offset=0.2"],
     );
     let states = shifted.ok().column("imu_prior");
     assert!(states[1..].iter().all(|s| s == "gap"), "{states:?}");
-    shifted.warning_with(&["frame 1 ", "imu.max_gap", "--imu-time-offset"]);
+    shifted.warning_with(&["frame 1 ", "imu.max_gap", "imu.time_offset"]);
     let strict = run(
         &sim,
         &tmp.path().join("strict"),
-        &["--imu", "auto", "--imu-time-offset", "0.2", "--strict"],
+        &[
+            "--imu",
+            "auto",
+            "--set",
+            "imu.time_offset=0.2",
+            "--set",
+            "output.strict=true",
+        ],
     );
-    strict.failed_with(&["imu.max_gap", "--strict"]);
+    strict.failed_with(&["imu.max_gap", "output.strict"]);
     assert_eq!(
         shifted.lines("poses_kitti.txt"),
         off.lines("poses_kitti.txt")

@@ -83,10 +83,14 @@ fn a_run_without_poses_reports_its_own_reason_and_writes_no_pose_files() {
     let frames = bin_folder(&data, 3);
     let bad = frames.join("000000.bin");
     std::fs::write(&bad, &kitti_bytes(0)[..100]).unwrap();
-    let r = run(&data, &dir.path().join("out-strict"), &["--strict"]);
+    let r = run(
+        &data,
+        &dir.path().join("out-strict"),
+        &["--set", "output.strict=true"],
+    );
     let line = r.failed_naming(&bad);
     assert!(
-        line.contains("--strict") && !line.contains("plot"),
+        line.contains("output.strict") && !line.contains("plot"),
         "{line}"
     );
     assert_no_pose_outputs(&r);
@@ -139,7 +143,7 @@ fn a_setting_out_of_range_is_named_in_the_error() {
             "registration.kernel_scale = 0.0",
         ),
         (&["--voxel-size", "-1"], "mapping.voxel_size = -1.0"),
-        (&["--min-range", "200"], "data.min_range = 200.0"),
+        (&["--set", "data.min_range=200"], "data.min_range = 200.0"),
         (&["--max-range", "0"], "data.max_range = 0.0"),
     ];
     for (flags, named) in cases {
@@ -311,7 +315,7 @@ fn a_refused_argument_leaves_every_file_it_names_and_the_earlier_outputs_in_plac
     let mut cases: Vec<Vec<&str>> = vec![
         vec!["--save-map", notes_s],
         vec!["--save-cloud", notes_s],
-        vec!["--save-cloud", "cloud.ply", "--save-cloud-voxel", "0"],
+        vec!["--save-cloud", "cloud.ply", "--set", "output.cloud_voxel=0"],
         vec!["--rerun", rec_s],
         vec!["--max-range", "0", "--save-map", notes_s],
     ];
@@ -492,7 +496,10 @@ fn nan_and_inf_settings_are_refused_naming_the_setting() {
             &["--config", config.to_str().unwrap()],
             "data.max_range = nan",
         ),
-        (&["--plane-gate", "inf"], "registration.plane_gate = inf"),
+        (
+            &["--set", "registration.plane_gate=inf"],
+            "registration.plane_gate = inf",
+        ),
         (&["--voxel-size", "NaN"], "mapping.voxel_size = nan"),
     ];
     for (flags, named) in cases {

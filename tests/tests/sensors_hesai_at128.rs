@@ -150,6 +150,6 @@ fn a_missing_wrong_damaged_or_encrypted_correction_is_an_error_naming_the_file()
     let e = why(Some(damaged), None);
     assert!(e.contains("damaged.dat") && e.contains("SHA-256"), "{e}");
     let e = why(Some(dat()), Some(0.0));
-    assert!(e.contains("--cut-angle"), "{e}");
+    assert!(e.contains("input.cut_angle"), "{e}");
     println!("the last: {e}");
 }

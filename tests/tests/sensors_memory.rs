@@ -117,7 +117,7 @@ fn a_sweep_whose_azimuth_never_advances_stays_under_64_mb() {
     drop(w);
     // SMALL's 1 MiB state, so that the limit measures the sweep buffer (the default state is
     // sized from the configuration, 40 MiB); its 131,072 points bound the sweep.
-    let small = ["--capacities", "small"];
+    let small = ["--set", "capacities=small"];
     let (code, stderr, peak) = run_measured(&path, &dir.path().join("out"), &small);
     println!(
         "peak RSS {:.1} MiB (limit {:.0} MiB)",

@@ -70,7 +70,11 @@ fn what_comes_after_the_last_sweep_is_warned_and_in_the_totals() {
     // A VLP-32C's product byte: another sensor on the port.
     after(&mut d, 10, None, |p| p[1205] = 0x28);
     let path = capture(dir.path(), "tail.pcap", &d);
-    let r = run(&path, &dir.path().join("out"), &["--cut-angle", "0"]);
+    let r = run(
+        &path,
+        &dir.path().join("out"),
+        &["--set", "input.cut_angle=0"],
+    );
     r.ok();
     r.warning_with(&["tail.pcap", "other sender", "192.168.1.202:2368 (20)"]);
     r.warning_with(&["tail.pcap", "10 packet(s) refused", "truncated"]);
@@ -93,7 +97,7 @@ fn live_warns_of_a_second_sender_after_the_last_sweep() {
     let out = dir.path().join("live");
     let mut child = Command::new(env!("CARGO_BIN_EXE_kiss-odom-cli"))
         .args(["live", "--udp", &addr, "--idle-timeout", "1.5"])
-        .args(["--cut-angle", "0", "--quiet", "--out", s(&out)])
+        .args(["--set", "input.cut_angle=0", "--quiet", "--out", s(&out)])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -159,14 +163,14 @@ fn the_default_velodyne_port_is_2368_and_packets_elsewhere_are_named() {
         alone.lines("poses_kitti.txt"),
         "the sensor on 2368 is the one decoded"
     );
-    r.warning_with(&["both.pcap", "port 2000", "--port 2000"]);
+    r.warning_with(&["both.pcap", "port 2000", "--set input.port=2000"]);
     // Nothing on 2368: an error naming where the packets are.
     let r = run(
         &capture(dir.path(), "b.pcap", &b),
         &dir.path().join("b"),
         &[],
     );
-    r.failed_with(&["b.pcap", "port 2368", "port 2000", "--port 2000"]);
+    r.failed_with(&["b.pcap", "port 2368", "port 2000", "--set input.port=2000"]);
 }
 
 #[test]
@@ -267,7 +271,7 @@ fn a_velodyne_clock_jump_of_more_than_half_an_hour_resynchronises_with_a_warning
     let base = run(
         &capture(dir.path(), "base.pcap", &d),
         &dir.path().join("base"),
-        &["--cut-angle", "0"],
+        &["--set", "input.cut_angle=0"],
     );
     base.ok();
     const HOUR_US: u32 = 3_600_000_000;
@@ -278,7 +282,7 @@ fn a_velodyne_clock_jump_of_more_than_half_an_hour_resynchronises_with_a_warning
     let r = run(
         &capture(dir.path(), "jump.pcap", &d),
         &dir.path().join("jump"),
-        &["--cut-angle", "0"],
+        &["--set", "input.cut_angle=0"],
     );
     r.ok();
     r.warning_with(&["jump.pcap", "resynchronised"]);

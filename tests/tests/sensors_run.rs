@@ -119,7 +119,7 @@ fn run_on_the_os1_128_recording_equals_kiss_icp_fed_the_same_points_and_times() 
         std::fs::write(frames.join(format!("timestamps/{k:06}.bin")), t).unwrap();
     }
     let driver = common::repo().join("tests/reference/driver.py");
-    for deskew in ["--deskew", "--no-deskew"] {
+    for (deskew, ours) in [("--deskew", "true"), ("--no-deskew", "false")] {
         let reference = dir.path().join(format!("ref{deskew}.txt"));
         let status = Command::new(&python)
             .arg(&driver)
@@ -129,7 +129,8 @@ fn run_on_the_os1_128_recording_equals_kiss_icp_fed_the_same_points_and_times() 
             .status()
             .unwrap();
         assert!(status.success(), "driver.py pipeline {deskew}");
-        let ours = run_os1(dir.path(), deskew, &[deskew, "--threads", "1"]);
+        let set = format!("data.deskew={ours}");
+        let ours = run_os1(dir.path(), deskew, &["--set", &set, "--threads", "1"]);
         let theirs = read_kitti(&reference).unwrap();
         assert_eq!(ours.len(), sweeps.len(), "one pose per sweep");
         let (dt, dr) = worst_of(&ours, &theirs);
@@ -150,7 +151,7 @@ fn run_on_the_os1_128_recording_is_close_to_ouster_sdks_odometry() {
     let dir = tempfile::tempdir().unwrap();
     let sdk =
         read_kitti(&data().join("ouster/OS-1-128_v2.3.0_1024x10_lb_n3_poses_kitti.txt")).unwrap();
-    let rigid = run_os1(dir.path(), "rigid", &["--no-deskew"]);
+    let rigid = run_os1(dir.path(), "rigid", &["--set", "data.deskew=false"]);
     let (dt, dr) = worst_of(&rigid, &sdk);
     println!(
         "not deskewed: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses (tolerance \
@@ -160,9 +161,10 @@ fn run_on_the_os1_128_recording_is_close_to_ouster_sdks_odometry() {
 
     let mut measured = Vec::new();
     for instant in ["end", "middle", "start"] {
-        let p = run_os1(dir.path(), instant, &["--pose-time", instant]);
+        let set = format!("output.pose_time={instant}");
+        let p = run_os1(dir.path(), instant, &["--set", &set]);
         let (dt, dr) = worst_of(&p, &sdk);
-        println!("deskewed, --pose-time {instant}: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses");
+        println!("deskewed, output.pose_time {instant}: worst {dt:.4} m / {dr:.4} deg from ouster-sdk's poses");
         measured.push((dt, dr, instant, p));
     }
     let best = measured.iter().min_by(|a, b| a.0.total_cmp(&b.0)).unwrap();
@@ -259,7 +261,7 @@ fn bad_recordings_stop_run_with_the_file_and_the_reason() {
         ),
         (
             &pcap,
-            vec!["--meta", arg(&meta), "--port", "9999"],
+            vec!["--meta", arg(&meta), "--set", "input.port=9999"],
             "no packets on port 9999",
         ),
         (&pcap, vec![], "give its metadata JSON (--meta)"),
@@ -369,7 +371,11 @@ fn a_second_sensor_on_the_port_is_a_warning_naming_the_file_and_strict_refuses_i
         poses(&alone.out),
         "the first sender's sweeps"
     );
-    let strict = run(&two, &dir.path().join("strict"), &["--strict"]);
+    let strict = run(
+        &two,
+        &dir.path().join("strict"),
+        &["--set", "output.strict=true"],
+    );
     assert_eq!(strict.code, 1, "{}", strict.stderr);
 }
 
@@ -388,8 +394,8 @@ fn the_gyroscope_prior_on_the_os1_128_uses_its_imu_packets_and_stays_at_ouster_s
         &[
             "--meta",
             arg(&meta),
-            "--pose-time",
-            "middle",
+            "--set",
+            "output.pose_time=middle",
             "--imu",
             "auto",
         ],
@@ -399,7 +405,7 @@ fn the_gyroscope_prior_on_the_os1_128_uses_its_imu_packets_and_stays_at_ouster_s
     assert_eq!(r.column("imu_prior"), ["first", "used", "used"]);
     assert_eq!(r.column("imu_samples"), ["10", "10", "10"]);
     let with = poses(&r.out);
-    let without = run_os1(dir.path(), "off", &["--pose-time", "middle"]);
+    let without = run_os1(dir.path(), "off", &["--set", "output.pose_time=middle"]);
     let (dt, dr) = worst_of(&with, &sdk);
     let (ot, or) = worst_of(&without, &sdk);
     println!(

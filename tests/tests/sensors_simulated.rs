@@ -517,14 +517,14 @@ fn run_on_a_generated_pcap_tracks_as_well_as_on_the_direct_points() {
         // 150 sweeps of the fast drive: ~300 m, most of it at 20-30 m/s after the 3 s launch.
         generate(case, d, 150);
         let mut errors = Vec::new();
-        for deskew in ["--deskew", "--no-deskew"] {
+        for deskew in ["data.deskew=true", "data.deskew=false"] {
             let (pcap, direct) = (
                 d.join(format!("pcap{deskew}")),
                 d.join(format!("direct{deskew}")),
             );
             let recording = d.join("packets.pcap");
             let meta = d.join("packets.json");
-            let flags = ["-q", deskew, "--out"].map(OsStr::new);
+            let flags = ["-q", "--set", deskew, "--out"].map(OsStr::new);
             let mut head = vec![OsStr::new("run"), recording.as_os_str()];
             if case.ouster() {
                 head.extend([OsStr::new("--meta"), meta.as_os_str()]);
@@ -583,7 +583,15 @@ fn run_on_generated_helios_hdl64e_and_vls128_pcaps_tracks_as_on_the_direct_point
         let (pcap, direct) = (d.join("pcap"), d.join("direct"));
         let recording = d.join("packets.pcap");
         let yaml = d.join("packets.yaml");
-        let flags = ["-q", "--deskew", "--cut-angle", "0", "--out"].map(OsStr::new);
+        let flags = [
+            "-q",
+            "--set",
+            "data.deskew=true",
+            "--set",
+            "input.cut_angle=0",
+            "--out",
+        ]
+        .map(OsStr::new);
         let mut head = vec![
             OsStr::new("run"),
             recording.as_os_str(),
@@ -594,7 +602,7 @@ fn run_on_generated_helios_hdl64e_and_vls128_pcaps_tracks_as_on_the_direct_point
             head.extend([OsStr::new("--calibration"), yaml.as_os_str()]);
         }
         cli(&[&head[..], &flags[..], &[pcap.as_os_str()]].concat());
-        let direct_flags = ["-q", "--deskew", "--out"].map(OsStr::new);
+        let direct_flags = ["-q", "--set", "data.deskew=true", "--out"].map(OsStr::new);
         cli(&[
             &[OsStr::new("run"), d.as_os_str()],
             &direct_flags[..],

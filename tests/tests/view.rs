@@ -72,7 +72,7 @@ fn saved_cloud_is_voxel_thinned_and_its_bound_drops_with_a_warning() {
     let r = run(
         &sample(),
         &out,
-        &["--save-cloud", c, "--save-cloud-voxel", "0.5"],
+        &["--save-cloud", c, "--set", "output.cloud_voxel=0.5"],
     );
     r.succeeded_with_frames(10);
     assert!(r.warnings().is_empty(), "{}", r.stderr);
@@ -97,14 +97,14 @@ fn saved_cloud_is_voxel_thinned_and_its_bound_drops_with_a_warning() {
         &[
             "--save-cloud",
             bounded.to_str().unwrap(),
-            "--save-cloud-max-points",
-            "100",
+            "--set",
+            "output.cloud_max_points=100",
         ],
     );
     r.succeeded_with_frames(10);
     let w = r.warnings();
     assert!(
-        w.len() == 1 && w[0].contains("--save-cloud-max-points 100"),
+        w.len() == 1 && w[0].contains("output.cloud_max_points = 100"),
         "{}",
         r.stderr
     );
@@ -176,7 +176,12 @@ fn rerun_recording_reads_back_with_rerun_sdk() {
     let r = run(
         &sample(),
         &out,
-        &["--rerun", rrd.to_str().unwrap(), "--rerun-map-every", "4"],
+        &[
+            "--rerun",
+            rrd.to_str().unwrap(),
+            "--set",
+            "output.rerun_map_every=4",
+        ],
     );
     r.succeeded_with_frames(10);
     let Some(back) = readback("rrd", &rrd) else {

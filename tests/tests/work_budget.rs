@@ -9,12 +9,12 @@ use std::path::{Path, PathBuf};
 
 /// The microcontroller configuration the budget is meant for (as `bench/budget.sh`).
 const SMALL: [&str; 10] = [
-    "--capacities",
-    "small",
-    "--scalar",
-    "f32",
-    "--storage",
-    "quantized",
+    "--set",
+    "capacities=small",
+    "--set",
+    "runtime.scalar=f32",
+    "--set",
+    "runtime.map_storage=quantized",
     "--max-range",
     "50",
     "--voxel-size",
@@ -76,10 +76,10 @@ fn numbers(r: &Run, column: &str) -> Vec<Option<u64>> {
 /// Runs `input` without and with `budget` (and with the budget on one and two threads), and
 /// checks the budget's promises. Returns the unbudgeted run's worst frame.
 fn check(dir: &Path, name: &str, input: &Path, extra: &[&str], budget: u64) -> u64 {
-    let b = budget.to_string();
+    let b = format!("registration.work_budget={budget}");
     let free = run(input, &dir.join(format!("{name}-free")), extra);
     let mut with: Vec<&str> = extra.to_vec();
-    with.extend(["--budget", &b, "--threads", "1"]);
+    with.extend(["--set", &b, "--threads", "1"]);
     let capped = run(input, &dir.join(format!("{name}-capped")), &with);
     with.pop();
     with.push("2");

@@ -1,11 +1,11 @@
 //! Command-line options that `run`, `bench` and `crosscheck` share, as clap argument groups
 //! each command flattens (`#[command(flatten)]`), and how they become [`Settings`].
 //!
-//! Precedence is the same everywhere: defaults, then `--config FILE`, then flags.
+//! Precedence is the same everywhere: defaults, then `--config FILE`, then `--set`, then the
+//! named flags.
 
 use anyhow::{bail, Result};
-use kiss_odom_core::Capacities;
-use kiss_odom_drive::settings::{DegeneracyMode, PresetName, Scalar, Settings, Storage};
+use kiss_odom_drive::settings::{Input, PresetName, Settings};
 use kiss_odom_io::{Format, ImuInput, OpenOptions};
 use kiss_odom_io::{FrameRange, SensorKind, SensorOptions};
 use std::path::{Path, PathBuf};
@@ -32,14 +32,14 @@ impl CommonArgs {
     }
 
     /// [`InputArgs::open_options`], with the IMU samples `--imu` asks for.
-    pub fn open_options(&self, scan_points: usize) -> OpenOptions {
+    pub fn open_options(&self, scan_points: usize, input: &Input) -> OpenOptions {
         OpenOptions {
             imu: self
                 .pipeline
                 .imu
                 .as_ref()
                 .map_or(ImuInput::Builtin, ImuMode::input),
-            ..self.input.open_options(scan_points)
+            ..self.input.open_options(scan_points, input)
         }
     }
 }
@@ -83,30 +83,18 @@ pub struct SensorArgs {
     /// recording's DIFOP packet).
     #[arg(long)]
     pub calibration: Option<PathBuf>,
-    /// UDP port of the sensor's data packets [default: Velodyne and Hesai 2368, Ouster the
-    /// metadata's lidar port, else 7502, Livox 56001, Robosense 6699].
-    #[arg(long)]
-    pub port: Option<u16>,
-    /// Velodyne and Hesai: azimuth (degrees) where one sweep ends and the next begins [default: a full
-    /// turn from where the recording starts].
-    #[arg(long, allow_negative_numbers = true)]
-    pub cut_angle: Option<f64>,
-    /// Livox: seconds of points in a frame (the sensor has no sweep) [default: 0.1, the Livox
-    /// ROS driver's; a bag's CustomMsg: each message a frame, with this its messages merged].
-    #[arg(long)]
-    pub frame_period: Option<f64>,
 }
 
 impl SensorArgs {
-    /// The decoder's options.
-    pub fn options(&self) -> SensorOptions {
+    /// The decoder's options, with the settings' `[input]` (port, sweep cut, frame period).
+    pub fn options(&self, input: &Input) -> SensorOptions {
         SensorOptions {
             sensor: self.sensor,
-            port: self.port,
+            port: input.port,
             meta: self.meta.clone(),
             calibration: self.calibration.clone(),
-            cut_angle_deg: self.cut_angle,
-            frame_period_s: self.frame_period,
+            cut_angle_deg: input.cut_angle,
+            frame_period_s: input.frame_period,
         }
     }
 }
@@ -119,106 +107,47 @@ impl InputArgs {
 
     /// Options for `io::open`: read at most `scan_points` points of a frame (the core's
     /// `Capacities::scan_points`, which ignores the rest anyway); the IMU samples the
-    /// recording carries (a bag's IMU topic is read with [`CommonArgs::open_options`]).
-    pub fn open_options(&self, scan_points: usize) -> OpenOptions {
+    /// recording carries (a bag's IMU topic is read with [`CommonArgs::open_options`]); the
+    /// settings' `[input]` for sensor packets.
+    pub fn open_options(&self, scan_points: usize, input: &Input) -> OpenOptions {
         OpenOptions {
             topic: self.topic.clone(),
             sequence: self.sequence.clone(),
             scan_points,
-            sensor: self.sensor.options(),
+            sensor: self.sensor.options(input),
             imu: ImuInput::Builtin,
         }
     }
 }
 
-/// The pipeline's parameters.
+/// The pipeline's parameters: the few a user reaches for by name, every other setting by its
+/// key in the settings file (`--set`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct PipelineArgs {
     /// Settings file: TOML, as `run` writes to `config.toml`, or kiss-icp's YAML (a .yaml or
-    /// .yml name); flags override it.
+    /// .yml name).
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// The defaults every setting not given takes: `default` (kiss-icp 1.3.0's poses, bit for
-    /// bit) or `accurate` (the lowest error measured: point-to-plane terms where the map is
-    /// planar on every frame, max_range / 200 voxels, or 1.2 times those with 3 points each
-    /// when the first scan has fewer than 32,768 points, a scan whose motion was not the
-    /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
-    /// 3,000 points, both clouds in the scan's order, the vehicle and hold priors only where
-    /// the scene leaves a translation free (--prior-gate 0.1); 1.1-2.6 times the time on urban
-    /// and KITTI scans, 2.6-2.8 in a corridor); replaces the file's `[pipeline] preset`
-    /// [default: default].
+    /// Any setting by its key in the settings file, e.g. `registration.degeneracy=robust`,
+    /// `capacities=small` (the book's configuration reference lists every key); repeatable,
+    /// over --config, under the named flags.
+    #[arg(long, value_name = "SECTION.KEY=VALUE")]
+    pub set: Vec<String>,
+    /// The defaults of every setting not given: `default` (kiss-icp 1.3.0's poses, bit for bit)
+    /// or `accurate` (lower error at one to three times the time) [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,
     /// Maximum range r_max (m) [default: 100].
     #[arg(long, allow_negative_numbers = true)]
     pub max_range: Option<f64>,
-    /// Minimum range (m) [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    pub min_range: Option<f64>,
     /// Map voxel size v (m) [default: max_range / 100].
     #[arg(long, allow_negative_numbers = true)]
     pub voxel_size: Option<f64>,
-    /// Deskew scans that carry per-point timestamps (the default).
-    #[arg(long, overrides_with = "no_deskew")]
-    pub deskew: bool,
-    /// Do not deskew.
-    #[arg(long, overrides_with = "deskew")]
-    pub no_deskew: bool,
-    /// Registration along directions the scene does not constrain: `reference` (kiss-icp) or
-    /// `robust` (the reference, but frames it leaves degenerate are registered again with
-    /// point-to-plane terms where the map is planar, flagged `planes`: for open ground, and
-    /// with --plane-gate 1 --voxel-size 0.5 for tunnels and corridors; on a car add
-    /// --lateral-prior 1, and in tunnels --prediction-prior 0.01) [default: reference].
-    #[arg(long, value_enum)]
-    pub degeneracy: Option<DegeneracyMode>,
-    /// Robust mode registers a frame again with plane terms when the reference registration's
-    /// observability is below this; 1: every frame, without the reference registration
-    /// [default: 0.015].
-    #[arg(long)]
-    pub plane_gate: Option<f64>,
-    /// Robust mode: weight per correspondence pulling a registration with plane terms to the
-    /// constant-velocity prediction, so what the scene leaves free stays there [default: 0].
-    #[arg(long)]
-    pub prediction_prior: Option<f64>,
-    /// Robust mode: weight per correspondence against sideways motion along the sensor's y
-    /// axis, for a car-like vehicle with the sensor's x axis forward; in a corridor a turn
-    /// then tells how far it went [default: 0].
-    #[arg(long)]
-    pub lateral_prior: Option<f64>,
-    /// Robust mode: the two priors act only in frames whose weakest translation, measured at
-    /// the prediction, is below this fraction of the strongest (frames.csv `weak_t`); 1: in
-    /// every frame [default: 1].
-    #[arg(long)]
-    pub prior_gate: Option<f64>,
-    /// ICP's work budget per frame, in the core's work units (frames.csv `work`): a frame that
-    /// would spend more keeps its last complete iterate and is flagged `budget`. With the
-    /// capacities it bounds a frame's time on a given target (the book's "Embedded and deadlines") [default:
-    /// none, the reference's behaviour].
-    #[arg(long)]
-    pub budget: Option<u64>,
-    /// The gyroscope prior: `auto` predicts and deskews each frame with the rotation the
-    /// recording's IMU measured (a folder's imu.csv, an Ouster's or Livox's IMU packets, a bag's
-    /// or MCAP file's only sensor_msgs/Imu topic; the IMU's clock must be the frames'),
-    /// learning the gyroscope's bias from ICP; frames without samples fall back to the
-    /// constant-velocity model and say so in frames.csv. A FILE (an existing path) is an
-    /// imu.csv for any input, in place of the recording's own samples; any other value is the
-    /// bag's or MCAP file's sensor_msgs/Imu TOPIC (`ros2`: the node subscribes to TOPIC, or
-    /// /imu for auto; --play publishes the recording's samples there). `off`: the reference's
-    /// prediction [default: off].
+    /// The gyroscope prior: `auto` (the recording's IMU), an imu.csv FILE, a bag's IMU TOPIC,
+    /// or `off`, the reference's constant-velocity prediction (the book's "Fast motion")
+    /// [default: off].
     #[arg(long, value_name = "auto|off|TOPIC|FILE", value_parser = ImuMode::parse)]
     pub imu: Option<ImuMode>,
-    /// The IMU's pose in the LiDAR frame, X,Y,Z,ROLL,PITCH,YAW (m, deg; Rz Ry Rx), as
-    /// `simulate` writes it in sim.toml [default: 0,0,0,0,0,0].
-    #[arg(
-        long,
-        value_delimiter = ',',
-        value_name = "X,Y,Z,ROLL,PITCH,YAW",
-        allow_negative_numbers = true
-    )]
-    pub imu_extrinsic: Option<Vec<f64>>,
-    /// The IMU's clock minus the LiDAR's (s) [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
-    pub imu_time_offset: Option<f64>,
 }
 
 /// Whether the gyroscope prior runs, and with which samples.
@@ -272,52 +201,13 @@ impl ImuMode {
 /// How the core runs.
 #[derive(Debug, Clone, clap::Args)]
 pub struct CoreArgs {
-    /// Scalar type of the core [default: f64].
-    #[arg(long, value_enum)]
-    pub scalar: Option<Scalar>,
-    /// Map point storage [default: exact, which agrees with the reference; quantized uses 6
-    /// bytes a point].
-    #[arg(long, value_enum)]
-    pub storage: Option<Storage>,
-    /// Fixed capacities of the core's buffers, as a board has them: they never grow, and a
-    /// full map gives up its farthest voxels [default: none: sized from the configuration,
-    /// growing as the run needs up to --memory-limit].
-    #[arg(long, value_enum)]
-    pub capacities: Option<Preset>,
-    /// Bytes the core's state may grow to without --capacities (e.g. 512M, 8G; K, M, G, T are
-    /// powers of 1024) [default: a quarter of the machine's memory].
-    #[arg(long, value_name = "SIZE", value_parser = parse_size)]
-    pub memory_limit: Option<u64>,
     /// Worker threads for the correspondence search, 0 = all cores, at most the machine's
     /// cores; results are identical for any count [default: the settings' (all cores)].
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
-/// Capacity presets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Preset {
-    /// `Capacities::FULL_SCALE` (KITTI-like sensors at 100 m).
-    Full,
-    /// `Capacities::SMALL` (microcontroller budget).
-    Small,
-    /// `Capacities::TINY` (a 16-beam sensor in 512 KiB); also sets the parameters it was sized
-    /// for (`Config::tiny`: max range 50 m, voxel 2 m, 10 points a voxel) unless given.
-    Tiny,
-}
-
-impl Preset {
-    /// The capacities of the preset.
-    pub fn capacities(self) -> Capacities {
-        match self {
-            Preset::Full => Capacities::FULL_SCALE,
-            Preset::Small => Capacities::SMALL,
-            Preset::Tiny => Capacities::TINY,
-        }
-    }
-}
-
-/// Resolves the settings: defaults, then `--config`, then the flags. A command whose thread
+/// Resolves the settings: defaults, then `--config`, then `--set`, then the flags. A command whose thread
 /// count must not follow the file (bench and crosscheck time and compare single-threaded
 /// runs) gives it as `threads`, which only `--threads` overrides. The result is validated,
 /// errors naming the setting at fault.
@@ -338,106 +228,26 @@ pub fn from_file(p: &PipelineArgs) -> Result<Settings> {
     }
 }
 
-/// The flags over `s`, then the check of the whole (errors name the setting at fault).
+/// `--set`, then the named flags over `s`, then the check of the whole (errors name the
+/// setting at fault).
 pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
-    if c.capacities == Some(Preset::Tiny) {
-        let t = kiss_odom_core::Config::<f64>::tiny();
-        s.data.max_range = t.max_range;
-        s.mapping.voxel_size = Some(t.voxel_size);
-        s.mapping.max_points_per_voxel = t.max_points_per_voxel;
-    }
+    *s = s.with_set(&p.set)?;
     if let Some(r) = p.max_range {
         s.data.max_range = r;
-    }
-    if let Some(r) = p.min_range {
-        s.data.min_range = r;
     }
     if let Some(v) = p.voxel_size {
         s.mapping.voxel_size = Some(v);
     }
-    if p.deskew {
-        s.data.deskew = true;
-    }
-    if p.no_deskew {
-        s.data.deskew = false;
-    }
-    if let Some(d) = p.degeneracy {
-        s.registration.degeneracy = d;
-    }
-    if let Some(g) = p.plane_gate {
-        s.registration.plane_gate = g;
-    }
-    if let Some(w) = p.prediction_prior {
-        s.registration.prediction_prior = w;
-    }
-    if let Some(w) = p.lateral_prior {
-        s.registration.lateral_prior = w;
-    }
-    if let Some(g) = p.prior_gate {
-        s.registration.prior_gate = g;
-    }
-    if let Some(b) = p.budget {
-        s.registration.work_budget = Some(b);
-    }
     if let Some(m) = &p.imu {
         s.imu.enabled = *m != ImuMode::Off;
-    }
-    if let Some(e) = &p.imu_extrinsic {
-        s.imu.extrinsic = e.as_slice().try_into().map_err(|_| {
-            anyhow::anyhow!(
-                "--imu-extrinsic takes 6 numbers, X,Y,Z,ROLL,PITCH,YAW, not {}",
-                e.len()
-            )
-        })?;
-    }
-    if let Some(t) = p.imu_time_offset {
-        s.imu.time_offset = t;
-    }
-    if let Some(x) = c.scalar {
-        s.runtime.scalar = x;
-    }
-    if let Some(x) = c.storage {
-        s.runtime.map_storage = x;
-    }
-    if let Some(preset) = c.capacities {
-        s.capacities = preset.capacities().into();
     }
     if let Some(t) = c.threads {
         s.runtime.threads = t;
     }
-    if let Some(m) = c.memory_limit {
-        if !s.grows() {
-            bail!("--memory-limit: fixed capacities never grow (leave out --capacities)");
-        }
-        s.runtime.memory_limit = Some(m);
+    if s.runtime.memory_limit.is_some() && !s.grows() {
+        bail!("runtime.memory_limit: fixed capacities never grow (leave out the capacities)");
     }
     s.validate()
-}
-
-/// A size in bytes: a number with an optional K, M, G or T (powers of 1024; `B`, `iB` and
-/// lower case accepted).
-pub fn parse_size(text: &str) -> Result<u64, String> {
-    let t = text.trim();
-    let t = t
-        .strip_suffix("iB")
-        .or_else(|| t.strip_suffix('B'))
-        .unwrap_or(t);
-    let (digits, shift) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
-        Some('K') => (&t[..t.len() - 1], 10),
-        Some('M') => (&t[..t.len() - 1], 20),
-        Some('G') => (&t[..t.len() - 1], 30),
-        Some('T') => (&t[..t.len() - 1], 40),
-        _ => (t, 0),
-    };
-    let n: f64 = digits
-        .trim()
-        .parse()
-        .map_err(|_| format!("{text}: not a size (e.g. 512M, 8G)"))?;
-    let bytes = n * (1u64 << shift) as f64;
-    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(format!("{text}: not a size of at least one byte"));
-    }
-    Ok(bytes as u64)
 }
 
 #[cfg(test)]
@@ -477,18 +287,47 @@ mod tests {
         )
         .unwrap();
         assert_eq!((s.data.max_range, s.runtime.threads), (50.0, 2));
-        assert_eq!(parse_size("512M"), Ok(512 << 20));
-        assert_eq!(parse_size("1.5GiB"), Ok(3 << 29));
-        assert_eq!(parse_size("4096"), Ok(4096));
-        assert!(parse_size("lots").is_err() && parse_size("0").is_err());
-        let s = resolve(&["--memory-limit", "2G"], Some(1)).unwrap();
+        let s = resolve(
+            &[
+                "--config",
+                f,
+                "--set",
+                "data.max_range=40",
+                "--set",
+                "runtime.threads=4",
+            ],
+            None,
+        )
+        .unwrap();
+        assert_eq!(
+            (s.data.max_range, s.runtime.threads),
+            (40.0, 4),
+            "--set over the file"
+        );
+        let s = resolve(&["--set", "data.max_range=40", "--max-range", "30"], None).unwrap();
+        assert_eq!(s.data.max_range, 30.0, "the named flag over --set");
+        let s = resolve(&["--set", "runtime.memory_limit=2G"], Some(1)).unwrap();
         assert_eq!(s.memory_limit(), Some(2 << 30));
-        let e = resolve(&["--capacities", "small", "--memory-limit", "2G"], Some(1));
+        let e = resolve(
+            &[
+                "--set",
+                "capacities=small",
+                "--set",
+                "runtime.memory_limit=2G",
+            ],
+            Some(1),
+        );
         assert!(format!("{:#}", e.unwrap_err()).contains("never grow"));
-        let s = resolve(&["--no-deskew", "--capacities", "small"], Some(1)).unwrap();
+        let s = resolve(
+            &["--set", "data.deskew=false", "--set", "capacities=small"],
+            Some(1),
+        )
+        .unwrap();
         assert_eq!(s.memory_limit(), None);
         assert!(!s.data.deskew && s.runtime.threads == 1);
-        assert_eq!(s.capacities, Capacities::SMALL.into());
+        assert_eq!(s.capacities, kiss_odom_core::Capacities::SMALL.into());
+        let e = resolve(&["--set", "registration.plane_gat=1"], None).unwrap_err();
+        assert!(format!("{e:#}").contains("plane_gat"), "{e:#}");
         let s = resolve(&[], None).unwrap();
         assert_eq!(s.runtime.threads, 0, "run's default: all cores");
     }

@@ -60,11 +60,13 @@ pub struct BenchArgs {
 }
 
 /// Reads the frames of `args.dataset` in range into memory; unreadable frames are left out.
-pub fn load(args: &BenchArgs, scan_points: usize, err: &mut dyn Write) -> Result<Vec<Frame>> {
+pub fn load(args: &BenchArgs, settings: &Settings, err: &mut dyn Write) -> Result<Vec<Frame>> {
     let mut dataset = io::open(
         &args.dataset,
         args.common.input.format,
-        &args.common.open_options(scan_points),
+        &args
+            .common
+            .open_options(settings.capacities()?.scan_points, &settings.input),
     )?;
     let mut out = Vec::new();
     for item in Selection::new(dataset.frames.as_mut(), args.common.input.range()) {
@@ -100,7 +102,7 @@ pub fn execute(args: &BenchArgs, err: &mut dyn Write) -> Result<i32> {
         writeln!(err, "warning: {w}")?;
     }
     let threads = settings.threads();
-    let frames = load(args, settings.capacities()?.scan_points, err)?;
+    let frames = load(args, &settings, err)?;
     let mut reference = if args.no_reference {
         None
     } else {

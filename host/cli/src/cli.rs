@@ -104,6 +104,21 @@ mod tests {
     }
 
     #[test]
+    fn run_names_at_most_twenty_options_and_the_rest_are_settings_keys() {
+        let mut cli = Cli::command();
+        let run = cli.find_subcommand_mut("run").unwrap();
+        let help = run.render_long_help().to_string();
+        let options: Vec<&str> = help
+            .lines()
+            .map(str::trim_start)
+            .filter(|l| l.starts_with("--") || l.starts_with("-q, --") || l.starts_with("-h, --"))
+            .collect();
+        println!("run --help: {} options", options.len());
+        assert!(options.len() <= 20, "{options:#?}");
+        assert!(help.contains("--set <SECTION.KEY=VALUE>"), "{help}");
+    }
+
+    #[test]
     fn the_users_command_has_no_developer_command() {
         for developer in ["crosscheck", "bench"] {
             assert!(

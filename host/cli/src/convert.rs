@@ -16,6 +16,7 @@
 
 use crate::args::InputArgs;
 use anyhow::{bail, Context, Result};
+use kiss_odom_drive::Settings;
 use kiss_odom_io::folders::{bin, generic};
 use kiss_odom_io::{self as io, Item};
 use std::fmt::Write as _;
@@ -38,6 +39,10 @@ pub struct ConvertArgs {
     /// Which frames, how read.
     #[command(flatten, next_help_heading = "Input")]
     pub input: InputArgs,
+    /// How sensor packets become frames, by key: `input.port`, `input.cut_angle`,
+    /// `input.frame_period` (the book's configuration reference); repeatable.
+    #[arg(long, value_name = "input.KEY=VALUE")]
+    pub set: Vec<String>,
 }
 
 fn create(dir: &Path) -> Result<()> {
@@ -78,10 +83,18 @@ fn refuse_occupied(out: &Path) -> Result<()> {
 pub fn execute(args: &ConvertArgs, err: &mut dyn Write) -> Result<i32> {
     let frames_dir = args.out.join("velodyne");
     refuse_occupied(&args.out)?;
+    if let Some(a) = args
+        .set
+        .iter()
+        .find(|a| !a.trim_start().starts_with("input."))
+    {
+        bail!("--set {a}: convert takes only the input.* settings");
+    }
+    let input = Settings::default().with_set(&args.set)?.input;
     let mut dataset = io::open(
         &args.path,
         args.input.format,
-        &args.input.open_options(usize::MAX),
+        &args.input.open_options(usize::MAX, &input),
     )?;
     create(&frames_dir)?;
     let range = args.input.range();

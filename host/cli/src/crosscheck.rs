@@ -35,13 +35,10 @@ use std::path::PathBuf;
 #[command(
     mut_arg("config", |a| a.help(crate::reference::CONFIG_HELP_WITH_REFERENCE)),
     mut_arg("threads", |a| a.help(crate::reference::THREADS_HELP_WITH_REFERENCE)),
-    mut_arg("scalar", |a| a.help(
-        "Scalar of the end-to-end run [default: f64]; f32 also runs the f64 build and \
-         reports against both (stage checks always use f64)"
-    )),
-    mut_arg("storage", |a| a.help(
-        "Map point storage of the end-to-end run [default: exact] (stage checks always \
-         use exact)"
+    mut_arg("set", |a| a.help(
+        "Any setting by its key in the settings file, repeatable; the end-to-end run's \
+         `runtime.scalar=f32` also runs the f64 build and reports against both (stage checks \
+         always use f64 and exact storage)"
     )),
 )]
 pub struct CrosscheckArgs {
@@ -166,11 +163,13 @@ pub fn execute(args: &CrosscheckArgs, err: &mut dyn Write) -> Result<i32> {
             picked.len()
         );
         progress(args, err, "reference and core stages on the scans")?;
+        let min_range = settings.data.min_range;
         let crop = (
-            args.common
-                .pipeline
-                .min_range
-                .unwrap_or(scans::DEFAULT_CROP.0),
+            if min_range != Settings::default().data.min_range {
+                min_range
+            } else {
+                scans::DEFAULT_CROP.0
+            },
             args.common
                 .pipeline
                 .max_range
@@ -228,9 +227,6 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
     let lower = |v: &dyn std::fmt::Debug| format!("{v:?}").to_lowercase();
     flag("frames", input.frames.map(|r| r.to_string()));
     flag("threads", core.threads.map(|t| t.to_string()));
-    flag("scalar", core.scalar.map(|v| lower(&v)));
-    flag("storage", core.storage.map(|v| lower(&v)));
-    flag("capacities", core.capacities.map(|v| lower(&v)));
     flag(
         "format",
         (input.format != Format::Auto).then(|| lower(&input.format)),
@@ -252,8 +248,6 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
         "calibration",
         sensor.calibration.as_ref().map(|m| m.display().to_string()),
     );
-    flag("port", sensor.port.map(|p| p.to_string()));
-    flag("cut-angle", sensor.cut_angle.map(|a| a.to_string()));
     flag(
         "only",
         args.only.map(|o| match o {
@@ -263,11 +257,11 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
     );
     flag("motion", args.motion.as_ref().map(|m| format!("'{m}'")));
     flag("config", p.config.as_ref().map(|c| c.display().to_string()));
+    for a in &p.set {
+        flag("set", Some(a.clone()));
+    }
     flag("max-range", p.max_range.map(|v| v.to_string()));
-    flag("min-range", p.min_range.map(|v| v.to_string()));
     flag("voxel-size", p.voxel_size.map(|v| v.to_string()));
-    flag("deskew", p.deskew.then(String::new));
-    flag("no-deskew", p.no_deskew.then(String::new));
     c
 }
 
@@ -286,7 +280,9 @@ fn sequence_checks(
         Format::Auto => io::open::detect(&args.dataset)?,
         f => f,
     };
-    let opts = args.common.open_options(settings.capacities()?.scan_points);
+    let opts = args
+        .common
+        .open_options(settings.capacities()?.scan_points, &settings.input);
     let mut dataset = io::open(&args.dataset, format, &opts)?;
     progress(args, err, "reading frames")?;
     let frames = sequence::preload(&mut dataset, range, err)?;
@@ -423,8 +419,8 @@ mod tests {
             "3..",
             "--threads",
             "2",
-            "--scalar",
-            "f32",
+            "--set",
+            "runtime.scalar=f32",
             "--only",
             "stages",
             "--json",
@@ -432,7 +428,8 @@ mod tests {
         ];
         assert_eq!(
             command_of(&parse(&argv)),
-            "kiss-odom-dev crosscheck data/seq --frames 3.. --threads 2 --scalar f32 --only stages"
+            "kiss-odom-dev crosscheck data/seq --frames 3.. --threads 2 --only stages --set \
+             runtime.scalar=f32"
         );
         assert_eq!(
             command_of(&parse(&["d"])),

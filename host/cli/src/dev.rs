@@ -68,7 +68,7 @@ mod tests {
                 "--frames",
                 "--max-range",
                 "--voxel-size",
-                "--scalar",
+                "--set",
                 "--threads",
             ] {
                 assert!(h.contains(flag), "{flag} missing:\n{h}");
@@ -86,7 +86,7 @@ mod tests {
             assert!(h.contains("The reference gets only the range"), "{h}");
             assert!(h.contains("--python") && h.contains("--driver"), "{h}");
         }
-        assert!(cross.contains("f32 also runs the f64 build"), "{cross}");
+        assert!(cross.contains("also runs the f64 build"), "{cross}");
         assert!(
             !run.contains("The reference gets") && !run.contains("--python"),
             "{run}"

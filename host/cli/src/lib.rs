@@ -5,7 +5,7 @@
 //!
 //! [`run`] feeds a recording's frames to the driver and writes what each command writes;
 //! `live` is `run` on a socket, watching each pose as it comes; `listen` collects the poses a
-//! receiver that runs the odometry itself sends. With the `dev` feature, [`dev`] is the
+//! receiver that runs the odometry itself sends. With the `dev` feature, `dev` is the
 //! developer's tool: `bench` and `crosscheck` time and compare the same frames against the
 //! reference kiss-icp. Only what the workspace's tests and the
 //! binary reach is public: [`cli::main_with`], the outputs' names, the ROS 2 node's parts,

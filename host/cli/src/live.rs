@@ -49,7 +49,7 @@ pub struct LiveArgs {
     /// Outputs and how the run goes, as `run`'s.
     #[command(flatten)]
     pub run: RunOptions,
-    /// The sensor (`--port` is the one of `--udp`).
+    /// The sensor (its port is the one of `--udp`).
     #[command(flatten, next_help_heading = "Sensor")]
     pub sensor: SensorArgs,
     /// The pipeline's parameters.
@@ -238,8 +238,13 @@ impl Observer for Poses {
 
 /// Runs `kiss-odom live`.
 pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
-    if args.sensor.port.is_some() {
-        bail!("live listens on the port of --udp; --port is for recordings");
+    if args
+        .pipeline
+        .set
+        .iter()
+        .any(|a| a.trim_start().starts_with("input.port"))
+    {
+        bail!("live listens on the port of --udp; input.port is for recordings");
     }
     crate::args::ImuMode::recording_only(args.pipeline.imu.as_ref(), "live")?;
     let idle = match args.idle_timeout {

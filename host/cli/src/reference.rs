@@ -118,7 +118,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("c.toml");
         std::fs::write(&file, "[registration]\nkernel_scale = 0.5\n").unwrap();
-        let s = resolve(&["--max-range", "50", "--scalar", "f32"]).unwrap();
+        let s = resolve(&["--max-range", "50", "--set", "runtime.scalar=f32"]).unwrap();
         check_reference_compatible(&s).unwrap();
         let s = resolve(&["--config", file.to_str().unwrap()]).unwrap();
         let e = check_reference_compatible(&s).unwrap_err().to_string();

@@ -5,7 +5,7 @@
 //! (`record`, `files`), and hands every outcome to its [`observe::Observer`]s: those of `viz`
 //! (`--rerun`, `--save-map`, `--save-cloud`) and whatever the caller adds (`live` prints each pose
 //! as it comes). The rules (the book's failure reference): a frame-level problem is a warning and a
-//! counted skip (an error under `--strict`); a damaged container, a `--strict` stop or a run in
+//! counted skip (an error under `output.strict`); a damaged container, a `output.strict` stop or a run in
 //! which no frame could be registered ends with exit 1 and its own reason, never an output error in
 //! its place; SIGINT/SIGTERM stop after the current frame with `128 + signal`. In every case the
 //! outputs hold the frames processed so far (pose files and the plot only when a frame was
@@ -20,7 +20,8 @@ pub(crate) mod record;
 pub(crate) mod viz;
 
 pub use files::OUTPUTS;
-pub(crate) use options::{PoseTime, RunArgs, RunOptions};
+pub(crate) use kiss_odom_drive::settings::PoseTime;
+pub(crate) use options::{RunArgs, RunOptions};
 pub(crate) use record::{FrameRow, Record, RowKind};
 
 use anyhow::{anyhow, Context, Result};
@@ -38,7 +39,7 @@ use std::path::{Path, PathBuf};
 enum End {
     /// Every frame in range was read.
     Finished,
-    /// An error: a damaged container, a `--strict` stop.
+    /// An error: a damaged container, a `output.strict` stop.
     Failed(anyhow::Error),
     /// SIGINT or SIGTERM.
     Interrupted(i32),
@@ -67,6 +68,7 @@ pub(crate) fn execute_on(
     err: &mut dyn Write,
 ) -> Result<i32> {
     let settings = args.common.settings(None)?;
+    let args = &args.resolved(&settings.output);
     let inputs = inputs(args);
     viz::check(&args.view, &inputs)?;
     // The sensor files are read while the input opens; `--config` is read by now, and
@@ -77,7 +79,11 @@ pub(crate) fn execute_on(
     // Only the files an earlier command wrote there are replaced; any other refuses the run.
     let earlier = Earlier::check(&args.run.out, &OUTPUTS)?;
     let mut driver = Driver::new(&settings)?;
-    let opened = open(&args.common.open_options(settings.capacities()?.scan_points));
+    let opened = open(
+        &args
+            .common
+            .open_options(settings.capacities()?.scan_points, &settings.input),
+    );
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     earlier.remove()?;
     for path in viz::files(&args.view) {
@@ -112,7 +118,7 @@ pub(crate) fn execute_on(
     {
         warn(&mut record, &hidden, w);
         if args.run.strict {
-            end = End::Failed(anyhow!("{w} (--strict)"));
+            end = End::Failed(anyhow!("{w} (output.strict)"));
             break;
         }
     }
@@ -142,7 +148,7 @@ pub(crate) fn execute_on(
         row.add_packets(&p);
     }
     if let (true, End::Finished, Some(w)) = (args.run.strict, &end, trailer.warnings.first()) {
-        end = End::Failed(anyhow!("{w} (--strict)"));
+        end = End::Failed(anyhow!("{w} (output.strict)"));
     }
     // The observers' files hold the frames processed, however the loop ended.
     for observer in &mut observers {
@@ -257,7 +263,7 @@ fn nothing_registered(r: &Record) -> String {
 }
 
 /// Feeds the frames in range to the driver, recording each outcome and showing it to the
-/// observers, until the end, an error, a `--strict` stop or a signal.
+/// observers, until the end, an error, a `output.strict` stop or a signal.
 #[allow(clippy::too_many_arguments)]
 fn frame_loop(
     args: &RunArgs,
@@ -297,7 +303,7 @@ fn frame_loop(
             warn(record, &bar, p);
         }
         if let (true, Some(first)) = (args.run.strict, problems.first()) {
-            break End::Failed(anyhow!("{first} (--strict)"));
+            break End::Failed(anyhow!("{first} (output.strict)"));
         }
         let (outcome, frame) = match item {
             Item::Frame(frame) => (driver.register(&frame), Some(frame)),
@@ -310,7 +316,7 @@ fn frame_loop(
         if let Some(report) = outcome.report() {
             if args.run.strict && report.status.contains(Flag::TimestampsIgnored) {
                 break End::Failed(anyhow!(
-                    "{}: timestamps unusable ({:?}), frame not deskewed (--strict)",
+                    "{}: timestamps unusable ({:?}), frame not deskewed (output.strict)",
                     outcome.meta.source,
                     report.stamp_problem
                 ));
@@ -335,20 +341,20 @@ fn frame_loop(
             warn(record, &bar, w);
         }
         if let (true, Some(first)) = (args.run.strict, full.first()) {
-            break End::Failed(anyhow!("{first} (--strict)"));
+            break End::Failed(anyhow!("{first} (output.strict)"));
         }
         // So does a frame the gyroscope prior, asked for, could not predict.
         // And the first time the IMU consistency check rejects the gyroscope.
         if let Some(w) = driver.imu_check_warning(false) {
             warn(record, &bar, &w);
             if args.run.strict {
-                break End::Failed(anyhow!("{w} (--strict)"));
+                break End::Failed(anyhow!("{w} (output.strict)"));
             }
         }
         if let Some(w) = prior.check(&outcome) {
             warn(record, &bar, &w);
             if args.run.strict {
-                break End::Failed(anyhow!("{w} (--strict)"));
+                break End::Failed(anyhow!("{w} (output.strict)"));
             }
         }
         if outcome.step == Step::Empty {

@@ -86,7 +86,7 @@ pub fn execute_to(args: &SizeArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
             err,
             "warning: {}: the run dropped or evicted in {lost} frames, so these capacities are \
              what its full buffers held, not what the recording needs: run it again without \
-             --capacities (and a larger --memory-limit if it was reached)",
+             fixed capacities (and a larger runtime.memory_limit if it was reached)",
             path.display()
         )?;
     }

@@ -5,7 +5,7 @@
 //! whose short capacities are doubled (or raised to what the frame needs, if more), then
 //! registers the frame again: the poses are those of a run that had the larger storage from
 //! the start. Growth stops at a memory limit on the core's state (`[runtime] memory_limit`,
-//! `--memory-limit`; by default [`DEFAULT_SHARE`] of the machine's memory); past it the core's
+//! `runtime.memory_limit`; by default [`DEFAULT_SHARE`] of the machine's memory); past it the core's
 //! fixed-storage rule acts (a full map evicts its farthest voxels) and the run warns once.
 //! Named or explicit capacities never grow.
 
@@ -123,7 +123,7 @@ impl Growth {
         Some(format!(
             "frame {frame}: the core's state ({:.1} MiB) cannot grow past the memory limit \
              ({:.1} MiB): from here its buffers keep their size and a full map gives up its \
-             farthest voxels, as on a board; raise --memory-limit to keep kiss-icp's map",
+             farthest voxels, as on a board; raise runtime.memory_limit to keep kiss-icp's map",
             mib(m.bytes as u64),
             mib(limit)
         ))

@@ -20,7 +20,7 @@ impl PriorWarnings {
             Prior::Gap => (
                 1,
                 "its IMU samples leave a gap longer than imu.max_gap (an IMU that stopped, or \
-                 a clock offset: --imu-time-offset)",
+                 a clock offset: imu.time_offset)",
             ),
             Prior::BadSamples => (2, "its IMU samples are out of time order or not finite"),
             Prior::Used(_) | Prior::First => return None,

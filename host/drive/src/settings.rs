@@ -1,5 +1,5 @@
 //! Every parameter of a run, as TOML: a preset's defaults, then `--config FILE`, then
-//! command-line flags.
+//! `--set SECTION.KEY=VALUE`, then the command line's named flags.
 //! The `config.toml` a run writes holds the values actually used and can be passed back with
 //! `--config` to repeat the run. `--config` also reads kiss-icp's YAML (a `.yaml` or `.yml`
 //! file, [`Settings::from_kiss_icp_yaml`]).
@@ -62,12 +62,8 @@ pub enum PresetName {
     /// kiss-icp 1.3.0's parameters: its poses, bit for bit.
     #[default]
     Default,
-    /// The lowest error measured here (`Config::accurate`): point-to-plane terms where the
-    /// map is planar on every frame, `r_max / 200` voxels, a scan whose motion was not the
-    /// model's deskewed again with its own, a dense scan's registration cloud thinned toward
-    /// 3,000 points, both clouds in the scan's order, the vehicle and hold priors only where
-    /// the scene leaves a translation free; 1.1-2.6 times the default's time on
-    /// urban and KITTI scans, 2.6-2.8 in a corridor.
+    /// The lowest error measured here, at one to three times the default's time
+    /// (`Config::accurate`; the book's configuration reference lists what it changes).
     Accurate,
 }
 
@@ -241,6 +237,12 @@ pub struct Settings {
     /// The opt-in gyroscope prior (left out of the file when off with its defaults).
     #[serde(skip_serializing_if = "Imu::is_default")]
     pub imu: Imu,
+    /// How sensor packets become frames (left out of the file with its defaults).
+    #[serde(skip_serializing_if = "Input::is_default")]
+    pub input: Input,
+    /// What the outputs hold (left out of the file with its defaults).
+    #[serde(skip_serializing_if = "Output::is_default")]
+    pub output: Output,
 }
 
 impl Default for Data {
@@ -631,6 +633,9 @@ impl Settings {
     /// more than one would).
     pub fn validate(&self) -> Result<()> {
         self.refuse_non_finite()?;
+        if let Some(e) = self.input.fault().or_else(|| self.output.fault()) {
+            bail!("{e}");
+        }
         let Some(e) = self.fault() else {
             return Ok(());
         };
@@ -694,59 +699,21 @@ impl Settings {
     }
 
     /// The robust mode's settings given other values than their defaults while the run is in
-    /// reference mode, which does not use them: one warning each, naming the flag too.
+    /// reference mode, which does not use them: one warning each.
     pub fn unused_warnings(&self) -> Vec<String> {
         if self.registration.degeneracy != DegeneracyMode::Reference {
             return Vec::new();
         }
-        let (r, d) = (&self.registration, Registration::default());
-        let robust_only: [(&str, Option<&str>, bool, String); 6] = [
-            (
-                "plane_gate",
-                Some("--plane-gate"),
-                r.plane_gate != d.plane_gate,
-                r.plane_gate.to_string(),
-            ),
-            (
-                "prediction_prior",
-                Some("--prediction-prior"),
-                r.prediction_prior != d.prediction_prior,
-                r.prediction_prior.to_string(),
-            ),
-            (
-                "lateral_prior",
-                Some("--lateral-prior"),
-                r.lateral_prior != d.lateral_prior,
-                r.lateral_prior.to_string(),
-            ),
-            (
-                "prior_gate",
-                Some("--prior-gate"),
-                r.prior_gate != d.prior_gate,
-                r.prior_gate.to_string(),
-            ),
-            (
-                "plane_kernel_scale",
-                None,
-                r.plane_kernel_scale != d.plane_kernel_scale,
-                r.plane_kernel_scale.to_string(),
-            ),
-            (
-                "cycle_stop",
-                None,
-                r.cycle_stop != d.cycle_stop,
-                r.cycle_stop.to_string(),
-            ),
-        ];
-        robust_only
-            .into_iter()
-            .filter(|(_, _, set, _)| *set)
-            .map(|(key, flag, _, value)| {
-                let flag = flag.map_or(String::new(), |f| format!(" ({f})"));
+        let defaults = Settings::default();
+        fields()
+            .iter()
+            .filter(|f| ROBUST_ONLY.contains(&f.name) && f.show(self) != f.show(&defaults))
+            .map(|f| {
                 format!(
-                    "[registration] {key} = {value}{flag} not used: it acts in robust mode only \
-                     (--degeneracy robust, or --preset accurate), and this run is in reference \
-                     mode"
+                    "{} = {} not used: it acts in robust mode only (registration.degeneracy = \
+                     robust, or --preset accurate), and this run is in reference mode",
+                    f.name,
+                    f.show(self)
                 )
             })
             .collect()
@@ -793,6 +760,16 @@ macro_rules! field {
     };
 }
 
+/// The settings only robust mode reads.
+const ROBUST_ONLY: [&str; 6] = [
+    "registration.plane_gate",
+    "registration.prediction_prior",
+    "registration.lateral_prior",
+    "registration.prior_gate",
+    "registration.plane_kernel_scale",
+    "registration.cycle_stop",
+];
+
 /// Every setting the core gets.
 fn fields() -> [Field; 33] {
     [
@@ -833,7 +810,11 @@ fn fields() -> [Field; 33] {
 }
 
 mod imu;
+mod run;
+mod set;
 pub use imu::Imu;
+pub use run::{Input, Output, PoseTime};
+pub use set::parse_size;
 
 #[cfg(test)]
 mod tests;

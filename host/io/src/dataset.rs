@@ -7,7 +7,7 @@
 //! truth and times pair with it whatever was lost before it.
 //!
 //! What the layer finds is reported through three channels the run loop prints, counts and
-//! turns into exit 1 under `--strict`: [`DatasetInfo::warnings`] for the dataset as a whole
+//! turns into exit 1 under `output.strict`: [`DatasetInfo::warnings`] for the dataset as a whole
 //! (ignored files, side files of the wrong length, a recording out of time order), a
 //! [`Frame::warnings`] entry for a frame used despite a problem, and [`Item::Skipped`] for a
 //! frame that cannot be used (missing, truncated, garbage). Names that cannot be told apart
@@ -127,7 +127,7 @@ impl Item {
 /// its last sweep, a second sender), asked for once after the last item.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trailer {
-    /// Warnings naming the source: to print, count and, under `--strict`, refuse.
+    /// Warnings naming the source: to print, count and, under `output.strict`, refuse.
     pub warnings: Vec<String>,
     /// Sensor packets refused or lost after the last sweep, and those of an open sweep at the
     /// end that was not made a frame (`packets`), for the packet totals.
@@ -175,7 +175,7 @@ pub enum Format {
     /// ROS 2 bag in sqlite3 storage: a folder of `metadata.yaml` and `.db3` files, or one
     /// `.db3` file.
     Db3,
-    /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `--port`).
+    /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `input.port`).
     Pcap,
     /// MulRan sequence (`Ouster/`, `global_pose.csv`).
     Mulran,
@@ -210,7 +210,7 @@ pub struct DatasetInfo {
     /// Whether the reference's KITTI vertical-angle correction is applied to every scan.
     pub kitti_correction: bool,
     /// Findings about the dataset as a whole, one line each, naming the file: to print, count
-    /// and, under `--strict`, refuse.
+    /// and, under `output.strict`, refuse.
     pub warnings: Vec<String>,
 }
 
@@ -284,7 +284,7 @@ impl Default for OpenOptions {
 
 /// What a frame decoded from sensor packets carries besides its points: the sweep's packet
 /// statistics (for `frames.csv`), the sensor-clock instants of its first and last point (the
-/// instants a pose can refer to, `--pose-time`) and when its last packet was captured.
+/// instants a pose can refer to, `output.pose_time`) and when its last packet was captured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SweepInfo {
     /// Packet statistics.

@@ -284,7 +284,7 @@ impl Run<'_> {
         };
         if deskewed {
             format!(
-                "time x y z qx qy qz qw: the sensor at the {} of each sweep (--pose-time); \
+                "time x y z qx qy qz qw: the sensor at the {} of each sweep (output.pose_time); \
                  times: {times}",
                 self.args.run.pose_time.name()
             )

@@ -17,7 +17,7 @@ pub struct Seen<'a> {
     pub outcome: &'a Outcome,
     /// The frame's points as read (sensor frame), `None` when it could not be read.
     pub points: Option<&'a [[f64; 3]]>,
-    /// The pose the run records for the frame (at the instant `--pose-time` chooses).
+    /// The pose the run records for the frame (at the instant `output.pose_time` chooses).
     pub pose: Isometry3<f64>,
     /// The frame's time (s): its own, else the dataset's `times.txt`.
     pub time: Option<f64>,

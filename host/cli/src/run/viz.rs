@@ -1,7 +1,7 @@
 //! What a run shows beside its poses: observers ([`Observer`]) the run loop calls after every
 //! frame and once at the end, each turning the driver's outcomes into one output. `--save-map` writes the
 //! final local map, `--save-cloud` the whole run's registered points voxel-thinned on the host
-//! ([`export`]), and `--rerun`/`--rerun-connect` record every frame for the Rerun viewer
+//! ([`export`]), and `--rerun` records every frame for the Rerun viewer
 //! (`recording` module, cargo feature `rerun`). They never change what the driver computes: a run
 //! with them gives the same poses, byte for byte, as one without.
 
@@ -16,7 +16,8 @@ use super::observe::Observer;
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 
-/// Checks `args` without creating anything: the file types, the cloud's voxel, what this
+/// Checks `args` (resolved: [`ViewArgs::resolved`]) without creating anything: the file
+/// types, the cloud's voxel, what this
 /// build can record, that no two options name one file (one would replace the other) and
 /// that no file named is one of the run's `inputs` (the file at an output's name is removed
 /// before the run starts, so this comes first).
@@ -29,14 +30,6 @@ pub fn check(args: &ViewArgs, inputs: &[&Path]) -> Result<()> {
     }
     if args.rerun.is_some() || args.rerun_connect.is_some() {
         rerun_available()?;
-    }
-    if let Some(path) = &args.rerun {
-        let rrd = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("rrd"));
-        if !rrd {
-            bail!("{}: give a .rrd file name", path.display());
-        }
     }
     kiss_odom_io::write::refuse_shared(&[
         ("--save-map", args.save_map.as_deref()),
@@ -79,8 +72,8 @@ fn rerun_observer(_: &ViewArgs) -> Result<Box<dyn Observer>> {
     bail!("{RERUN_MISSING}")
 }
 
-/// Why a build without the `rerun` feature refuses `--rerun` and `--rerun-connect`.
-const RERUN_MISSING: &str = "--rerun and --rerun-connect need the `rerun` cargo feature: \
+/// Why a build without the `rerun` feature refuses `--rerun`.
+const RERUN_MISSING: &str = "--rerun needs the `rerun` cargo feature: \
      cargo build --release -p kiss-odom --features rerun";
 
 /// Whether this build can record for Rerun.

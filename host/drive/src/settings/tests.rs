@@ -294,7 +294,7 @@ fn robust_settings_in_reference_mode_are_said_unused_and_in_robust_mode_not() {
     let w = s.unused_warnings();
     assert_eq!(w.len(), 2, "{w:?}");
     assert!(
-        w[0].contains("lateral_prior = 1 (--lateral-prior) not used"),
+        w[0].contains("registration.lateral_prior = 1.0 not used"),
         "{w:?}"
     );
     assert!(

@@ -329,11 +329,11 @@ fn livox_decoder(
     };
     if let Some(p) = opts.frame_period_s {
         if !(p.is_finite() && p > 0.0) {
-            bail!("--frame-period {p}: give a positive number of seconds");
+            bail!("input.frame_period = {p}: give a positive number of seconds");
         }
         config.frame_period_ns = (p * 1e9).round() as u64;
     }
-    let dec = livox::Decoder::new(config).map_err(|e| anyhow!("--frame-period: {e}"))?;
+    let dec = livox::Decoder::new(config).map_err(|e| anyhow!("input.frame_period: {e}"))?;
     let decoder = Decoder::Livox(Box::new(dec));
     let notes = unused(opts, "a Livox", &[Unused::Calibration, Unused::CutAngle])?;
     Ok(sweeps(
@@ -461,7 +461,7 @@ fn at128_decoder(
     };
     if opts.cut_angle_deg.is_some() {
         bail!(
-            "{}: packets of a {name}: its sweeps are its mirror frames, so --cut-angle does not \
+            "{}: packets of a {name}: its sweeps are its mirror frames, so input.cut_angle does not \
              apply",
             path.display()
         );
@@ -576,7 +576,7 @@ fn unused(opts: &SensorOptions, sensor: &str, which: &[Unused]) -> Result<Vec<St
             Unused::CutAngle => {
                 if let Some(a) = opts.cut_angle_deg {
                     notes.push(format!(
-                        "--cut-angle {a} not used: {sensor} recording's frames are not cut by \
+                        "input.cut_angle = {a} not used: {sensor} recording's frames are not cut by \
                          azimuth"
                     ));
                 }
@@ -584,7 +584,7 @@ fn unused(opts: &SensorOptions, sensor: &str, which: &[Unused]) -> Result<Vec<St
             Unused::FramePeriod => {
                 if let Some(p) = opts.frame_period_s {
                     notes.push(format!(
-                        "--frame-period {p} not used: only a Livox sensor's frames are cut by \
+                        "input.frame_period = {p} not used: only a Livox sensor's frames are cut by \
                          time; {sensor} sensor's packets mark where its sweeps end"
                     ));
                 }

@@ -4,7 +4,7 @@
 //!
 //! Frame `k` is the `k`-th sweep decoded, named `file#k`; it carries its per-point times (for
 //! deskewing) and its [`SweepInfo`](crate::SweepInfo) (packet statistics for
-//! `frames.csv`, the instants `--pose-time` chooses from), at most `scan_points` points (the
+//! `frames.csv`, the instants `output.pose_time` chooses from), at most `scan_points` points (the
 //! rest counted and warned about as the sweep fills), and a warning when the decoder took a
 //! new timeline before it. What only the whole recording shows (packets from a second
 //! sender, refused packets, frames the capture could not read) is reported once, naming the

@@ -1,5 +1,5 @@
 //! Which sensor family a datagram comes from, by its bytes alone: how `live` without
-//! `--sensor` (and a recording read on a given `--port`) finds its decoder from the first
+//! `--sensor` (and a recording read on a given `input.port`) finds its decoder from the first
 //! packet, and how a recording's other ports are searched for a second sensor's packets. Each
 //! family's packets are recognised as its decoder checks them first: a Velodyne data packet's
 //! length and first block flag, a Hesai header ([`hesai::identify`]), a Livox packet's version

@@ -3,7 +3,7 @@
 //! statistics.
 //!
 //! The sensor is told by the options or found in the capture: Velodyne data packets are 1206
-//! bytes on port 2368 unless `--port` says otherwise (the model is in each packet's product
+//! bytes on port 2368 unless `input.port` says otherwise (the model is in each packet's product
 //! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
 //! need the sensor's metadata JSON (`--meta`), Hesai packets start `EE FF` and their protocol
 //! version on port 2368 (the model found from it when no Velodyne packets are; the 128-channel
@@ -153,7 +153,7 @@ impl PcapReport {
             for (port, n) in &self.data_elsewhere {
                 w.push(format!(
                     "{n} sensor data packet(s) on port {port} not decoded (a second sensor? \
-                     --port {port} decodes them instead)"
+                     --set input.port={port} decodes them instead)"
                 ));
             }
         }
@@ -590,7 +590,7 @@ impl PcapSweeps {
             let elsewhere: Vec<_> = r
                 .data_elsewhere
                 .iter()
-                .map(|(p, n)| format!("{n} on port {p} (--port {p})"))
+                .map(|(p, n)| format!("{n} on port {p} (--set input.port={p})"))
                 .collect();
             let hint = if elsewhere.is_empty() {
                 String::new()

@@ -8,7 +8,7 @@
 //! stamps are seconds after its first message's `timebase`, and it ends (`Frame::end`) at its
 //! latest point. The
 //! drivers publish at a configurable rate (`publish_freq`, 10 Hz by default): each message is
-//! a frame, or with `--frame-period` the messages whose first points fall in one period are
+//! a frame, or with `input.frame_period` the messages whose first points fall in one period are
 //! merged into one frame (periods counted from the first message, a message placed in the
 //! period its first point is nearest the start of, within half the messages' spacing). A
 //! message whose `point_num` disagrees with its points, or that does not parse, is a skipped
@@ -101,7 +101,7 @@ pub fn open(
     let (file, ros1) = (rec.label().to_string(), rec.ros1());
     let period_ns = match opts.sensor.frame_period_s {
         Some(p) if p.is_finite() && p > 0.0 => Some((p * 1e9).round() as u64),
-        Some(p) => bail!("--frame-period {p}: give a positive number of seconds"),
+        Some(p) => bail!("input.frame_period = {p}: give a positive number of seconds"),
         None => None,
     };
     let total = rec.count(topic);
@@ -127,7 +127,7 @@ pub fn open(
 }
 
 /// A message read: its index, receive time, and the message with the period it belongs to
-/// (0 without `--frame-period`), or why it was left out.
+/// (0 without `input.frame_period`), or why it was left out.
 type Read = (usize, u64, Result<(CustomMsg, u64), String>);
 
 /// `CustomMsg` messages as frames.

@@ -2,7 +2,7 @@
 //! packet messages ([`packets`]) become the UDP datagrams a capture of the
 //! sensor would hold, on the ports the sensor sends to, timed by the driver's stamps (the
 //! message's receive time where a packet has none), and go through the same decoders, sweep
-//! assembly and options (`--sensor`, `--meta`, `--calibration`, `--cut-angle`) as a pcap
+//! assembly and options (`--sensor`, `--meta`, `--calibration`, `input.cut_angle`) as a pcap
 //! ([`sweeps`], [`SweepFrames`]), so a bag of packets and a pcap of
 //! the same packets give the same frames.
 //!

@@ -80,7 +80,7 @@ impl VoxelCloud {
     /// points.
     pub fn new(voxel: f64, max: usize) -> Result<Self> {
         if !(voxel.is_finite() && voxel > 0.0) {
-            bail!("--save-cloud-voxel must be a positive number of metres, not {voxel}");
+            bail!("output.cloud_voxel must be a positive number of metres, not {voxel}");
         }
         Ok(Self {
             voxel,
@@ -158,8 +158,8 @@ impl Observer for CloudExport {
         Ok((dropped > 0)
             .then(|| {
                 format!(
-                    "{}: {dropped} points in new voxels dropped past --save-cloud-max-points {} \
-                     (raise it or --save-cloud-voxel)",
+                    "{}: {dropped} points in new voxels dropped past output.cloud_max_points = {} \
+                     (raise it or output.cloud_voxel)",
                     self.path.display(),
                     self.cloud.max
                 )

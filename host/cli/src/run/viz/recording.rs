@@ -1,11 +1,11 @@
-//! `--rerun FILE.rrd` and `--rerun-connect ADDR`: every frame of a run logged for the Rerun
+//! `--rerun FILE.rrd` or `--rerun ADDR`: every frame of a run logged for the Rerun
 //! viewer, on two time lines, `frame` (the frame index) and `time` (the frame's time in
 //! seconds, when known). The entity paths (the book's "Viewing a run"):
 //!
 //! - `world/sensor`: the pose after the frame (`Transform3D`, sensor to world);
-//! - `world/sensor/scan`: the input scan as read, every `--rerun-scan-stride`th point;
+//! - `world/sensor/scan`: the input scan as read, every `output.rerun_scan_stride`th point;
 //! - `world/source`: the registration (source) cloud, deskewed, in the world frame;
-//! - `world/map`: the local map, every `--rerun-map-every` frames and after the last;
+//! - `world/map`: the local map, every `output.rerun_map_every` frames and after the last;
 //! - `world/trajectory`, `world/ground_truth`: the paths so far, as often as the map;
 //! - `metrics/<name>`: one scalar series each (latency, iterations, sigma, ...);
 //! - `flags/<flag>`: 0 or 1 per registered frame, one series per status flag;

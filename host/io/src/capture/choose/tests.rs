@@ -135,7 +135,7 @@ fn options_the_sensor_does_not_use_are_named_and_a_missing_file_is_an_error() {
     println!("{notes:?}");
     assert!(notes
         .iter()
-        .any(|n| n.starts_with("--cut-angle 90 not used")));
+        .any(|n| n.starts_with("input.cut_angle = 90 not used")));
     let missing = SensorOptions {
         calibration: Some("no-such-file.csv".into()),
         ..livox
@@ -154,7 +154,7 @@ fn options_the_sensor_does_not_use_are_named_and_a_missing_file_is_an_error() {
     println!("{notes:?}");
     assert!(notes
         .iter()
-        .any(|n| n.starts_with("--frame-period 0.05 not used")));
+        .any(|n| n.starts_with("input.frame_period = 0.05 not used")));
 }
 
 #[test]
