@@ -9,7 +9,7 @@
 //! same process can see of a running node.
 
 pub mod dds;
-pub mod engine;
+pub(crate) mod engine;
 pub mod imu;
 pub mod msg;
 pub mod node;
@@ -31,16 +31,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 pub struct Ros2Args {
     /// Cloud topic (node: subscribe; --play: publish).
     #[arg(long)]
-    pub points: Option<String>,
+    pub(crate) points: Option<String>,
     /// Odometry topic.
     #[arg(long)]
-    pub odom: Option<String>,
+    pub(crate) odom: Option<String>,
     /// ROS 2 parameter file (`node_name: ros__parameters: {...}`).
     #[arg(long)]
     pub params: Option<PathBuf>,
     /// Node name looked up in the parameter file.
     #[arg(long, default_value = params::NODE_NAME)]
-    pub node_name: String,
+    pub(crate) node_name: String,
     /// DDS domain (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long)]
     pub domain: Option<u16>,
@@ -49,13 +49,13 @@ pub struct Ros2Args {
     pub base_frame: Option<String>,
     /// Odometry frame.
     #[arg(long)]
-    pub odom_frame: Option<String>,
+    pub(crate) odom_frame: Option<String>,
     /// Do not publish `/tf`.
     #[arg(long)]
-    pub no_tf: bool,
+    pub(crate) no_tf: bool,
     /// Publish the local map (every `local_map_period` seconds).
     #[arg(long)]
-    pub local_map: bool,
+    pub(crate) local_map: bool,
     /// Also write each published pose as a KITTI line to this file.
     #[arg(long)]
     pub poses: Option<PathBuf>,
@@ -68,33 +68,33 @@ pub struct Ros2Args {
     pub play: Option<PathBuf>,
     /// --play: speed factor.
     #[arg(long, default_value_t = 1.0)]
-    pub rate: f64,
+    pub(crate) rate: f64,
     /// --play: input format.
     #[arg(long, value_enum, default_value_t = Format::Auto)]
-    pub format: Format,
+    pub(crate) format: Format,
     /// --play: topic inside the bag or MCAP (default: its only cloud topic).
     #[arg(long)]
-    pub topic: Option<String>,
+    pub(crate) topic: Option<String>,
     /// --play: frame_id of the published clouds.
     #[arg(long, default_value = "lidar")]
     pub frame_id: String,
     /// --play: seconds between frames that carry no time.
     #[arg(long, default_value_t = 0.1)]
-    pub period: f64,
+    pub(crate) period: f64,
     /// --play: seconds to wait for a subscriber before the first cloud (and, with
     /// --lockstep, for each cloud's odometry).
     #[arg(long, default_value_t = 10.0)]
-    pub wait: f64,
+    pub(crate) wait: f64,
     /// --play: publish each cloud only once the node's odometry for the one before came (on
     /// --odom), so that no cloud is dropped whatever the node's speed; the pace is the node's.
     #[arg(long)]
     pub lockstep: bool,
     /// The node's pipeline parameters, as `run`'s.
     #[command(flatten, next_help_heading = "Pipeline")]
-    pub pipeline: PipelineArgs,
+    pub(crate) pipeline: PipelineArgs,
     /// How the node's core runs, as `run`'s.
     #[command(flatten, next_help_heading = "Core")]
-    pub core: CoreArgs,
+    pub(crate) core: CoreArgs,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -110,7 +110,7 @@ fn non_negative(s: &str) -> Result<f64, String> {
 static STOP: AtomicBool = AtomicBool::new(false);
 
 /// Runs `kiss-odom ros2`.
-pub fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
+pub(crate) fn execute(args: &Ros2Args, err: &mut dyn Write) -> Result<i32> {
     // Ctrl-C, SIGTERM and SIGHUP end the node cleanly, even where the shell had SIGINT
     // ignored (background jobs). One handler per process: a second install keeps the first.
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
@@ -176,10 +176,10 @@ pub fn imu_topic(mode: Option<&ImuMode>) -> Result<String> {
 }
 
 /// The IMU topic of `--imu auto`, for the node and the player.
-pub const DEFAULT_IMU_TOPIC: &str = "/imu";
+pub(crate) const DEFAULT_IMU_TOPIC: &str = "/imu";
 
 /// Settings and node parameters from the defaults, `--config`, `--params` and the flags.
-pub fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)> {
+pub(crate) fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)> {
     imu_topic(args.pipeline.imu.as_ref())?;
     let mut settings = crate::args::from_file(&args.pipeline)?;
     let mut p = params::NodeParams::default();

@@ -25,13 +25,13 @@ use std::time::{Duration, Instant};
 pub type Writer<D> = DataWriter<D, CDRSerializerAdapter<D>>;
 
 /// A reader of `D` in CDR.
-pub type Reader<D> = DataReader<D, CDRDeserializerAdapter<D>>;
+pub(crate) type Reader<D> = DataReader<D, CDRDeserializerAdapter<D>>;
 
 /// A reader of serialized messages (clouds, IMU samples).
 pub type CloudReader = DataReader<RawCloud, RawAdapter>;
 
 /// The ROS domain: `ROS_DOMAIN_ID` if set and valid, else 0.
-pub fn default_domain() -> u16 {
+pub(crate) fn default_domain() -> u16 {
     std::env::var("ROS_DOMAIN_ID")
         .ok()
         .and_then(|v| v.trim().parse().ok())
@@ -61,7 +61,7 @@ pub fn sensor_qos() -> QosPolicies {
 }
 
 /// Reliable, keep last `depth`, volatile (`rclcpp::QoS(depth)`, what `/tf` and odometry use).
-pub fn reliable_qos(depth: i32) -> QosPolicies {
+pub(crate) fn reliable_qos(depth: i32) -> QosPolicies {
     QosPolicyBuilder::new()
         .reliability(Reliability::Reliable {
             max_blocking_time: rustdds::Duration::from_millis(100),
@@ -90,7 +90,7 @@ pub fn writer<D: Serialize>(
 }
 
 /// A reader of `D` (CDR) on ROS 2 topic `name` with DDS type `type_name`.
-pub fn reader<D: serde::de::DeserializeOwned + 'static>(
+pub(crate) fn reader<D: serde::de::DeserializeOwned + 'static>(
     dp: &DomainParticipant,
     name: &str,
     type_name: &str,
@@ -109,7 +109,7 @@ pub fn reader<D: serde::de::DeserializeOwned + 'static>(
 
 /// Waits until `r` has a matched writer, `stop` says stop, or `timeout` passes; returns whether
 /// a writer matched.
-pub fn wait_for_writer<D: serde::de::DeserializeOwned + 'static>(
+pub(crate) fn wait_for_writer<D: serde::de::DeserializeOwned + 'static>(
     r: &Reader<D>,
     timeout: Duration,
     stop: &dyn Fn() -> bool,
@@ -136,10 +136,10 @@ pub fn cloud_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
 /// How many IMU messages the DDS reader keeps between two drains: a burst of 100 ms at 1 kHz.
 /// Best effort and volatile as [`sensor_qos`], so it matches any sensor publisher; only the
 /// local history is deeper, since IMU messages come many to a cloud.
-pub const IMU_HISTORY: i32 = 100;
+pub(crate) const IMU_HISTORY: i32 = 100;
 
 /// Sensor-data QoS with a history of [`IMU_HISTORY`]: the IMU reader's and the player's.
-pub fn imu_qos() -> QosPolicies {
+pub(crate) fn imu_qos() -> QosPolicies {
     QosPolicyBuilder::new()
         .reliability(Reliability::BestEffort)
         .history(History::KeepLast { depth: IMU_HISTORY })
@@ -148,7 +148,7 @@ pub fn imu_qos() -> QosPolicies {
 }
 
 /// A reader of serialized `sensor_msgs/msg/Imu` on ROS 2 topic `name`, [`imu_qos`].
-pub fn imu_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
+pub(crate) fn imu_reader(dp: &DomainParticipant, name: &str) -> Result<CloudReader> {
     raw_reader(dp, name, super::msg::IMU_TYPE, imu_qos())
 }
 

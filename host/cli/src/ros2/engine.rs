@@ -11,26 +11,26 @@ use nalgebra::Isometry3;
 
 /// What registering one cloud gave.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Registered {
+pub(crate) struct Registered {
     /// Sensor pose in the odometry frame (the first cloud's sensor frame), widened to f64 as
     /// `kiss-odom run` writes it.
-    pub pose: Isometry3<f64>,
+    pub(crate) pose: Isometry3<f64>,
     /// Motion from the previous registered cloud to this one, in the previous sensor frame.
-    pub delta: Isometry3<f64>,
+    pub(crate) delta: Isometry3<f64>,
     /// The core's flags for the frame.
-    pub status: Status,
+    pub(crate) status: Status,
     /// Points given.
-    pub input_points: u32,
+    pub(crate) input_points: u32,
     /// NaN/inf points the core skipped.
-    pub non_finite: u32,
+    pub(crate) non_finite: u32,
     /// Whether per-point times were used to deskew.
-    pub deskewed: bool,
+    pub(crate) deskewed: bool,
     /// Seconds in the core's frame call.
-    pub core_s: f64,
+    pub(crate) core_s: f64,
 }
 
 /// The node's driver for `settings`.
-pub fn driver(settings: &Settings) -> Result<Driver> {
+pub(crate) fn driver(settings: &Settings) -> Result<Driver> {
     let mut d = Driver::new(settings)?;
     d.on_empty(OnEmpty::Ignore);
     Ok(d)
@@ -39,7 +39,7 @@ pub fn driver(settings: &Settings) -> Result<Driver> {
 /// Registers a cloud's frame (sensor frame, optional per-point times, and with the gyroscope
 /// prior on the IMU samples up to its sweep's end). `None` when no point was usable: the
 /// odometry is untouched, as if the cloud had never arrived.
-pub fn register(driver: &mut Driver, frame: &Frame) -> Result<Option<Registered>> {
+pub(crate) fn register(driver: &mut Driver, frame: &Frame) -> Result<Option<Registered>> {
     let outcome = driver.register(frame)?;
     let Step::Registered(r) = &outcome.step else {
         return Ok(None);

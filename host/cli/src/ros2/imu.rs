@@ -16,7 +16,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 /// Samples the queue holds: 4 s at 1 kHz, 20 s at 200 Hz.
-pub const CAPACITY: usize = 4096;
+pub(crate) const CAPACITY: usize = 4096;
 
 /// The counts the exit summary prints.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -31,7 +31,7 @@ pub struct ImuCounts {
 
 /// Samples in time order, at most `capacity`.
 #[derive(Debug)]
-pub struct ImuQueue {
+pub(crate) struct ImuQueue {
     samples: VecDeque<ImuSample>,
     capacity: usize,
     counts: ImuCounts,
@@ -49,7 +49,7 @@ impl ImuQueue {
 
     /// Adds a received sample in time order (one older than the newest is put in its place);
     /// when full, the oldest goes and is counted.
-    pub fn push(&mut self, s: ImuSample) {
+    pub(crate) fn push(&mut self, s: ImuSample) {
         self.counts.received += 1;
         if self.samples.len() == self.capacity {
             self.samples.pop_front();
@@ -67,7 +67,7 @@ impl ImuQueue {
 
     /// The samples up to `end` (s; all if `None`, a cloud whose end is unknown), in time order;
     /// later ones stay.
-    pub fn take_until(&mut self, end: Option<f64>) -> Vec<ImuSample> {
+    pub(crate) fn take_until(&mut self, end: Option<f64>) -> Vec<ImuSample> {
         let n = match end {
             Some(end) => handed_on(self.samples.make_contiguous(), end),
             None => self.samples.len(),
@@ -77,12 +77,12 @@ impl ImuQueue {
 
     /// Whether a sample at or after `end` (s) has come, so none up to it is still on its way
     /// (the IMU's messages come in time order).
-    pub fn covers(&self, end: f64) -> bool {
+    pub(crate) fn covers(&self, end: f64) -> bool {
         self.samples.back().is_some_and(|s| s.seconds() >= end)
     }
 
     /// The counters.
-    pub fn counts(&self) -> ImuCounts {
+    pub(crate) fn counts(&self) -> ImuCounts {
         self.counts
     }
 }
@@ -92,7 +92,7 @@ const KEPT_ERRORS: usize = 100;
 
 /// The queue shared by the receiver and the worker, and the warnings of malformed messages
 /// (the receiver has no error stream; the worker prints them).
-pub struct ImuInbox {
+pub(crate) struct ImuInbox {
     queue: Mutex<(ImuQueue, Vec<String>)>,
     arrived: Condvar,
 }
@@ -104,7 +104,7 @@ impl ImuInbox {
     }
 
     /// An empty inbox of `capacity` samples.
-    pub fn with_capacity(capacity: usize) -> Self {
+    pub(crate) fn with_capacity(capacity: usize) -> Self {
         Self {
             queue: Mutex::new((ImuQueue::new(capacity), Vec::new())),
             arrived: Condvar::new(),
@@ -116,7 +116,7 @@ impl ImuInbox {
     }
 
     /// Adds a decoded message's sample, or counts a malformed one and keeps its warning.
-    pub fn put(&self, sample: Result<ImuSample, ImuError>) {
+    pub(crate) fn put(&self, sample: Result<ImuSample, ImuError>) {
         let mut guard = self.lock();
         let (q, errors) = &mut *guard;
         match sample {
@@ -133,7 +133,7 @@ impl ImuInbox {
     }
 
     /// The warnings of malformed messages since the last call.
-    pub fn take_errors(&self) -> Vec<String> {
+    pub(crate) fn take_errors(&self) -> Vec<String> {
         std::mem::take(&mut self.lock().1)
     }
 
@@ -142,7 +142,7 @@ impl ImuInbox {
     /// takes what is there (the prior says `gap` if they stop more than `max_gap` short of
     /// the end). Waits only once the IMU has delivered a sample, so a node whose IMU topic is
     /// silent registers at once.
-    pub fn take_for(&self, end: Option<f64>, wait: Duration) -> Vec<ImuSample> {
+    pub(crate) fn take_for(&self, end: Option<f64>, wait: Duration) -> Vec<ImuSample> {
         let mut q = self.lock();
         if let Some(end) = end {
             let deadline = Instant::now() + wait;
@@ -162,7 +162,7 @@ impl ImuInbox {
     }
 
     /// The counters.
-    pub fn counts(&self) -> ImuCounts {
+    pub(crate) fn counts(&self) -> ImuCounts {
         self.lock().0.counts()
     }
 }

@@ -18,15 +18,15 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 /// DDS type name of `sensor_msgs/msg/PointCloud2` (ROS 2 naming: `pkg::msg::dds_::Name_`).
 pub const POINTCLOUD2_TYPE: &str = "sensor_msgs::msg::dds_::PointCloud2_";
 /// DDS type name of `nav_msgs/msg/Odometry`.
-pub const ODOMETRY_TYPE: &str = "nav_msgs::msg::dds_::Odometry_";
+pub(crate) const ODOMETRY_TYPE: &str = "nav_msgs::msg::dds_::Odometry_";
 /// DDS type name of `tf2_msgs/msg/TFMessage`.
-pub const TFMESSAGE_TYPE: &str = "tf2_msgs::msg::dds_::TFMessage_";
+pub(crate) const TFMESSAGE_TYPE: &str = "tf2_msgs::msg::dds_::TFMessage_";
 
 /// DDS type name of `sensor_msgs/msg/Imu`.
 pub const IMU_TYPE: &str = "sensor_msgs::msg::dds_::Imu_";
 
 /// The DDS topic of ROS 2 topic `name`: `rt/` and the name without its leading slash.
-pub fn dds_topic(name: &str) -> String {
+pub(crate) fn dds_topic(name: &str) -> String {
     format!("rt/{}", name.trim_start_matches('/'))
 }
 
@@ -34,14 +34,14 @@ pub fn dds_topic(name: &str) -> String {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Time {
     /// Seconds.
-    pub sec: i32,
+    pub(crate) sec: i32,
     /// Nanoseconds, below 1e9.
-    pub nanosec: u32,
+    pub(crate) nanosec: u32,
 }
 
 impl Time {
     /// Seconds as f64, the way the readers compute a frame time.
-    pub fn seconds(self) -> f64 {
+    pub(crate) fn seconds(self) -> f64 {
         kiss_odom_io::ros::pointcloud2::Stamp {
             sec: i64::from(self.sec),
             nsec: self.nanosec,
@@ -84,7 +84,7 @@ pub struct Vector3 {
 
 /// `geometry_msgs/msg/Quaternion`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Quaternion {
+pub(crate) struct Quaternion {
     /// x.
     pub x: f64,
     /// y.
@@ -92,16 +92,16 @@ pub struct Quaternion {
     /// z.
     pub z: f64,
     /// w.
-    pub w: f64,
+    pub(crate) w: f64,
 }
 
 /// `geometry_msgs/msg/Pose` (and `Transform`: translation then rotation, the same layout).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Pose {
+pub(crate) struct Pose {
     /// Position.
-    pub position: Vector3,
+    pub(crate) position: Vector3,
     /// Orientation.
-    pub orientation: Quaternion,
+    pub(crate) orientation: Quaternion,
 }
 
 impl Pose {
@@ -127,11 +127,11 @@ impl Pose {
 
 /// A row-major 6x6 covariance (`double[36]`: a CDR array, no length prefix).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Covariance(pub [f64; 36]);
+pub(crate) struct Covariance(pub [f64; 36]);
 
 impl Covariance {
     /// The diagonal matrix with `linear` on x, y, z and `angular` on the three rotations.
-    pub fn diagonal(linear: f64, angular: f64) -> Self {
+    pub(crate) fn diagonal(linear: f64, angular: f64) -> Self {
         let mut c = [0.0; 36];
         for i in 0..3 {
             c[7 * i] = linear;
@@ -178,11 +178,11 @@ impl<'de> Deserialize<'de> for Covariance {
 
 /// `geometry_msgs/msg/PoseWithCovariance`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PoseWithCovariance {
+pub(crate) struct PoseWithCovariance {
     /// Pose.
-    pub pose: Pose,
+    pub(crate) pose: Pose,
     /// Row-major over (x, y, z, rot x, rot y, rot z).
-    pub covariance: Covariance,
+    pub(crate) covariance: Covariance,
 }
 
 /// `geometry_msgs/msg/Twist`.
@@ -196,42 +196,42 @@ pub struct Twist {
 
 /// `geometry_msgs/msg/TwistWithCovariance`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TwistWithCovariance {
+pub(crate) struct TwistWithCovariance {
     /// Twist.
-    pub twist: Twist,
+    pub(crate) twist: Twist,
     /// Row-major over (vx, vy, vz, wx, wy, wz).
-    pub covariance: Covariance,
+    pub(crate) covariance: Covariance,
 }
 
 /// `nav_msgs/msg/Odometry`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Odometry {
+pub(crate) struct Odometry {
     /// Stamp of the cloud and the odometry frame.
-    pub header: Header,
+    pub(crate) header: Header,
     /// The moving frame (base).
-    pub child_frame_id: String,
+    pub(crate) child_frame_id: String,
     /// Pose of the child frame in the header frame.
-    pub pose: PoseWithCovariance,
+    pub(crate) pose: PoseWithCovariance,
     /// Velocity in the child frame.
-    pub twist: TwistWithCovariance,
+    pub(crate) twist: TwistWithCovariance,
 }
 
 /// `geometry_msgs/msg/TransformStamped`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TransformStamped {
+pub(crate) struct TransformStamped {
     /// Stamp and parent frame.
-    pub header: Header,
+    pub(crate) header: Header,
     /// Child frame.
-    pub child_frame_id: String,
+    pub(crate) child_frame_id: String,
     /// Child frame in the parent frame (translation, rotation).
-    pub transform: Pose,
+    pub(crate) transform: Pose,
 }
 
 /// `tf2_msgs/msg/TFMessage`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TfMessage {
+pub(crate) struct TfMessage {
     /// Transforms.
-    pub transforms: Vec<TransformStamped>,
+    pub(crate) transforms: Vec<TransformStamped>,
 }
 
 /// `sensor_msgs/msg/PointField`.
@@ -261,15 +261,15 @@ impl Serialize for Bytes {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PointCloud2 {
     /// Stamp and frame.
-    pub header: Header,
+    pub(crate) header: Header,
     /// Rows.
-    pub height: u32,
+    pub(crate) height: u32,
     /// Points per row.
     pub width: u32,
     /// Layout.
     pub fields: Vec<Field>,
     /// Byte order of `data`.
-    pub is_bigendian: bool,
+    pub(crate) is_bigendian: bool,
     /// Bytes per point.
     pub point_step: u32,
     /// Bytes per row.
@@ -277,7 +277,7 @@ pub struct PointCloud2 {
     /// Points.
     pub data: Bytes,
     /// No invalid points.
-    pub is_dense: bool,
+    pub(crate) is_dense: bool,
 }
 
 impl PointCloud2 {
@@ -326,19 +326,19 @@ impl PointCloud2 {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Imu {
     /// Stamp (the sample's time) and frame.
-    pub header: Header,
+    pub(crate) header: Header,
     /// Orientation (identity, not measured).
-    pub orientation: Quaternion,
+    pub(crate) orientation: Quaternion,
     /// Its covariance, row-major 3x3.
     pub orientation_covariance: [f64; 9],
     /// rad/s.
-    pub angular_velocity: Vector3,
+    pub(crate) angular_velocity: Vector3,
     /// Its covariance.
-    pub angular_velocity_covariance: [f64; 9],
+    pub(crate) angular_velocity_covariance: [f64; 9],
     /// m/s^2.
-    pub linear_acceleration: Vector3,
+    pub(crate) linear_acceleration: Vector3,
     /// Its covariance.
-    pub linear_acceleration_covariance: [f64; 9],
+    pub(crate) linear_acceleration_covariance: [f64; 9],
 }
 
 impl Imu {

@@ -94,9 +94,9 @@ pub struct Summary {
     /// Warnings printed (every skip, non-finite points, oddities).
     pub warnings: u64,
     /// End-to-end latency (arrival to publication) of registered clouds, ms.
-    pub latency_ms: Vec<f64>,
+    pub(crate) latency_ms: Vec<f64>,
     /// Time in the core's frame call, ms.
-    pub core_ms: Vec<f64>,
+    pub(crate) core_ms: Vec<f64>,
     /// IMU messages, when the node subscribes to an IMU topic.
     pub imu: Option<ImuCounts>,
 }
@@ -482,7 +482,7 @@ struct Publishers {
 /// `position_covariance` on x, y, z and `orientation_covariance` on the rotations, constant as
 /// in kiss-icp's wrapper. The twist treats the same two values as the variance of one scan's
 /// motion, so its diagonal is theirs divided by `dt^2`.
-pub fn covariances(p: &NodeParams, dt: f64) -> (Covariance, Covariance) {
+pub(crate) fn covariances(p: &NodeParams, dt: f64) -> (Covariance, Covariance) {
     let pose = Covariance::diagonal(p.position_covariance, p.orientation_covariance);
     let twist = Covariance::diagonal(
         p.position_covariance / (dt * dt),

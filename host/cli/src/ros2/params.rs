@@ -17,7 +17,7 @@ use serde_yaml_ng::{Mapping, Value};
 use std::path::Path;
 
 /// Default node name: the key looked up in a parameter file.
-pub const NODE_NAME: &str = "kiss_odom";
+pub(crate) const NODE_NAME: &str = "kiss_odom";
 
 /// Everything about the node that is not the odometry itself.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -94,7 +94,7 @@ impl NodeParams {
     }
 
     /// Refuses values no node can use.
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let finite_nonneg = |v: f64| v.is_finite() && v >= 0.0;
         if !finite_nonneg(self.position_covariance) || !finite_nonneg(self.orientation_covariance) {
             bail!("position_covariance and orientation_covariance must be finite and >= 0");
@@ -146,7 +146,7 @@ const SECTIONS: [&str; 6] = [
 
 /// Applies the parameters for `node` in the YAML text `text` over `settings` and `params`.
 /// Entries under `/**` (every node) apply first, then those under `node` or `/node`.
-pub fn apply_yaml(
+pub(crate) fn apply_yaml(
     text: &str,
     node: &str,
     settings: &mut Settings,
@@ -190,7 +190,7 @@ pub fn apply_yaml(
 }
 
 /// Reads a parameter file; see [`apply_yaml`].
-pub fn load_yaml(
+pub(crate) fn load_yaml(
     path: &Path,
     node: &str,
     settings: &mut Settings,

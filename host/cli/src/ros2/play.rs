@@ -32,22 +32,22 @@ use std::time::{Duration, Instant};
 #[derive(Clone, Debug)]
 pub struct PlayOptions {
     /// Recording.
-    pub path: PathBuf,
+    pub(crate) path: PathBuf,
     /// Its format.
-    pub format: Format,
+    pub(crate) format: Format,
     /// Topic inside a bag or MCAP (default: its only cloud topic).
-    pub source_topic: Option<String>,
+    pub(crate) source_topic: Option<String>,
     /// ROS 2 topic to publish on.
     pub points_topic: String,
     /// `frame_id` of the published clouds.
     pub frame_id: String,
     /// Speed factor (2 = twice as fast).
-    pub rate: f64,
+    pub(crate) rate: f64,
     /// Time between frames that carry no time (s).
-    pub period: f64,
+    pub(crate) period: f64,
     /// How long to wait for a subscriber before the first cloud (s), and with `lockstep` for
     /// each cloud's odometry.
-    pub wait: f64,
+    pub(crate) wait: f64,
     /// The node's odometry topic: publish a cloud only once the odometry of the one before has
     /// come on it (or `wait` passed).
     pub lockstep: Option<String>,
