@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Prints BENCHMARKS.md's "Every rule of the accurate preset on real data" table (run by
+"""Prints BENCHMARKS.md's "Every rule on real data" table (run by
 bench/ablation.sh): the accurate preset, then the preset with each of its rules off in turn,
 then the default, on every given dataset; ATE and mean RPE against its ground truth or
 reference trajectory, and frames/s in the core.

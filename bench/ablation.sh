@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces BENCHMARKS.md's "Every rule of the accurate preset on real data": the preset, the
+# Reproduces BENCHMARKS.md's "Every rule on real data": the preset, the
 # preset with each rule off in turn and the default on the real recordings with ground truth
 # or a reference trajectory (cells: ATE m / mean RPE m / frames/s in the core).
 #

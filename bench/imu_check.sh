@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces BENCHMARKS.md section 14, "The consistency check: a wrong IMU is rejected": on
+# Reproduces BENCHMARKS.md section 14, "A wrong IMU": on
 # generated drone and hand-held runs (`simulate --imu-rate 200`, 150 frames, deskew on, seeds
 # 1-3) the IMU replaced by a wrong but plausible one (bench/imu_wrong.py: rates in deg/s, the x
 # or z axis flipped, a dead gyroscope, one 1e6 rad/s sample, another seed's imu.csv, each sample

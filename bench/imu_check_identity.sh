@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Reproduces BENCHMARKS.md section 14, "The consistency check: a right IMU is never
-# rejected": every run of bench/imu_prior.sh (the table "Against LiDAR only and LiDAR-inertial
+# Reproduces BENCHMARKS.md section 14, "A wrong IMU" (its "right" row: a right IMU is never
+# rejected): every run of bench/imu_prior.sh (the table "Against LiDAR only and LiDAR-inertial
 # peers" and the variants of its "Tried and dropped") with two builds, BEFORE (a kiss-odom
 # built without the IMU consistency check) and BIN (this tree's): their poses_kitti.txt must
 # be the same bytes, and no frame of BIN's may have `imu_prior` = `rejected`. Prints one

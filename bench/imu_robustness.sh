@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Reproduces BENCHMARKS.md section 14, "Where it should not help, and wrong facts" and "The IMU
-# stopping": what the gyroscope prior does where it should not help or is given wrong facts,
+# Reproduces BENCHMARKS.md section 14, "Where it should not help, and wrong facts" (the table and
+# its paragraph on the IMU stopping): what the gyroscope prior does where it should not help or is given wrong facts,
 # against the
 # LiDAR-only run of the same drive: car drives (urban, fast: the constant-velocity model suits
 # them), and a drone flight with the IMU's extrinsic rotated by 5 degrees, its clock shifted by

@@ -5,7 +5,7 @@
 #   speed       section 2, the all-threads ratios, and section 3's "High-water marks and
 #               margins" (the clouds) and "The map against the reference's" (the reference's
 #               map and RSS), printed by bench/summarize.py
-#   rss         section 3, "Peak RSS against sequence length" (bench/summarize.py)
+#   rss         section 6, "Long run and tooling": peak RSS flat over the sequence length
 #   state       section 3, "State bytes of each capacity preset"
 #   small       section 3, the small configuration's accuracy (bench/summarize.py)
 #   tables      section 4, the voxel table against hashbrown (criterion)

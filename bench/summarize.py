@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Prints the figures of BENCHMARKS.md section 2 (the all-threads ratios) and section 3 ("High-water
-marks and margins", the reference's columns of "The map against the reference's", "Peak RSS
-against sequence length", the small configuration's accuracy) from what bench/run_all.sh's
+marks and margins", the reference's columns of "The map against the reference's", the small
+configuration's accuracy) and section 6 (peak RSS over the sequence length) from what bench/run_all.sh's
 `speed`, `rss` and `small` steps wrote.
 
     python3 bench/summarize.py [OUT]     (default target/bench/run-all/results)

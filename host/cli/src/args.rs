@@ -250,6 +250,22 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     s.validate()
 }
 
+/// The settings the pipeline and core options `argv` resolve to, `threads` as a command gives
+/// it (the unit tests' parser).
+#[cfg(test)]
+pub(crate) fn resolve(argv: &[&str], threads: Option<usize>) -> Result<Settings> {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Wrap {
+        #[command(flatten)]
+        pipeline: PipelineArgs,
+        #[command(flatten)]
+        core: CoreArgs,
+    }
+    let w = Wrap::try_parse_from(std::iter::once("x").chain(argv.iter().copied())).unwrap();
+    settings(&w.pipeline, &w.core, threads)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -259,13 +275,6 @@ mod tests {
     struct Wrap {
         #[command(flatten)]
         pipeline: PipelineArgs,
-        #[command(flatten)]
-        core: CoreArgs,
-    }
-
-    fn resolve(argv: &[&str], threads: Option<usize>) -> Result<Settings> {
-        let w = Wrap::try_parse_from(std::iter::once("x").chain(argv.iter().copied())).unwrap();
-        settings(&w.pipeline, &w.core, threads)
     }
 
     #[test]

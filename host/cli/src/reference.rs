@@ -97,20 +97,9 @@ pub const DRIVER_IN_REPO: &str = "tests/reference/driver.py";
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::args::{settings, CoreArgs, PipelineArgs};
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct Wrap {
-        #[command(flatten)]
-        pipeline: PipelineArgs,
-        #[command(flatten)]
-        core: CoreArgs,
-    }
 
     fn resolve(argv: &[&str]) -> Result<Settings> {
-        let w = Wrap::try_parse_from(std::iter::once("x").chain(argv.iter().copied())).unwrap();
-        settings(&w.pipeline, &w.core, None)
+        crate::args::resolve(argv, None)
     }
 
     #[test]
