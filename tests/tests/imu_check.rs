@@ -34,23 +34,7 @@ fn rejected(r: &Run) -> Vec<usize> {
 fn a_wrong_gyroscope_is_rejected_within_a_second_and_the_right_one_never() {
     let tmp = tempfile::tempdir().unwrap();
     let sim = tmp.path().join("sim");
-    kiss_odom_tests::simulate(
-        &sim,
-        &[
-            "--profile",
-            "drone",
-            "--seed",
-            "41",
-            "--frames",
-            "150",
-            "--beams",
-            "32",
-            "--columns",
-            "512",
-            "--imu-rate",
-            "200",
-        ],
-    );
+    crate::imu_prior::simulate(&sim, "drone", "41", "150");
     let out = |name: &str| tmp.path().join(name);
     let off = run(&sim, &out("off"), &["--set", "data.deskew=true"]);
     let a_off = off.ok().number("metrics.ate_m");

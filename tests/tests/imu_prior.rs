@@ -6,7 +6,9 @@
 use kiss_odom_tests::run;
 use std::path::Path;
 
-fn simulate(dir: &Path, profile: &str, seed: &str, frames: &str) {
+/// `frames` frames of `profile` (seed `seed`), 32 x 512 beams, with an IMU at 200 Hz; also the
+/// IMU check's drive (`imu_check.rs`).
+pub(crate) fn simulate(dir: &Path, profile: &str, seed: &str, frames: &str) {
     kiss_odom_tests::simulate(
         dir,
         &[
