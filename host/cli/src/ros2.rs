@@ -5,7 +5,7 @@
 //! `sensor_msgs/PointCloud2` from the wire ([`node`]) and publishes odometry, `/tf` and the
 //! local map; [`play`] goes the other way, from the file readers to the wire. [`msg`] holds the
 //! ROS 2 message layouts, [`dds`] the participant, QoS and discovery, [`params`] the parameter
-//! file, [`engine`] the adapter to the host frame driver, and [`watch`] what a caller in the
+//! file, `engine` the adapter to the host frame driver, and [`watch`] what a caller in the
 //! same process can see of a running node.
 
 pub mod dds;

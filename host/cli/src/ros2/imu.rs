@@ -5,7 +5,7 @@
 //! skipped, takes none, so the next registered cloud gets them, as the gyroscope prior
 //! integrates from the last registered sweep's end.
 //!
-//! The queue holds at most [`CAPACITY`] samples; a sample arriving when it is full pushes out
+//! The queue holds at most `CAPACITY` samples; a sample arriving when it is full pushes out
 //! the oldest, which is counted as dropped (an IMU streaming while no cloud comes).
 
 use kiss_odom_io::imu::attach::handed_on;

@@ -4,7 +4,7 @@
 //! one-cloud mailbox; a cloud still waiting there when a newer one arrives is replaced and
 //! counted as dropped (latest-only: a slow frame never queues work, and a dropped cloud is never
 //! registered). The worker takes the mailbox's cloud, decodes it with the readers' PointCloud2
-//! code, registers it through [`super::engine`] and publishes. A cloud that cannot be decoded
+//! code, registers it through `engine` and publishes. A cloud that cannot be decoded
 //! (no x/y/z, a point step its fields do not fit), has no point, or has no usable point is
 //! skipped with a warning and counted; it does not touch the odometry either. So the poses
 //! published are those `kiss-odom run` gives on the sequence of registered clouds.
@@ -18,7 +18,7 @@
 //! - `nav_msgs/Odometry`: pose of the base in `lidar_odom_frame`; twist = the last motion
 //!   (previous registered cloud to this one, expressed in the base frame at the previous
 //!   cloud) over the time between their stamps (`scan_period` when the stamps do not increase): linear = translation / dt,
-//!   angular = rotation vector / dt; covariance: see [`covariances`].
+//!   angular = rotation vector / dt; covariance: see `covariances`.
 //! - `/tf`: `lidar_odom_frame -> base` (or its inverse with `invert_odom_tf`).
 //! - the local map in `lidar_odom_frame`, at most every `local_map_period` seconds.
 //!
