@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Reproduces BENCHMARKS.md's "Speed of the growing host run": `bench` (kiss-odom against
-# kiss-icp 1.3.0 on preloaded frames, one thread, the ratio of frames/s in the same run) with
-# a build from before the host grew its storage and with this one, on kitti-mini 01 and 05
-# and a generated urban drive (seed 61, 100 frames).
+# Reproduces the speed line of BENCHMARKS.md section 13, "The host's default run": `bench`
+# (kiss-odom against kiss-icp 1.3.0 on preloaded frames, one thread, the ratio of frames/s in the
+# same run) with a build from before the host grew its storage and with this one, on kitti-mini 01
+# and 05 and a generated urban drive (seed 61, 100 frames).
 #
 #   KISS_ODOM_PYTHON=target/refvenv/bin/python bash bench/growth_speed.sh OLD_BIN [NEW_BIN]
 #
