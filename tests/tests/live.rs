@@ -474,3 +474,28 @@ fn no_packets_on_the_port_is_an_error_naming_the_address() {
         "{stderr}"
     );
 }
+
+#[test]
+fn live_refuses_an_input_port_from_set_or_from_the_settings_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("c.toml");
+    std::fs::write(&config, "[input]\nport = 2370\n").unwrap();
+    let config = config.to_str().unwrap().to_string();
+    for given in [["--set", "input.port=2370"], ["--config", config.as_str()]] {
+        let out = dir.path().join("out");
+        let mut argv: Vec<std::ffi::OsString> = vec![
+            "live".into(),
+            "--udp".into(),
+            "127.0.0.1:0".into(),
+            "--out".into(),
+            out.into(),
+        ];
+        argv.extend(given.iter().map(Into::into));
+        let (code, stderr) = common::kiss_odom(argv);
+        assert_eq!(code, 1, "{given:?}: {stderr}");
+        assert!(
+            stderr.contains("input.port is for recordings"),
+            "{given:?}: {stderr}"
+        );
+    }
+}

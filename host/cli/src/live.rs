@@ -238,11 +238,11 @@ impl Observer for Poses {
 
 /// Runs `kiss-odom live`.
 pub fn execute(args: &LiveArgs, err: &mut dyn Write) -> Result<i32> {
-    if args
-        .pipeline
-        .set
-        .iter()
-        .any(|a| a.trim_start().starts_with("input.port"))
+    // From `--set` or `--config` alike: the resolved settings, not the command line's text.
+    if crate::args::settings(&args.pipeline, &args.core, None)?
+        .input
+        .port
+        .is_some()
     {
         bail!("live listens on the port of --udp; input.port is for recordings");
     }
