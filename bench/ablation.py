@@ -21,11 +21,9 @@ from pathlib import Path
 RULES = {
     "r_max/200 voxels": "[mapping]\nvoxel_size = {half}\n",
     "plane terms every frame": "[registration]\nplane_gate = 0.015\n",
-    "gated motion prior": "[registration]\nlateral_prior = 0.0\nprediction_prior = 0.0\n",
     "cycle stop": "[registration]\ncycle_stop = false\n",
     "second deskew": "[data]\nredeskew = false\n",
     "scan-order clouds": "[mapping]\nreference_order = true\n",
-    "sparse-scan map": "[mapping]\nsparse_scan_points = 0\n",
     "thinned cloud": "[mapping]\ndesired_source_points = 0\n",
 }
 

@@ -88,13 +88,6 @@ pub struct Config<T> {
     pub degeneracy: Degeneracy,
     /// Robust mode's parameters; the other modes ignore them.
     pub robust: Robust<T>,
-    /// A run whose first scan keeps fewer points than this within range (a sparse sensor's:
-    /// a 16-beam ring scanner or a Livox) maps on GenZ-ICP's sparse-sensor map instead, voxels
-    /// 1.2 times `voxel_size` of at most 3 points ([`Config::for_first_scan`]); 0 (the
-    /// reference's) never does. The odometry decides it
-    /// at the first scan, before the map holds anything, and [`crate::Odometry::config`] then
-    /// says what it runs.
-    pub sparse_scan_points: usize,
     /// A registration cloud of more points than this (a dense sensor's) is made again from the
     /// merge cloud with voxels of `beta v` scaled by its points over this number (GenZ-ICP's
     /// adaptive voxel, from LOCUS 2.0), so ICP's work per iteration stops growing with the
@@ -105,9 +98,7 @@ pub struct Config<T> {
     /// (the second frame, from a prediction standing still: the one that iterates longest)
     /// registers the thinned cloud first, then every voxel from where that ended if it measured
     /// every direction (not with a `work_budget`, which bounds one registration). The points
-    /// counted are those the source buffer held (`Capacities::source_points`). A run on the
-    /// sparse-scan map ([`Config::for_first_scan`]) keeps every voxel: a sparse sensor's cloud
-    /// is hardly above GenZ-ICP's count, and every point of it counts.
+    /// counted are those the source buffer held (`Capacities::source_points`).
     pub desired_source_points: usize,
     /// Work units ICP may spend on one frame (see [`crate::FrameReport::work`]); `None` (the
     /// reference's behaviour) leaves it to `gamma` and `max_iterations`. When a frame would
@@ -143,12 +134,6 @@ pub struct Robust<T> {
     /// The Geman-McClure scale of a registration with plane terms, over `sigma` (default
     /// [`crate::stages::PLANE_KERNEL_SCALE`], the paper's 1/3).
     pub kernel_scale: T,
-    /// Where the motion prior acts: only in frames whose scene leaves a translation nearly
-    /// unobserved, the weakest translation of the registration cloud's point-to-plane
-    /// information at the prediction ([`crate::FrameReport`]'s `weak_ratios`) below this
-    /// fraction of the strongest. 1 or more: in every registration
-    /// with plane terms, without the measurement.
-    pub prior_gate: T,
     /// A registration with plane terms also stops when its iterate comes back within `gamma`
     /// of one of its last [`crate::stages::CYCLE_LEN`] iterates: the step changes of the plane
     /// terms can hold it in a loop that `|dx| < gamma` never ends. `false`: the reference's
@@ -164,7 +149,6 @@ impl<T: Real> Robust<T> {
             prediction_prior: T::zero(),
             lateral_prior: T::zero(),
             kernel_scale: T::of(PLANE_KERNEL_SCALE),
-            prior_gate: T::one(),
             cycle_stop: false,
         }
     }
@@ -180,23 +164,13 @@ impl<T: Real> Robust<T> {
         }
     }
 
-    /// The `accurate` preset's: plane terms on every frame, the cycle stop, and the motion
-    /// prior of the tunnel setting where the weakest translation at the prediction is below a
-    /// tenth of the strongest (see [`Config::accurate`]).
+    /// The `accurate` preset's: plane terms on every frame and the cycle stop, no motion prior
+    /// (see [`Config::accurate`]).
     pub fn accurate() -> Self {
-        // A bare corridor leaves its axis only what the scan pattern leaks in sparsely filled
-        // voxels, and an open field its two ground directions what a few poles and trees
-        // give; they read 0.0006-0.065 and 0-0.02 of the strongest, a tunnel with sparse wall
-        // features 0.001-0.13. A street's buildings, cars and poles face every way: urban
-        // drives read 0.1-0.8 (1 % of frames below 0.2), and hand-held and drone runs through
-        // the same streets 0.09-0.9 (BENCHMARKS.md, "The motion prior where the scene leaves
-        // a translation free").
-        const PRIOR_GATE: f64 = 0.1;
         Self {
             plane_gate: T::one(),
             cycle_stop: true,
-            prior_gate: T::of(PRIOR_GATE),
-            ..Self::tunnel()
+            ..Self::new()
         }
     }
 
@@ -206,7 +180,6 @@ impl<T: Real> Robust<T> {
         pos && nonneg(self.plane_gate)
             && nonneg(self.prediction_prior)
             && nonneg(self.lateral_prior)
-            && nonneg(self.prior_gate)
     }
 }
 
@@ -238,7 +211,6 @@ impl<T: Real> Config<T> {
             degeneracy_ratio: T::of(0.02),
             degeneracy: Degeneracy::Reference,
             robust: Robust::new(),
-            sparse_scan_points: 0,
             desired_source_points: 0,
             work_budget: None,
         }
@@ -261,78 +233,27 @@ impl<T: Real> Config<T> {
 
     /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
     /// preset"), on ordinary scenes as well as degenerate ones, at 1.1-2.6 times the default's
-    /// time on urban and KITTI scans (2.6-2.8 in a corridor). Every frame is registered with
-    /// point-to-plane terms where the map is planar (GenZ-ICP's weighting, see
-    /// `registration::planes`) and point-to-point terms elsewhere, on a map of `r_max / 200`
-    /// voxels (GenZ-ICP's sparse-sensor map when the first scan keeps fewer than 32,768
-    /// points, [`Config::for_first_scan`]); the motion prior acts only where the scene leaves a
-    /// translation nearly free ([`Robust::prior_gate`]: a corridor, a tunnel, open ground),
-    /// where its lateral term takes the sensor for a car's (a flying sensor there breaks it)
-    /// and its hold acts only along a corridor's lone free axis; a registration that goes
-    /// round a loop stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not
-    /// the model's is deskewed again with its own ([`Config::redeskew`]), and a dense scan's
-    /// registration cloud is thinned toward 3,000 points where the scene measures every
-    /// direction ([`Config::desired_source_points`]; not on the sparse-scan map). Both clouds
-    /// keep the scan's order ([`Config::reference_order`] `false`). Its poses are not the
-    /// reference's.
+    /// time on urban and KITTI scans. Every frame is registered with point-to-plane terms where
+    /// the map is planar (GenZ-ICP's weighting, see `registration::planes`) and point-to-point
+    /// terms elsewhere, on a map of `r_max / 200` voxels; a registration that goes round a loop
+    /// stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the model's is
+    /// deskewed again with its own ([`Config::redeskew`]), and a dense scan's registration
+    /// cloud is thinned toward 3,000 points where the scene measures every direction
+    /// ([`Config::desired_source_points`]). Both clouds keep the scan's order
+    /// ([`Config::reference_order`] `false`). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {
-        // 2^15, half of a 64-beam, 1024-column sweep. A sweep of a 16-beam scanner at 10 Hz
-        // holds at most 28,800 points (16 x 1,800), a Livox Mid-360's 0.1 s frame about
-        // 20,000; a 64 x 1024 sensor's 65,536 less what finds nothing within range, which over
-        // an open field (its upper beams on the sky) left 56,000 (BENCHMARKS.md, "The accurate
-        // preset").
-        const SPARSE_SCAN_POINTS: usize = 32_768;
         // GenZ-ICP's `desired_num_voxelized_points` in its `outdoor` and `kitti` presets. A
         // 64-beam sweep keeps 3,700-4,600 points at `beta v` on generated streets and
-        // 6,000-12,500 on KITTI's; a 16-beam one about this many on the sparse-scan map, which
-        // keeps them all (BENCHMARKS.md, "The accurate preset").
+        // 6,000-12,500 on KITTI's (BENCHMARKS.md, "The accurate preset").
         const DESIRED_SOURCE_POINTS: usize = 3_000;
         Self {
             voxel_size: max_range / T::of(200.0),
             degeneracy: Degeneracy::Robust,
             robust: Robust::accurate(),
-            sparse_scan_points: SPARSE_SCAN_POINTS,
             desired_source_points: DESIRED_SOURCE_POINTS,
             redeskew: true,
             reference_order: false,
             ..Self::new(max_range)
-        }
-    }
-
-    /// This configuration for a run whose first scan kept `points` points within range, when
-    /// that is fewer than `sparse_scan_points`, else as it is: GenZ-ICP's sparse-sensor map
-    /// (see [`Config::sparse_scan_points`]) of voxels 1.2 times `voxel_size` with at most 3
-    /// points each (`N_max` if lower), a registration cloud of every voxel of the map's size
-    /// (`beta` 1, every voxel kept: `desired_source_points` 0) and plane terms with a kernel of
-    /// `sigma / 100` ([`Robust::kernel_scale`] 0.01).
-    pub fn for_first_scan(&self, points: usize) -> Self {
-        // GenZ-ICP's `outdoor` map of 0.6 m voxels against the preset's `r_max / 200` of a
-        // 100 m sensor, and its `N_max`.
-        const SPARSE_VOXEL_FACTOR: f64 = 1.2;
-        const SPARSE_POINTS_PER_VOXEL: u32 = 3;
-        // The registration cloud on the map's own voxels, where GenZ-ICP starts its adaptive
-        // source voxel (BENCHMARKS.md, "The sparse-scan map").
-        const SPARSE_BETA: f64 = 1.0;
-        // A thirty-third of the paper's 1/3. A 16-beam sensor's neighbourhoods are often one
-        // ring's arc, whose normal is only the arc's flatter side. A kernel of `sigma / 100` (a
-        // Geman-McClure cut-off near 5 cm at the usual sigma of 0.3 m) leaves such residuals
-        // almost no weight. On the tuning seeds every step from 1/4 down to 1/200 lowered the
-        // VLP-16's error, by half at 1/100, and moved the Mid-360's within 10 % (BENCHMARKS.md,
-        // "The sparse-scan map").
-        const SPARSE_PLANE_KERNEL_SCALE: f64 = 0.01;
-        if points >= self.sparse_scan_points {
-            return *self;
-        }
-        Self {
-            voxel_size: self.voxel_size * T::of(SPARSE_VOXEL_FACTOR),
-            max_points_per_voxel: self.max_points_per_voxel.min(SPARSE_POINTS_PER_VOXEL),
-            beta: T::of(SPARSE_BETA),
-            desired_source_points: 0,
-            robust: Robust {
-                kernel_scale: T::of(SPARSE_PLANE_KERNEL_SCALE),
-                ..self.robust
-            },
-            ..*self
         }
     }
 

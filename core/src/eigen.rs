@@ -1,6 +1,6 @@
 //! Symmetric 3x3 eigen-decomposition by cyclic Jacobi rotations, for the voxel shapes robust
-//! mode's planes read and the scene's information its motion prior gate reads (`weakness`):
-//! fixed sweep order, only `+ - * /` and the correctly rounded square root, so every target
+//! mode's planes read and the one-plane test of a registration cloud (`one_plane`): fixed
+//! sweep order, only `+ - * /` and the correctly rounded square root, so every target
 //! gives the same bits.
 
 use crate::scalar::Real;

@@ -64,6 +64,7 @@ mod lie;
 mod local_map;
 mod observability;
 mod odometry;
+mod one_plane;
 mod preprocess;
 mod registration;
 mod report;
@@ -71,7 +72,6 @@ mod scalar;
 pub mod storage;
 mod threshold;
 mod voxel;
-mod weakness;
 
 #[cfg(test)]
 mod testutil;
@@ -107,9 +107,7 @@ pub mod stages {
     pub use crate::local_map::{
         LocalMap, MapLayout, UpdateStats, BLOCK, EVICT_TO, GROW_BELOW, GROW_STEP, RADIUS_BINS,
     };
-    pub use crate::observability::{
-        information, observability, Information, Volumes, RING_SINE, SAMPLES,
-    };
+    pub use crate::observability::{observability, RING_SINE, SAMPLES};
     pub use crate::preprocess::{preprocess, Drop, Preprocessed, Preprocessor};
     pub use crate::registration::{
         align_points_to_map, chunk_len, chunks_for, moved_points, work_words, Alignment, Chunk,
@@ -121,5 +119,4 @@ pub mod stages {
     pub use crate::voxel::{
         point_to_voxel, reference_hash, table_hash, VoxelKey, NEIGHBOUR_SHIFTS,
     };
-    pub use crate::weakness::{min_points, weakness, Weakness};
 }

@@ -41,43 +41,29 @@ pub fn observability<T: Real, P: PointCodec<T>>(
     origin: &Point<T>,
     max_distance: T,
 ) -> Option<T> {
-    let info = information(map, points, n, origin, max_distance, Volumes::Isotropic, 3)?;
+    let info = information(map, points, n, origin, max_distance)?;
     Some(ratio(&info.t).min(ratio(&info.r)))
 }
 
 /// The summed information `sum J^T M_i J` of the sampled points for a motion about `origin`
 /// (world axes), `J = [I, -[s_i - origin]x]`: its translation and rotation blocks.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Information<T: Real> {
+struct Information<T: Real> {
     /// Translation block `sum M_i`.
-    pub t: Matrix3<T>,
+    t: Matrix3<T>,
     /// Rotation block `sum [s_i - origin]x^T M_i [s_i - origin]x`.
-    pub r: Matrix3<T>,
-}
-
-/// What a voxel that is neither a plane nor a line tells.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Volumes {
-    /// The same in every direction (`I / 3`): the `observability` diagnostic.
-    Isotropic,
-    /// Only along its covariance's flattest direction, as a plane would. Two planes meeting
-    /// in a voxel (a corridor's wall and floor) fill it like a volume, but say nothing along
-    /// their common edge; the measurement of weak directions (`weakness`) must not read
-    /// information there.
-    Flattest,
+    r: Matrix3<T>,
 }
 
 /// The information of the `n` `points` (world frame) seen from `origin`, sampled every
-/// `n / SAMPLES`-th point, from voxels holding at least `min_points` map points; `None` if no
-/// sample had such a voxel nearby.
-pub fn information<T: Real, P: PointCodec<T>>(
+/// `n / SAMPLES`-th point, from voxels holding at least 3 map points; `None` if no sample had
+/// such a voxel nearby.
+fn information<T: Real, P: PointCodec<T>>(
     map: &MapView<'_, T, P>,
     points: impl Iterator<Item = Point<T>>,
     n: usize,
     origin: &Point<T>,
     max_distance: T,
-    volumes: Volumes,
-    min_points: usize,
 ) -> Option<Information<T>> {
     let step = n.div_ceil(SAMPLES).max(1);
     let mut info = Information {
@@ -92,11 +78,11 @@ pub fn information<T: Real, P: PointCodec<T>>(
         let Some((n, cov)) = map.voxel_covariance(&q) else {
             continue;
         };
-        if n < min_points.max(3) {
+        if n < 3 {
             continue;
         }
         let ray = s - origin;
-        let Some(m) = shape_information(&cov, &ray, volumes) else {
+        let Some(m) = shape_information(&cov, &ray) else {
             continue;
         };
         let arm = hat(&ray);
@@ -109,11 +95,7 @@ pub fn information<T: Real, P: PointCodec<T>>(
 
 /// Information `M` (trace 1) a voxel of covariance `cov` gives a point matched in it, seen
 /// along `ray` from the sensor; `None` for no information.
-fn shape_information<T: Real>(
-    cov: &Matrix3<T>,
-    ray: &Vector3<T>,
-    volumes: Volumes,
-) -> Option<Matrix3<T>> {
+fn shape_information<T: Real>(cov: &Matrix3<T>, ray: &Vector3<T>) -> Option<Matrix3<T>> {
     let eig = SymmetricEigen::new(*cov);
     let mut idx = [0usize, 1, 2];
     idx.sort_unstable_by(|&a, &b| {
@@ -137,7 +119,7 @@ fn shape_information<T: Real>(
             return None;
         }
         (Matrix3::identity() - d * d.transpose()) * T::of(0.5)
-    } else if l[0] < tenth * l[1] || volumes == Volumes::Flattest {
+    } else if l[0] < tenth * l[1] {
         let n = col(0);
         n * n.transpose()
     } else {
@@ -183,15 +165,15 @@ mod tests {
     fn shapes_are_classified_by_their_covariance() {
         // A plane z = 0: information only along z.
         let plane = Matrix3::from_diagonal(&Vector3::new(0.1f64, 0.08, 1e-6));
-        let m = shape_information(&plane, &Vector3::x(), Volumes::Isotropic).unwrap();
+        let m = shape_information(&plane, &Vector3::x()).unwrap();
         assert!((m[(2, 2)] - 1.0).abs() < 1e-9 && m[(0, 0)].abs() < 1e-9);
         // A vertical line (a pole) seen side-on: information across it only.
         let pole = Matrix3::from_diagonal(&Vector3::new(1e-6f64, 1e-6, 0.1));
-        let m = shape_information(&pole, &Vector3::x(), Volumes::Isotropic).unwrap();
+        let m = shape_information(&pole, &Vector3::x()).unwrap();
         assert!(m[(2, 2)].abs() < 1e-9 && (m[(0, 0)] - 0.5).abs() < 1e-9);
         // A blob: isotropic.
         let blob = Matrix3::from_diagonal(&Vector3::new(0.1f64, 0.09, 0.08));
-        let m = shape_information(&blob, &Vector3::x(), Volumes::Isotropic).unwrap();
+        let m = shape_information(&blob, &Vector3::x()).unwrap();
         assert!((m - Matrix3::identity() / 3.0).amax() < 1e-12);
     }
 
@@ -200,19 +182,16 @@ mod tests {
         // A ring on the ground 20 m ahead of a sensor 1.8 m up: an arc along y, across the ray.
         let ray = Vector3::new(20.0f64, 0.0, -1.8);
         let arc = Matrix3::from_diagonal(&Vector3::new(1e-6f64, 0.1, 1e-6));
-        assert_eq!(shape_information(&arc, &ray, Volumes::Isotropic), None);
+        assert_eq!(shape_information(&arc, &ray), None);
         // The same arc on a side wall, seen at 45 degrees: along the wall, slightly tilted.
         let ray = Vector3::new(10.0f64, 10.0, -1.0);
         let d = Vector3::new(1.0f64, 0.0, -0.07).normalize();
         let wall_arc = d * d.transpose() * 0.1 + Matrix3::identity() * 1e-6;
-        assert_eq!(shape_information(&wall_arc, &ray, Volumes::Isotropic), None);
+        assert_eq!(shape_information(&wall_arc, &ray), None);
         // A line leaving the cone steeply (a pole, 20 degrees off vertical) still counts.
         let d = Vector3::new(0.34f64, 0.0, 0.94).normalize();
         let leaning = d * d.transpose() * 0.1 + Matrix3::identity() * 1e-6;
-        assert!(
-            shape_information(&leaning, &Vector3::new(15.0, 0.0, 0.5), Volumes::Isotropic)
-                .is_some()
-        );
+        assert!(shape_information(&leaning, &Vector3::new(15.0, 0.0, 0.5)).is_some());
     }
 
     #[test]

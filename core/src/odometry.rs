@@ -65,14 +65,14 @@ pub struct Odometry<T: Real, P: PointCodec<T> = Exact, S: Storage = &'static mut
     sweep: Sweep<T>,
     /// `sigma_t` of Eq. (7), one per kind of prediction.
     threshold: Thresholds<T>,
-    /// The configuration in use: the one asked for, or its sparse-scan form (`strategy`).
+    /// The configuration it was built with.
     config: Config<T>,
     /// The local map's bookkeeping (Sec. III-C); its buffers are in the storage.
     map: MapState<T>,
     /// The storage, its layout and capacities, the last clouds, the high-water marks.
     buffers: Buffers<S>,
     /// What the accurate preset keeps from frame to frame.
-    strategy: Strategy<T>,
+    strategy: Strategy,
     _codec: PhantomData<P>,
 }
 
@@ -106,7 +106,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             config,
             map,
             buffers: Buffers::new(storage, layout, caps, WhenFull::Drop),
-            strategy: Strategy::new(config),
+            strategy: Strategy::default(),
             _codec: PhantomData,
         };
         odom.map_mut()
@@ -242,7 +242,6 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// threshold's seed, frame count and high-water marks at zero. The same frames then give
     /// the same poses as on a new odometry.
     pub fn reset(&mut self) {
-        self.use_config(self.strategy.asked);
         if let Ok(mut map) = self.map_mut() {
             map.clear();
         }
@@ -250,34 +249,11 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         self.threshold = fresh_threshold(&self.config);
         self.motion = Motion::start();
         self.sweep = Sweep::start();
-        self.strategy = Strategy::new(self.strategy.asked);
+        self.strategy = Strategy::default();
         let b = &mut self.buffers;
         (b.merge_len, b.source_len) = (0, 0);
         b.high = Default::default();
         b.needed = b.caps;
-    }
-
-    /// Runs `config` from here on, with an empty map of its voxels; the caller has nothing in
-    /// the map to lose. Nothing changes when `config` is the one in use, or invalid (a voxel
-    /// grown past the largest scalar).
-    fn use_config(&mut self, config: Config<T>) {
-        if config == self.config || config.validate().is_err() {
-            return;
-        }
-        let state = MapState::new(
-            config.voxel_size,
-            config.max_range,
-            config.max_points_per_voxel,
-            self.buffers.caps.map_voxels,
-            &self.buffers.layout.map,
-        );
-        if let Some(state) = state {
-            self.map = state;
-            self.config = config;
-            if let Ok(mut map) = self.map_mut() {
-                map.clear();
-            }
-        }
     }
 
     /// Write access to the map.

@@ -262,11 +262,6 @@ pub struct FrameReport<T: Real> {
     /// Weakest over strongest direction of the point-to-plane information sampled from map
     /// voxel normals (translation and rotation, the smaller); `None` on the first frame.
     pub observability: Option<T>,
-    /// Weakest over strongest eigenvalue of the point-to-plane information at the prediction,
-    /// for translation and for rotation: in robust mode with a `prior_gate` below 1 (the
-    /// motion prior acts where the first is below it); `None` otherwise, on the first two
-    /// frames, or with nothing measured.
-    pub weak_ratios: Option<[T; 2]>,
     /// Points given.
     pub input_points: u32,
     /// Finite points outside the range shell.

@@ -384,76 +384,6 @@ fn robust_mode_needs_room_for_plane_terms_and_only_it_pays_for_them() {
 }
 
 #[test]
-fn a_sparse_first_scan_sets_the_map_for_the_run_and_reset_forgets_it() {
-    // A first scan of half a street scan, then whole ones: only the first decides.
-    let all = scans();
-    let half = all[0][..all[0].len() / 2].to_vec();
-    let frames = [&half, &all[1], &all[2], &all[3]];
-    assert!(frames[1..].iter().all(|f| f.len() > half.len()));
-    let caps = Capacities {
-        plane_terms: true,
-        ..caps()
-    };
-    let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
-    let asked = Config {
-        sparse_scan_points: half.len() + 1,
-        ..Config::<f64>::accurate(RANGE)
-    };
-    let sparse = asked.for_first_scan(half.len());
-    assert!(sparse.voxel_size > asked.voxel_size && sparse.max_points_per_voxel == 3);
-    let mut odom = Odometry::<f64, Exact, _>::new(asked, caps, &mut words[..]).unwrap();
-    assert_eq!(
-        *odom.config(),
-        asked,
-        "nothing decided before the first scan"
-    );
-    let run = |odom: &mut Odometry<f64, Exact, _>| -> Vec<Pose<f64>> {
-        frames
-            .iter()
-            .map(|s| {
-                let pose = odom.register_frame(s, None).unwrap().pose;
-                assert_eq!(*odom.config(), sparse, "denser scans later change nothing");
-                pose
-            })
-            .collect()
-    };
-    let first = run(&mut odom);
-    assert!(odom.sparse_scan_map());
-    // The map is the sparse one: its voxels, and at most its N_max points in each.
-    let map = odom.map();
-    assert_eq!(map.voxel_size(), sparse.voxel_size);
-    let mut per_voxel = std::collections::HashMap::new();
-    map.for_each_point(|k, _| *per_voxel.entry(*k).or_insert(0u32) += 1);
-    let most = per_voxel.values().copied().max().unwrap_or(0);
-    assert_eq!(most, 3, "points in the fullest voxel");
-    odom.reset();
-    assert_eq!(*odom.config(), asked);
-    assert!(!odom.sparse_scan_map());
-    assert_eq!(run(&mut odom), first, "after a reset, the same run again");
-    // A first scan of as many points as the bound keeps the map asked for.
-    let dense = Config {
-        sparse_scan_points: half.len(),
-        ..asked
-    };
-    let mut odom = Odometry::<f64, Exact, _>::new(dense, caps, &mut words[..]).unwrap();
-    for s in frames {
-        odom.register_frame(s, None).unwrap();
-        assert_eq!(*odom.config(), dense);
-    }
-    assert_eq!(odom.map().voxel_size(), dense.voxel_size);
-    assert!(!odom.sparse_scan_map());
-    // Nor does a sparse-scan map whose voxel would not be finite: the map asked for stays.
-    let huge = Config {
-        voxel_size: f64::MAX,
-        ..asked
-    };
-    assert!(huge.validate().is_ok() && huge.for_first_scan(0).validate().is_err());
-    let mut odom = Odometry::<f64, Exact, _>::new(huge, caps, &mut words[..]).unwrap();
-    let _ = odom.register_frame(&half, None);
-    assert_eq!(*odom.config(), huge);
-}
-
-#[test]
 fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_points() {
     // A street swept while the sensor's yaw swings (without the capture times): some
     // registrations measure every direction, some are flagged degenerate.
@@ -463,7 +393,6 @@ fn a_dense_registration_cloud_is_made_again_with_voxels_scaled_to_the_desired_po
     let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
     let asked = Config {
         desired_source_points: 0,
-        sparse_scan_points: 0,
         ..Config::<f64>::accurate(RANGE)
     };
     // Each frame's pose, registration cloud, merge cloud and whether it was flagged degenerate.
@@ -544,17 +473,14 @@ fn plane_caps() -> Capacities {
 
 /// `scans` through the `accurate` preset for a 100 m sensor (0.5 m voxels: the street's 0.3 m
 /// sampling leaves too few points for a plane in the 27 voxels around a point at 40 m's 0.2 m),
-/// always on its own map, changed by `with`: each frame's report and the last registration
+/// changed by `with`: each frame's report and the last registration
 /// cloud.
 fn accurate_on(
     scans: &[Vec<[f64; 3]>],
     with: impl FnOnce(Config<f64>) -> Config<f64>,
 ) -> (Vec<FrameReport<f64>>, Vec<[f64; 3]>) {
     let caps = plane_caps();
-    let cfg = with(Config {
-        sparse_scan_points: 0,
-        ..Config::<f64>::accurate(100.0)
-    });
+    let cfg = with(Config::<f64>::accurate(100.0));
     let mut words = vec![0u64; caps.arena_words::<f64, Exact>()];
     let mut odom = Odometry::<f64, Exact, _>::new(cfg, caps, &mut words[..]).unwrap();
     let reports = scans

@@ -69,9 +69,7 @@ fn config<T: Real>(u: &mut Unstructured) -> Result<Config<T>> {
     c.robust.plane_gate = T::of(pick(u, &[0.015, 0.0, 1.0, 0.5])?);
     c.robust.prediction_prior = T::of(pick(u, &[0.0, 0.01, 1e3])?);
     c.robust.lateral_prior = T::of(pick(u, &[0.0, 1.0, 1e-3])?);
-    c.robust.prior_gate = T::of(pick(u, &[1.0, 0.1, 0.0])?);
     c.robust.cycle_stop = u.arbitrary()?;
-    c.sparse_scan_points = usize::from(u.arbitrary::<u16>()? % 1024);
     c.desired_source_points = usize::from(u.arbitrary::<u8>()? % 128);
     Ok(c)
 }

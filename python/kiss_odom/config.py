@@ -4,9 +4,8 @@ into the settings of ``kiss-odom run`` (the layout of the ``config.toml`` it wri
 Accepted by :func:`settings_from` (and so by :class:`kiss_odom.KissICP`):
 
 - ``None``: the defaults, which are kiss-icp 1.3.0's (max range 100 m, voxel max_range/100),
-  or those of the ``accurate`` preset with ``preset="accurate"`` (voxel max_range/200, or
-  GenZ-ICP's sparse-sensor map after a sparse first scan, point-to-plane terms where the map
-  is planar; see the README's "Which preset");
+  or those of the ``accurate`` preset with ``preset="accurate"`` (voxel max_range/200,
+  point-to-plane terms where the map is planar; see the README's "Which preset");
 - a kiss-icp ``KISSConfig`` (``kiss_icp.config.load_config(...)``), or the path of one of its
   YAML files (``.yaml``/``.yml``, read by the compiled module as ``kiss-odom run --config``
   reads it: neither PyYAML nor kiss-icp is needed; the voxel size is made explicit at

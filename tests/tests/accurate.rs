@@ -72,72 +72,37 @@ fn numbers(r: &Run, column: &str) -> Vec<u32> {
         .collect()
 }
 
-/// `summary.json`'s map: voxel size, points a voxel, and whether the sparse-scan map was taken;
-/// a run warns (once) exactly when it was.
-fn map_of(r: &Run) -> (f64, u64, bool) {
+/// `summary.json`'s map: voxel size and points a voxel.
+fn map_of(r: &Run) -> (f64, u64) {
     r.ok();
     let m = r.summary()["map"].clone();
     println!("{m}");
-    let sparse = m["sparse_scan"].as_bool().unwrap();
-    let warned = r
-        .stderr
-        .matches("fewer than [mapping] sparse_scan_points")
-        .count();
-    assert_eq!(warned, usize::from(sparse), "{}", r.stderr);
     (
         m["voxel_size"].as_f64().unwrap(),
         m["max_points_per_voxel"].as_u64().unwrap(),
-        sparse,
     )
 }
 
 #[test]
-fn the_accurate_preset_maps_a_sparse_sensor_on_genz_icp_s_sparse_sensor_map() {
+fn the_accurate_preset_maps_a_sparse_and_a_dense_sensor_on_the_same_finer_map() {
     let tmp = tempfile::tempdir().unwrap();
     let vlp = tmp.path().join("vlp16");
     let sensor = ["--frames", "3", "--seed", "5", "--profile", "urban"];
     simulate(&vlp, &[&sensor[..], &["--sensor", "vlp16"]].concat());
     let accurate = ["--preset", "accurate", "--threads", "1"];
-    // A 16-beam sweep (under 28,800 points): 1.2 times the preset's 0.5 m voxels, 3 points each.
-    let sparse = map_of(&run(&vlp, &tmp.path().join("a"), &accurate));
-    assert_eq!((sparse.1, sparse.2), (3, true));
-    assert!((sparse.0 - 0.6).abs() < 1e-12);
-    // The warning names the map's voxel as the core holds it, in f32 too, and the registration
-    // settings that the map puts in place of the configured ones.
-    let f32 = run(
-        &vlp,
-        &tmp.path().join("f"),
-        &[&accurate[..], &["--set", "runtime.scalar=f32"]].concat(),
-    );
-    map_of(&f32);
-    for said in [
-        "maps on 0.6 m voxels of at most 3 points",
-        "with beta 1 and plane_kernel_scale 0.01 (the sparse-sensor map, in place of",
-    ] {
-        assert!(f32.stderr.contains(said), "{said:?} in {}", f32.stderr);
-    }
-    // The reference keeps its map whatever the scan.
+    // A 16-beam sweep: the preset's `r_max / 200` voxels (0.5 m at 100 m), 20 points each.
+    let sparse = run(&vlp, &tmp.path().join("a"), &accurate);
+    assert_eq!(map_of(&sparse), (0.5, 20));
+    assert!(sparse.warnings().is_empty(), "{}", sparse.stderr);
+    // The reference keeps its own.
     assert_eq!(
         map_of(&run(&vlp, &tmp.path().join("d"), &["--threads", "1"])),
-        (1.0, 20, false)
+        (1.0, 20)
     );
-    // A 64-beam KITTI sweep (124k points) keeps the preset's map...
+    // A 64-beam KITTI sweep (124k points) maps as the 16-beam one does.
     let seq = repo().join("../shared/data/kitti-mini/sequences/02");
     let two = [&accurate[..], &["--frames", "0..2"]].concat();
-    assert_eq!(
-        map_of(&run(&seq, &tmp.path().join("k"), &two)),
-        (0.5, 20, false)
-    );
-    // ...unless the bound, a setting, is above it.
-    let above = tmp.path().join("above.toml");
-    std::fs::write(&above, "[mapping]\nsparse_scan_points = 1000000\n").unwrap();
-    let config = ["--config", above.to_str().unwrap()];
-    let moved = map_of(&run(
-        &seq,
-        &tmp.path().join("m"),
-        &[&two[..], &config].concat(),
-    ));
-    assert_eq!((moved.1, moved.2), (3, true));
+    assert_eq!(map_of(&run(&seq, &tmp.path().join("k"), &two)), (0.5, 20));
 }
 
 #[test]

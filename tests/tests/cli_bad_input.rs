@@ -679,7 +679,7 @@ fn robust_only_options_in_reference_mode_are_said_unused() {
         "--set",
         "registration.lateral_prior=1",
         "--set",
-        "registration.prior_gate=0.5",
+        "registration.cycle_stop=true",
     ];
     let r = run(&data, &dir.path().join("out-ref"), &opts);
     r.ok();
@@ -688,7 +688,7 @@ fn robust_only_options_in_reference_mode_are_said_unused() {
         "registration.lateral_prior = 1.0 not used",
         "robust mode only",
     ]);
-    r.warning_with(&["registration.prior_gate = 0.5 not used"]);
+    r.warning_with(&["registration.cycle_stop = true not used"]);
     let strict = [&opts[..], &["--set", "output.strict=true"]].concat();
     let s = run(&data, &dir.path().join("out-strict"), &strict);
     assert!(s.stderr.contains("output.strict"), "{}", s.stderr);

@@ -34,12 +34,8 @@ fn robust_is_the_reference_with_planes_and_its_gate_is_checked() {
             lateral_prior: bad,
             ..r.robust
         });
-        let prior_gate = with(Robust {
-            prior_gate: bad,
-            ..r.robust
-        });
         let all = [(gate, "plane_gate"), (hold, "hold"), (lateral, "lateral")];
-        for (c, name) in all.into_iter().chain([(prior_gate, "prior_gate")]) {
+        for (c, name) in all {
             assert_eq!(c.validate(), Err(ConfigError::Threshold), "{name} {bad}");
         }
     }
@@ -54,20 +50,14 @@ fn robust_is_the_reference_with_planes_and_its_gate_is_checked() {
 }
 
 #[test]
-fn accurate_is_robust_mode_on_every_frame_on_a_finer_map_with_gated_priors() {
+fn accurate_is_robust_mode_on_every_frame_on_a_finer_map_without_priors() {
     let (a, r) = (Config::<f64>::accurate(80.0), Config::<f64>::robust(80.0));
     assert_eq!(a.voxel_size, 0.4);
     assert!(a.robust.plane_gate >= 1.0, "every frame with plane terms");
-    let t = Robust::<f64>::tunnel();
     assert_eq!(
         (a.robust.prediction_prior, a.robust.lateral_prior),
-        (t.prediction_prior, t.lateral_prior),
-        "the tunnel setting's priors"
-    );
-    assert_eq!(
-        (a.robust.prior_gate, r.robust.prior_gate, t.prior_gate),
-        (0.1, 1.0, 1.0),
-        "gated in the preset only"
+        (0.0, 0.0),
+        "no motion prior"
     );
     assert!(
         a.robust.cycle_stop && !r.robust.cycle_stop,
@@ -89,8 +79,11 @@ fn accurate_is_robust_mode_on_every_frame_on_a_finer_map_with_gated_priors() {
     );
     let back = Config {
         voxel_size: r.voxel_size,
-        robust: r.robust,
-        sparse_scan_points: r.sparse_scan_points,
+        robust: Robust {
+            plane_gate: r.robust.plane_gate,
+            cycle_stop: r.robust.cycle_stop,
+            ..a.robust
+        },
         desired_source_points: r.desired_source_points,
         redeskew: r.redeskew,
         reference_order: r.reference_order,
@@ -134,59 +127,4 @@ fn the_tunnel_and_tiny_settings_are_what_their_docs_say() {
         ..c
     };
     assert_eq!(back, r);
-}
-
-#[test]
-fn a_sparse_first_scan_gives_the_accurate_preset_genz_icp_s_sparse_sensor_map() {
-    let a = Config::<f64>::accurate(100.0);
-    assert_eq!(
-        a.sparse_scan_points, 32_768,
-        "half a 64-beam, 1024-column sweep"
-    );
-    let sparse = a.for_first_scan(a.sparse_scan_points - 1);
-    assert_eq!(
-        (sparse.voxel_size, sparse.max_points_per_voxel),
-        (0.5 * 1.2, 3)
-    );
-    assert!((sparse.voxel_size - 0.6).abs() < 1e-15, "GenZ-ICP's 0.6 m");
-    assert_eq!(
-        sparse.desired_source_points, 0,
-        "every voxel of a sparse cloud"
-    );
-    assert_eq!(
-        (sparse.beta, sparse.robust.kernel_scale),
-        (1.0, 0.01),
-        "a registration cloud on the map's voxels, a tighter plane kernel"
-    );
-    assert_eq!(
-        Config {
-            voxel_size: a.voxel_size,
-            max_points_per_voxel: a.max_points_per_voxel,
-            desired_source_points: a.desired_source_points,
-            beta: a.beta,
-            robust: Robust {
-                kernel_scale: a.robust.kernel_scale,
-                ..sparse.robust
-            },
-            ..sparse
-        },
-        a,
-        "nothing else changes"
-    );
-    assert!(sparse.validate().is_ok());
-    assert_eq!(
-        a.for_first_scan(a.sparse_scan_points),
-        a,
-        "the bound is strict"
-    );
-    // A map already coarser in points keeps its own N_max.
-    let two = Config {
-        max_points_per_voxel: 2,
-        ..a
-    };
-    assert_eq!(two.for_first_scan(0).max_points_per_voxel, 2);
-    // The reference's configuration never changes.
-    let n = Config::<f64>::new(100.0);
-    assert_eq!(n.sparse_scan_points, 0);
-    assert_eq!(n.for_first_scan(0), n);
 }

@@ -143,16 +143,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
         )
         .run(points, stamps, out)
     }
-    /// Parameters in use: those it was built with, or from the first scan on their
-    /// sparse-scan form (see [`Config::sparse_scan_points`]).
+    /// Parameters in use.
     pub fn config(&self) -> &Config<T> {
         &self.config
-    }
-
-    /// Whether the first scan gave this run the sparse-scan map, so that [`Self::config`]
-    /// differs from the configuration the odometry was built with.
-    pub fn sparse_scan_map(&self) -> bool {
-        self.config != self.strategy.asked
     }
     /// Capacities in use.
     pub fn capacities(&self) -> &Capacities {

@@ -6,21 +6,20 @@
 //!   prediction (it measures nothing along the plane); else the reference's registration;
 //!   where its observability is below `plane_gate` (or always, with a gate of 1 or more) a
 //!   registration from the prediction with point-to-plane terms where the map is planar, and
-//!   the motion prior (with a `prior_gate` below 1, only where the scene's measurement at the
-//!   prediction, `weakness`, finds a translation nearly free).
+//!   the motion prior.
 //!
 //! What the paper leaves out lives here too: the convergence floor of a finite scalar and the
 //! fallback for a non-finite ICP result.
 
-use crate::config::{Config, Degeneracy, Robust};
+use crate::config::{Config, Degeneracy};
 use crate::geometry::{Point, Pose};
 use crate::local_map::{MapView, PointCodec};
 use crate::observability::observability;
+use crate::one_plane::one_plane;
 use crate::registration::{
     align_points_to_map, moved_points, Alignment, Executor, IcpParams, MotionPrior,
 };
 use crate::scalar::Real;
-use crate::weakness::{min_points, one_plane, weakness, Weakness};
 
 /// What step 4 works with, besides the prediction, the map and ICP's work chunks.
 pub(super) struct Step<'a, T: Real, E: Executor> {
@@ -56,10 +55,8 @@ pub(super) struct Registered<T: Real> {
     pub(super) observability: Option<T>,
     /// Registered with robust mode's plane terms.
     pub(super) planes: bool,
-    /// The scene's weakness at the prediction, where the motion prior's gate measured it.
-    pub(super) weak: Weakness<T>,
     /// Held to the prediction, unregistered: robust mode's registration cloud was one plane
-    /// (see `weakness::one_plane`).
+    /// (see `one_plane`).
     pub(super) held: bool,
 }
 
@@ -82,34 +79,16 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
         if robust && !first_frame && one_plane(self.source, cfg.voxel_size) {
             return held(at);
         }
-        // Where robust mode's motion prior is gated on the scene, the scene is measured once
-        // there is a prediction: the second frame's is standing still, whatever the sensor
-        // does.
-        let weak = if robust && !first_frame && at.frames >= 2 && gated(&cfg.robust) {
-            self.weakness(at, map)
-        } else {
-            Weakness::NONE
-        };
         let always = robust && !first_frame && cfg.robust.plane_gate >= T::one();
-        let first = self.once(at, map, work, always, &weak);
+        let first = self.once(at, map, work, always);
         let degenerate = first
             .observability
             .is_none_or(|o| o < cfg.robust.plane_gate);
         if robust && !first.planes && !first_frame && degenerate {
-            self.once(at, map, work, true, &weak)
+            self.once(at, map, work, true)
         } else {
             first
         }
-    }
-
-    /// The scene's measurement at the prediction (see `weakness`).
-    fn weakness<P: PointCodec<T>>(
-        &self,
-        at: &Predicted<T>,
-        map: &MapView<'_, T, P>,
-    ) -> Weakness<T> {
-        let min = min_points(self.cfg.alpha);
-        weakness(map, self.source, &at.pose, self.max_distance(at), min)
     }
 
     /// Correspondences farther than `max_correspondence_factor sigma` are rejected (Eq. (7)).
@@ -125,13 +104,13 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
         map: &MapView<'_, T, P>,
         work: &mut [u64],
         planes: bool,
-        weak: &Weakness<T>,
     ) -> Registered<T> {
         let cfg = self.cfg;
         let (kernel, prior) = if planes {
-            let weights = prior_weights(&cfg.robust, weak).filter(|_| at.frames >= 2);
-            let prior = weights
-                .map(|(hold, sideways)| MotionPrior::new(&at.last_pose, &at.pose, hold, sideways));
+            let r = &cfg.robust;
+            let prior = (at.frames >= 2).then(|| {
+                MotionPrior::new(&at.last_pose, &at.pose, r.prediction_prior, r.lateral_prior)
+            });
             (cfg.robust.kernel_scale, prior)
         } else {
             (cfg.kernel_scale, None)
@@ -165,7 +144,6 @@ impl<'a, T: Real, E: Executor> Step<'a, T, E> {
             finite,
             observability,
             planes,
-            weak: *weak,
             held: false,
         }
     }
@@ -181,35 +159,8 @@ fn held<T: Real>(at: &Predicted<T>) -> Registered<T> {
         finite: true,
         observability: None,
         planes: false,
-        weak: Weakness::NONE,
         held: true,
     }
-}
-
-/// Whether robust mode's motion prior waits for a measurement of the scene: it has a term to
-/// add, and a gate below 1.
-fn gated<T: Real>(r: &Robust<T>) -> bool {
-    let any = r.prediction_prior > T::zero() || r.lateral_prior > T::zero();
-    any && r.prior_gate < T::one()
-}
-
-/// The motion prior's hold and lateral weights in a frame with `weak`'s measurement, `None`
-/// where it does not act. With a gate of 1 or more, both, always. Else only where the weakest
-/// translation was measured below the gate: the lateral prior there, and the hold prior only
-/// where no other translation is below it (a corridor's axis). Along an open plane's two weak
-/// translations, sparse structure still measures what a hold would overrule.
-fn prior_weights<T: Real>(r: &Robust<T>, weak: &Weakness<T>) -> Option<(T, T)> {
-    if r.prior_gate >= T::one() {
-        return Some((r.prediction_prior, r.lateral_prior));
-    }
-    weak.ratio.filter(|[t, _]| *t < r.prior_gate)?;
-    let corridor = weak.middle.is_some_and(|m| m >= r.prior_gate);
-    let hold = if corridor {
-        r.prediction_prior
-    } else {
-        T::zero()
-    };
-    Some((hold, r.lateral_prior))
 }
 
 /// ICP's stopping rule: `gamma`, but never below what the scalar can resolve where the points
@@ -266,50 +217,5 @@ mod tests {
             "robust mode keeps the reference's stopping rule"
         );
         assert!(!stops(&Config::new(100.0), false));
-    }
-
-    /// A measurement with the weakest and middle translation ratios `t` and `middle`.
-    fn measured(t: f64, middle: f64) -> Weakness<f64> {
-        Weakness {
-            ratio: Some([t, 0.5]),
-            middle: Some(middle),
-        }
-    }
-
-    #[test]
-    fn the_gated_prior_acts_where_a_translation_is_free_and_holds_a_corridors_lone_axis() {
-        let preset = Config::<f64>::accurate(100.0).robust;
-        let (hold, lateral) = (preset.prediction_prior, preset.lateral_prior);
-        assert!(hold > 0.0 && lateral > 0.0 && gated(&preset));
-        let weights = |w: &Weakness<f64>| prior_weights(&preset, w);
-        assert_eq!(
-            weights(&measured(0.01, 0.6)),
-            Some((hold, lateral)),
-            "a corridor"
-        );
-        assert_eq!(
-            weights(&measured(0.01, 0.02)),
-            Some((0.0, lateral)),
-            "open ground"
-        );
-        assert_eq!(weights(&measured(0.3, 0.6)), None, "a street");
-        assert_eq!(
-            weights(&measured(preset.prior_gate, 0.6)),
-            None,
-            "the gate itself"
-        );
-        assert_eq!(weights(&Weakness::NONE), None, "nothing measured");
-        // The tunnel setting's gate of 1 needs no measurement: both terms, always.
-        let tunnel = Robust::<f64>::tunnel();
-        assert!(!gated(&tunnel));
-        let both = Some((tunnel.prediction_prior, tunnel.lateral_prior));
-        assert_eq!(prior_weights(&tunnel, &Weakness::NONE), both);
-        // Without a term to add there is nothing to gate.
-        let none = Robust {
-            prediction_prior: 0.0,
-            lateral_prior: 0.0,
-            ..preset
-        };
-        assert!(!gated(&none));
     }
 }

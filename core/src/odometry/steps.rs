@@ -61,8 +61,6 @@ impl Received {
 
 /// A scan registered (steps 2-4), before anything of it is kept.
 pub(super) struct Registration<T: Real> {
-    /// The configuration it was registered with.
-    cfg: Config<T>,
     scan: Received,
     clouds: Clouds,
     reg: Registered<T>,
@@ -113,13 +111,7 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             },
             ..nothing()
         })?;
-        // The map's shape from the first scan's density (`Config::sparse_scan_points`), taken
-        // on by the map update: until then the frame can still be refused.
-        let cfg = if self.motion.frames == 0 {
-            self.strategy.first_scan(&self.config, scan.kept)
-        } else {
-            self.config
-        };
+        let cfg = self.config;
         // Step 1's prediction, Eq. (1) (the scan was deskewed with it as it arrived), and
         // step 4's `sigma_t` (Eq. (7)).
         let predicted = self.predict();
@@ -167,7 +159,6 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             reg.icp.work += c.icp.work;
         }
         Ok(Registration {
-            cfg,
             scan,
             clouds,
             reg,
@@ -181,7 +172,13 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     pub(super) fn deskew_again(&self, r: &Registration<T>) -> Option<Pose<T>> {
         let constant_rate = r.scan.deskewed() && self.sweep.rotation.is_none();
         let error = self.threshold.in_use().model_error(&r.deviation());
-        deskew_again(&r.cfg, constant_rate, &r.reg, error, &self.motion.pose)
+        deskew_again(
+            &self.config,
+            constant_rate,
+            &r.reg,
+            error,
+            &self.motion.pose,
+        )
     }
 
     /// Sec. III-C and III-D for a registered scan: its model deviation (Eq. (13)) joins the
@@ -189,7 +186,6 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
     /// pruned; a full map gives up its farthest voxels first), and `T_t` becomes the pose.
     pub(super) fn update(&mut self, r: Registration<T>) -> Result<FrameReport<T>, FrameError> {
         self.room_for(self.map_room(r.clouds.merge))?;
-        self.use_config(r.cfg);
         let deviation = r.deviation();
         let model_error = self.threshold.in_use().model_error(&deviation);
         self.threshold.update(&deviation);
@@ -249,7 +245,6 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Odometry<T, P, S> {
             rms: f.icp.rms,
             model_error,
             observability: f.observability,
-            weak_ratios: f.weak.ratio,
             input_points: (scan.input + dropped.truncated as usize) as u32,
             out_of_range: scan.out_of_range,
             merge_points: clouds.merge as u32,

@@ -3,15 +3,13 @@
 //!
 //! With the reference's configuration every rule here is off and a frame runs the paper's
 //! steps alone. Each rule is a setting of [`Config`] that the preset turns on:
-//! - the sparse-scan map ([`Config::sparse_scan_points`]): a first scan sparser than this maps
-//!   on GenZ-ICP's sparse-sensor voxels ([`Config::for_first_scan`]);
 //! - the thinned registration cloud ([`Config::desired_source_points`]): `P^*` made with
 //!   coarser voxels when it holds more points, once a registration has measured every
 //!   direction; the first registration against the map starts from the thinned cloud's pose;
 //! - the second deskew ([`Config::redeskew`]): a sweep deskewed again with the motion its first
 //!   registration found, and registered again.
 //!
-//! Robust mode's plane terms, cycle stop and gated motion prior change step 4 itself (`icp`).
+//! Robust mode's plane terms, cycle stop and motion prior change step 4 itself (`icp`).
 
 use super::icp::{Predicted, Registered, Step};
 use super::layout::Parts;
@@ -23,38 +21,17 @@ use crate::registration::Executor;
 use crate::scalar::Real;
 
 /// What the strategy keeps from frame to frame.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Strategy<T: Real> {
-    /// The configuration the odometry was built with; the one in use is its sparse-scan form
-    /// from a sparse first scan on.
-    pub(super) asked: Config<T>,
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Strategy {
     /// The last registration measured every direction (see [`measured_every_direction`]).
     pub(super) constrained: bool,
 }
 
-impl<T: Real> Strategy<T> {
-    pub(super) fn new(asked: Config<T>) -> Self {
-        Self {
-            asked,
-            constrained: false,
-        }
-    }
-
-    /// The configuration a first scan keeping `kept` points maps with: the asked one's
-    /// sparse-scan form for a sparse scan, if valid; else `in_use`.
-    pub(super) fn first_scan(&self, in_use: &Config<T>, kept: usize) -> Config<T> {
-        let c = self.asked.for_first_scan(kept);
-        if c.validate().is_ok() {
-            c
-        } else {
-            *in_use
-        }
-    }
-
+impl Strategy {
     /// Points the registration cloud is thinned to: until a registration has measured every
     /// direction, none (every `beta v` voxel: a weakly constrained scene's sparse structure is
     /// what measures its weak directions).
-    pub(super) fn desired_points(&self, cfg: &Config<T>) -> usize {
+    pub(super) fn desired_points<T: Real>(&self, cfg: &Config<T>) -> usize {
         if self.constrained {
             cfg.desired_source_points
         } else {
@@ -63,7 +40,7 @@ impl<T: Real> Strategy<T> {
     }
 
     /// Notes what a registration the frame kept measured.
-    pub(super) fn registered(&mut self, cfg: &Config<T>, reg: &Registered<T>) {
+    pub(super) fn registered<T: Real>(&mut self, cfg: &Config<T>, reg: &Registered<T>) {
         self.constrained = measured_every_direction(cfg, reg);
     }
 }

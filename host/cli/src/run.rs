@@ -323,11 +323,7 @@ fn frame_loop(
             }
             core_s += outcome.latency.as_secs_f64();
         }
-        // A first scan sparse enough to change the map (the accurate preset's rule) warns once.
-        if let Some(w) = driver.sparse_map_warning(&outcome) {
-            warn(record, &bar, &w);
-        }
-        // So does the first scan of one plane, held to the prediction (robust mode).
+        // The first scan of one plane, held to the prediction (robust mode), warns once.
         if let Some(w) = driver.one_plane_warning(&outcome) {
             warn(record, &bar, &w);
         }

@@ -392,8 +392,7 @@ impl Driver {
     pub fn high_water(&self) -> HighWater {
         self.engine.high_water()
     }
-    /// The map in use and how the run registers on it: what a sparse first scan changed from
-    /// the settings' (`[mapping] sparse_scan_points`).
+    /// The map in use: its voxel size and points a voxel.
     pub fn map_in_use(&self) -> MapInUse {
         self.engine.map_in_use()
     }
@@ -413,36 +412,6 @@ impl Driver {
         })
     }
 
-    /// The warning that the first registered frame, `outcome`, gave the run the sparse-scan
-    /// map: a 16-beam or Livox sensor's normal case, but also what a recording that begins
-    /// mid-sweep does to a dense sensor's run.
-    pub fn sparse_map_warning(&self, outcome: &Outcome) -> Option<String> {
-        let report = outcome.report().filter(|r| r.index == 0)?;
-        let map = self.map_in_use();
-        let kept = report
-            .input_points
-            .saturating_sub(report.out_of_range)
-            .saturating_sub(report.dropped.non_finite);
-        // Values as the core holds them, in its scalar: an f32 run's 0.6 is shown as 0.6, not
-        // as the f64 it widens to.
-        let shown = |x: f64| match self.build.scalar {
-            Scalar::F32 => (x as f32).to_string(),
-            Scalar::F64 => x.to_string(),
-        };
-        let (voxel, points) = (shown(map.voxel_size), map.max_points_per_voxel);
-        let (beta, kernel) = (shown(map.beta), shown(map.plane_kernel_scale));
-        map.sparse_scan.then(|| {
-            format!(
-                "{}: the first scan kept {kept} points within range, fewer than [mapping] \
-                 sparse_scan_points: the run maps on {voxel} m voxels of at most {points} \
-                 points and registers on them with beta {beta} and plane_kernel_scale \
-                 {kernel} (the sparse-sensor map, in place of the configured ones); a \
-                 recording that begins mid-sweep gives such a first scan too, and \
-                 sparse_scan_points = 0 keeps the configured map",
-                outcome.meta.source
-            )
-        })
-    }
     /// Bytes of state this build would need with capacities `caps`.
     pub fn state_bytes_for(&self, caps: &Capacities) -> usize {
         self.engine.state_bytes_for(caps)

@@ -424,9 +424,6 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         MapInUse {
             voxel_size: c.voxel_size.wide(),
             max_points_per_voxel: c.max_points_per_voxel,
-            beta: c.beta.wide(),
-            plane_kernel_scale: c.robust.kernel_scale.wide(),
-            sparse_scan: self.odom.sparse_scan_map(),
         }
     }
     fn capacities(&self) -> Capacities {

@@ -50,22 +50,14 @@ pub struct SweepMotions {
     pub middle: Isometry3<f64>,
 }
 
-/// The map a run registers on and how it registers there, from the core's configuration in
-/// use (`Odometry::config`): a sparse first scan puts GenZ-ICP's sparse-sensor map in place of
-/// the settings' (`Config::for_first_scan`). Values in the build's scalar, widened.
+/// The map a run registers on, from the core's configuration in use (`Odometry::config`).
+/// Values in the build's scalar, widened.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapInUse {
     /// Voxel size (m).
     pub voxel_size: f64,
     /// Points a voxel.
     pub max_points_per_voxel: u32,
-    /// The registration cloud's voxel over the map's.
-    pub beta: f64,
-    /// The plane terms' Geman-McClure scale over sigma (`Robust::kernel_scale`).
-    pub plane_kernel_scale: f64,
-    /// Whether a sparse first scan changed them from the settings'
-    /// (`[mapping] sparse_scan_points`).
-    pub sparse_scan: bool,
 }
 
 impl Default for SweepMotions {

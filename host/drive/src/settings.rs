@@ -114,9 +114,6 @@ pub struct Mapping {
     /// Keep the downsampled clouds in kiss-icp's order, which its poses need bit for bit
     /// (`Config::reference_order`); `false`: in the scan's order, faster.
     pub reference_order: bool,
-    /// A first scan with fewer points within range maps the run on GenZ-ICP's sparse-sensor
-    /// map (`Config::sparse_scan_points`; 0: never).
-    pub sparse_scan_points: usize,
     /// A registration cloud of more points is made again with coarser voxels
     /// (`Config::desired_source_points`; 0: never).
     pub desired_source_points: usize,
@@ -155,10 +152,6 @@ pub struct Registration {
     /// Robust mode's vehicle prior per correspondence: no sideways motion along the sensor's
     /// y axis (`Robust::lateral_prior`); 0: none.
     pub lateral_prior: f64,
-    /// Robust mode's motion prior acts only in frames whose weakest translation, measured at
-    /// the prediction, is below this fraction of the strongest (`Robust::prior_gate`); 1: in
-    /// every frame.
-    pub prior_gate: f64,
     /// Robust mode's Geman-McClure scale over sigma in registrations with plane terms
     /// (`Robust::kernel_scale`).
     pub plane_kernel_scale: f64,
@@ -264,7 +257,6 @@ impl Default for Mapping {
             alpha: 0.5,
             beta: 1.5,
             reference_order: true,
-            sparse_scan_points: 0,
             desired_source_points: 0,
         }
     }
@@ -290,7 +282,6 @@ impl Default for Registration {
             plane_gate: Robust::<f64>::new().plane_gate,
             prediction_prior: Robust::<f64>::new().prediction_prior,
             lateral_prior: Robust::<f64>::new().lateral_prior,
-            prior_gate: Robust::<f64>::new().prior_gate,
             plane_kernel_scale: Robust::<f64>::new().kernel_scale,
             cycle_stop: Robust::<f64>::new().cycle_stop,
             degeneracy: DegeneracyMode::Reference,
@@ -334,7 +325,6 @@ impl Settings {
         s.mapping.alpha = c.alpha;
         s.mapping.beta = c.beta;
         s.mapping.reference_order = c.reference_order;
-        s.mapping.sparse_scan_points = c.sparse_scan_points;
         s.mapping.desired_source_points = c.desired_source_points;
         s.adaptive_threshold.initial_threshold = c.initial_threshold;
         s.adaptive_threshold.min_motion_th = c.min_motion_threshold;
@@ -346,7 +336,6 @@ impl Settings {
         r.plane_gate = c.robust.plane_gate;
         r.prediction_prior = c.robust.prediction_prior;
         r.lateral_prior = c.robust.lateral_prior;
-        r.prior_gate = c.robust.prior_gate;
         r.plane_kernel_scale = c.robust.kernel_scale;
         r.cycle_stop = c.robust.cycle_stop;
         r.degeneracy = c.degeneracy.into();
@@ -584,7 +573,6 @@ impl Settings {
         c.beta = T::of(self.mapping.beta);
         c.reference_order = self.mapping.reference_order;
         c.max_points_per_voxel = self.mapping.max_points_per_voxel;
-        c.sparse_scan_points = self.mapping.sparse_scan_points;
         c.desired_source_points = self.mapping.desired_source_points;
         c.initial_threshold = T::of(self.adaptive_threshold.initial_threshold);
         c.min_motion_threshold = T::of(self.adaptive_threshold.min_motion_th);
@@ -599,7 +587,6 @@ impl Settings {
             plane_gate: T::of(self.registration.plane_gate),
             prediction_prior: T::of(self.registration.prediction_prior),
             lateral_prior: T::of(self.registration.lateral_prior),
-            prior_gate: T::of(self.registration.prior_gate),
             kernel_scale: T::of(self.registration.plane_kernel_scale),
             cycle_stop: self.registration.cycle_stop,
         };
@@ -761,17 +748,16 @@ macro_rules! field {
 }
 
 /// The settings only robust mode reads.
-const ROBUST_ONLY: [&str; 6] = [
+const ROBUST_ONLY: [&str; 5] = [
     "registration.plane_gate",
     "registration.prediction_prior",
     "registration.lateral_prior",
-    "registration.prior_gate",
     "registration.plane_kernel_scale",
     "registration.cycle_stop",
 ];
 
 /// Every setting the core gets.
-fn fields() -> [Field; 33] {
+fn fields() -> [Field; 31] {
     [
         field!(data.max_range, true),
         field!(data.min_range, true),
@@ -780,7 +766,6 @@ fn fields() -> [Field; 33] {
         field!(mapping.alpha, false),
         field!(mapping.beta, false),
         field!(mapping.reference_order, false),
-        field!(mapping.sparse_scan_points, false),
         field!(mapping.desired_source_points, false),
         field!(adaptive_threshold.initial_threshold, false),
         field!(adaptive_threshold.min_motion_th, false),
@@ -792,7 +777,6 @@ fn fields() -> [Field; 33] {
         field!(registration.plane_gate, true),
         field!(registration.prediction_prior, true),
         field!(registration.lateral_prior, true),
-        field!(registration.prior_gate, true),
         field!(registration.plane_kernel_scale, true),
         field!(registration.cycle_stop, true),
         field!(registration.degeneracy, false),

@@ -23,7 +23,6 @@ pub fn widen_report<T: Real>(r: &FrameReport<T>) -> FrameReport<f64> {
         rms: r.rms.wide(),
         model_error: r.model_error.wide(),
         observability: r.observability.map(Real::wide),
-        weak_ratios: r.weak_ratios.map(|w| w.map(Real::wide)),
         input_points: r.input_points,
         out_of_range: r.out_of_range,
         merge_points: r.merge_points,

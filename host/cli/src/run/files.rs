@@ -79,8 +79,7 @@ pub struct Summary {
     pub degraded_frames: BTreeMap<&'static str, usize>,
     /// Largest buffer occupancy against capacity.
     pub high_water: serde_json::Value,
-    /// The map the run ended on: `voxel_size` and `max_points_per_voxel`, and `sparse_scan`,
-    /// whether a sparse first scan gave it the sparse-scan map (`[mapping] sparse_scan_points`).
+    /// The map the run ended on: `voxel_size` and `max_points_per_voxel`.
     pub map: serde_json::Value,
     /// The smallest radius the local map had after a frame, and the first frame that had it:
     /// `max_range` and no frame while the map never filled.
@@ -410,7 +409,6 @@ impl Run<'_> {
                 serde_json::json!({
                     "voxel_size": m.voxel_size,
                     "max_points_per_voxel": m.max_points_per_voxel,
-                    "sparse_scan": m.sparse_scan,
                 })
             },
             map_radius: MapRadius::of(&o.rows, s.data.max_range),

@@ -101,11 +101,6 @@ pub struct FrameRow {
     pub dropped_map_points_full: Option<u32>,
     /// Observability ratio (empty on the first frame and when nothing was measured).
     pub observability: Option<f64>,
-    /// Weakest over strongest eigenvalue of the translation information at the prediction,
-    /// where robust mode's motion prior gate measured it (`Robust::prior_gate` below 1).
-    pub weak_t: Option<f64>,
-    /// The same for rotation.
-    pub weak_r: Option<f64>,
     /// Sensor packets decoded into the sweep (empty for frames not decoded from packets).
     pub packets: Option<u32>,
     /// Packets the decoder found missing (timestamp gaps, missing columns or frame ids).
@@ -184,8 +179,6 @@ impl FrameRow {
             dropped_map_voxels_full: r.map(|r| r.dropped.map_voxels_full),
             dropped_map_points_full: r.map(|r| r.dropped.map_points_full),
             observability: r.and_then(|r| r.observability),
-            weak_t: r.and_then(|r| r.weak_ratios).map(|w| w[0]),
-            weak_r: r.and_then(|r| r.weak_ratios).map(|w| w[1]),
             packets: None,
             packets_lost: None,
             packets_out_of_order: None,
