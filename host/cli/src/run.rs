@@ -20,6 +20,7 @@ pub(crate) mod record;
 pub(crate) mod viz;
 
 pub use files::OUTPUTS;
+use kiss_odom_drive::settings::Output;
 pub(crate) use kiss_odom_drive::settings::PoseTime;
 pub(crate) use options::{RunArgs, RunOptions};
 pub(crate) use record::{FrameRow, Record, RowKind};
@@ -68,9 +69,9 @@ pub(crate) fn execute_on(
     err: &mut dyn Write,
 ) -> Result<i32> {
     let settings = args.common.settings(None)?;
-    let args = &args.resolved(&settings.output);
+    let output = &settings.output;
     let inputs = inputs(args);
-    viz::check(&args.view, &inputs)?;
+    viz::check(&args.view, output, &inputs)?;
     // The sensor files are read while the input opens; `--config` is read by now, and
     // `config.toml` is the settings it gave, written back.
     for name in OUTPUTS {
@@ -86,7 +87,7 @@ pub(crate) fn execute_on(
     );
     // Whatever happens next, no output of an earlier run stays to be taken for this one's.
     earlier.remove()?;
-    for path in viz::files(&args.view) {
+    for path in args.view.files() {
         kiss_odom_io::write::remove_stale_file(path)?;
     }
     // An input that cannot be opened refuses the run before it starts: nothing is written.
@@ -95,7 +96,7 @@ pub(crate) fn execute_on(
         .with_context(|| format!("{}: cannot create output folder", args.run.out.display()))?;
     let mut record = Record::default();
     // After the folder: a recording or cloud may be asked for inside it.
-    let mut observers = match viz::observers(&args.view) {
+    let mut observers = match viz::observers(&args.view, output) {
         Ok(o) => watchers.into_iter().chain(o).collect::<Vec<_>>(),
         Err(e) => {
             let end = End::Failed(e);
@@ -117,7 +118,7 @@ pub(crate) fn execute_on(
         .chain(&dataset.info.warnings)
     {
         warn(&mut record, &hidden, w);
-        if args.run.strict {
+        if output.strict {
             end = End::Failed(anyhow!("{w} (output.strict)"));
             break;
         }
@@ -127,6 +128,7 @@ pub(crate) fn execute_on(
             CapacityWarnings::new(driver.build().capacities, settings.data.max_range);
         end = frame_loop(
             args,
+            output,
             &mut driver,
             &mut capacity,
             &mut dataset,
@@ -147,7 +149,7 @@ pub(crate) fn execute_on(
     ) {
         row.add_packets(&p);
     }
-    if let (true, End::Finished, Some(w)) = (args.run.strict, &end, trailer.warnings.first()) {
+    if let (true, End::Finished, Some(w)) = (output.strict, &end, trailer.warnings.first()) {
         end = End::Failed(anyhow!("{w} (output.strict)"));
     }
     // The observers' files hold the frames processed, however the loop ended.
@@ -267,6 +269,7 @@ fn nothing_registered(r: &Record) -> String {
 #[allow(clippy::too_many_arguments)]
 fn frame_loop(
     args: &RunArgs,
+    output: &Output,
     driver: &mut Driver,
     capacity: &mut CapacityWarnings,
     dataset: &mut io::Dataset,
@@ -302,7 +305,7 @@ fn frame_loop(
         for p in &problems {
             warn(record, &bar, p);
         }
-        if let (true, Some(first)) = (args.run.strict, problems.first()) {
+        if let (true, Some(first)) = (output.strict, problems.first()) {
             break End::Failed(anyhow!("{first} (output.strict)"));
         }
         let (outcome, frame) = match item {
@@ -314,7 +317,7 @@ fn frame_loop(
             Err(e) => break End::Failed(e),
         };
         if let Some(report) = outcome.report() {
-            if args.run.strict && report.status.contains(Flag::TimestampsIgnored) {
+            if output.strict && report.status.contains(Flag::TimestampsIgnored) {
                 break End::Failed(anyhow!(
                     "{}: timestamps unusable ({:?}), frame not deskewed (output.strict)",
                     outcome.meta.source,
@@ -336,20 +339,20 @@ fn frame_loop(
         for w in &full {
             warn(record, &bar, w);
         }
-        if let (true, Some(first)) = (args.run.strict, full.first()) {
+        if let (true, Some(first)) = (output.strict, full.first()) {
             break End::Failed(anyhow!("{first} (output.strict)"));
         }
         // So does a frame the gyroscope prior, asked for, could not predict.
         // And the first time the IMU consistency check rejects the gyroscope.
         if let Some(w) = driver.imu_check_warning(false) {
             warn(record, &bar, &w);
-            if args.run.strict {
+            if output.strict {
                 break End::Failed(anyhow!("{w} (output.strict)"));
             }
         }
         if let Some(w) = prior.check(&outcome) {
             warn(record, &bar, &w);
-            if args.run.strict {
+            if output.strict {
                 break End::Failed(anyhow!("{w} (output.strict)"));
             }
         }
@@ -361,7 +364,7 @@ fn frame_loop(
             );
         }
         let sweep = frame.as_ref().and_then(|f| f.sweep);
-        add(record, info, &outcome, sweep.as_ref(), args.run.pose_time);
+        add(record, info, &outcome, sweep.as_ref(), output.pose_time);
         if !observers.is_empty() {
             let ground_truth = info
                 .ground_truth

@@ -285,7 +285,7 @@ impl Run<'_> {
             format!(
                 "time x y z qx qy qz qw: the sensor at the {} of each sweep (output.pose_time); \
                  times: {times}",
-                self.args.run.pose_time.name()
+                self.settings.output.pose_time.name()
             )
         } else {
             format!(

@@ -2,7 +2,6 @@
 
 use super::viz::ViewArgs;
 use crate::args::CommonArgs;
-use kiss_odom_drive::settings::{Output, PoseTime};
 use std::path::PathBuf;
 
 /// `kiss-odom run` arguments. Flags override `--set`, which overrides `--config`, which
@@ -23,33 +22,15 @@ pub struct RunArgs {
     pub view: ViewArgs,
 }
 
-/// What `run` and `live` share: where the outputs go and how the run goes (the fields without
-/// a flag come from the settings' `[output]`, [`RunArgs::resolved`]).
+/// What `run` and `live` share: where the outputs go and how the run goes (the rest of it is
+/// the settings' `[output]`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct RunOptions {
     /// Output folder (created if missing); the outputs of an earlier run there are replaced,
     /// and a file of an output's name that no earlier run wrote refuses the run.
     #[arg(long)]
     pub out: PathBuf,
-    /// `[output] strict`: a skipped frame, ignored timestamps or a dataset warning is an
-    /// error (exit 1).
-    #[arg(skip)]
-    pub strict: bool,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
-    /// `[output] pose_time`: the instant within a deskewed sweep each pose refers to.
-    #[arg(skip)]
-    pub pose_time: PoseTime,
-}
-
-impl RunArgs {
-    /// These arguments with the settings' `[output]` in the fields that have no flag.
-    pub fn resolved(&self, output: &Output) -> Self {
-        let mut args = self.clone();
-        args.run.strict = output.strict;
-        args.run.pose_time = output.pose_time;
-        args.view = self.view.resolved(output);
-        args
-    }
 }

@@ -14,29 +14,29 @@ pub use options::ViewArgs;
 
 use super::observe::Observer;
 use anyhow::{bail, Result};
-use std::path::{Path, PathBuf};
+use kiss_odom_drive::settings::Output;
+use std::path::Path;
 
-/// Checks `args` (resolved: [`ViewArgs::resolved`]) without creating anything: the file
-/// types, the cloud's voxel, what this
-/// build can record, that no two options name one file (one would replace the other) and
+/// Checks `args` with the settings' `output` without creating anything: the file types, the
+/// cloud's voxel, what this build can record, that no two options name one file (one would replace the other) and
 /// that no file named is one of the run's `inputs` (the file at an output's name is removed
 /// before the run starts, so this comes first).
-pub fn check(args: &ViewArgs, inputs: &[&Path]) -> Result<()> {
+pub fn check(args: &ViewArgs, output: &Output, inputs: &[&Path]) -> Result<()> {
     if let Some(path) = &args.save_map {
         export::MapExport::new(path)?;
     }
     if let Some(path) = &args.save_cloud {
-        export::CloudExport::new(path, args.save_cloud_voxel, args.save_cloud_max_points)?;
+        export::CloudExport::new(path, output.cloud_voxel, output.cloud_max_points)?;
     }
-    if args.rerun.is_some() || args.rerun_connect.is_some() {
+    if args.rerun.is_some() {
         rerun_available()?;
     }
     kiss_odom_io::write::refuse_shared(&[
         ("--save-map", args.save_map.as_deref()),
         ("--save-cloud", args.save_cloud.as_deref()),
-        ("--rerun", args.rerun.as_deref()),
+        ("--rerun", args.rerun_file()),
     ])?;
-    for path in files(args) {
+    for path in args.files() {
         kiss_odom_io::write::refuse_input(path, inputs)?;
     }
     Ok(())
@@ -44,7 +44,7 @@ pub fn check(args: &ViewArgs, inputs: &[&Path]) -> Result<()> {
 
 /// The observers `args` ask for, in the order they run; an error for a file type or an option
 /// this build cannot serve ([`check`] says so before anything is created).
-pub fn observers(args: &ViewArgs) -> Result<Vec<Box<dyn Observer>>> {
+pub fn observers(args: &ViewArgs, output: &Output) -> Result<Vec<Box<dyn Observer>>> {
     let mut out: Vec<Box<dyn Observer>> = Vec::new();
     if let Some(path) = &args.save_map {
         out.push(Box::new(export::MapExport::new(path)?));
@@ -52,23 +52,23 @@ pub fn observers(args: &ViewArgs) -> Result<Vec<Box<dyn Observer>>> {
     if let Some(path) = &args.save_cloud {
         out.push(Box::new(export::CloudExport::new(
             path,
-            args.save_cloud_voxel,
-            args.save_cloud_max_points,
+            output.cloud_voxel,
+            output.cloud_max_points,
         )?));
     }
-    if args.rerun.is_some() || args.rerun_connect.is_some() {
-        out.push(rerun_observer(args)?);
+    if args.rerun.is_some() {
+        out.push(rerun_observer(args, output)?);
     }
     Ok(out)
 }
 
 #[cfg(feature = "rerun")]
-fn rerun_observer(args: &ViewArgs) -> Result<Box<dyn Observer>> {
-    Ok(Box::new(recording::Recorder::new(args)?))
+fn rerun_observer(args: &ViewArgs, output: &Output) -> Result<Box<dyn Observer>> {
+    Ok(Box::new(recording::Recorder::new(args, output)?))
 }
 
 #[cfg(not(feature = "rerun"))]
-fn rerun_observer(_: &ViewArgs) -> Result<Box<dyn Observer>> {
+fn rerun_observer(_: &ViewArgs, _: &Output) -> Result<Box<dyn Observer>> {
     bail!("{RERUN_MISSING}")
 }
 
@@ -82,11 +82,4 @@ fn rerun_available() -> Result<()> {
         bail!("{RERUN_MISSING}");
     }
     Ok(())
-}
-
-/// The files `args` name that a run writes, for removing stale ones before it starts.
-pub fn files(args: &ViewArgs) -> impl Iterator<Item = &PathBuf> {
-    [&args.save_map, &args.save_cloud, &args.rerun]
-        .into_iter()
-        .flatten()
 }

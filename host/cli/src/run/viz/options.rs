@@ -1,10 +1,9 @@
 //! `run`'s options for what a run shows beside its poses.
 
-use kiss_odom_drive::settings::Output;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The run command's options for what a run shows (`kiss-odom run --help`, "View and export");
-/// the fields without a flag come from the settings' `[output]` ([`ViewArgs::resolved`]).
+/// how much it shows is the settings' `[output]`.
 #[derive(Debug, Clone, clap::Args)]
 #[command(next_help_heading = "View and export")]
 pub struct ViewArgs {
@@ -13,15 +12,6 @@ pub struct ViewArgs {
     /// the `rerun` cargo feature.
     #[arg(long, value_name = "FILE.rrd|ADDR")]
     pub rerun: Option<PathBuf>,
-    /// The viewer `--rerun` names when it is not a .rrd file.
-    #[arg(skip)]
-    pub rerun_connect: Option<String>,
-    /// `[output] rerun_scan_stride`.
-    #[arg(skip)]
-    pub rerun_scan_stride: u32,
-    /// `[output] rerun_map_every`.
-    #[arg(skip)]
-    pub rerun_map_every: u32,
     /// Write the local map after the last frame to FILE (.ply or .pcd, f64 coordinates).
     #[arg(long, value_name = "FILE")]
     pub save_map: Option<PathBuf>,
@@ -29,32 +19,32 @@ pub struct ViewArgs {
     /// thinned to one point per voxel of `output.cloud_voxel`.
     #[arg(long, value_name = "FILE")]
     pub save_cloud: Option<PathBuf>,
-    /// `[output] cloud_voxel`.
-    #[arg(skip)]
-    pub save_cloud_voxel: f64,
-    /// `[output] cloud_max_points`.
-    #[arg(skip)]
-    pub save_cloud_max_points: usize,
 }
 
 impl ViewArgs {
-    /// These options with the settings' `[output]` values, and `--rerun` split into a file or
-    /// a viewer's address by its name.
-    pub fn resolved(&self, output: &Output) -> Self {
-        let rrd = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("rrd"));
-        let (rerun, rerun_connect) = match &self.rerun {
-            Some(p) if !rrd(p) => (None, Some(p.to_string_lossy().into_owned())),
-            other => (other.clone(), None),
-        };
-        Self {
-            rerun,
-            rerun_connect,
-            rerun_scan_stride: output.rerun_scan_stride,
-            rerun_map_every: output.rerun_map_every,
-            save_map: self.save_map.clone(),
-            save_cloud: self.save_cloud.clone(),
-            save_cloud_voxel: output.cloud_voxel,
-            save_cloud_max_points: output.cloud_max_points,
-        }
+    /// The recording file `--rerun` names: a `.rrd` name.
+    pub fn rerun_file(&self) -> Option<&Path> {
+        self.rerun.as_deref().filter(|p| is_rrd(p))
     }
+
+    /// The viewer `--rerun` names: any other name.
+    pub fn rerun_address(&self) -> Option<String> {
+        let addr = self.rerun.as_deref().filter(|p| !is_rrd(p))?;
+        Some(addr.to_string_lossy().into_owned())
+    }
+
+    /// The files these options name that a run writes.
+    pub fn files(&self) -> impl Iterator<Item = &Path> {
+        [
+            self.save_map.as_deref(),
+            self.save_cloud.as_deref(),
+            self.rerun_file(),
+        ]
+        .into_iter()
+        .flatten()
+    }
+}
+
+fn is_rrd(p: &Path) -> bool {
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("rrd"))
 }

@@ -19,6 +19,7 @@ use crate::run::observe::{Observer, Seen};
 use crate::run::record::FrameRow;
 use anyhow::{Context, Result};
 use kiss_odom_core::Flag;
+use kiss_odom_drive::settings::Output;
 use kiss_odom_drive::{Driver, Step};
 use nalgebra::{Isometry3, Point3};
 use rerun as rr;
@@ -56,21 +57,21 @@ fn f32s(p: Point3<f64>) -> [f32; 3] {
 }
 
 impl Recorder {
-    /// A recording to the file or viewer `args` name.
-    pub fn new(args: &ViewArgs) -> Result<Self> {
+    /// A recording to the file or viewer `args` name, as much of it as `output` asks.
+    pub fn new(args: &ViewArgs, output: &Output) -> Result<Self> {
         let builder = rr::RecordingStreamBuilder::new("kiss-odom");
-        let rec = match (&args.rerun, &args.rerun_connect) {
+        let rec = match (args.rerun_file(), args.rerun_address()) {
             (Some(path), _) => builder.save(path).context("cannot record the run")?,
             (None, Some(addr)) => builder
-                .connect_grpc_opts(proxy_url(addr))
+                .connect_grpc_opts(proxy_url(&addr))
                 .with_context(|| format!("{addr}: cannot connect to a Rerun viewer"))?,
             (None, None) => anyhow::bail!("no Rerun file or viewer given"),
         };
         rec.log_static("world", &rr::ViewCoordinates::RIGHT_HAND_Z_UP())?;
         Ok(Self {
             rec,
-            scan_stride: args.rerun_scan_stride.max(1) as usize,
-            map_every: u64::from(args.rerun_map_every.max(1)),
+            scan_stride: output.rerun_scan_stride.max(1) as usize,
+            map_every: u64::from(output.rerun_map_every.max(1)),
             frames: 0,
             logged_map: false,
             trajectory: Vec::new(),
