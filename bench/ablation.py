@@ -6,9 +6,12 @@ reference trajectory, and frames/s in the core.
 
     python3 bench/ablation.py BIN OUT DATASET...
 
-DATASET: a folder `run` reads, `NAME=PATH` to name it, `@ARGS` after it (one word,
-comma-separated) for more `run` flags. Each variant is `run --preset accurate --config
-VARIANT.toml` (the rule's settings back at the default's values), one thread.
+DATASET: a folder `run` reads, `NAME=PATH` to name it, `GROUP/NAME=PATH` to put it in a group
+of the summary, `@ARGS` after it (one word, comma-separated) for more `run` flags. Each variant
+is `run --preset accurate --config VARIANT.toml` (the rule's settings back at the default's
+values), one thread. After the table of every run, the summary BENCHMARKS.md shows: per group,
+the geometric mean of ATE and of mean RPE without the rule over the preset's, and (in
+brackets) the runs whose ATE grew without it.
 """
 
 import json
@@ -35,8 +38,19 @@ def sh(*cmd):
 def spec(arg):
     arg, _, extra = arg.partition("@")
     name, _, path = arg.rpartition("=")
+    group, _, name = name.rpartition("/")
     path = Path(path)
-    return name or path.name, path, [a for a in extra.split(",") if a]
+    return group, name or path.name, path, [a for a in extra.split(",") if a]
+
+
+def gm(xs):
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else math.nan
+
+
+def ratios(rows, acc):
+    """ATE and mean RPE of `rows` over the preset's `acc`, where both are measured."""
+    return [(a / a0, r / r0) for (a, r, _), (a0, r0, _) in zip(rows, acc)
+            if a0 > 0 and r0 > 0 and math.isfinite(a) and math.isfinite(r)]
 
 
 def run(binary, out, path, extra, preset, config=None):
@@ -53,10 +67,11 @@ def main():
     binary, out, datasets = sys.argv[1], Path(sys.argv[2]), sys.argv[3:]
     names = ["accurate"] + [f"without {r}" for r in RULES] + ["default"]
     rows = {n: [] for n in names}
-    heads = []
+    heads, groups = [], []
     for arg in datasets:
-        name, path, extra = spec(arg)
+        group, name, path, extra = spec(arg)
         heads.append(name)
+        groups.append(group)
         base = out / name
         base.mkdir(parents=True, exist_ok=True)
         rows["accurate"].append(run(binary, base / "accurate", path, extra, "accurate"))
@@ -78,11 +93,21 @@ def main():
     acc = rows["accurate"]
     for n in names:
         cells = [f"{a:.3f} / {r:.4f} / {hz:.1f}" for a, r, hz in rows[n]]
-        ratios = [(a / a0, r / r0) for (a, r, _), (a0, r0, _) in zip(rows[n], acc)
-                  if a0 > 0 and r0 > 0 and math.isfinite(a) and math.isfinite(r)]
-        gm = lambda xs: math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else math.nan
-        ate_gm, rpe_gm = gm([a for a, _ in ratios]), gm([r for _, r in ratios])
+        rs = ratios(rows[n], acc)
+        ate_gm, rpe_gm = gm([a for a, _ in rs]), gm([r for _, r in rs])
         print(f"| {n} | " + " | ".join(cells) + f" | {ate_gm:.3f} / {rpe_gm:.3f} |")
+    names_of = {g: [i for i, h in enumerate(groups) if h == g] for g in dict.fromkeys(groups)}
+    print()
+    print("| rule off | " + " | ".join(f"{g or 'all'} ({len(ix)})" for g, ix in names_of.items())
+          + " |")
+    print("|---|" + "---|" * len(names_of))
+    for n in names[1:]:
+        cells = []
+        for ix in names_of.values():
+            rs = ratios([rows[n][i] for i in ix], [acc[i] for i in ix])
+            grew = sum(a > 1 for a, _ in rs)
+            cells.append(f"{gm([a for a, _ in rs]):.2f} / {gm([r for _, r in rs]):.2f} ({grew})")
+        print(f"| {n} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

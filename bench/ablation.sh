@@ -14,10 +14,11 @@ cargo build --release -q -p kiss-odom
 B=target/release/kiss-odom
 OUT=${OUT:-target/bench/ablation}
 K=../shared/data/kitti-mini/sequences
-sets=("kitti-01=$K/01" "kitti-02=$K/02" "kitti-04=$K/04" "kitti-05=$K/05")
+sets=("kitti-mini/kitti-01=$K/01" "kitti-mini/kitti-02=$K/02" "kitti-mini/kitti-04=$K/04"
+  "kitti-mini/kitti-05=$K/05")
 if [ -n "${REAL:-}" ]; then
   for d in "$REAL"/*/; do
-    [ -f "$d/poses.txt" ] && sets+=("$(basename "$d")=${d%/}")
+    [ -f "$d/poses.txt" ] && sets+=("real/$(basename "$d")=${d%/}")
   done
 fi
 if [ -n "${GENERATED:-}" ]; then
@@ -25,11 +26,11 @@ if [ -n "${GENERATED:-}" ]; then
     g=$OUT/gen/$p-200-s61
     [ -f "$g/poses.txt" ] || $B simulate --profile $p --frames 200 --seed 61 --out "$g" \
       --overwrite >/dev/null
-    sets+=("$p=$g")
+    sets+=("generated/$p=$g")
   done
   g=$OUT/gen/suburban-vlp16-200-s61
   [ -f "$g/poses.txt" ] || $B simulate --profile suburban --sensor vlp16 --frames 200 \
     --seed 61 --out "$g" --overwrite >/dev/null
-  sets+=("suburban-vlp16=$g")
+  sets+=("generated/suburban-vlp16=$g")
 fi
 python3 bench/ablation.py $B "$OUT/runs" "${sets[@]}"

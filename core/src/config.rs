@@ -231,9 +231,9 @@ impl<T: Real> Config<T> {
         }
     }
 
-    /// The `accurate` preset: the lowest error measured here (BENCHMARKS.md, "The accurate
-    /// preset"), on ordinary scenes as well as degenerate ones, at 1.1-2.6 times the default's
-    /// time on urban and KITTI scans. Every frame is registered with point-to-plane terms where
+    /// The `accurate` preset: lower error than the reference's on ordinary scenes, tunnels and
+    /// open ground, not in a bare corridor (BENCHMARKS.md, "The accurate preset"), at 1.1-2.6
+    /// times the default's time on urban and KITTI scans. Every frame is registered with point-to-plane terms where
     /// the map is planar (GenZ-ICP's weighting, see `registration::planes`) and point-to-point
     /// terms elsewhere, on a map of `r_max / 200` voxels; a registration that goes round a loop
     /// stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the model's is

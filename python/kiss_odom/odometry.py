@@ -130,8 +130,8 @@ class KissICP:
 
     ``config`` is anything :func:`kiss_odom.settings_from` accepts (a kiss-icp
     ``KISSConfig``, its YAML, our ``config.toml``, a dict or ``None``); the keyword extras
-    pick the preset (``"default"``: kiss-icp's poses; ``"accurate"``: the lowest error
-    measured, settings the config does not give take its values), the scalar
+    pick the preset (``"default"``: kiss-icp's poses; ``"accurate"``: lower error
+    on most runs measured, settings the config does not give take its values), the scalar
     (``"f64"``/``"f32"``), the map storage (``"exact"``/``"quantized"``), the capacities (``"full"``/``"small"``/dict) and the thread count. A bad setting is a
     ``ValueError`` naming it.
     """
