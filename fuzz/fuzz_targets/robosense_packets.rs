@@ -33,7 +33,11 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     if head & 0x80 != 0 {
-        feed_all(&mut kiss_odom_sensors::robosense::m1::Decoder::new(), rest, 1210);
+        feed_all(
+            &mut kiss_odom_sensors::robosense::m1::Decoder::new(),
+            rest,
+            1210,
+        );
         return;
     }
     let model = Model::ALL[usize::from(head & 7) % Model::ALL.len()];

@@ -32,8 +32,7 @@ fuzz_target!(|data: &[u8]| {
             distance_offset_m: 1.5,
             vertical_offset_m: 0.2,
             horizontal_offset_m: 0.026,
-            near_distance_offset_m: (near & 1 != 0)
-                .then_some([f64::from(near >> 1) * 0.01, 1.4]),
+            near_distance_offset_m: (near & 1 != 0).then_some([f64::from(near >> 1) * 0.01, 1.4]),
         };
         let _ = lasers.push(laser);
     }
