@@ -247,31 +247,10 @@ impl PacketSim<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::packets::xt32::tests::sim;
+    use crate::packets::xt32::tests::{sim, Points};
     use crate::packets::PacketSensor;
     use kiss_odom_sensors::robosense::{wire::Difop, Calibration, Config, Decoder};
-    use kiss_odom_sensors::{Chunk, Decode, SweepSink, SweepStart, SweepStats};
-
-    #[derive(Default)]
-    struct Points {
-        xyz: Vec<[f64; 3]>,
-        times: Vec<f64>,
-        starts: Vec<u64>,
-        packets: Vec<u32>,
-    }
-
-    impl SweepSink for Points {
-        fn begin_sweep(&mut self, s: &SweepStart) {
-            self.starts.push(s.start_ns);
-        }
-        fn points(&mut self, c: Chunk<'_>) {
-            self.xyz.extend_from_slice(c.xyz);
-            self.times.extend_from_slice(c.times);
-        }
-        fn end_sweep(&mut self, s: &SweepStats) {
-            self.packets.push(s.packets);
-        }
-    }
+    use kiss_odom_sensors::Decode;
 
     #[test]
     fn generated_robosense_packets_decode_to_the_simulated_points() {

@@ -223,6 +223,28 @@ pub(super) mod tests {
         }
     }
 
+    /// Every point, time, sweep start and packet count a decoder hands on.
+    #[derive(Default)]
+    pub(in crate::packets) struct Points {
+        pub(in crate::packets) xyz: Vec<[f64; 3]>,
+        pub(in crate::packets) times: Vec<f64>,
+        pub(in crate::packets) starts: Vec<u64>,
+        pub(in crate::packets) packets: Vec<u32>,
+    }
+
+    impl SweepSink for Points {
+        fn begin_sweep(&mut self, s: &SweepStart) {
+            self.starts.push(s.start_ns);
+        }
+        fn points(&mut self, c: Chunk<'_>) {
+            self.xyz.extend_from_slice(c.xyz);
+            self.times.extend_from_slice(c.times);
+        }
+        fn end_sweep(&mut self, s: &SweepStats) {
+            self.packets.push(s.packets);
+        }
+    }
+
     /// A simulation of `sensor` at `rate_hz`, its sequence time starting at `start_time`.
     pub(in crate::packets) fn sim(
         sensor: PacketSensor,
