@@ -61,6 +61,17 @@ fn refused_naming(list: &[&dyn AsRef<std::ffi::OsStr>], file: &Path) -> String {
     error
 }
 
+/// Runs `command`, which must be refused (exit 1) with an error containing `named`, and leave
+/// `folder` as it was.
+fn refused_leaving(folder: &Path, command: Vec<OsString>, named: &str) {
+    let before = tree(folder);
+    let (code, stderr) = kiss_odom(command);
+    assert_eq!(code, 1, "{stderr}");
+    assert!(stderr.contains(named), "{named:?} in {stderr}");
+    println!("{}", stderr.trim());
+    assert_eq!(tree(folder), before, "nothing removed");
+}
+
 /// A small sensor: each simulated frame takes milliseconds.
 const SMALL: [&str; 4] = ["--beams", "8", "--columns", "128"];
 
@@ -120,33 +131,18 @@ fn simulate_overwrite_checks_everything_before_it_removes_anything() {
     // A file in the frame folder that is not a frame: refused, the old data set whole.
     let notes = sim.join("velodyne/notes.txt");
     std::fs::write(&notes, "keep").unwrap();
-    let before = tree(&sim);
-    let (code, stderr) = kiss_odom(again(&sim));
-    assert_eq!(code, 1, "{stderr}");
-    assert!(stderr.contains(&notes.display().to_string()), "{stderr}");
-    println!("{}", stderr.trim());
-    assert_eq!(tree(&sim), before, "nothing removed");
+    refused_leaving(&sim, again(&sim), &notes.display().to_string());
     std::fs::remove_file(&notes).unwrap();
 
     // A file of a name simulate writes that this data set's sim.toml does not list.
     let imu = sim.join("imu.csv");
     std::fs::write(&imu, "the user's own").unwrap();
-    let before = tree(&sim);
-    let (code, stderr) = kiss_odom(again(&sim));
-    assert_eq!(code, 1, "{stderr}");
-    assert!(stderr.contains(&imu.display().to_string()), "{stderr}");
-    println!("{}", stderr.trim());
-    assert_eq!(tree(&sim), before, "nothing removed");
+    refused_leaving(&sim, again(&sim), &imu.display().to_string());
     std::fs::remove_file(&imu).unwrap();
 
     // A data set simulate did not write (KITTI's): refused whole.
     let kitti = kitti_copy(dir.path(), "kitti");
-    let before = tree(&kitti);
-    let (code, stderr) = kiss_odom(again(&kitti));
-    assert_eq!(code, 1, "{stderr}");
-    assert!(stderr.contains("sim.toml"), "{stderr}");
-    println!("{}", stderr.trim());
-    assert_eq!(tree(&kitti), before, "nothing removed");
+    refused_leaving(&kitti, again(&kitti), "sim.toml");
 
     // A layout's folder simulate did not write: refused, the folder kept.
     let mulran = dir.path().join("mulran");
