@@ -231,14 +231,14 @@ impl<T: Real> Config<T> {
         }
     }
 
-    /// The `accurate` preset: lower error than the reference's on ordinary scenes, tunnels and
-    /// open ground, not in a bare corridor (BENCHMARKS.md, "The accurate preset"), at 1.1-2.6
-    /// times the default's time on urban and KITTI scans. Every frame is registered with point-to-plane terms where
-    /// the map is planar (GenZ-ICP's weighting, see `registration::planes`) and point-to-point
-    /// terms elsewhere, on a map of `r_max / 200` voxels; a registration that goes round a loop
-    /// stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the model's is
-    /// deskewed again with its own ([`Config::redeskew`]), and a dense scan's registration
-    /// cloud is thinned toward 3,000 points where the scene measures every direction
+    /// The `accurate` preset: lower error than the reference's on ordinary scenes, tunnels and open
+    /// ground, not in a bare corridor (BENCHMARKS.md, "The accurate preset"), at 1.1-2.6 times the
+    /// default's time on urban and KITTI scans. Every frame is registered with point-to-plane terms
+    /// where the map is planar (GenZ-ICP's weighting, see `registration::planes`) and
+    /// point-to-point terms elsewhere, on a map of `r_max / 200` voxels; a registration that goes
+    /// round a loop stops there ([`Robust::cycle_stop`]), a whole scan whose motion was not the
+    /// model's is deskewed again with its own ([`Config::redeskew`]), and a dense scan's
+    /// registration cloud is thinned toward 3,000 points where the scene measures every direction
     /// ([`Config::desired_source_points`]). Both clouds keep the scan's order
     /// ([`Config::reference_order`] `false`). Its poses are not the reference's.
     pub fn accurate(max_range: T) -> Self {

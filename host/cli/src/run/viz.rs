@@ -17,10 +17,10 @@ use anyhow::{bail, Result};
 use kiss_odom_drive::settings::Output;
 use std::path::Path;
 
-/// Checks `args` with the settings' `output` without creating anything: the file types, the
-/// cloud's voxel, what this build can record, that no two options name one file (one would replace the other) and
-/// that no file named is one of the run's `inputs` (the file at an output's name is removed
-/// before the run starts, so this comes first).
+/// Checks `args` with the settings' `output` without creating anything: the file types, the cloud's
+/// voxel, what this build can record, that no two options name one file (one would replace the
+/// other) and that no file named is one of the run's `inputs` (the file at an output's name is
+/// removed before the run starts, so this comes first).
 pub fn check(args: &ViewArgs, output: &Output, inputs: &[&Path]) -> Result<()> {
     if let Some(path) = &args.save_map {
         export::MapExport::new(path)?;
