@@ -1,0 +1,524 @@
+//! Localization in a prior map: the odometry's registered scan, registered again to a map of
+//! the site read tile by tile from a [`TileMap`], gives the pose in the map frame.
+//!
+//! Each frame, after [`crate::Odometry`] registered the scan:
+//!
+//! 1. predict: the last map-frame pose moved by the odometry's motion over the frame (its
+//!    registration against the local map, which holds what the prior map lacks: parked cars,
+//!    new shelves);
+//! 2. hold the tiles within reach of the prediction (`tiles`);
+//! 3. register the odometry's registration cloud `P^*` to the prior map from the prediction
+//!    (the paper's robust ICP, Eq. (9)-(12), its gate `max(3 sigma_t, gate_floor)`);
+//! 4. measure it: the share of `P^*` off level ground within `inlier_distance` of a map point
+//!    (level ground fits whatever the horizontal error), and the registration's conditioning
+//!    (the observability ratio);
+//! 5. judge it ([`State`]): a good share and conditioning moves the pose to the registration;
+//!    a fair share moves it too, degraded; else the pose is the prediction, degraded, until
+//!    `lost_after_m` metres or `lost_after_frames` frames have passed without a fix: lost.
+//!    Lost runs the bounded search (`search`) around the dead-reckoned pose, a few starts per
+//!    frame; its answer is confirmed by `confirm_frames` good frames before the state says
+//!    localized again. [`Localizer::reseed`] takes a pose from the user instead.
+//!
+//! Storage: the prior map (its voxels and points) and ICP's work, in one run of words sized by
+//! [`Localizer::words`]; the tiles stay in the file's bytes.
+
+mod search;
+mod tiles;
+
+pub use search::{STARTS as SEARCH_STARTS, STEP_DEG as SEARCH_STEP_DEG, STEP_M as SEARCH_STEP_M};
+pub use tiles::{tiles_touched, Loaded, MAX_TILES_HELD};
+
+use crate::config::Config;
+use crate::geometry::{Point, Pose};
+use crate::lie::renormalize;
+use crate::local_map::{MapLayout, MapMut, MapState, MapView, PointCodec};
+use crate::observability::observability;
+use crate::prior_map::TileMap;
+use crate::registration::{align_points_to_map, moved_points, work_words, Executor, IcpParams};
+use crate::scalar::Real;
+use crate::storage::Storage;
+use core::marker::PhantomData;
+use search::Search;
+use tiles::Held;
+
+/// How sure the localization is of the frame's pose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum State {
+    /// Registered to the map with a good share of inliers and conditioning, confirmed.
+    Localized,
+    /// A pose to use with care: a fair registration, an unconfirmed one, or the odometry
+    /// carrying the last fix forward for a short way.
+    Degraded,
+    /// No fix for too long: the pose is the odometry's guess while the search runs.
+    Lost,
+}
+
+impl State {
+    /// The name `frames.csv` uses.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Localized => "localized",
+            Self::Degraded => "degraded",
+            Self::Lost => "lost",
+        }
+    }
+}
+
+/// The rules of the judgement and the tiles' reach.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings<T: Real> {
+    /// Tiles within this of the pose are held (m); `r_max` by default.
+    pub reach: T,
+    /// A registered point within this of a map point is an inlier (m); half a voxel.
+    pub inlier_distance: T,
+    /// Inlier share of a good registration (0.5).
+    pub good_share: T,
+    /// Inlier share of a fair registration (0.3).
+    pub fair_share: T,
+    /// Conditioning of a good registration: the observability ratio's floor (0.02, the
+    /// odometry's `degeneracy_ratio`).
+    pub min_observability: T,
+    /// The registration's gate never below this (m): 3 voxels.
+    pub gate_floor: T,
+    /// Good frames that confirm a fix from the search or the start (3).
+    pub confirm_frames: u32,
+    /// Travel without a fix after which the state is lost (m): 20.
+    pub lost_after_m: T,
+    /// Frames without a fix after which the state is lost: 20.
+    pub lost_after_frames: u32,
+    /// Starts of the search registered per frame (16: the grid in 22 frames).
+    pub search_per_frame: u32,
+    /// The search's answer must beat any distinct one by this share (0.1).
+    pub search_margin: T,
+}
+
+impl<T: Real> Settings<T> {
+    /// The defaults for an odometry configured with `config`.
+    pub fn for_config(config: &Config<T>) -> Self {
+        Self {
+            reach: config.max_range,
+            inlier_distance: config.voxel_size * T::of(0.5),
+            good_share: T::of(0.5),
+            fair_share: T::of(0.3),
+            min_observability: config.degeneracy_ratio,
+            gate_floor: config.voxel_size * T::of(3.0),
+            confirm_frames: 3,
+            lost_after_m: T::of(20.0),
+            lost_after_frames: 20,
+            search_per_frame: 16,
+            search_margin: T::of(0.1),
+        }
+    }
+}
+
+/// The prior map's room: what [`Localizer::words`] sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PriorCapacities {
+    /// Voxels of the held tiles.
+    pub map_voxels: usize,
+    /// Points of the held tiles.
+    pub map_points: usize,
+    /// Points of `P^*` registered (more are not used).
+    pub source_points: usize,
+}
+
+/// Why a localizer cannot be built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LocalizeError {
+    /// The map's voxel size is not the configuration's: build the map at the configuration's,
+    /// or configure the map's.
+    VoxelSize,
+    /// The map is in another frame than the one asked for.
+    Frame,
+    /// The tiles within reach can number more than [`MAX_TILES_HELD`]: build the map with
+    /// larger tiles (or a smaller reach).
+    TileSize,
+    /// A capacity is zero or the storage is shorter than [`Localizer::words`].
+    Storage,
+    /// A setting is out of range (a share outside `0..=1`, a distance not positive).
+    Settings,
+}
+
+impl core::fmt::Display for LocalizeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::VoxelSize => "the map's voxel size differs from the configuration's",
+            Self::Frame => "the map is in another frame than the one asked for",
+            Self::TileSize => "the map's tiles are too small for the reach (too many to hold)",
+            Self::Storage => "a capacity is zero or the storage is too short",
+            Self::Settings => "a localization setting is out of range",
+        })
+    }
+}
+
+/// One frame's localization.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Located<T: Real> {
+    /// The sensor's pose in the map frame.
+    pub pose: Pose<T>,
+    /// How sure it is.
+    pub state: State,
+    /// Share of `P^*` within `inlier_distance` of the map at the registered pose, counting
+    /// only the points off level ground (level ground fits whatever the horizontal error).
+    pub inlier_share: T,
+    /// The registration's observability ratio (`None` if nothing was measured).
+    pub observability: Option<T>,
+    /// How far the registration moved the prediction (m).
+    pub correction: T,
+    /// What the tiles' load did this frame, if one was needed.
+    pub loaded: Option<Loaded>,
+    /// Search starts registered this frame.
+    pub searched: u32,
+    /// The search found the pose this frame.
+    pub recovered: bool,
+    /// Voxels of the prior map held.
+    pub map_voxels: u32,
+}
+
+/// Localization in a prior map over storage it owns or borrows (see [`crate::storage`]).
+pub struct Localizer<'m, T: Real, P: PointCodec<T>, S: Storage> {
+    file: TileMap<'m>,
+    settings: Settings<T>,
+    config: Config<T>,
+    caps: PriorCapacities,
+    map: MapState<T>,
+    layout: MapLayout,
+    storage: S,
+    held: Held,
+    pose: Pose<T>,
+    state: State,
+    /// Good frames in a row.
+    confirmed: u32,
+    /// Travel and frames since the last fix.
+    since_fix: (T, u32),
+    search: Option<Search<T>>,
+    _codec: PhantomData<P>,
+}
+
+impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
+    /// Words of storage for `caps`.
+    pub const fn words(caps: &PriorCapacities) -> usize {
+        MapLayout::new(
+            caps.map_voxels,
+            caps.map_points,
+            core::mem::size_of::<P::Stored>(),
+        )
+        .words()
+            + work_words::<T>(caps.source_points, false)
+    }
+
+    /// A localizer in `file` (whose frame must be named `frame`) for an odometry configured
+    /// with `config`, starting at `initial` (map frame), degraded until confirmed.
+    pub fn new(
+        file: TileMap<'m>,
+        frame: &str,
+        config: &Config<T>,
+        settings: Settings<T>,
+        caps: PriorCapacities,
+        mut storage: S,
+        initial: Pose<T>,
+    ) -> Result<Self, LocalizeError> {
+        let h = file.header();
+        let v = config.voxel_size.wide();
+        if (h.voxel_size - v).abs() > 1e-9 * v {
+            return Err(LocalizeError::VoxelSize);
+        }
+        if h.frame_name() != frame {
+            return Err(LocalizeError::Frame);
+        }
+        let s = settings;
+        let share = |x: T| x >= T::zero() && x <= T::one();
+        let positive = |x: T| x > T::zero() && x.is_finite();
+        let valid = share(s.good_share)
+            && share(s.fair_share)
+            && share(s.search_margin)
+            && positive(s.reach)
+            && positive(s.inlier_distance)
+            && positive(s.gate_floor)
+            && positive(s.lost_after_m);
+        if !valid {
+            return Err(LocalizeError::Settings);
+        }
+        let held_reach = s.reach.wide() + 0.5 * h.tile_size;
+        if tiles_touched(held_reach, h.tile_size) > MAX_TILES_HELD {
+            return Err(LocalizeError::TileSize);
+        }
+        let layout = MapLayout::new(
+            caps.map_voxels,
+            caps.map_points,
+            core::mem::size_of::<P::Stored>(),
+        );
+        let words = storage.as_mut();
+        if caps.source_points == 0 || caps.map_points == 0 || words.len() < Self::words(&caps) {
+            return Err(LocalizeError::Storage);
+        }
+        let far = T::of(1e6);
+        let map = MapState::new(
+            config.voxel_size,
+            far,
+            h.points_per_voxel,
+            caps.map_voxels,
+            &layout,
+        )
+        .ok_or(LocalizeError::Storage)?;
+        let mut me = Self {
+            file,
+            settings,
+            config: *config,
+            caps,
+            map,
+            layout,
+            storage,
+            held: Held::new(),
+            pose: initial,
+            state: State::Degraded,
+            confirmed: 0,
+            since_fix: (T::zero(), 0),
+            search: None,
+            _codec: PhantomData,
+        };
+        map_mut::<T, P>(&mut me.map, &me.layout, &mut me.storage)
+            .ok_or(LocalizeError::Storage)?
+            .clear();
+        Ok(me)
+    }
+
+    /// The pose in the map frame after the last frame.
+    pub fn pose(&self) -> &Pose<T> {
+        &self.pose
+    }
+
+    /// The state after the last frame.
+    pub fn state(&self) -> State {
+        self.state
+    }
+
+    /// The map file.
+    pub fn file(&self) -> &TileMap<'m> {
+        &self.file
+    }
+
+    /// Bytes of the state: the prior map, ICP's work and the bookkeeping.
+    pub fn state_bytes(&self) -> usize {
+        8 * Self::words(&self.caps) + core::mem::size_of::<Self>()
+    }
+
+    /// Starts again from `pose` (map frame), degraded until confirmed: a pose from the user.
+    pub fn reseed(&mut self, pose: Pose<T>) {
+        self.pose = pose;
+        self.state = State::Degraded;
+        self.confirmed = 0;
+        self.since_fix = (T::zero(), 0);
+        self.search = None;
+    }
+
+    /// Localizes the frame the odometry just registered: `source` is its `P^*`
+    /// ([`crate::Odometry::source`]), `motion` its motion over the frame
+    /// ([`crate::Odometry::last_delta`]) and `sigma` its `sigma_t`.
+    pub fn locate<E: Executor>(
+        &mut self,
+        exec: &E,
+        source: &[[T; 3]],
+        motion: &Pose<T>,
+        sigma: T,
+    ) -> Located<T> {
+        let source = &source[..source.len().min(self.caps.source_points)];
+        let mut predicted = self.pose * motion;
+        renormalize(&mut predicted);
+        let t = predicted.translation.vector;
+        let reach = self.settings.reach.wide();
+        let loaded = match map_mut::<T, P>(&mut self.map, &self.layout, &mut self.storage) {
+            Some(mut m) => self
+                .held
+                .around(&self.file, &mut m, t.x.wide(), t.y.wide(), reach),
+            None => None,
+        };
+        let mut out = Located {
+            pose: predicted,
+            state: State::Degraded,
+            inlier_share: T::zero(),
+            observability: None,
+            correction: T::zero(),
+            loaded,
+            searched: 0,
+            recovered: false,
+            map_voxels: self.map.voxels() as u32,
+        };
+        let step = motion.translation.vector.norm();
+        if self.state == State::Lost {
+            self.search_step(exec, source, &predicted, &mut out);
+        } else {
+            let gate = (T::of(3.0) * sigma).max(self.settings.gate_floor);
+            let (pose, share, obs) = self.register(exec, source, &predicted, gate);
+            out.inlier_share = share;
+            out.observability = obs;
+            out.correction = (pose.translation.vector - t).norm();
+            self.judge(pose, share, obs, step, &mut out);
+        }
+        self.pose = out.pose;
+        self.state = out.state;
+        out
+    }
+
+    /// Step 5 for a tracked frame.
+    fn judge(&mut self, pose: Pose<T>, share: T, obs: Option<T>, step: T, out: &mut Located<T>) {
+        let s = &self.settings;
+        let conditioned = obs.is_some_and(|o| o >= s.min_observability);
+        if share >= s.good_share && conditioned {
+            out.pose = pose;
+            self.since_fix = (T::zero(), 0);
+            self.confirmed = self.confirmed.saturating_add(1);
+            out.state = if self.confirmed >= s.confirm_frames {
+                State::Localized
+            } else {
+                State::Degraded
+            };
+            return;
+        }
+        self.confirmed = 0;
+        if share >= s.fair_share && conditioned {
+            out.pose = pose;
+        }
+        self.since_fix = (self.since_fix.0 + step, self.since_fix.1.saturating_add(1));
+        let lost = self.since_fix.0 > s.lost_after_m || self.since_fix.1 > s.lost_after_frames;
+        out.state = if lost { State::Lost } else { State::Degraded };
+        if lost {
+            self.search = Some(Search::new());
+        }
+    }
+
+    /// One frame of the search around the dead-reckoned `at`.
+    fn search_step<E: Executor>(
+        &mut self,
+        exec: &E,
+        source: &[[T; 3]],
+        at: &Pose<T>,
+        out: &mut Located<T>,
+    ) {
+        out.state = State::Lost;
+        let mut search = self.search.unwrap_or_else(Search::new);
+        let gate = self.settings.gate_floor;
+        for _ in 0..self.settings.search_per_frame {
+            if search.done() {
+                break;
+            }
+            let from = search::start(search.next, at);
+            let (pose, share, obs) = self.register(exec, source, &from, gate);
+            if obs.is_some_and(|o| o >= self.settings.min_observability) {
+                search.note(pose * at.inverse(), share);
+            }
+            search.next += 1;
+            out.searched += 1;
+        }
+        if search.done() {
+            let s = &self.settings;
+            if let Some(correction) = search.verdict(s.good_share, s.search_margin) {
+                out.pose = correction * at;
+                renormalize(&mut out.pose);
+                out.correction = (out.pose.translation.vector - at.translation.vector).norm();
+                out.state = State::Degraded;
+                out.recovered = true;
+                self.confirmed = 0;
+                self.since_fix = (T::zero(), 0);
+                self.search = None;
+                return;
+            }
+            search = Search::new();
+        }
+        self.search = Some(search);
+    }
+
+    /// Registers `source` to the prior map from `from` with gate `gate`: the pose, the
+    /// inlier share there and the conditioning.
+    fn register<E: Executor>(
+        &mut self,
+        exec: &E,
+        source: &[[T; 3]],
+        from: &Pose<T>,
+        gate: T,
+    ) -> (Pose<T>, T, Option<T>) {
+        let cfg = &self.config;
+        let map_words = self.layout.words();
+        let words = self.storage.as_mut();
+        let Some((map_part, work)) = words
+            .get_mut(..Self::words(&self.caps))
+            .map(|w| w.split_at_mut(map_words))
+        else {
+            return (*from, T::zero(), None);
+        };
+        let Ok(view) = MapView::<T, P>::of(&self.map, &self.layout, map_part) else {
+            return (*from, T::zero(), None);
+        };
+        let params = IcpParams {
+            convergence_criterion: cfg.convergence_criterion,
+            max_iterations: cfg.max_iterations,
+            budget: cfg.work_budget,
+            planes: false,
+            prior: None,
+            stop_on_cycle: false,
+        };
+        let kernel = cfg.kernel_scale * gate / T::of(3.0);
+        let icp = align_points_to_map(exec, source, work, &view, from, gate, kernel, &params);
+        let pose = icp.pose;
+        let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+            && pose.rotation.coords.iter().all(|v| v.is_finite());
+        if !finite || source.is_empty() {
+            return (*from, T::zero(), None);
+        }
+        let n = source.len();
+        let origin = Point::from(pose.translation.vector);
+        let obs = observability(&view, moved_points::<T>(work, n, false), n, &origin, gate);
+        let (level, structure) = inliers(&view, source, &pose, self.settings.inlier_distance);
+        let off_level = n - level;
+        let share = if off_level == 0 {
+            T::zero()
+        } else {
+            T::of(structure as f64 / off_level as f64)
+        };
+        (pose, share, obs)
+    }
+}
+
+/// Of `source` moved by `pose`, the points within `near` of a map point on level ground (a
+/// voxel whose spread is less than 5 % vertical) and those within `near` of any other map
+/// point. Level ground matches whatever the horizontal error, so only the others tell a right
+/// pose from a wrong one.
+fn inliers<T: Real, P: PointCodec<T>>(
+    view: &MapView<'_, T, P>,
+    source: &[[T; 3]],
+    pose: &Pose<T>,
+    near: T,
+) -> (usize, usize) {
+    let (mut level, mut structure) = (0, 0);
+    for p in source {
+        let q = pose * Point::new(p[0], p[1], p[2]);
+        let Some((m, _)) = view.closest_neighbor(&q, near) else {
+            continue;
+        };
+        let flat = view
+            .voxel_covariance(&m)
+            .is_some_and(|(k, c)| k >= 3 && c[(2, 2)] < T::of(0.05) * c.trace());
+        if flat {
+            level += 1;
+        } else {
+            structure += 1;
+        }
+    }
+    (level, structure)
+}
+
+/// Write access to the prior map at the start of `storage`.
+fn map_mut<'a, T: Real, P: PointCodec<T>>(
+    map: &'a mut MapState<T>,
+    layout: &MapLayout,
+    storage: &'a mut impl Storage,
+) -> Option<MapMut<'a, T, P>> {
+    let words = storage.as_mut().get_mut(..layout.words())?;
+    MapMut::of(map, layout, words).ok()
+}
+
+#[cfg(test)]
+mod tests;
