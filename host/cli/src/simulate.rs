@@ -4,7 +4,8 @@
 
 use anyhow::Result;
 use kiss_odom_sim::{
-    Format, ImuSpec, Layout, Lidar, Messages, PacketSensor, Profile, Request, SimParams, Written,
+    Format, ImuSpec, Layout, Lidar, Messages, PacketSensor, Profile, Request, Revisit, SimParams,
+    Written,
 };
 use std::path::PathBuf;
 use std::time::Instant;
@@ -14,7 +15,8 @@ use std::time::Instant;
 pub struct SimulateArgs {
     /// Output folder; gets velodyne/ (sensor frame at each point's capture time),
     /// timestamps/, poses.txt (the pose at each sweep's end, i.e. its last column, relative to
-    /// the first), times.txt and sim.toml.
+    /// the first; with --revisit, to the first run's first), times.txt and sim.toml (and with
+    /// --revisit initial_pose.txt).
     #[arg(long)]
     pub out: PathBuf,
     /// Number of sweeps to generate.
@@ -105,6 +107,21 @@ pub struct SimulateArgs {
     /// refused, and nothing is removed.
     #[arg(long)]
     pub overwrite: bool,
+    /// Drive the scene of the same flags without --revisit (the first run) again: the same
+    /// route the other way, 1.75 m to its left (0.5 m in a warehouse, 1 m in a corridor or
+    /// tunnel), from where the first run's last sweep ended back towards its start at 60-95 %
+    /// of its mean speed, through the scene changed (--changes). poses.txt is in the first run's
+    /// frame, so a map built from the first run's poses.txt is in the frame of this one's;
+    /// initial_pose.txt holds frame 0's pose as X,Y,Z,ROLL,PITCH,YAW (m, degrees, R = Rz(yaw)
+    /// Ry(pitch) Rx(roll)).
+    #[arg(long)]
+    pub revisit: bool,
+    /// With --revisit: the share of the scene's objects (parked cars first, then buildings,
+    /// walls, racks, poles, trees) moved 2-6 m along their axis, turned by 10-30 degrees or
+    /// removed, in 0..=1 (default 0.1). Whatever the share, at least 10 % of the parked cars
+    /// change and a new wall 10 m long and 3 m high stands beside the revisit's stretch.
+    #[arg(long, value_name = "FRACTION", requires = "revisit")]
+    pub changes: Option<f64>,
 }
 
 impl SimulateArgs {
@@ -147,6 +164,11 @@ impl SimulateArgs {
                 noise: self.noise,
                 dropout: self.dropout,
             },
+            revisit: self.revisit.then(|| Revisit {
+                changes: self
+                    .changes
+                    .unwrap_or(kiss_odom_sim::revisit::DEFAULT_CHANGES),
+            }),
         }
     }
 }

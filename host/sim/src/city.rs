@@ -5,22 +5,51 @@
 //! along the x axis (floor, walls, ceiling: nothing varies along the axis) and `plane` a lone
 //! ground plane; both are degenerate on purpose. `tunnel` and `field` add sparse structure to
 //! them (see `sparse`): weakly observable, as real tunnels and fields are. `suburban` lines long
-//! streets with rows of houses, yards and trees out to 100 m (see `suburb`).
+//! streets with rows of houses, yards and trees out to 100 m (see `suburb`), `warehouse` aisles
+//! between rows of racks under a ceiling (see `warehouse`). Objects are kept as [`Group`]s, which
+//! a revisit moves, turns or removes ([`changes`]).
 
 use crate::profile::Profile;
 use crate::scene::Scene;
+use crate::scene::Solid;
 use crate::shapes::Plane;
 use crate::trajectory::Route;
 use nalgebra::{Point3, Vector3};
 use sparse::{CORRIDOR_HALF_WIDTH, CORRIDOR_HEIGHT};
 use streets::{City, GROUND};
+pub use streets::{Group, GroupKind};
 
+pub mod changes;
 mod sparse;
 mod streets;
 mod suburb;
+mod warehouse;
+
+/// A scene before it is indexed: its planes, its solids and the objects they make.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    /// Infinite planes and their reflectivity.
+    pub planes: Vec<(Plane, f32)>,
+    /// The solids.
+    pub solids: Vec<Solid>,
+    /// The objects (consecutive solids) a revisit may change; solids in none stay as they are.
+    pub groups: Vec<Group>,
+}
+
+impl Layout {
+    /// The indexed scene.
+    pub fn scene(self) -> Scene {
+        Scene::new(self.planes, self.solids)
+    }
+}
 
 /// Builds the scene of `profile` around `route`.
 pub fn build(profile: Profile, seed: u64, route: &Route) -> Scene {
+    layout(profile, seed, route).scene()
+}
+
+/// The planes, solids and objects of `profile`'s scene around `route`.
+pub fn layout(profile: Profile, seed: u64, route: &Route) -> Layout {
     let ground = (Plane::new(Vector3::z(), Point3::origin()), GROUND);
     let w = CORRIDOR_HALF_WIDTH;
     let corridor = vec![
@@ -32,15 +61,26 @@ pub fn build(profile: Profile, seed: u64, route: &Route) -> Scene {
         (Plane::new(Vector3::y(), Point3::new(0.0, w, 0.0)), 0.45),
         (Plane::new(Vector3::y(), Point3::new(0.0, -w, 0.0)), 0.45),
     ];
-    match profile {
-        Profile::Plane => Scene::new(vec![ground], Vec::new()),
-        Profile::Field => Scene::new(vec![ground], City::new(route, seed).field()),
-        Profile::Corridor => Scene::new(corridor, Vec::new()),
-        Profile::Tunnel => Scene::new(corridor, City::new(route, seed).tunnel()),
+    let ceiling = (
+        Plane::new(Vector3::z(), Point3::new(0.0, 0.0, warehouse::CEILING)),
+        0.35,
+    );
+    let city = City::new(route, seed);
+    let (planes, (solids, groups)) = match profile {
+        Profile::Plane => (vec![ground], (Vec::new(), Vec::new())),
+        Profile::Field => (vec![ground], city.field()),
+        Profile::Corridor => (corridor, (Vec::new(), Vec::new())),
+        Profile::Tunnel => (corridor, city.tunnel()),
         Profile::Urban | Profile::Fast | Profile::Handheld | Profile::Drone => {
-            Scene::new(vec![ground], City::new(route, seed).generate())
+            (vec![ground], city.generate())
         }
-        Profile::Suburban => Scene::new(vec![ground], City::new(route, seed).suburb()),
+        Profile::Suburban => (vec![ground], city.suburb()),
+        Profile::Warehouse => (vec![ground, ceiling], city.warehouse()),
+    };
+    Layout {
+        planes,
+        solids,
+        groups,
     }
 }
 

@@ -9,7 +9,8 @@
 //! [`capture`] writes them as a pcap, [`ros`] the frames, packets and IMU samples as a ROS bag,
 //! MCAP file or sqlite3 bag, [`writer`] the generic layout, [`layouts`] the public datasets'
 //! own layouts, both replacing only a data set `simulate` wrote ([`replace`]), and
-//! [`sequence`] a whole sequence. Every random draw is
+//! [`sequence`] a whole sequence; a [`revisit`] drives the same scene again, changed, along
+//! another path, for localization in a prior map. Every random draw is
 //! keyed by indices ([`rng`]), so the bytes depend on the seed and parameters only, never on
 //! the thread count.
 
@@ -20,6 +21,7 @@ pub mod layouts;
 pub mod packets;
 pub mod profile;
 pub mod replace;
+pub mod revisit;
 pub mod rng;
 pub mod ros;
 pub mod scene;
@@ -34,6 +36,7 @@ pub use imu::ImuSpec;
 pub use layouts::Layout;
 pub use packets::{PacketSensor, PacketSim};
 pub use profile::Profile;
+pub use revisit::Revisit;
 pub use scene::{Scene, Surface};
 pub use sensor::{Frame, Lidar};
 pub use sequence::{write, Format, Messages, Request, Written};

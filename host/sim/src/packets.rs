@@ -458,12 +458,17 @@ impl<'a> PacketSim<'a> {
         }
     }
 
-    /// Ground truth of sweep `k`: its end in the frame of sweep 0's end.
+    /// Ground truth of sweep `k`: its end in the frame of sweep 0's end (with a revisit, the
+    /// first run's sweep 0).
     pub fn ground_truth(&self, k: u64) -> PoseM {
+        let t = self.sim.trajectory();
+        if let Some(first) = self.sim.first_run() {
+            // A revisit: in the frame of the first run's sweep 0, at this sensor's timing.
+            return first.pose(self.end_offset(0)).inverse() * t.pose(self.end_offset(k));
+        }
         if k == 0 {
             return PoseM::identity();
         }
-        let t = self.sim.trajectory();
         t.pose(self.end_offset(0)).inverse() * t.pose(self.end_offset(k))
     }
 

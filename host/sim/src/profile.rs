@@ -34,6 +34,10 @@ pub enum Profile {
     /// The urban scene flown at 3-10 m/s, 5-11 m up with climbs and descents up to 2.5 m/s,
     /// banking into turns, with fast yaw swings (up to about 200 deg/s).
     Drone,
+    /// A warehouse-like corridor network: aisles 3-4 m wide between long rows of racks (3-6 m
+    /// tall, with gaps) under an 8 m ceiling, cross aisles every 20-40 m, driven at 1.5-3 m/s
+    /// with right-angle turns.
+    Warehouse,
 }
 
 impl Profile {

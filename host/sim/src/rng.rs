@@ -41,6 +41,10 @@ pub enum Purpose {
     Swing = 5,
     /// IMU noise and biases.
     Imu = 6,
+    /// A revisit's path: its speed, attitude and ray noise.
+    Revisit = 7,
+    /// What a revisit changes in the scene.
+    Changes = 8,
 }
 
 /// A SplitMix64 sequence: fast, seedable from any key, good enough for scene generation.

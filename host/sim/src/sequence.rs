@@ -120,8 +120,33 @@ struct Provenance<'a> {
     ros_messages: Option<Messages>,
     #[serde(skip_serializing_if = "Option::is_none")]
     imu: Option<ImuSummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    revisit: Option<RevisitSummary>,
     scene: SceneSummary,
 }
+
+/// What `sim.toml` records of a revisit.
+#[derive(Serialize)]
+struct RevisitSummary {
+    /// What the revisit is, for a reader without this source at hand.
+    meaning: &'static str,
+    /// Share of the objects asked to change.
+    changes: f64,
+    /// Offset of the revisit's path from the first run's route (m, left of the route).
+    lateral_offset_m: f64,
+    /// Objects the first run's scene has that a revisit may change.
+    objects: usize,
+    moved: usize,
+    turned: usize,
+    removed: usize,
+    new_walls: usize,
+}
+
+const REVISIT: &str = "the first run's scene (these parameters without revisit), changed, \
+    driven the other way along its route, beside it; poses.txt is in the first run's frame \
+    (its sensor at the end of its first sweep), so frame 0 is not the identity; \
+    initial_pose.txt: frame 0's pose as X,Y,Z,ROLL,PITCH,YAW (m, degrees, R = Rz(yaw) \
+    Ry(pitch) Rx(roll))";
 
 #[derive(Serialize)]
 struct ImuSummary {
@@ -172,6 +197,9 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
             .map_err(anyhow::Error::msg)?;
     }
     if request.layout != Layout::Generic {
+        if params.revisit.is_some() {
+            bail!("--revisit writes the generic layout only (without --layout)");
+        }
         if request.format != Format::Generic || request.sensor.is_some() || request.imu.is_some() {
             bail!(
                 "--layout {}: a dataset layout is written on its own (without --format, \
@@ -275,6 +303,19 @@ pub fn write(
                 samples: imu_samples.len(),
             }
         }),
+        revisit: params.revisit.zip(sim.changed()).map(|(r, c)| {
+            use crate::city::changes::Change;
+            RevisitSummary {
+                meaning: REVISIT,
+                changes: r.changes,
+                lateral_offset_m: crate::revisit::lateral_offset(params.profile),
+                objects: c.groups,
+                moved: c.count(|c| matches!(c, Change::Moved(_))),
+                turned: c.count(|c| matches!(c, Change::Turned(_))),
+                removed: c.count(|c| *c == Change::Removed),
+                new_walls: usize::from(c.wall),
+            }
+        }),
         scene: SceneSummary {
             planes: sim.scene().planes().count(),
             solids: sim.scene().solids().len(),
@@ -282,6 +323,15 @@ pub fn write(
         },
     };
     let mut writer = DatasetWriter::create(out, request.overwrite, &provenance)?;
+    if params.revisit.is_some() {
+        let truth = match &packets {
+            Some(p) => p.ground_truth(0),
+            None => sim.ground_truth(0),
+        };
+        let path = writer.staging().join(crate::revisit::INITIAL_POSE);
+        let line = crate::revisit::initial_pose_line(&truth) + "\n";
+        std::fs::write(&path, line).with_context(|| format!("writing {}", path.display()))?;
+    }
     if request.imu.is_some() {
         let path = writer.staging().join(imu::CSV_NAME);
         std::fs::write(&path, imu::csv(&imu_samples))

@@ -2,10 +2,12 @@
 //! indexed by [`crate::scene`]) swept by a multi-beam sensor ([`crate::sensor`]) riding a smooth
 //! parametric trajectory ([`crate::trajectory`]). Each column is cast from the pose at its own
 //! capture time, so scans carry real motion distortion; ground truth is the same pose function
-//! at each sweep's end.
+//! at each sweep's end. A [`Revisit`] drives the same scene again, changed, along another path.
 
-use crate::city;
+use crate::city::{self, changes, changes::Changed};
 use crate::profile::Profile;
+use crate::revisit::{self, Revisit};
+use crate::rng::{key, Purpose};
 use crate::scene::Scene;
 use crate::sensor::{self, Frame, Lidar};
 use crate::trajectory::{PoseM, Trajectory};
@@ -34,6 +36,10 @@ pub struct SimParams {
     pub lead_in: f64,
     /// The sensor.
     pub sensor: Lidar,
+    /// Drive the scene again, changed, along another path, with ground truth in the frame of
+    /// the first run (these same parameters without the revisit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub revisit: Option<Revisit>,
 }
 
 impl SimParams {
@@ -46,6 +52,7 @@ impl SimParams {
             start_time: 0.0,
             lead_in: 0.0,
             sensor: Lidar::DEFAULT,
+            revisit: None,
         }
     }
 
@@ -63,6 +70,9 @@ impl SimParams {
         if !(0.0..=MAX_LEAD_IN).contains(&self.lead_in) {
             bail!("lead-in must be in 0..={MAX_LEAD_IN} s");
         }
+        if let Some(r) = &self.revisit {
+            r.validate()?;
+        }
         self.sensor.validate().map_err(anyhow::Error::msg)
     }
 }
@@ -75,6 +85,10 @@ pub struct Simulation {
     scene: Scene,
     sweeper: sensor::Sweeper,
     first_end: PoseM,
+    /// With a revisit: the first run's trajectory, whose frame ground truth is in.
+    first_run: Option<Box<Trajectory>>,
+    /// With a revisit: what changed in the scene.
+    changed: Option<Box<Changed>>,
 }
 
 impl Simulation {
@@ -85,16 +99,61 @@ impl Simulation {
         let duration = (params.frames + 1) as f64 * l.period();
         let trajectory =
             Trajectory::generate_after(params.profile, params.seed, params.lead_in, duration);
-        let scene = city::build(params.profile, params.seed, trajectory.route());
+        let layout = city::layout(params.profile, params.seed, trajectory.route());
         let sweeper = sensor::Sweeper::new(l, params.seed, params.start_time);
         let first_end = trajectory.pose(sweeper.end_offset(0));
+        let Some(revisit) = params.revisit else {
+            return Ok(Self {
+                params,
+                trajectory,
+                scene: layout.scene(),
+                sweeper,
+                first_end,
+                first_run: None,
+                changed: None,
+            });
+        };
+        // Back from where the first run's last sweep ended, never farther than it came.
+        let last = sweeper.end_offset(params.frames - 1);
+        let (from, to) = (trajectory.route_arc(0.0), trajectory.route_arc(last));
+        let mean = (to - from) / last.max(1e-9);
+        let (lo, hi) = revisit::SPEED_SHARE;
+        let lateral = revisit::lateral_offset(params.profile);
+        let path = trajectory.revisit(params.seed, to, lateral, (lo * mean, hi * mean));
+        let lane = changes::Lane {
+            lateral,
+            span: (path.route_arc(last).min(to), to),
+        };
+        let changed = changes::apply(
+            &layout,
+            params.profile,
+            trajectory.route(),
+            params.seed,
+            revisit.changes,
+            lane,
+        );
+        let scene = Scene::new(layout.planes, changed.solids.clone());
+        // Ray noise of its own: another drive, not the first one's noise again.
+        let noise = key(&[params.seed, Purpose::Revisit as u64]);
         Ok(Self {
             params,
-            trajectory,
+            trajectory: path,
             scene,
-            sweeper,
+            sweeper: sensor::Sweeper::new(l, noise, params.start_time),
             first_end,
+            first_run: Some(Box::new(trajectory)),
+            changed: Some(Box::new(changed)),
         })
+    }
+
+    /// With a revisit, the first run's trajectory (ground truth is in its frame).
+    pub fn first_run(&self) -> Option<&Trajectory> {
+        self.first_run.as_deref()
+    }
+
+    /// With a revisit, what changed in the scene since the first run.
+    pub fn changed(&self) -> Option<&Changed> {
+        self.changed.as_deref()
     }
 
     /// The parameters.
@@ -132,14 +191,20 @@ impl Simulation {
         self.trajectory.pose(t - self.params.start_time)
     }
 
-    /// World pose of the first sweep's end: the ground-truth frame's origin.
+    /// World pose of the first sweep's end: the ground-truth frame's origin (with a revisit,
+    /// the first run's first sweep's end).
     pub fn ground_truth_origin(&self) -> PoseM {
         self.first_end
     }
 
     /// Ground truth of frame `k`: the sensor at the end of sweep `k` in the frame of the sensor
-    /// at the end of sweep 0 (so frame 0 is the identity).
+    /// at the end of sweep 0 (so frame 0 is the identity); with a revisit, in the frame of the
+    /// first run's sensor at the end of its sweep 0.
     pub fn ground_truth(&self, k: u64) -> PoseM {
+        if self.first_run.is_some() {
+            let end = self.trajectory.pose(self.sweeper.end_offset(k));
+            return self.first_end.inverse() * end;
+        }
         if k == 0 {
             // Exactly, rather than `T^-1 T` up to rounding.
             return PoseM::identity();

@@ -234,6 +234,15 @@ impl Route {
                     b.straight(straight);
                 }
             }
+            Profile::Warehouse => {
+                // Aisles joined by tight right-angle turns into cross aisles.
+                b.straight(ROUTE_BEFORE_START + rng.range(10.0, 30.0));
+                while b.s < end {
+                    let angle = core::f64::consts::FRAC_PI_2 * rng.sign();
+                    b.turn(angle, rng.range(3.0, 5.0), rng.range(1.5, 3.0));
+                    b.straight(rng.range(20.0, 80.0));
+                }
+            }
             Profile::Corridor | Profile::Tunnel => {
                 // A gentle weave: each S-bend is mirrored by the next, so the lateral offset
                 // returns exactly to zero and the route stays on the corridor's axis.
@@ -564,6 +573,10 @@ impl MotionParams {
                 speed: (3.0, 8.0),
                 ..car
             },
+            Profile::Warehouse => Self {
+                speed: (1.5, 3.0),
+                ..car
+            },
             Profile::Suburban => Self {
                 speed: (15.5, 18.5),
                 launch_tau: 2.0,
@@ -621,6 +634,17 @@ pub struct Trajectory {
     swing: Option<[[Wave; 2]; 4]>,
     /// Seconds of the drive before trajectory time 0.
     lead_in: f64,
+    /// Driven backwards along the route, beside it (a revisit); `None`: along it.
+    reverse: Option<Reverse>,
+}
+
+/// A route driven from its end towards its start, beside it.
+#[derive(Clone, Copy, Debug)]
+struct Reverse {
+    /// Route arc length at drive time 0 (m).
+    start: f64,
+    /// Offset from the route, positive left of its own direction (m).
+    lateral: f64,
 }
 
 impl Trajectory {
@@ -662,6 +686,7 @@ impl Trajectory {
             bounce,
             swing,
             lead_in,
+            reverse: None,
         }
     }
 
@@ -693,13 +718,30 @@ impl Trajectory {
         }
     }
 
+    /// The route's arc length under the sensor at `t` (m; it falls on a revisit).
+    pub fn route_arc(&self, t: f64) -> f64 {
+        self.route_arc_at_drive_time(self.drive_time(t))
+    }
+
+    fn route_arc_at_drive_time(&self, t: f64) -> f64 {
+        match &self.reverse {
+            None => self.speed.arc_length(t),
+            Some(r) => r.start - self.speed.arc_length(t),
+        }
+    }
+
     /// Roll, pitch and yaw (rad) and position (m) at `t`: the pose's parameters.
     pub fn state(&self, t: f64) -> ([f64; 3], [f64; 3]) {
         let t = self.drive_time(t);
         let m = &self.motion;
-        let s = self.speed.arc_length(t);
+        let s = self.route_arc_at_drive_time(t);
         let v = self.speed.speed(t);
-        let lateral = v * v * self.route.curvature(s);
+        // Driven backwards, a left turn of the route is a right turn of the vehicle.
+        let curvature = match self.reverse {
+            None => self.route.curvature(s),
+            Some(_) => -self.route.curvature(s),
+        };
+        let lateral = v * v * curvature;
         let longitudinal = self.speed.accel(t);
         let saturate = |gain: f64, max: f64, a: f64| max * libm::tanh(gain * a / max);
         let sum = |w: &[Wave; 2]| w[0].at(t) + w[1].at(t);
@@ -708,7 +750,13 @@ impl Trajectory {
         let mut roll = -saturate(m.roll_gain, m.roll_max, lateral) + sum(&self.roll);
         let mut pitch = -saturate(m.pitch_gain, m.pitch_max, longitudinal) + sum(&self.pitch);
         let mut yaw = self.route.heading(s);
-        let [x, y] = self.route.position(s);
+        let [mut x, mut y] = self.route.position(s);
+        if let Some(r) = &self.reverse {
+            // A curve offset from the route is parallel to it: same tangent, other way.
+            x -= libm::sin(yaw) * r.lateral;
+            y += libm::cos(yaw) * r.lateral;
+            yaw += core::f64::consts::PI;
+        }
         let mut z = m.height + sum(&self.bounce);
         if let Some([sy, sp, sr, sz]) = &self.swing {
             yaw += sum(sy);
@@ -743,5 +791,6 @@ pub fn rotation_zyx(roll: f64, pitch: f64, yaw: f64) -> Rotation3<f64> {
     Rotation3::from_matrix_unchecked(r)
 }
 
+mod revisit;
 #[cfg(test)]
 mod tests;

@@ -4,8 +4,10 @@
 //! DIR/velodyne/NNNNNN.bin    f32 LE x, y, z, intensity per point (sensor frame at capture time)
 //! DIR/timestamps/NNNNNN.bin  f64 LE capture time per point (s, sequence time)
 //! DIR/poses.txt              3x4 row-major end-of-sweep pose per frame, first one identity
+//!                            (with --revisit: in the first run's frame)
 //! DIR/times.txt              end-of-sweep time per frame (s)
 //! DIR/sim.toml               the parameters used, for provenance
+//! DIR/initial_pose.txt       with --revisit: frame 0's pose, X,Y,Z,ROLL,PITCH,YAW (m, degrees)
 //! DIR/packets.pcap           with --format pcap: the same sweeps as sensor packets
 //! DIR/packets.json           with --format pcap and an Ouster: its metadata
 //! DIR/packets.csv            with --format pcap and a QT128 or OT128: its angle correction file
@@ -29,9 +31,10 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Files the layout owns, `sim.toml` last.
-const OWNED_FILES: [&str; 11] = [
+const OWNED_FILES: [&str; 12] = [
     "poses.txt",
     "times.txt",
+    crate::revisit::INITIAL_POSE,
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,

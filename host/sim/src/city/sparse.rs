@@ -4,7 +4,7 @@
 //! degenerate corridor or plane, so registration has a little information along the free
 //! directions, not none: what robust mode is measured on.
 
-use super::streets::{City, Footprint};
+use super::streets::{City, Footprint, Group, GroupKind};
 use crate::scene::Solid;
 use crate::shapes::Shape;
 
@@ -23,7 +23,7 @@ const BOULDER_CLEARANCE: f64 = 4.0;
 
 impl City<'_> {
     /// Structure on the corridor's walls along the route (which follows the corridor's axis).
-    pub(super) fn tunnel(mut self) -> Vec<Solid> {
+    pub(super) fn tunnel(mut self) -> (Vec<Solid>, Vec<Group>) {
         let (s0, s1) = self.route.knot_span();
         let (x0, x1) = (self.route.position(s0)[0], self.route.position(s1)[0]);
         let mut x = x0 + self.rng.range(10.0, 40.0);
@@ -37,6 +37,7 @@ impl City<'_> {
             let y = side * (CORRIDOR_HALF_WIDTH + 0.05 - 0.5 * depth);
             let half_y = 0.5 * depth + 0.05;
             let clear = Some(TUNNEL_CLEARANCE);
+            let start = self.solids.len();
             match kind {
                 0 => {
                     // A pillar, floor to ceiling.
@@ -58,13 +59,14 @@ impl City<'_> {
                     self.add_box([x, y], 0.0, half, 0.0, refl, clear);
                 }
             }
+            self.group(GroupKind::Structure, start);
             x += self.rng.range(10.0, 40.0);
         }
-        self.solids
+        self.finish()
     }
 
     /// Objects scattered along the route, clear of it everywhere (it may cross itself).
-    pub(super) fn field(mut self) -> Vec<Solid> {
+    pub(super) fn field(mut self) -> (Vec<Solid>, Vec<Group>) {
         let (s0, s1) = self.route.knot_span();
         let mut s = s0 + self.rng.range(20.0, 60.0);
         while s < s1 {
@@ -72,6 +74,7 @@ impl City<'_> {
             let kind = self.rng.next_u64() % 3;
             let size = self.rng.range(0.0, 1.0);
             let (c, _) = self.offset(s, lateral);
+            let start = self.solids.len();
             match kind {
                 0 => {
                     self.pole(c, 0.1 + 0.1 * size, 4.0 + 4.0 * size);
@@ -90,9 +93,10 @@ impl City<'_> {
                     }
                 }
             }
+            self.group(GroupKind::Structure, start);
             s += self.rng.range(20.0, 60.0);
         }
-        self.solids
+        self.finish()
     }
 }
 

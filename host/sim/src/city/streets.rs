@@ -1,12 +1,33 @@
 //! Street fronts generated along the route (the `urban` and `fast` scenes), and what every
 //! generated scene shares: an object's [`Footprint`], the [`RouteIndex`] that keeps objects clear
-//! of the driven path, and the [`City`] that places them.
+//! of the driven path, and the [`City`] that places them (and groups them into the objects a
+//! revisit may change).
 
 use crate::rng::{Purpose, Stream};
 use crate::scene::Solid;
 use crate::shapes::Shape;
 use crate::trajectory::Route;
 use nalgebra::{Point3, Vector3};
+use std::ops::Range;
+
+/// What kind of object a [`Group`] of solids is, for a revisit's changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GroupKind {
+    /// A parked car (body and cabin): what changes first between visits.
+    Car,
+    /// A structure: a building with its facade, a wall, a rack, a pole, a tree, a boulder.
+    Structure,
+}
+
+/// Consecutive solids that make one object (a car's body and cabin, a building and its
+/// pilasters): a revisit moves, turns or removes them together.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Group {
+    /// What the object is.
+    pub kind: GroupKind,
+    /// Its solids, the first one the object's body.
+    pub solids: Range<usize>,
+}
 
 /// Reflectivity of asphalt, concrete walls and ceilings.
 pub(super) const GROUND: f32 = 0.2;
@@ -29,7 +50,6 @@ impl Footprint {
     }
 
     /// The footprint of `shape` seen from above.
-    #[cfg(test)]
     pub(super) fn of(shape: &Shape) -> Self {
         match *shape {
             Shape::Box { centre, half, rot } => {
@@ -118,6 +138,8 @@ pub(super) struct City<'a> {
     pub(super) index: RouteIndex,
     pub(super) rng: Stream,
     pub(super) solids: Vec<Solid>,
+    /// The objects a revisit may change, in the order they were placed.
+    pub(super) groups: Vec<Group>,
 }
 
 impl<'a> City<'a> {
@@ -127,7 +149,23 @@ impl<'a> City<'a> {
             index: RouteIndex::new(route),
             rng: Stream::new(seed, Purpose::Scene),
             solids: Vec::new(),
+            groups: Vec::new(),
         }
+    }
+
+    /// Records the solids placed since `start` as one object of `kind` (none: no object).
+    pub(super) fn group(&mut self, kind: GroupKind, start: usize) {
+        if self.solids.len() > start {
+            self.groups.push(Group {
+                kind,
+                solids: start..self.solids.len(),
+            });
+        }
+    }
+
+    /// The solids placed and their objects.
+    pub(super) fn finish(self) -> (Vec<Solid>, Vec<Group>) {
+        (self.solids, self.groups)
     }
 
     /// The point at arc length `s` moved `lateral` metres to the left, and the heading there.
@@ -167,7 +205,7 @@ impl<'a> City<'a> {
         true
     }
 
-    pub(super) fn generate(mut self) -> Vec<Solid> {
+    pub(super) fn generate(mut self) -> (Vec<Solid>, Vec<Group>) {
         let (s0, s1) = self.route.knot_span();
         for side in [1.0, -1.0] {
             self.buildings(s0, s1, side);
@@ -176,7 +214,7 @@ impl<'a> City<'a> {
             self.trees(s0, s1, side);
             self.clutter(s0, s1, side);
         }
-        self.solids
+        self.finish()
     }
 
     pub(super) fn buildings(&mut self, s0: f64, s1: f64, side: f64) {
@@ -202,7 +240,9 @@ impl<'a> City<'a> {
                 if wall {
                     let (c, yaw) = self.offset(s + 0.5 * gap, side * (setback + 0.15));
                     let half = [0.5 * gap - 0.5, 0.15, 0.5 * height];
+                    let start = self.solids.len();
                     self.add_box(c, yaw, half, 0.0, 0.35, Some(BUILDING_CLEARANCE));
+                    self.group(GroupKind::Structure, start);
                 }
                 s += gap;
                 continue;
@@ -214,9 +254,11 @@ impl<'a> City<'a> {
             let mid = s + 0.5 * frontage;
             let (c, yaw) = self.offset(mid, side * (setback + 0.5 * depth));
             let half = [0.5 * frontage - 0.3, 0.5 * depth, 0.5 * height];
+            let start = self.solids.len();
             if self.add_box(c, yaw, half, 0.0, refl, Some(BUILDING_CLEARANCE)) {
                 self.facade(mid, side, setback, half[0], height, refl);
             }
+            self.group(GroupKind::Structure, start);
             // A second row behind, seen through gaps and over low buildings.
             let back = self.rng.chance(0.5);
             let (gap, d2, h2) = (
@@ -229,7 +271,9 @@ impl<'a> City<'a> {
             if back {
                 let (c, yaw) = self.offset(mid, side * (setback + depth + gap + 0.5 * d2));
                 let half = [0.5 * f2, 0.5 * d2, 0.5 * h2];
+                let start = self.solids.len();
                 self.add_box(c, yaw, half, 0.0, refl2, Some(BUILDING_CLEARANCE));
+                self.group(GroupKind::Structure, start);
             }
             s += frontage;
         }
@@ -262,7 +306,9 @@ impl<'a> City<'a> {
                         p[1] + away[1] * u + along[1] * v,
                     ];
                     let half = [0.5 * frontage - 0.3, 0.5 * depth, 0.5 * height];
+                    let start = self.solids.len();
                     self.add_box(c, yaw, half, 0.0, refl, Some(BUILDING_CLEARANCE));
+                    self.group(GroupKind::Structure, start);
                 }
                 d += frontage;
             }
@@ -367,12 +413,14 @@ impl<'a> City<'a> {
             let (c, psi) = self.offset(s, lateral);
             let yaw = psi + skew;
             let body = [0.5 * len, 0.5 * width, 0.375];
+            let start = self.solids.len();
             if self.add_box(c, yaw, body, 0.25, paint, Some(CAR_CLEARANCE)) {
                 // The cabin sits a little behind the middle; dark glass.
                 let back = 0.1 * len;
                 let cc = [c[0] - back * libm::cos(yaw), c[1] - back * libm::sin(yaw)];
                 let cabin = [0.28 * len, 0.5 * width - 0.08, 0.23];
                 self.add_box(cc, yaw, cabin, 1.0, 0.1, None);
+                self.group(GroupKind::Car, start);
             }
         }
     }

@@ -5,7 +5,7 @@
 //! its ground disc and this structure out to `r_max`: the scene a map sized from city streets
 //! fills.
 
-use super::streets::{City, Footprint, BUILDING_CLEARANCE, CANOPY_CLEARANCE};
+use super::streets::{City, Footprint, Group, GroupKind, BUILDING_CLEARANCE, CANOPY_CLEARANCE};
 use crate::scene::Solid;
 use crate::shapes::Shape;
 use nalgebra::Point3;
@@ -20,7 +20,7 @@ const CLUMP_MAX: f64 = 0.5;
 
 impl City<'_> {
     /// Houses, yards and trees along the whole route, both sides.
-    pub(super) fn suburb(mut self) -> Vec<Solid> {
+    pub(super) fn suburb(mut self) -> (Vec<Solid>, Vec<Group>) {
         let (s0, s1) = self.route.knot_span();
         for side in [1.0, -1.0] {
             let mut row = FIRST_ROW;
@@ -34,7 +34,7 @@ impl City<'_> {
             self.clutter(s0, s1, side);
             self.gardens(s0, s1, side);
         }
-        self.solids
+        self.finish()
     }
 
     /// One row of houses whose street faces stand `setback` from the route, with gaps for side
@@ -59,13 +59,17 @@ impl City<'_> {
             let mid = s + 0.5 * lot;
             let (c, yaw) = self.offset(mid, side * (setback + 0.5 * depth));
             let half = [0.5 * frontage, 0.5 * depth, 0.5 * height];
+            let start = self.solids.len();
             self.add_box(c, yaw, half, 0.0, refl, Some(BUILDING_CLEARANCE));
+            self.group(GroupKind::Structure, start);
             // A garage or shed beside some houses.
             if self.rng.chance(0.4) {
                 let along = 0.5 * frontage + self.rng.range(1.5, 3.0);
                 let (gc, gyaw) = self.offset(mid + along, side * (setback + 3.0));
                 let g = [1.5, 3.0, 0.5 * self.rng.range(2.4, 3.2)];
+                let start = self.solids.len();
                 self.add_box(gc, gyaw, g, 0.0, 0.4, Some(BUILDING_CLEARANCE));
+                self.group(GroupKind::Structure, start);
             }
             // A fence or hedge along the lot line, back to the next row.
             if self.rng.chance(0.5) {
