@@ -520,10 +520,36 @@ def capture_seeds():
     put("capture", "pcap-sll2", bytes([2 + 3 * 2]) + records)
 
 
+def prior_map_file(tiles, voxel=1.0, tile=20.0, per_voxel=4, frame=b"map"):
+    """A map file (core/src/prior_map.rs's format) of `tiles`: {(i, j): [(x, y, z) offsets]}."""
+    import zlib
+    cap = max((len(p) for p in tiles.values()), default=1) or 1
+    keys = sorted(tiles)
+    index = b"".join(struct.pack("<iiI", i, j, len(tiles[(i, j)])) for i, j in keys)
+    records = b""
+    for i, j in keys:
+        pts = b"".join(struct.pack("<3f", *p) for p in tiles[(i, j)])
+        pts += bytes(12 * cap - len(pts))
+        head = struct.pack("<iiI", i, j, len(tiles[(i, j)]))
+        records += head + struct.pack("<I", zlib.crc32(head + pts)) + pts
+    h = b"KOMAP\0\0\0" + struct.pack("<II", 1, 0) + struct.pack("<dd", voxel, tile)
+    h += struct.pack("<IIII", per_voxel, cap, len(keys), zlib.crc32(index))
+    h += frame.ljust(16, b"\0") + bytes(60)
+    h += struct.pack("<I", zlib.crc32(h))
+    return h + index + records
+
+
+def prior_map_seeds():
+    wall = [(x / 2, 5.0, z / 2) for x in range(0, 30) for z in range(0, 6)]
+    ground = [(x / 2, y / 2, 0.0) for x in range(0, 30, 3) for y in range(0, 30, 3)]
+    put("prior_map", "two-tiles", prior_map_file({(0, 0): wall + ground, (-1, 0): ground}))
+    put("prior_map", "empty", prior_map_file({}))
+
+
 def main():
     for make in (bin_seeds, ply_seeds, pcd_seeds, timestamps_seeds, poses_seeds,
                  pointcloud2_seeds, container_seeds, core_frame_seeds, sensor_seeds,
-                 capture_seeds, driver_seeds, db3_seeds):
+                 capture_seeds, driver_seeds, db3_seeds, prior_map_seeds):
         make()
     for d in sorted(CORPUS.iterdir()):
         print(f"{d.name}: {len(list(d.iterdir()))} seeds")

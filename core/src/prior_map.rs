@@ -97,6 +97,8 @@ pub enum TileError {
     Mismatch,
     /// No such tile: the index is shorter.
     Missing,
+    /// A point is not finite or lies outside its tile.
+    Points,
 }
 
 impl core::fmt::Display for MapError {
@@ -121,6 +123,7 @@ impl core::fmt::Display for TileError {
             Self::Checksum => "the tile's checksum does not match (damaged)",
             Self::Mismatch => "the tile record disagrees with the index",
             Self::Missing => "no such tile in the index",
+            Self::Points => "a tile point is not finite or lies outside its tile",
         })
     }
 }
@@ -423,14 +426,23 @@ impl<'a> TileMap<'a> {
             return Err(TileError::Mismatch);
         }
         let end = RECORD_HEAD_LEN + POINT_LEN * points as usize;
-        Ok(Tile {
+        let s = self.header.tile_size as f32;
+        let tile = Tile {
             key,
             corner: [
                 f64::from(key.i) * self.header.tile_size,
                 f64::from(key.j) * self.header.tile_size,
             ],
             points: &record[RECORD_HEAD_LEN..end],
-        })
+        };
+        let inside = tile
+            .offsets()
+            .all(|[x, y, z]| (0.0..=s).contains(&x) && (0.0..=s).contains(&y) && z.is_finite());
+        if inside {
+            Ok(tile)
+        } else {
+            Err(TileError::Points)
+        }
     }
 }
 
@@ -456,9 +468,20 @@ impl Tile<'_> {
 
     /// The points in the map frame, in stored order.
     pub fn points(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        self.offsets().map(|[x, y, z]| {
+            [
+                self.corner[0] + f64::from(x),
+                self.corner[1] + f64::from(y),
+                f64::from(z),
+            ]
+        })
+    }
+
+    /// The points as stored: offsets from the tile's corner.
+    fn offsets(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
         self.points.chunks_exact(POINT_LEN).map(|p| {
-            let c = |k: usize| f64::from(f32::from_le_bytes([p[k], p[k + 1], p[k + 2], p[k + 3]]));
-            [self.corner[0] + c(0), self.corner[1] + c(4), c(8)]
+            let c = |k: usize| f32::from_le_bytes([p[k], p[k + 1], p[k + 2], p[k + 3]]);
+            [c(0), c(4), c(8)]
         })
     }
 }

@@ -152,5 +152,19 @@ fn an_unsorted_index_and_out_of_range_fields_are_refused_naming_them() {
         );
     }
     assert_eq!(Header::frame_field("a name of more than 16"), None);
+    // Points outside their tile or not finite, with valid checksums, are refused by the tile.
+    for bad in [[50.5f32, 1.0, 0.0], [-0.1, 1.0, 0.0], [1.0, 1.0, f32::NAN]] {
+        let tiles: [(TileKey, &[[f32; 3]]); 1] = [(TileKey { i: 0, j: 0 }, &[bad])];
+        let h = Header {
+            tile_points: 1,
+            tiles: 1,
+            ..header(1)
+        };
+        let mut out = vec![0u8; h.file_len()];
+        assert!(encode_map(&h, &tiles, &mut out));
+        let map = TileMap::open(&out).unwrap();
+        assert_eq!(map.tile(0).unwrap_err(), TileError::Points, "{bad:?}");
+        assert_eq!(map.tile(1).unwrap_err(), TileError::Missing);
+    }
     assert_eq!(Header::frame_field("caf\u{e9}"), None);
 }
