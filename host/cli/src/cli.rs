@@ -31,6 +31,8 @@ pub enum Command {
     Convert(crate::convert::ConvertArgs),
     /// Score an estimated trajectory against ground truth (KITTI 3x4 files).
     Eval(crate::eval::EvalArgs),
+    /// Build a prior map for localization (`--map` of run).
+    Map(crate::map::MapArgs),
     /// Generate a LiDAR dataset with exact ground truth by ray casting a synthetic scene.
     Simulate(crate::simulate::SimulateArgs),
     /// The smallest fixed capacities that held a run, and their bytes of state on each target
@@ -57,6 +59,7 @@ pub fn main_with(args: Vec<OsString>, err: &mut dyn Write) -> i32 {
             Command::ListenPoses(a) => crate::listen::execute(&a, err),
             Command::Convert(a) => crate::convert::execute(&a, err),
             Command::Eval(a) => crate::eval::execute(&a),
+            Command::Map(a) => crate::map::execute(&a, err),
             Command::Simulate(a) => crate::simulate::execute(&a),
             Command::Size(a) => crate::size::execute(&a, err),
             #[cfg(feature = "ros2")]

@@ -24,6 +24,7 @@ pub mod eval;
 pub mod interrupt;
 pub(crate) mod listen;
 pub(crate) mod live;
+pub(crate) mod map;
 pub mod memory;
 pub mod plot;
 #[cfg(feature = "dev")]

@@ -13,6 +13,8 @@ mod engine;
 pub mod error;
 pub mod growth;
 pub mod imu_check;
+pub mod localize;
+pub mod map_build;
 pub mod outcome;
 pub mod pool;
 pub mod prior;

@@ -1,0 +1,166 @@
+//! Localization in a prior map on a host: the map file read whole, the core's
+//! [`Localizer`](kiss_odom_core::localize::Localizer) run after each frame the driver answers,
+//! on the odometry's registration cloud and its motion over the frame.
+//!
+//! The host localizes in `f64` whatever the odometry's scalar (the board runs the core's
+//! localizer in its own). The prior map's room is sized from the file: the tiles within reach
+//! at most, each as full as the fullest tile, so it never drops.
+
+use crate::{Driver, Outcome, Step};
+use anyhow::{anyhow, bail, Context, Result};
+use kiss_odom_core::localize::{
+    tiles_touched, Localizer, Located, PriorCapacities, Settings as LocalizeSettings,
+};
+use kiss_odom_core::prior_map::TileMap;
+use kiss_odom_core::{Config, Exact, Sequential};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use std::path::Path;
+
+/// A pose from `X,Y,Z,ROLL,PITCH,YAW` (metres, degrees; `R = Rz(yaw) Ry(pitch) Rx(roll)`).
+pub fn parse_pose(text: &str) -> Result<Isometry3<f64>> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| anyhow!("{text:?}: expected six numbers X,Y,Z,ROLL,PITCH,YAW"))?;
+    if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
+        bail!("{text:?}: expected six finite numbers X,Y,Z,ROLL,PITCH,YAW (m, degrees)");
+    }
+    let r =
+        UnitQuaternion::from_euler_angles(v[3].to_radians(), v[4].to_radians(), v[5].to_radians());
+    Ok(Isometry3::from_parts(
+        Translation3::new(v[0], v[1], v[2]),
+        r,
+    ))
+}
+
+/// The core's localizer over a map file the process keeps for its lifetime.
+pub struct MapLocalizer {
+    loc: Localizer<'static, f64, Exact, Box<[u64]>>,
+    /// Damaged tiles found so far (each load that met one counts it).
+    pub damaged_tiles: u32,
+    /// Whether the damaged tiles were warned about.
+    damaged_said: bool,
+}
+
+impl MapLocalizer {
+    /// Opens the map at `path` for an odometry configured with `config` (`f64`), in the map
+    /// frame named `frame`, starting at `initial`; `source_points` is the odometry's
+    /// registration cloud capacity. Errors name the file and the reason.
+    pub fn open(
+        path: &Path,
+        frame: &str,
+        config: &Config<f64>,
+        source_points: usize,
+        initial: Isometry3<f64>,
+    ) -> Result<Self> {
+        let bytes = std::fs::read(path)
+            .with_context(|| format!("{}: cannot read the map", path.display()))?;
+        // The map lives as long as the process (a host run holds one map).
+        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        let file = TileMap::open(bytes).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        let h = *file.header();
+        let settings = LocalizeSettings::for_config(config);
+        let held = tiles_touched(settings.reach + 0.5 * h.tile_size, h.tile_size).min(file.len());
+        let points = (held * h.tile_points as usize).max(1);
+        let caps = PriorCapacities {
+            map_voxels: points,
+            map_points: points,
+            source_points: source_points.max(1),
+        };
+        let words = vec![0u64; Localizer::<f64, Exact, Box<[u64]>>::words(&caps)];
+        let loc = Localizer::new(
+            file,
+            frame,
+            config,
+            settings,
+            caps,
+            words.into_boxed_slice(),
+            initial,
+        )
+        .map_err(|e| {
+            anyhow!(
+                "{}: {e} (map: voxel {} m, frame {:?}, tiles of {} m; run: voxel {} m, frame {frame:?})",
+                path.display(),
+                h.voxel_size,
+                h.frame_name(),
+                h.tile_size,
+                config.voxel_size
+            )
+        })?;
+        Ok(Self {
+            loc,
+            damaged_tiles: 0,
+            damaged_said: false,
+        })
+    }
+
+    /// Localizes the frame `outcome` answered: a registered frame by its registration cloud,
+    /// any other by the odometry's motion alone.
+    pub fn locate(&mut self, driver: &Driver, outcome: &Outcome) -> Located<f64> {
+        let source = match outcome.step {
+            Step::Registered(_) => driver.source_cloud(),
+            _ => Vec::new(),
+        };
+        let located = self
+            .loc
+            .locate(&Sequential, &source, &driver.last_delta(), outcome.sigma);
+        if let Some(l) = located.loaded {
+            self.damaged_tiles += l.damaged;
+        }
+        located
+    }
+
+    /// A warning, once, when a damaged tile was skipped.
+    pub fn damaged_warning(&mut self) -> Option<String> {
+        if self.damaged_tiles == 0 || self.damaged_said {
+            return None;
+        }
+        self.damaged_said = true;
+        Some(format!(
+            "the map has a damaged tile (checksum): skipped, its area localizes on the rest \
+             of the map ({} so far)",
+            self.damaged_tiles
+        ))
+    }
+
+    /// Bytes of the localizer's state.
+    pub fn state_bytes(&self) -> usize {
+        self.loc.state_bytes()
+    }
+
+    /// The map file.
+    pub fn file(&self) -> &TileMap<'static> {
+        self.loc.file()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pose_is_six_finite_numbers_in_metres_and_degrees() {
+        let p = parse_pose("1, -2.5, 0.25, 0, 0, 90").unwrap();
+        assert_eq!(p.translation.vector.as_slice(), &[1.0, -2.5, 0.25]);
+        let x = p.rotation * nalgebra::Vector3::x();
+        assert!(
+            (x - nalgebra::Vector3::y()).norm() < 1e-12,
+            "yaw turns x to y"
+        );
+        let q = parse_pose("0,0,0,90,0,0").unwrap().rotation * nalgebra::Vector3::y();
+        assert!(
+            (q - nalgebra::Vector3::z()).norm() < 1e-12,
+            "roll turns y to z"
+        );
+        for bad in [
+            "1,2,3,4,5",
+            "1,2,3,4,5,6,7",
+            "1,2,x,4,5,6",
+            "1,2,3,4,5,inf",
+            "",
+        ] {
+            assert!(parse_pose(bad).is_err(), "{bad}");
+        }
+    }
+}
