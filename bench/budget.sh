@@ -32,7 +32,7 @@ for b in "${budgets[@]}"; do
   for r in "${runs[@]}"; do
     o="$out/$b-$(basename "$r")"
     $B run "$r" --out "$o" -q --threads 1 --set capacities=small --set runtime.scalar=f32 --set runtime.map_storage=quantized \
-      --max-range 50 --voxel-size 1 "${flag[@]}" >/dev/null 2>&1 || true
+      --max-range 50 --set mapping.voxel_size=1 "${flag[@]}" >/dev/null 2>&1 || true
     python3 - "$o" "$b" "$(basename "$r")" <<'P'
 import csv, json, sys
 o, b, r = sys.argv[1:]

@@ -11,7 +11,7 @@
 # `outdoor` on field, urban and fast, `kitti` (no deskew) on kitti-mini; robust mode runs with
 # its vehicle prior everywhere (--set registration.lateral_prior=1: every run is a car's) and its tunnel setting
 # where GenZ-ICP has its corridor preset: every frame with plane terms, r_max / 200 voxels and
-# the hold prior (--set registration.plane_gate=1 --voxel-size 0.5 --set registration.prediction_prior=0.01).
+# the hold prior (--set registration.plane_gate=1 --set mapping.voxel_size=0.5 --set registration.prediction_prior=0.01).
 #
 # The drives are generated into $GEN (default target/bench/degeneracy; kept for reruns).
 # Writes $OUT/results.jsonl (one line per run and system, with the estimated over the true
@@ -35,7 +35,7 @@ for p in $PROFILES; do
   case $p in
     kitti) continue ;;
     corridor | plane | tunnel)
-      preset=corridor fine=(--set registration.lateral_prior=1 --set registration.plane_gate=1 --voxel-size 0.5 --set registration.prediction_prior=0.01) ;;
+      preset=corridor fine=(--set registration.lateral_prior=1 --set registration.plane_gate=1 --set mapping.voxel_size=0.5 --set registration.prediction_prior=0.01) ;;
     *) preset=outdoor fine=(--set registration.lateral_prior=1) ;;
   esac
   for s in $SEEDS; do

@@ -26,7 +26,7 @@ inputs=(
   "kitti02|$DATA/kitti-mini/sequences/02"
   "kitti04|$DATA/kitti-mini/sequences/04"
   "kitti05|$DATA/kitti-mini/sequences/05"
-  "ouster|$OUSTER.pcap --meta $DATA/sensors/ouster/OS-1-128_v2.3.0_1024x10.json"
+  "ouster|$OUSTER.pcap --calibration $DATA/sensors/ouster/OS-1-128_v2.3.0_1024x10.json"
   "urban|$WORK/urban"
   "handheld|$WORK/handheld"
 )

@@ -15,13 +15,13 @@ D=../shared/data/sensors/ouster
 PCAP=$D/OS-1-128_v2.3.0_1024x10_lb_n3.pcap META=$D/OS-1-128_v2.3.0_1024x10.json
 N=${N:-10}
 out=target/bench/live-latency; rm -rf "$out"; mkdir -p "$out"
-$B run "$PCAP" --meta "$META" --out "$out/run" -q >/dev/null
+$B run "$PCAP" --calibration "$META" --out "$out/run" -q >/dev/null
 echo "| rate | replays | sweeps timed | last packet to pose p50 / p99 / max (ms) | core p50 (ms) | packets lost | poses byte-equal to run |"
 echo "|---|---|---|---|---|---|---|"
 for rate in 1 5; do
   for i in $(seq "$N"); do
     o="$out/r$rate-$i"
-    $B live --udp 127.0.0.1:17999 --meta "$META" --out "$o" -q --idle-timeout 1 >/dev/null &
+    $B live --udp 127.0.0.1:17999 --calibration "$META" --out "$o" -q --idle-timeout 1 >/dev/null &
     live=$!
     # Listening once the port is taken.
     while python3 -c 'import socket; socket.socket(socket.AF_INET, socket.SOCK_DGRAM).bind(("127.0.0.1", 17999))' 2>/dev/null; do sleep 0.05; done

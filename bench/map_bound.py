@@ -21,7 +21,7 @@ Two tables, each a Markdown table on stdout:
     python3 bench/map_bound.py filled BIN OLD_BIN PYTHON DRIVER DATASET...
 
 DATASET: a generic or KITTI folder `run` reads; `@ARGS` after it (one word, comma-separated)
-adds `run` flags, e.g. `dir@--meta,x.json`. Outputs go to $OUT (default target/bench/map-bound/runs).
+adds `run` flags, e.g. `dir@--calibration,x.json`. Outputs go to $OUT (default target/bench/map-bound/runs).
 """
 
 import json

@@ -45,9 +45,9 @@ O=$S/ouster
 status=0
 python3 bench/map_bound.py defaults $B "$PY" tests/reference/driver.py \
   $K/01 $K/02 $K/04 $K/05 \
-  "$O/OS-0-32-U1_v2.2.0_1024x10.pcap@--meta,$O/OS-0-32-U1_v2.2.0_1024x10.json" \
-  "$O/OS-1-32-G_v2.1.1_1024x10.pcap@--meta,$O/OS-1-32-G_v2.1.1_1024x10.json" \
-  "$O/OS-1-128_v2.3.0_1024x10_lb_n3.pcap@--meta,$O/OS-1-128_v2.3.0_1024x10.json" \
+  "$O/OS-0-32-U1_v2.2.0_1024x10.pcap@--calibration,$O/OS-0-32-U1_v2.2.0_1024x10.json" \
+  "$O/OS-1-32-G_v2.1.1_1024x10.pcap@--calibration,$O/OS-1-32-G_v2.1.1_1024x10.json" \
+  "$O/OS-1-128_v2.3.0_1024x10_lb_n3.pcap@--calibration,$O/OS-1-128_v2.3.0_1024x10.json" \
   $S/velodyne/velodyne_vlp16.pcap $S/velodyne/velodyne_vlp32.pcap \
   $S/hesai/hesai-xt32-small.pcap $S/livox/livox_tele15_small.pcap \
   "${PROFILES[@]}" || status=1

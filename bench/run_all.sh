@@ -138,9 +138,9 @@ if has small; then
     esac
     log "small vs full on $ds"
     "$BIN" run "$path" --quiet --threads 1 --out "$OUT/small/$ds-full"
-    "$BIN" run "$path" --quiet --threads 1 --max-range 50 --voxel-size 1 \
+    "$BIN" run "$path" --quiet --threads 1 --max-range 50 --set mapping.voxel_size=1 \
       --out "$OUT/small/$ds-full-50m"
-    "$BIN" run "$path" --quiet --threads 1 --max-range 50 --voxel-size 1 \
+    "$BIN" run "$path" --quiet --threads 1 --max-range 50 --set mapping.voxel_size=1 \
       --set capacities=small --set runtime.scalar=f32 --set runtime.map_storage=quantized --out "$OUT/small/$ds-small"
   done
 fi

@@ -31,7 +31,7 @@ for spec in "${specs[@]}"; do
     [ -f "$d/sim.toml" ] || $B simulate --out "$d" --frames "$FRAMES" --seed "$seed" \
       --profile "$2" --sensor "$1" --format pcap --overwrite >/dev/null
     case $1 in
-      os1-64) src=(--meta "$d/packets.json") ;;
+      os1-64) src=(--calibration "$d/packets.json") ;;
       # Livox frames by time, found by port; the XT32 by its packets, sweeps by azimuth
       # coverage: nothing to give.
       mid360|avia|xt32) src=() ;;

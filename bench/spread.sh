@@ -27,7 +27,7 @@ mkdir -p "$OUT"
 for f in 1 1.0000001 0.9999999 1.000001 0.999999 1.00001 0.99999; do
   v=$(python3 -c "print(${PRESET_VOXEL:-0.5} * $f)")
   g=$(python3 -c "print(${GENZ_VOXEL:-0.6} * $f)")
-  gt=$(ours "$f" "$data" accurate --preset accurate --voxel-size "$v")
+  gt=$(ours "$f" "$data" accurate --preset accurate --set "mapping.voxel_size=$v")
   genz "$f" "$data" "$preset" "$gt" --set "voxel_size=$g" "${genz_args[@]}"
 done
 python3 -c '

@@ -13,10 +13,16 @@
 //!    (level ground fits whatever the horizontal error), and the registration's conditioning
 //!    (the observability ratio);
 //! 5. judge it ([`State`]): a good share and conditioning moves the pose to the registration;
-//!    a fair share moves it too, degraded; else the pose is the prediction, degraded, until
-//!    `lost_after_m` metres or `lost_after_frames` frames have passed without a fix: lost.
+//!    a fair share moves it too (in a long aisle the map measures the pose across it, not
+//!    along), degraded; else the pose is the prediction, degraded, until `lost_after_m` metres
+//!    or `lost_after_frames` frames have passed without a fix (a good share at a quarter of the
+//!    conditioning counts: an open field measures the pose weakly, which does not confirm it
+//!    but keeps it from drifting): lost. A pose not yet confirmed
+//!    by a good registration (the start, a reseed, the search's answer) is lost after
+//!    `confirm_frames` frames in a row whose share is not good.
 //!    Lost runs the bounded search (`search`) around the dead-reckoned pose, a few starts per
-//!    frame; its answer is confirmed by `confirm_frames` good frames before the state says
+//!    frame, while a fair fit from the prediction still moves the pose (and a good one ends
+//!    the search); its answer is confirmed by `confirm_frames` good frames before the state says
 //!    localized again. [`Localizer::reseed`] takes a pose from the user instead.
 //!
 //! Storage: the prior map (its voxels and points) and ICP's work, in one run of words sized by
@@ -81,11 +87,13 @@ pub struct Settings<T: Real> {
     pub min_observability: T,
     /// The registration's gate never below this (m): 3 voxels.
     pub gate_floor: T,
-    /// Good frames that confirm a fix from the search or the start (3).
+    /// Good frames that confirm a fix from the search or the start (3); as many frames
+    /// without a good registration lose a pose never confirmed.
     pub confirm_frames: u32,
-    /// Travel without a fix after which the state is lost (m): 20.
+    /// Travel without a fix after which the state is lost (m): 50, where an odometry that
+    /// drifts 2 % of the distance (twice KISS-ICP's on KITTI) is 1 m off.
     pub lost_after_m: T,
-    /// Frames without a fix after which the state is lost: 20.
+    /// Frames without a fix after which the state is lost: 600 (a minute at 10 Hz).
     pub lost_after_frames: u32,
     /// Starts of the search registered per frame (16: the grid in 22 frames).
     pub search_per_frame: u32,
@@ -104,8 +112,8 @@ impl<T: Real> Settings<T> {
             min_observability: config.degeneracy_ratio,
             gate_floor: config.voxel_size * T::of(3.0),
             confirm_frames: 3,
-            lost_after_m: T::of(20.0),
-            lost_after_frames: 20,
+            lost_after_m: T::of(50.0),
+            lost_after_frames: 600,
             search_per_frame: 16,
             search_margin: T::of(0.1),
         }
@@ -176,6 +184,8 @@ pub struct Located<T: Real> {
     pub recovered: bool,
     /// Voxels of the prior map held.
     pub map_voxels: u32,
+    /// Points of the prior map held.
+    pub map_points: u32,
 }
 
 /// Localization in a prior map over storage it owns or borrows (see [`crate::storage`]).
@@ -194,6 +204,10 @@ pub struct Localizer<'m, T: Real, P: PointCodec<T>, S: Storage> {
     confirmed: u32,
     /// Travel and frames since the last fix.
     since_fix: (T, u32),
+    /// A good registration since the start, the last reseed or the search's answer.
+    fixed: bool,
+    /// Frames in a row whose inlier share was below the good one.
+    misfits: u32,
     search: Option<Search<T>>,
     _codec: PhantomData<P>,
 }
@@ -277,6 +291,8 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
             state: State::Degraded,
             confirmed: 0,
             since_fix: (T::zero(), 0),
+            fixed: false,
+            misfits: 0,
             search: None,
             _codec: PhantomData,
         };
@@ -312,6 +328,8 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         self.state = State::Degraded;
         self.confirmed = 0;
         self.since_fix = (T::zero(), 0);
+        self.fixed = false;
+        self.misfits = 0;
         self.search = None;
     }
 
@@ -346,16 +364,24 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
             searched: 0,
             recovered: false,
             map_voxels: self.map.voxels() as u32,
+            map_points: self.map.points() as u32,
         };
         let step = motion.translation.vector.norm();
-        if self.state == State::Lost {
+        let gate = (T::of(3.0) * sigma).max(self.settings.gate_floor);
+        let (pose, share, obs) = self.register(exec, source, &predicted, gate);
+        out.inlier_share = share;
+        out.observability = obs;
+        out.correction = (pose.translation.vector - t).norm();
+        let s = &self.settings;
+        let good = share >= s.good_share && obs.is_some_and(|o| o >= s.min_observability);
+        if self.state == State::Lost && !good {
+            // Lost: the map's fair fit still moves the pose, and the search runs on.
+            if share >= s.fair_share {
+                out.pose = pose;
+            }
             self.search_step(exec, source, &predicted, &mut out);
         } else {
-            let gate = (T::of(3.0) * sigma).max(self.settings.gate_floor);
-            let (pose, share, obs) = self.register(exec, source, &predicted, gate);
-            out.inlier_share = share;
-            out.observability = obs;
-            out.correction = (pose.translation.vector - t).norm();
+            self.search = None;
             self.judge(pose, share, obs, step, &mut out);
         }
         self.pose = out.pose;
@@ -370,6 +396,8 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         if share >= s.good_share && conditioned {
             out.pose = pose;
             self.since_fix = (T::zero(), 0);
+            self.fixed = true;
+            self.misfits = 0;
             self.confirmed = self.confirmed.saturating_add(1);
             out.state = if self.confirmed >= s.confirm_frames {
                 State::Localized
@@ -379,11 +407,28 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
             return;
         }
         self.confirmed = 0;
-        if share >= s.fair_share && conditioned {
+        // A fair fit moves the pose where the map measures it (in a long aisle, across it).
+        if share >= s.fair_share {
             out.pose = pose;
         }
-        self.since_fix = (self.since_fix.0 + step, self.since_fix.1.saturating_add(1));
-        let lost = self.since_fix.0 > s.lost_after_m || self.since_fix.1 > s.lost_after_frames;
+        // A good fit the map conditions weakly (an open field) keeps the pose from drifting
+        // away: no confirmation, but no time lost either.
+        let weak = s.min_observability * T::of(0.25);
+        if share >= s.good_share && obs.is_some_and(|o| o >= weak) {
+            self.since_fix = (T::zero(), 0);
+        } else {
+            self.since_fix = (self.since_fix.0 + step, self.since_fix.1.saturating_add(1));
+        }
+        self.misfits = if share >= s.good_share {
+            0
+        } else {
+            self.misfits.saturating_add(1)
+        };
+        // Without a fix, the pose drifts as the odometry does; a pose never confirmed (the
+        // start, a reseed, the search's answer) that the map does not fit is no pose at all.
+        let lost = self.since_fix.0 > s.lost_after_m
+            || self.since_fix.1 > s.lost_after_frames
+            || (!self.fixed && self.misfits >= s.confirm_frames);
         out.state = if lost { State::Lost } else { State::Degraded };
         if lost {
             self.search = Some(Search::new());
@@ -423,6 +468,8 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
                 out.recovered = true;
                 self.confirmed = 0;
                 self.since_fix = (T::zero(), 0);
+                self.fixed = false;
+                self.misfits = 0;
                 self.search = None;
                 return;
             }

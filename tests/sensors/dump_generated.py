@@ -1,9 +1,9 @@
 """Decodes one pcap that `kiss-odom simulate --format pcap` wrote with the independent
 references, for tests/tests/sensors_simulated.rs to compare with the simulator's exact points.
 
-  python dump_generated.py PCAP OUT.bin [--meta JSON] [--cut DEG]
+  python dump_generated.py PCAP OUT.bin [--metadata JSON] [--cut DEG]
 
-With --meta, ouster-sdk decodes it (as `ouster` in dump_reference.py); otherwise
+With --metadata, ouster-sdk decodes it (as `ouster` in dump_reference.py); otherwise
 velodyne-decoder does (as `velodyne` there, cut at --cut degrees). OUT.bin gets the records of
 dump_reference.RECORD; OUT.json the per-sweep point counts.
 """
@@ -21,12 +21,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("pcap", type=Path)
     ap.add_argument("out", type=Path)
-    ap.add_argument("--meta", type=Path)
+    ap.add_argument("--metadata", type=Path)
     ap.add_argument("--cut", type=float)
     a = ap.parse_args()
     pcap = a.pcap.resolve()
-    if a.meta:
-        rec, counts, extra = dump_reference.ouster(pcap, a.meta.resolve())
+    if a.metadata:
+        rec, counts, extra = dump_reference.ouster(pcap, a.metadata.resolve())
     else:
         rec, counts, extra = dump_reference.velodyne(pcap, a.cut)
     rec.tofile(a.out)

@@ -111,7 +111,12 @@ fn ate(data: &Path, r: &common::Run) -> f64 {
     ignore = "heavy: cargo test --release --test workspace degeneracy::"
 )]
 fn robust_mode_follows_a_tunnel_where_reference_mode_stays_stuck() {
-    let tunnel = ["--set", "registration.plane_gate=1", "--voxel-size", "0.5"];
+    let tunnel = [
+        "--set",
+        "registration.plane_gate=1",
+        "--set",
+        "mapping.voxel_size=0.5",
+    ];
     let (robust, reference) = robust_and_reference("tunnel", 80, &tunnel, worst_error);
     println!(
         "tunnel, 80 frames: worst position error robust {robust:.3} m (tol: a fifth of \
@@ -155,7 +160,12 @@ fn with_the_vehicle_prior_robust_mode_learns_a_corridors_speed() {
     // changes on a straight, nothing tells), while reference mode stays stuck and plane terms
     // alone step along the axis at random.
     let frames = 160;
-    let tunnel = ["--set", "registration.plane_gate=1", "--voxel-size", "0.5"];
+    let tunnel = [
+        "--set",
+        "registration.plane_gate=1",
+        "--set",
+        "mapping.voxel_size=0.5",
+    ];
     let vehicle = [
         "--set",
         "registration.lateral_prior=1",

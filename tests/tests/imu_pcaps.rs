@@ -53,7 +53,7 @@ fn prior_from_the_pcap(sensor: &str, profile: &str, seed: &str) {
     let meta = sim.join("packets.json");
     let mut flags = vec![];
     if sensor == "os1-64" {
-        flags.extend(["--meta", meta.to_str().unwrap()]);
+        flags.extend(["--calibration", meta.to_str().unwrap()]);
     }
     let with = [&flags[..], &["--imu", "auto"]].concat();
     let on = run(&pcap, &tmp.path().join("on"), &with);

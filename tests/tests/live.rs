@@ -56,7 +56,7 @@ fn free_address() -> String {
     probe.local_addr().unwrap().to_string()
 }
 
-/// `kiss-odom live` on `addr` with the sensor's options (`--meta` for an Ouster, `--sensor`;
+/// `kiss-odom live` on `addr` with the sensor's options (`--calibration` for an Ouster, `--sensor`;
 /// none: Velodyne), started and listening.
 fn live(addr: &str, sensor: &[&str], out: &Path, extra: &[&str]) -> Child {
     let mut child = bin()
@@ -135,7 +135,7 @@ fn live_fed_by_replay_at_the_recorded_pace_gives_runs_poses_byte_for_byte() {
     };
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
-    let (ran, lived, o) = run_and_live(&pcap, &["--meta", s(&meta)], dir.path(), "1");
+    let (ran, lived, o) = run_and_live(&pcap, &["--calibration", s(&meta)], dir.path(), "1");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(
         summary(&lived)["packets"]["lost"],
@@ -215,7 +215,7 @@ fn at_five_times_the_pace_any_loss_is_counted_and_the_run_goes_on() {
     };
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
-    let (ran, lived, o) = run_and_live(&pcap, &["--meta", s(&meta)], dir.path(), "5");
+    let (ran, lived, o) = run_and_live(&pcap, &["--calibration", s(&meta)], dir.path(), "5");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     let lost = summary(&lived)["packets"]["lost"].as_u64().unwrap();
@@ -251,7 +251,7 @@ fn packets_missing_from_the_stream_are_counted_in_their_sweep() {
     }
     let holed = dir.path().join("holed.pcap");
     pcap::write(&holed, &datagrams, 9000).unwrap();
-    let (ran, lived, o) = run_and_live(&holed, &["--meta", s(&meta)], dir.path(), "1");
+    let (ran, lived, o) = run_and_live(&holed, &["--calibration", s(&meta)], dir.path(), "1");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let lost = summary(&lived)["packets"]["lost"].as_u64().unwrap();
     assert!(lost >= 5, "{lost} lost");
@@ -312,9 +312,9 @@ fn sigint_ends_live_with_its_outputs_written() {
     let _serial = serial();
     let dir = tempfile::tempdir().unwrap();
     let (ran, out) = (dir.path().join("run"), dir.path().join("live"));
-    run(&pcap, &["--meta", s(&meta)], &ran);
+    run(&pcap, &["--calibration", s(&meta)], &ran);
     let addr = free_address();
-    let mut child = live(&addr, &["--meta", s(&meta)], &out, &[]);
+    let mut child = live(&addr, &["--calibration", s(&meta)], &out, &[]);
     let (printed, reader) = printed_lines(&mut child);
     replay(&pcap, &addr, "1");
     // Two sweeps done (their poses printed); the third is open until the signal ends it.
@@ -462,7 +462,7 @@ fn no_packets_on_the_port_is_an_error_naming_the_address() {
     let out = dir.path().join("live");
     let child = live(
         &addr,
-        &["--meta", s(&meta)],
+        &["--calibration", s(&meta)],
         &out,
         &["--idle-timeout", "0.5"],
     );

@@ -26,6 +26,7 @@ mod layouts;
 mod listen_poses;
 mod live;
 mod livox_bags;
+mod localize;
 mod map_build;
 mod metrics;
 mod nebula_reading;

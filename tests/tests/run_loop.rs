@@ -142,7 +142,10 @@ fn a_setting_out_of_range_is_named_in_the_error() {
             &["--config", config.to_str().unwrap()],
             "registration.kernel_scale = 0.0",
         ),
-        (&["--voxel-size", "-1"], "mapping.voxel_size = -1.0"),
+        (
+            &["--set", "mapping.voxel_size=-1"],
+            "mapping.voxel_size = -1.0",
+        ),
         (&["--set", "data.min_range=200"], "data.min_range = 200.0"),
         (&["--max-range", "0"], "data.max_range = 0.0"),
     ];
@@ -213,7 +216,11 @@ fn json_outputs_of_bench_and_crosscheck_do_not_survive_a_failed_command() {
 #[test]
 fn a_huge_voxel_marks_frames_degenerate_in_frames_csv_and_summary() {
     let dir = tempfile::tempdir().unwrap();
-    let r = run(&sample(), &dir.path().join("out"), &["--voxel-size", "1e6"]);
+    let r = run(
+        &sample(),
+        &dir.path().join("out"),
+        &["--set", "mapping.voxel_size=1e6"],
+    );
     r.succeeded_with_frames(10);
     let rows = r.rows();
     for row in &rows {
@@ -491,7 +498,7 @@ fn nan_and_inf_settings_are_refused_naming_the_setting() {
     let dir = tempfile::tempdir().unwrap();
     let config = dir.path().join("nan.toml");
     std::fs::write(&config, "[data]\nmax_range = nan\n").unwrap();
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 4] = [
         (
             &["--config", config.to_str().unwrap()],
             "data.max_range = nan",
@@ -500,7 +507,11 @@ fn nan_and_inf_settings_are_refused_naming_the_setting() {
             &["--set", "registration.plane_gate=inf"],
             "registration.plane_gate = inf",
         ),
-        (&["--voxel-size", "NaN"], "mapping.voxel_size = nan"),
+        (
+            &["--set", "mapping.voxel_size=nan"],
+            "mapping.voxel_size = nan",
+        ),
+        (&["--max-range", "NaN"], "data.max_range = nan"),
     ];
     for (flags, named) in cases {
         let r = run(&sample(), &dir.path().join("out"), flags);

@@ -142,7 +142,7 @@ fn metadata_of_another_sensor_names_both_files() {
         &SensorOptions::default(),
     );
     assert!(
-        e.contains("look like an Ouster") && e.contains("--meta"),
+        e.contains("look like an Ouster") && e.contains("--calibration"),
         "{e}"
     );
 }

@@ -279,7 +279,7 @@ fn a_reused_ip_id_never_completes_another_datagram() {
         let r = run(
             &path,
             &dir.path().join(name),
-            &["--meta", s(opts.meta.as_ref().unwrap())],
+            &["--calibration", s(opts.meta.as_ref().unwrap())],
         );
         r.ok();
         r.warning_with(&[&format!("reused-{name}.pcap"), warning]);
@@ -296,7 +296,7 @@ fn fragments_that_never_complete_are_counted_and_warned() {
     let r = run(
         &path,
         &dir.path().join("out"),
-        &["--meta", s(opts.meta.as_ref().unwrap())],
+        &["--calibration", s(opts.meta.as_ref().unwrap())],
     );
     r.ok();
     r.warning_with(&["lossy.pcap", "20 fragmented IP datagram(s) dropped"]);

@@ -183,7 +183,7 @@ fn ouster_metadata_contradicting_itself_or_the_packets_is_refused_naming_the_fie
     let good = run(
         &pcap,
         &dir.path().join("good"),
-        &["--meta", s(&sim.join("packets.json"))],
+        &["--calibration", s(&sim.join("packets.json"))],
     );
     good.ok();
     type Edit = fn(&mut serde_json::Value);
@@ -227,7 +227,7 @@ fn ouster_metadata_contradicting_itself_or_the_packets_is_refused_naming_the_fie
         edit(&mut m);
         let path = dir.path().join(format!("{name}.json"));
         std::fs::write(&path, serde_json::to_string_pretty(&m).unwrap()).unwrap();
-        let r = run(&pcap, &dir.path().join(name), &["--meta", s(&path)]);
+        let r = run(&pcap, &dir.path().join(name), &["--calibration", s(&path)]);
         r.failed_with(&[&format!("{name}.json"), field]);
     }
 }
@@ -305,7 +305,7 @@ fn an_ouster_frame_id_far_ahead_or_a_restart_resynchronises_with_a_warning() {
     let base = run(
         &sim.join("packets.pcap"),
         &dir.path().join("base"),
-        &["--meta", s(&meta)],
+        &["--calibration", s(&meta)],
     );
     base.ok();
     // One packet of the second sweep says frame id + 1000; or the sensor restarts after the
@@ -328,7 +328,7 @@ fn an_ouster_frame_id_far_ahead_or_a_restart_resynchronises_with_a_warning() {
         let mut d = d.clone();
         edit(&mut d);
         let path = capture(dir.path(), &format!("{name}.pcap"), &d);
-        let r = run(&path, &dir.path().join(name), &["--meta", s(&meta)]);
+        let r = run(&path, &dir.path().join(name), &["--calibration", s(&meta)]);
         r.ok();
         r.warning_with(&[&format!("{name}.pcap"), "resynchronised"]);
         assert!(

@@ -65,7 +65,7 @@ fn worst_of(a: &[Isometry3<f64>], b: &[Isometry3<f64>]) -> (f64, f64) {
 /// `run` on the OS-1-128 recording with `extra` flags.
 fn run_os1(dir: &Path, name: &str, extra: &[&str]) -> Vec<Isometry3<f64>> {
     let (pcap, meta) = os1_128();
-    let mut args = vec!["--meta", arg(&meta)];
+    let mut args = vec!["--calibration", arg(&meta)];
     args.extend_from_slice(extra);
     let r = run(&pcap, &dir.join(name), &args);
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -253,18 +253,18 @@ fn bad_recordings_stop_run_with_the_file_and_the_reason() {
     let bytes = std::fs::read(&pcap).unwrap();
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     let cases: [(&Path, Vec<&str>, &str); 4] = [
-        (&cut, vec!["--meta", arg(&meta)], "cut in the middle"),
+        (&cut, vec!["--calibration", arg(&meta)], "cut in the middle"),
         (
             &pcap,
-            vec!["--meta", arg(&other_meta)],
+            vec!["--calibration", arg(&other_meta)],
             "the metadata of this sensor",
         ),
         (
             &pcap,
-            vec!["--meta", arg(&meta), "--set", "input.port=9999"],
+            vec!["--calibration", arg(&meta), "--set", "input.port=9999"],
             "no packets on port 9999",
         ),
-        (&pcap, vec![], "give its metadata JSON (--meta)"),
+        (&pcap, vec![], "give its metadata JSON (--calibration)"),
     ];
     for (k, (file, extra, reason)) in cases.iter().enumerate() {
         let r = run(file, &dir.path().join(format!("out{k}")), extra);
@@ -290,7 +290,7 @@ fn convert_writes_the_decoded_sweeps_to_float32_rounding_and_run_reads_them_back
         [
             "convert",
             arg(&pcap),
-            "--meta",
+            "--calibration",
             arg(&meta),
             "--out",
             arg(&out),
@@ -392,7 +392,7 @@ fn the_gyroscope_prior_on_the_os1_128_uses_its_imu_packets_and_stays_at_ouster_s
         &pcap,
         &dir.path().join("imu"),
         &[
-            "--meta",
+            "--calibration",
             arg(&meta),
             "--set",
             "output.pose_time=middle",

@@ -433,7 +433,7 @@ fn references_decode_generated_packets_to_the_simulated_points() {
         let mut cmd = Command::new(&python);
         cmd.arg(&script).arg(d.join("packets.pcap")).arg(&out);
         if case.ouster() {
-            cmd.arg("--meta").arg(d.join("packets.json"));
+            cmd.arg("--metadata").arg(d.join("packets.json"));
         } else {
             cmd.args(["--cut", "0"]);
         }
@@ -527,7 +527,7 @@ fn run_on_a_generated_pcap_tracks_as_well_as_on_the_direct_points() {
             let flags = ["-q", "--set", deskew, "--out"].map(OsStr::new);
             let mut head = vec![OsStr::new("run"), recording.as_os_str()];
             if case.ouster() {
-                head.extend([OsStr::new("--meta"), meta.as_os_str()]);
+                head.extend([OsStr::new("--calibration"), meta.as_os_str()]);
             }
             cli(&[&head[..], &flags[..], &[pcap.as_os_str()]].concat());
             cli(&[

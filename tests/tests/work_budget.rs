@@ -17,8 +17,8 @@ const SMALL: [&str; 10] = [
     "runtime.map_storage=quantized",
     "--max-range",
     "50",
-    "--voxel-size",
-    "1",
+    "--set",
+    "mapping.voxel_size=1",
 ];
 
 fn simulate(dir: &Path, profile: &str, seed: &str, frames: &str) -> PathBuf {

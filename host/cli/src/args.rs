@@ -70,33 +70,65 @@ pub struct InputArgs {
 /// How to decode sensor packets (a pcap recording, `live`).
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct SensorArgs {
-    /// The sensor of a pcap recording; `auto`: Ouster if `--meta` is given, else Velodyne
-    /// with the model the packets name, or Hesai or Livox if their packets are there instead.
+    /// The sensor of a pcap recording; `auto`: Ouster if `--calibration` is its metadata
+    /// JSON, else Velodyne with the model the packets name, or Hesai or Livox if their packets
+    /// are there instead.
     #[arg(long, value_enum, default_value_t = SensorKind::Auto)]
     pub sensor: SensorKind,
-    /// Ouster metadata JSON (as `ouster-cli` saves it beside a recording); Ouster needs it.
-    #[arg(long)]
-    pub meta: Option<PathBuf>,
-    /// Velodyne calibration (XML or YAML), Hesai angle correction file (CSV), Robosense
-    /// angle.csv; without one, the model's published angles (the QT128, Pandar128, OT128,
-    /// HDL-64E, VLS-128 and VLP-32A/B have none: they need it; a Robosense takes the
-    /// recording's DIFOP packet).
+    /// The sensor's own file: Ouster metadata JSON (as `ouster-cli` saves it beside a
+    /// recording; an Ouster needs it), Velodyne calibration (XML or YAML), Hesai angle
+    /// correction file (CSV; AT128: .dat), Robosense angle.csv; without one, the model's
+    /// published angles (the QT128, Pandar128, OT128, HDL-64E, VLS-128 and VLP-32A/B have
+    /// none: they need it; a Robosense takes the recording's DIFOP packet).
     #[arg(long)]
     pub calibration: Option<PathBuf>,
 }
 
 impl SensorArgs {
-    /// The decoder's options, with the settings' `[input]` (port, sweep cut, frame period).
+    /// The decoder's options, with the settings' `[input]` (port, sweep cut, frame period);
+    /// `--calibration` is the Ouster metadata under `--sensor ouster`, or under `auto` when it
+    /// is a JSON file ([`is_json`]), else the other sensors' calibration.
     pub fn options(&self, input: &Input) -> SensorOptions {
+        let ouster = |file: &PathBuf| match self.sensor {
+            SensorKind::Ouster => true,
+            SensorKind::Auto => is_json(file),
+            _ => false,
+        };
+        let (meta, calibration) = match &self.calibration {
+            Some(file) if ouster(file) => (Some(file.clone()), None),
+            file => (None, file.clone()),
+        };
         SensorOptions {
             sensor: self.sensor,
             port: input.port,
-            meta: self.meta.clone(),
-            calibration: self.calibration.clone(),
+            meta,
+            calibration,
             cut_angle_deg: input.cut_angle,
             frame_period_s: input.frame_period,
         }
     }
+}
+
+/// Whether `file` is a JSON document, as an Ouster's metadata is and no other sensor's
+/// calibration (XML, YAML, CSV or the AT128's binary .dat): a `.json` name (read or not, the
+/// Ouster reader then names its fault), else a first non-blank byte `{`.
+pub fn is_json(file: &Path) -> bool {
+    use std::io::Read;
+    if file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
+        return true;
+    }
+    let mut head = [0; 256];
+    std::fs::File::open(file)
+        .and_then(|mut f| f.read(&mut head))
+        .is_ok_and(|n| {
+            head[..n]
+                .iter()
+                .find(|b| !b.is_ascii_whitespace())
+                .is_some_and(|b| *b == b'{')
+        })
 }
 
 impl InputArgs {
@@ -137,12 +169,10 @@ pub struct PipelineArgs {
     /// or `accurate` (lower error at one to three times the time) [default: default].
     #[arg(long, value_enum)]
     pub preset: Option<PresetName>,
-    /// Maximum range r_max (m) [default: 100].
+    /// Maximum range r_max (m); the map's voxel follows it unless `mapping.voxel_size` is set
+    /// [default: 100].
     #[arg(long, allow_negative_numbers = true)]
     pub max_range: Option<f64>,
-    /// Map voxel size v (m) [default: max_range / 100].
-    #[arg(long, allow_negative_numbers = true)]
-    pub voxel_size: Option<f64>,
     /// The gyroscope prior: `auto` (the recording's IMU), an imu.csv FILE, a bag's IMU TOPIC,
     /// or `off`, the reference's constant-velocity prediction (the book's "Fast motion")
     /// [default: off].
@@ -235,9 +265,6 @@ pub fn apply(s: &mut Settings, p: &PipelineArgs, c: &CoreArgs) -> Result<()> {
     if let Some(r) = p.max_range {
         s.data.max_range = r;
     }
-    if let Some(v) = p.voxel_size {
-        s.mapping.voxel_size = Some(v);
-    }
     if let Some(m) = &p.imu {
         s.imu.enabled = *m != ImuMode::Off;
     }
@@ -269,7 +296,7 @@ pub(crate) fn resolve(argv: &[&str], threads: Option<usize>) -> Result<Settings>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
+    use clap::{CommandFactory, Parser};
 
     #[derive(Parser)]
     struct Wrap {
@@ -370,5 +397,64 @@ mod tests {
         let e = ImuMode::recording_only(Some(&parse("/imu")), "live").unwrap_err();
         assert!(e.to_string().contains("not a topic (/imu)"), "{e}");
         assert!(ImuMode::recording_only(Some(&ImuMode::Auto), "live").is_ok());
+    }
+
+    #[test]
+    fn calibration_is_the_ouster_metadata_when_it_is_json_or_the_sensor_is_ouster() {
+        #[derive(Parser)]
+        struct Sensor {
+            #[command(flatten)]
+            sensor: SensorArgs,
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            path.to_str().unwrap().to_string()
+        };
+        let json = file("os.txt", " \n\t{\"sensor_info\": {}}");
+        let yaml = file("vlp32.yaml", "lasers:\n- {laser_id: 0}\n");
+        let xml = file("hdl64.xml", "<?xml version=\"1.0\"?>");
+        let csv = file("angle.csv", "Laser id,Elevation,Azimuth\n");
+        let dat = file("at128.dat", "\u{ee}\u{ff}");
+        let missing = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+        let (missing_json, missing_csv) = (missing("os.json"), missing("angle.csv"));
+        let empty_json = file("empty.json", "");
+        let is_meta = |argv: &[&str]| {
+            let s =
+                Sensor::try_parse_from(std::iter::once("x").chain(argv.iter().copied())).unwrap();
+            let o = s.sensor.options(&Input::default());
+            assert_ne!(o.meta.is_some(), o.calibration.is_some(), "{argv:?}");
+            o.meta.is_some()
+        };
+        for (argv, meta) in [
+            (vec!["--calibration", &json], true),
+            (vec!["--calibration", &missing_json], true),
+            (vec!["--calibration", &empty_json], true),
+            (vec!["--calibration", &yaml], false),
+            (vec!["--calibration", &xml], false),
+            (vec!["--calibration", &csv], false),
+            (vec!["--calibration", &dat], false),
+            (vec!["--calibration", &missing_csv], false),
+            (vec!["--sensor", "ouster", "--calibration", &csv], true),
+            (vec!["--sensor", "vlp32ab", "--calibration", &json], false),
+        ] {
+            assert_eq!(is_meta(&argv), meta, "{argv:?}");
+        }
+        let none = Sensor::try_parse_from(["x"])
+            .unwrap()
+            .sensor
+            .options(&Input::default());
+        assert!(none.meta.is_none() && none.calibration.is_none());
+        let command = Sensor::command();
+        let names: Vec<_> = command
+            .get_arguments()
+            .filter_map(|a| a.get_long())
+            .collect();
+        assert_eq!(
+            names,
+            ["sensor", "calibration"],
+            "one option for the sensor's file"
+        );
     }
 }

@@ -26,8 +26,8 @@ use std::path::{Path, PathBuf};
 /// `kiss-odom convert` arguments.
 #[derive(Debug, clap::Args)]
 pub struct ConvertArgs {
-    /// Recording: a .pcap/.pcapng (with --meta for Ouster), a .bag, an .mcap, a ROS 2 bag (its
-    /// folder or a .db3) or a folder.
+    /// Recording: a .pcap/.pcapng (with --calibration for Ouster), a .bag, an .mcap, a ROS 2 bag
+    /// (its folder or a .db3) or a folder.
     pub path: PathBuf,
     /// Output folder; its `velodyne/` and `timestamps/` must be empty or missing, and it must
     /// have no `times.txt` or `imu.csv` (nothing there is replaced).

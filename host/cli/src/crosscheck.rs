@@ -241,10 +241,6 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
             .map(|v| v.get_name().to_string()),
     );
     flag(
-        "meta",
-        sensor.meta.as_ref().map(|m| m.display().to_string()),
-    );
-    flag(
         "calibration",
         sensor.calibration.as_ref().map(|m| m.display().to_string()),
     );
@@ -261,7 +257,6 @@ pub fn command_of(args: &CrosscheckArgs) -> String {
         flag("set", Some(a.clone()));
     }
     flag("max-range", p.max_range.map(|v| v.to_string()));
-    flag("voxel-size", p.voxel_size.map(|v| v.to_string()));
     c
 }
 

@@ -64,13 +64,7 @@ mod tests {
             help(DevCli::command(), "crosscheck"),
         );
         for h in [&run, &bench, &cross] {
-            for flag in [
-                "--frames",
-                "--max-range",
-                "--voxel-size",
-                "--set",
-                "--threads",
-            ] {
+            for flag in ["--frames", "--max-range", "--set", "--threads"] {
                 assert!(h.contains(flag), "{flag} missing:\n{h}");
             }
         }

@@ -28,6 +28,7 @@ pub(crate) use record::{FrameRow, Record, RowKind};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::Flag;
+use kiss_odom_drive::localize::{parse_pose, MapLocalizer};
 use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, PriorWarnings, Step};
 use kiss_odom_io::write::outputs::Earlier;
 use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
@@ -72,14 +73,15 @@ pub(crate) fn execute_on(
     let output = &settings.output;
     let inputs = inputs(args);
     viz::check(&args.view, output, &inputs)?;
-    // The sensor files are read while the input opens; `--config` is read by now, and
+    // The sensor's file is read while the input opens; `--config` is read by now, and
     // `config.toml` is the settings it gave, written back.
     for name in OUTPUTS {
-        kiss_odom_io::write::refuse_input(&args.run.out.join(name), &inputs[1..3])?;
+        kiss_odom_io::write::refuse_input(&args.run.out.join(name), &inputs[1..2])?;
     }
     // Only the files an earlier command wrote there are replaced; any other refuses the run.
     let earlier = Earlier::check(&args.run.out, &OUTPUTS)?;
     let mut driver = Driver::new(&settings)?;
+    let mut localizer = localizer(&args.run, &settings, &driver)?;
     let opened = open(
         &args
             .common
@@ -134,9 +136,16 @@ pub(crate) fn execute_on(
             &mut dataset,
             &mut record,
             &mut observers,
+            localizer.as_mut(),
             &mut warn,
         );
     }
+    record.localizer_bytes = localizer.as_ref().map(MapLocalizer::state_bytes);
+    record.localizer_board_bytes = localizer.as_ref().map(|_| {
+        let (voxels, points) = record.prior_held;
+        let source = driver.build().capacities.source_points;
+        MapLocalizer::board_bytes(voxels as usize, points as usize, source)
+    });
     // What the source found after its last frame (a sensor recording's packets refused after
     // the last sweep) is warned about and counted like a frame's findings.
     let trailer = dataset.frames.trailer();
@@ -176,14 +185,36 @@ pub(crate) fn execute_on(
     code
 }
 
-/// The files this run reads, which no output of it may replace: the dataset, `--meta`,
-/// `--calibration`, `--config` (the ones not given are empty paths, which name nothing).
-fn inputs(args: &RunArgs) -> [&Path; 4] {
+/// The localizer `--map` asks for, opened before anything is written: a map that cannot be
+/// used refuses the run.
+fn localizer(
+    run: &RunOptions,
+    settings: &kiss_odom_drive::settings::Settings,
+    driver: &Driver,
+) -> Result<Option<MapLocalizer>> {
+    let Some(path) = &run.map else {
+        return Ok(None);
+    };
+    let Some(pose) = &run.initial_pose else {
+        anyhow::bail!(
+            "--map needs --initial-pose X,Y,Z,ROLL,PITCH,YAW: the start is not searched for \
+             over the whole map"
+        );
+    };
+    let initial = parse_pose(pose).context("--initial-pose")?;
+    let frame = &settings.output.map_frame;
+    let config = settings.core_config::<f64>()?;
+    let source = driver.build().capacities.source_points;
+    MapLocalizer::open(path, frame, &config, source, initial).map(Some)
+}
+
+/// The files this run reads, which no output of it may replace: the dataset, `--calibration`,
+/// `--config` (the ones not given are empty paths, which name nothing).
+fn inputs(args: &RunArgs) -> [&Path; 3] {
     let sensor = &args.common.input.sensor;
     let none = Path::new("");
     [
         Some(&args.path),
-        sensor.meta.as_ref(),
         sensor.calibration.as_ref(),
         args.common.pipeline.config.as_ref(),
     ]
@@ -275,6 +306,7 @@ fn frame_loop(
     dataset: &mut io::Dataset,
     record: &mut Record,
     observers: &mut [Box<dyn Observer>],
+    mut localizer: Option<&mut MapLocalizer>,
     warn: &mut dyn FnMut(&mut Record, &ProgressBar, &str),
 ) -> End {
     let info = &dataset.info;
@@ -363,8 +395,24 @@ fn frame_loop(
                 &format!("{}: no usable point", outcome.meta.source),
             );
         }
+        // With a prior map, the pose is the map frame's.
+        let mut outcome = outcome;
+        let located = localizer.as_mut().map(|l| l.locate(driver, &outcome));
+        if let Some(l) = &located {
+            outcome.pose = l.pose;
+            let held = &mut record.prior_held;
+            *held = (held.0.max(l.map_voxels), held.1.max(l.map_points));
+        }
+        if let Some(w) = localizer.as_mut().and_then(|l| l.damaged_warning()) {
+            warn(record, &bar, &w);
+        }
         let sweep = frame.as_ref().and_then(|f| f.sweep);
         add(record, info, &outcome, sweep.as_ref(), output.pose_time);
+        if let (Some(l), Some(row)) = (&located, record.rows.last_mut()) {
+            row.localization = Some(l.state.name());
+            row.map_inlier_share = Some(l.inlier_share);
+            row.map_correction_m = Some(l.correction);
+        }
         if !observers.is_empty() {
             let ground_truth = info
                 .ground_truth

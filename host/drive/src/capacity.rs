@@ -7,7 +7,7 @@ use kiss_odom_core::{Capacities, Flag, FrameReport};
 
 /// What to tell a user whose buffers are too small.
 const REMEDY: &str = "give larger capacities (or none: they then grow with the run up to \
-                      runtime.memory_limit), a larger --voxel-size or a smaller --max-range";
+                      runtime.memory_limit), a larger mapping.voxel_size or a smaller --max-range";
 
 /// The rules already warned about in this run, for a core with those capacities and range.
 #[derive(Clone, Copy, Debug)]

@@ -12,7 +12,7 @@ use kiss_odom_core::localize::{
     tiles_touched, Localizer, Located, PriorCapacities, Settings as LocalizeSettings,
 };
 use kiss_odom_core::prior_map::TileMap;
-use kiss_odom_core::{Config, Exact, Sequential};
+use kiss_odom_core::{Config, Exact, Quantized, Sequential};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use std::path::Path;
 
@@ -127,6 +127,19 @@ impl MapLocalizer {
     /// Bytes of the localizer's state.
     pub fn state_bytes(&self) -> usize {
         self.loc.state_bytes()
+    }
+
+    /// Bytes of the localizer's state on a board whose prior map holds exactly `voxels` voxels
+    /// and `points` points (f32, quantised map points) and `source_points` registration points:
+    /// what a run's most held tiles ask of a board, without margin.
+    pub fn board_bytes(voxels: usize, points: usize, source_points: usize) -> usize {
+        let caps = PriorCapacities {
+            map_voxels: voxels.max(1),
+            map_points: points.max(1),
+            source_points: source_points.max(1),
+        };
+        8 * Localizer::<f32, Quantized, Box<[u64]>>::words(&caps)
+            + std::mem::size_of::<Localizer<'static, f32, Quantized, Box<[u64]>>>()
     }
 
     /// The map file.

@@ -175,7 +175,8 @@ pub enum Format {
     /// ROS 2 bag in sqlite3 storage: a folder of `metadata.yaml` and `.db3` files, or one
     /// `.db3` file.
     Db3,
-    /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--meta`, `input.port`).
+    /// pcap or pcapng capture of Velodyne or Ouster packets (`--sensor`, `--calibration`,
+    /// `input.port`).
     Pcap,
     /// MulRan sequence (`Ouster/`, `global_pose.csv`).
     Mulran,
@@ -303,7 +304,8 @@ pub struct SweepInfo {
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SensorKind {
-    /// Ouster if metadata is given, otherwise Velodyne with the model from the packets.
+    /// Ouster if `--calibration` is its metadata JSON, otherwise Velodyne with the model from
+    /// the packets.
     #[default]
     Auto,
     /// Velodyne VLP-16 / Puck.
@@ -322,7 +324,7 @@ pub enum SensorKind {
     Hdl64eS3,
     /// Velodyne VLS-128 / Alpha Prime (needs its calibration file, --calibration).
     Vls128,
-    /// Ouster (needs the metadata JSON).
+    /// Ouster (needs its metadata JSON, --calibration).
     Ouster,
     /// Hesai PandarXT-32.
     Xt32,

@@ -30,11 +30,11 @@ it in, then moved by its pose.
 From a cloud: INPUT is a .ply or .pcd file already in the map frame (no --poses); every point \
 is added.
 
-Points are kept with the local map's rule at the run's voxel size (--voxel-size, or \
---max-range / 100, so a map built with a run's options matches its map): at most \
---points-per-voxel a voxel, none closer than v / sqrt(N) to another. The map is cut into \
---tile-size tiles for loading a part at a time. Prints one line: tiles, voxels, points kept \
-of those read, the x-y extent, the file's bytes.
+Points are kept with the local map's rule at the run's voxel size (the setting \
+mapping.voxel_size, else --max-range / 100, so a map built with a run's options matches its \
+map): at most --points-per-voxel a voxel, none closer than v / sqrt(N) to another. The map is \
+cut into --tile-size tiles for loading a part at a time. Prints one line: tiles, voxels, points \
+kept of those read, the x-y extent, the file's bytes.
 
 Example: kiss-odom map build seq/ --poses out/poses_kitti.txt --out city.komap";
 

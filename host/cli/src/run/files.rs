@@ -93,6 +93,8 @@ pub struct Summary {
     pub packets: Option<PacketTotals>,
     /// `live`: time from a sweep's last packet to its pose (ms).
     pub pose_latency_ms: Option<Latency>,
+    /// With `--map`: frames by localization state and the localizer's state bytes.
+    pub localization: Option<LocalizationSummary>,
     /// Whether SIGINT or SIGTERM stopped the run (the outputs hold the frames before it).
     pub interrupted: bool,
     /// Why the run stopped early, if an error stopped it.
@@ -104,6 +106,42 @@ pub struct Summary {
     /// The other files this run wrote in the output folder and the SHA-256 of each: what a
     /// later command replaces as an earlier one's.
     pub outputs: Digests,
+}
+
+/// `summary.json`'s `localization`: see [`Summary::localization`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct LocalizationSummary {
+    /// Frames localized.
+    pub localized: usize,
+    /// Frames degraded.
+    pub degraded: usize,
+    /// Frames lost.
+    pub lost: usize,
+    /// Bytes of the localizer's state (the prior map's tiles held and ICP's work).
+    pub state_bytes: usize,
+    /// The most voxels of the prior map held at once (what a board's capacities must hold).
+    pub held_voxels: u32,
+    /// The most points of the prior map held at once.
+    pub held_points: u32,
+    /// The localizer's bytes on a board holding exactly `held_voxels` and `held_points` (f32,
+    /// quantised map points, the run's registration cloud capacity): to size firmware from.
+    pub board_bytes: usize,
+}
+
+impl LocalizationSummary {
+    fn of(record: &Record) -> Option<Self> {
+        let rows = &record.rows;
+        let count = |name: &str| rows.iter().filter(|r| r.localization == Some(name)).count();
+        Some(Self {
+            localized: count("localized"),
+            degraded: count("degraded"),
+            lost: count("lost"),
+            state_bytes: record.localizer_bytes?,
+            held_voxels: record.prior_held.0,
+            held_points: record.prior_held.1,
+            board_bytes: record.localizer_board_bytes?,
+        })
+    }
 }
 
 /// `summary.json`'s `state`: see [`Summary::state`].
@@ -416,6 +454,7 @@ impl Run<'_> {
             imu_rejected_frames: d.gyro_bias().map(|_| d.imu_rejected_frames()),
             packets: PacketTotals::of(&o.rows),
             pose_latency_ms: Latency::of(o.rows.iter().filter_map(|r| r.pose_latency_ms).collect()),
+            localization: LocalizationSummary::of(o),
             interrupted: self.interrupted.is_some(),
             stop_reason: self.stop.clone(),
             input: serde_json::json!({
@@ -465,6 +504,17 @@ pub(super) fn print_summary(s: &Summary) {
         println!(
             "last packet to pose: p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms",
             l.p50, l.p99, l.max
+        );
+    }
+    if let Some(l) = s.localization {
+        println!(
+            "localization: {} localized, {} degraded, {} lost, state {:.1} KiB (a board holding \
+             the most tiles held: {:.1} KiB)",
+            l.localized,
+            l.degraded,
+            l.lost,
+            l.state_bytes as f64 / 1024.0,
+            l.board_bytes as f64 / 1024.0
         );
     }
     if let Some(obj) = s.metrics.as_ref().and_then(|m| m.as_object()) {

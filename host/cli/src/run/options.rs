@@ -33,4 +33,12 @@ pub struct RunOptions {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Localize in this prior map (`kiss-odom map build`): the poses are written in the map's
+    /// frame and frames.csv's `localization` column says how sure each is.
+    #[arg(long, requires = "initial_pose")]
+    pub map: Option<PathBuf>,
+    /// With --map: the start pose in the map frame, X,Y,Z,ROLL,PITCH,YAW (metres, degrees;
+    /// R = Rz(yaw) Ry(pitch) Rx(roll)).
+    #[arg(long, requires = "map", allow_hyphen_values = true)]
+    pub initial_pose: Option<String>,
 }

@@ -23,6 +23,12 @@ pub struct Record {
     pub warnings: usize,
     /// Whether the frames are sweeps decoded from sensor packets.
     pub sweeps: bool,
+    /// With `--map`: the localizer's state bytes.
+    pub localizer_bytes: Option<usize>,
+    /// With `--map`: the most voxels and points of the prior map held at once.
+    pub prior_held: (u32, u32),
+    /// With `--map`: the localizer's bytes on a board holding exactly those (f32, quantised).
+    pub localizer_board_bytes: Option<usize>,
 }
 
 impl Record {
@@ -138,6 +144,13 @@ pub struct FrameRow {
     /// With `--imu auto`: the angle between the gyroscope's rotation over the frame and the
     /// rotation ICP registered (rad), which the IMU consistency check judges.
     pub imu_disagreement: Option<f64>,
+    /// With `--map`: `localized`, `degraded` or `lost` (see the book's maps chapter).
+    pub localization: Option<&'static str>,
+    /// With `--map`: the share of the registration cloud off level ground that lies on the
+    /// prior map at the pose.
+    pub map_inlier_share: Option<f64>,
+    /// With `--map`: how far registering to the prior map moved the predicted pose (m).
+    pub map_correction_m: Option<f64>,
     /// The core's flags, written as one column each.
     #[serde(skip)]
     pub status: Status,
@@ -195,6 +208,9 @@ impl FrameRow {
             gyro_bias_z: o.imu.map(|u| u.bias[2]),
             imu_residual: o.imu.and_then(|u| u.residual),
             imu_disagreement: o.imu.and_then(|u| u.disagreement),
+            localization: None,
+            map_inlier_share: None,
+            map_correction_m: None,
             status: o.status().unwrap_or_default(),
         }
     }
@@ -314,7 +330,7 @@ mod tests {
             let bit = |f: &Flag| if set.contains(f) { ",1" } else { ",0" };
             Flag::ALL.iter().map(bit).collect()
         };
-        let unflagged = format!(",,,,false,false,,,,,,,{}", cells(&[]));
+        let unflagged = format!(",,,,false,false,,,,,,,,,,{}", cells(&[]));
         assert!(first.ends_with(&unflagged), "{first}\n{unflagged}");
         let second = lines.next().unwrap();
         let flagged = cells(&[Flag::Degenerate, Flag::Capacity]);

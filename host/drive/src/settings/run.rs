@@ -39,6 +39,8 @@ pub struct Output {
     pub cloud_voxel: f64,
     /// Most points `--save-cloud` keeps; points in new voxels past it are dropped, warned.
     pub cloud_max_points: usize,
+    /// With `--map`: the frame the prior map must be in; the poses are written in it.
+    pub map_frame: String,
 }
 
 impl Default for Output {
@@ -50,6 +52,7 @@ impl Default for Output {
             rerun_map_every: 10,
             cloud_voxel: 0.2,
             cloud_max_points: 5_000_000,
+            map_frame: "map".into(),
         }
     }
 }
@@ -64,6 +67,12 @@ impl Output {
     pub(super) fn fault(&self) -> Option<String> {
         if self.rerun_scan_stride == 0 || self.rerun_map_every == 0 {
             return Some("output.rerun_scan_stride and output.rerun_map_every are >= 1".into());
+        }
+        if kiss_odom_core::prior_map::Header::frame_field(&self.map_frame).is_none() {
+            return Some(format!(
+                "output.map_frame = {:?}: not ASCII of at most 16 bytes",
+                self.map_frame
+            ));
         }
         if !(self.cloud_voxel.is_finite() && self.cloud_voxel > 0.0) {
             return Some(format!(

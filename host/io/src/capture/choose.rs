@@ -72,7 +72,7 @@ fn survey(path: &Path) -> Result<Survey> {
 pub struct Beside {
     /// Its first datagrams, for telling the sensor (a pcap is surveyed from its file).
     pub survey: Option<Survey>,
-    /// The Ouster metadata it carries, and where (`--meta` wins over it).
+    /// The Ouster metadata it carries, and where (`--calibration` wins over it).
     pub ouster_meta: Option<(ouster_meta::OusterMeta, String)>,
     /// A device-information packet it carries (a Robosense DIFOP: the lasers' angles), and
     /// where (`--calibration` wins over it).
@@ -125,7 +125,7 @@ pub fn decode_beside(
             (Some(file), _) => (ouster_meta::read(file)?, file.display().to_string()),
             (None, Some(carried)) => carried,
             (None, None) => bail!(
-                "{}: an Ouster recording needs the sensor's metadata JSON (--meta)",
+                "{}: an Ouster recording needs the sensor's metadata JSON (--calibration)",
                 path.display()
             ),
         };
@@ -220,7 +220,7 @@ pub fn decode_beside(
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
                     bail!(
                         "{}: packets on port {OUSTER_PORT} look like an Ouster's: give its \
-                         metadata JSON (--meta)",
+                         metadata JSON (--calibration)",
                         path.display()
                     );
                 }

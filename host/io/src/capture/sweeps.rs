@@ -5,10 +5,10 @@
 //! The sensor is told by the options or found in the capture: Velodyne data packets are 1206
 //! bytes on port 2368 unless `input.port` says otherwise (the model is in each packet's product
 //! byte, or `--sensor`; a byte the packets' timing contradicts is a warning), Ouster packets
-//! need the sensor's metadata JSON (`--meta`), Hesai packets start `EE FF` and their protocol
-//! version on port 2368 (the model found from it when no Velodyne packets are; the 128-channel
-//! models need their angle correction file, `--calibration`), Livox SDK 1
-//! packets come to port 56001 (found there without `--sensor livox`), Livox SDK 2 (Mid-360)
+//! need the sensor's metadata JSON (`--calibration`), Hesai packets start `EE FF` and their
+//! protocol version on port 2368 (the model found from it when no Velodyne packets are; the
+//! 128-channel models need their angle correction file, `--calibration`), Livox SDK 1 packets
+//! come to port 56001 (found there without `--sensor livox`), Livox SDK 2 (Mid-360)
 //! packets to port 56301 (found there without `--sensor mid360`). IMU packets (Ouster's on
 //! their own port, Livox SDK 1's on the data port, SDK 2's on their own) become the sweeps' IMU
 //! samples, not points. Only one sender is decoded: the first whose

@@ -2,13 +2,12 @@
 //! packet messages ([`packets`]) become the UDP datagrams a capture of the
 //! sensor would hold, on the ports the sensor sends to, timed by the driver's stamps (the
 //! message's receive time where a packet has none), and go through the same decoders, sweep
-//! assembly and options (`--sensor`, `--meta`, `--calibration`, `input.cut_angle`) as a pcap
-//! ([`sweeps`], [`SweepFrames`]), so a bag of packets and a pcap of
-//! the same packets give the same frames.
+//! assembly and options (`--sensor`, `--calibration`, `input.cut_angle`) as a pcap ([`sweeps`],
+//! [`SweepFrames`]), so a bag of packets and a pcap of the same packets give the same frames.
 //!
 //! An Ouster's IMU packets come from the topic beside its lidar packets' (`.../imu_packets`),
 //! its metadata from the `std_msgs/String` topic ouster-ros records it on (`.../metadata`)
-//! unless `--meta` gives a file. A Robosense's DIFOP packets (the lasers' angles) and its
+//! unless `--calibration` gives a file. A Robosense's DIFOP packets (the lasers' angles) and its
 //! model's name come from nebula's `.../robosense_info_packets` beside its MSOP packets, unless
 //! `--calibration` and `--sensor` say. `NebulaPackets` carry any sensor's packets: each goes to
 //! the port its sensor sends that packet to (a Livox Mid-360's IMU packets to their own). A
@@ -64,7 +63,7 @@ pub fn open(
             let Some(meta) = meta else {
                 bail!(
                     "{label}: Ouster packets on {topic} and no metadata topic beside them: give \
-                     the sensor's metadata JSON (--meta)"
+                     the sensor's metadata JSON (--calibration)"
                 );
             };
             let (parsed, where_) = read_metadata(rec.as_mut(), &meta)?;
@@ -157,7 +156,7 @@ fn read_metadata(
     })?;
     let where_ = format!("{label}:{topic}");
     match text {
-        None => bail!("{where_}: no message: give the sensor's metadata JSON (--meta)"),
+        None => bail!("{where_}: no message: give the sensor's metadata JSON (--calibration)"),
         Some(Err(e)) => bail!("{where_}: not a std_msgs/String: {e}"),
         Some(Ok(json)) => Ok((
             ouster_meta::parse(&json).map_err(|e| anyhow!("{where_}: {e:#}"))?,

@@ -32,7 +32,7 @@ fn ouster_packets_need_the_metadata_their_bag_carries_or_a_file() {
     // The IMU packets' topic is not a candidate for frames: the lidar one is chosen alone.
     let e = format!("{:#}", open(&ouster_bag(dir.path(), None)).err().unwrap());
     assert!(
-        e.contains("Ouster packets on /ouster/lidar_packets") && e.contains("--meta"),
+        e.contains("Ouster packets on /ouster/lidar_packets") && e.contains("--calibration"),
         "{e}"
     );
     let e = format!(
