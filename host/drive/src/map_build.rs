@@ -32,7 +32,7 @@ pub struct MapParams {
     pub voxel_size: f64,
     /// Tile edge `s` (m), a whole multiple of `v`.
     pub tile_size: f64,
-    /// Points per voxel at most, `N` (1..=255).
+    /// Points per voxel at most, `N` (3..=255).
     pub points_per_voxel: u32,
     /// The map frame's name: ASCII, at most 16 bytes.
     pub frame: String,
@@ -88,9 +88,12 @@ impl MapBuilder {
                 && (ratio - ratio.round()).abs() <= 1e-9 * ratio,
             "tile size {s} m: not a whole multiple of the voxel size {v} m (at most 100 km)"
         );
+        // The localizer reads a voxel's shape from its covariance, which needs 3 points: with
+        // fewer, no registration is conditioned and no frame is ever localized.
         ensure!(
-            (1..=255).contains(&params.points_per_voxel),
-            "points per voxel {}: not in 1..=255",
+            (3..=255).contains(&params.points_per_voxel),
+            "points per voxel {}: not in 3..=255 (the localizer reads a voxel's shape from \
+             3 points or more)",
             params.points_per_voxel
         );
         let frame = Header::frame_field(&params.frame).with_context(|| {
