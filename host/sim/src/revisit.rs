@@ -7,16 +7,12 @@
 //! run's last sweep ended back towards where its first began, at 60-95 % of the first run's
 //! mean speed, so that it stays on the stretch the first run swept. Its ground truth is in the
 //! first run's frame (the sensor at the end of the first run's first sweep), so its first pose
-//! is not the identity; [`INITIAL_POSE`] states that pose on its own.
+//! is not the identity; [`crate::writer::INITIAL_POSE`] states that pose on its own.
 
 use crate::profile::Profile;
 use crate::trajectory::PoseM;
-use crate::writer::fmt_f64;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
-
-/// The file beside `poses.txt` with the revisit's first pose: `X,Y,Z,ROLL,PITCH,YAW`.
-pub const INITIAL_POSE: &str = "initial_pose.txt";
 
 /// Share of the scene's objects changed when none is asked for (`--changes`).
 pub const DEFAULT_CHANGES: f64 = 0.1;
@@ -71,15 +67,7 @@ pub fn roll_pitch_yaw(pose: &PoseM) -> [f64; 3] {
     [roll, pitch, yaw]
 }
 
-/// The [`INITIAL_POSE`] line of `pose`: `X,Y,Z,ROLL,PITCH,YAW` in metres and degrees,
-/// `R = Rz(yaw) Ry(pitch) Rx(roll)`, each number the shortest text that parses back exactly.
-pub fn initial_pose_line(pose: &PoseM) -> String {
-    let t = pose.translation.vector;
-    let [roll, pitch, yaw] = roll_pitch_yaw(pose).map(f64::to_degrees);
-    [t.x, t.y, t.z, roll, pitch, yaw].map(fmt_f64).join(",")
-}
-
-/// Reads an [`INITIAL_POSE`] line back.
+/// Reads an initial pose line ([`crate::writer::initial_pose_line`]) back.
 pub fn parse_initial_pose(text: &str) -> Result<PoseM> {
     let v: Vec<f64> = text
         .trim()

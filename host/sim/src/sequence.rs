@@ -328,8 +328,8 @@ pub fn write(
             Some(p) => p.ground_truth(0),
             None => sim.ground_truth(0),
         };
-        let path = writer.staging().join(crate::revisit::INITIAL_POSE);
-        let line = crate::revisit::initial_pose_line(&truth) + "\n";
+        let path = writer.staging().join(crate::writer::INITIAL_POSE);
+        let line = crate::writer::initial_pose_line(&truth) + "\n";
         std::fs::write(&path, line).with_context(|| format!("writing {}", path.display()))?;
     }
     if request.imu.is_some() {

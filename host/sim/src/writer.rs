@@ -30,11 +30,14 @@ use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// The file beside `poses.txt` with a revisit's first pose: `X,Y,Z,ROLL,PITCH,YAW`.
+pub const INITIAL_POSE: &str = "initial_pose.txt";
+
 /// Files the layout owns, `sim.toml` last.
 const OWNED_FILES: [&str; 12] = [
     "poses.txt",
     "times.txt",
-    crate::revisit::INITIAL_POSE,
+    INITIAL_POSE,
     crate::capture::PCAP_NAME,
     crate::capture::META_NAME,
     crate::capture::ANGLES_NAME,
@@ -57,6 +60,14 @@ pub fn fmt_f64(x: f64) -> String {
     } else {
         format!("{x:e}")
     }
+}
+
+/// The [`INITIAL_POSE`] line of `pose`: `X,Y,Z,ROLL,PITCH,YAW` in metres and degrees,
+/// `R = Rz(yaw) Ry(pitch) Rx(roll)`, each number the shortest text that parses back exactly.
+pub fn initial_pose_line(pose: &PoseM) -> String {
+    let t = pose.translation.vector;
+    let [roll, pitch, yaw] = crate::revisit::roll_pitch_yaw(pose).map(f64::to_degrees);
+    [t.x, t.y, t.z, roll, pitch, yaw].map(fmt_f64).join(",")
 }
 
 /// One `poses.txt` line: the top 3x4 of the pose matrix, row-major.

@@ -4,6 +4,7 @@ use crate::scene::Surface;
 use crate::sequence::{self, Format, Messages, Request};
 use crate::shapes::Shape;
 use crate::simulation::{SimParams, Simulation};
+use crate::writer::INITIAL_POSE;
 use crate::Layout;
 use nalgebra::Point3;
 
