@@ -11,6 +11,10 @@
 #   bash bench/localize.sh [FRAMES] [SEEDS] [PROFILES]    (default: 500 "1 2 3" "urban warehouse field")
 #
 # DATA: where the generated runs go (default target/bench/localize; about 0.7 GB a run).
+# EXTRAS=0 leaves out the kidnapped, uncovered and changed runs. The speed figure, after a run:
+#   farm-bench --vs "sh -c 'exec kiss-odom run DATA/urban-1-B --threads 1 --quiet --out O1'" \
+#     -- sh -c "exec kiss-odom run DATA/urban-1-B --map DATA/out/urban-1/map.komap \
+#     --initial-pose $(cat DATA/urban-1-B/initial_pose.txt) --threads 1 --quiet --out O2"
 # The open field runs (map and both runs) with `--preset accurate`: the default odometry is
 # hundreds of metres off there (BENCHMARKS.md section 15), and localization predicts with it.
 set -euo pipefail
@@ -59,6 +63,7 @@ for p in $PROFILES; do
     sim "$p-$s-B" --profile "$p" --seed "$s" --revisit
     case_ "$p-$s" "$p-$s-A" "$p-$s-B" 0 "$(cat "$DATA/$p-$s-B/initial_pose.txt")"
   done
+  [ "${EXTRAS:-1}" = 1 ] || continue
   s=${SEEDS%% *}
   case_ "$p-$s-kidnapped" "$p-$s-A" "$p-$s-B" 0 "$(off "$DATA/$p-$s-B/initial_pose.txt")"
   case_ "$p-$s-uncovered" "$p-$s-A" "$p-$s-B" $((FRAMES / 2)) \

@@ -1,5 +1,5 @@
 //! Localization in a prior map on a host: the map file read whole, the core's
-//! [`Localizer`](kiss_odom_core::localize::Localizer) run after each frame the driver answers,
+//! [`Localizer`] run after each frame the driver answers,
 //! on the odometry's registration cloud and its motion over the frame.
 //!
 //! The host localizes in `f64` whatever the odometry's scalar (the board runs the core's
