@@ -28,19 +28,21 @@
 //! Storage: the prior map (its voxels and points) and ICP's work, in one run of words sized by
 //! [`Localizer::words`]; the tiles stay in the file's bytes.
 
+mod fit;
 mod search;
+mod settings;
 mod tiles;
 
 pub use search::{STARTS as SEARCH_STARTS, STEP_DEG as SEARCH_STEP_DEG, STEP_M as SEARCH_STEP_M};
+pub use settings::{LocalizeError, PriorCapacities, Settings};
 pub use tiles::{tiles_touched, Loaded, MAX_TILES_HELD};
 
 use crate::config::Config;
-use crate::geometry::{Point, Pose};
+use crate::geometry::Pose;
 use crate::lie::renormalize;
-use crate::local_map::{MapLayout, MapMut, MapState, MapView, PointCodec};
-use crate::observability::observability;
+use crate::local_map::{MapLayout, MapMut, MapState, PointCodec};
 use crate::prior_map::TileMap;
-use crate::registration::{align_points_to_map, moved_points, work_words, Executor, IcpParams};
+use crate::registration::{work_words, Executor};
 use crate::scalar::Real;
 use crate::storage::Storage;
 use core::marker::PhantomData;
@@ -68,97 +70,6 @@ impl State {
             Self::Degraded => "degraded",
             Self::Lost => "lost",
         }
-    }
-}
-
-/// The rules of the judgement and the tiles' reach.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings<T: Real> {
-    /// Tiles within this of the pose are held (m); `r_max` by default.
-    pub reach: T,
-    /// A registered point within this of a map point is an inlier (m); half a voxel.
-    pub inlier_distance: T,
-    /// Inlier share of a good registration (0.5).
-    pub good_share: T,
-    /// Inlier share of a fair registration (0.3).
-    pub fair_share: T,
-    /// Conditioning of a good registration: the observability ratio's floor (0.02, the
-    /// odometry's `degeneracy_ratio`).
-    pub min_observability: T,
-    /// The registration's gate never below this (m): 3 voxels.
-    pub gate_floor: T,
-    /// Good frames that confirm a fix from the search or the start (3); as many frames
-    /// without a good registration lose a pose never confirmed.
-    pub confirm_frames: u32,
-    /// Travel without a fix after which the state is lost (m): 50, where an odometry that
-    /// drifts 2 % of the distance (twice KISS-ICP's on KITTI) is 1 m off.
-    pub lost_after_m: T,
-    /// Frames without a fix after which the state is lost: 600 (a minute at 10 Hz).
-    pub lost_after_frames: u32,
-    /// Starts of the search registered per frame (16: the grid in 22 frames).
-    pub search_per_frame: u32,
-    /// The search's answer must beat any distinct one by this share (0.1).
-    pub search_margin: T,
-}
-
-impl<T: Real> Settings<T> {
-    /// The defaults for an odometry configured with `config`.
-    pub fn for_config(config: &Config<T>) -> Self {
-        Self {
-            reach: config.max_range,
-            inlier_distance: config.voxel_size * T::of(0.5),
-            good_share: T::of(0.5),
-            fair_share: T::of(0.3),
-            min_observability: config.degeneracy_ratio,
-            gate_floor: config.voxel_size * T::of(3.0),
-            confirm_frames: 3,
-            lost_after_m: T::of(50.0),
-            lost_after_frames: 600,
-            search_per_frame: 16,
-            search_margin: T::of(0.1),
-        }
-    }
-}
-
-/// The prior map's room: what [`Localizer::words`] sizes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PriorCapacities {
-    /// Voxels of the held tiles.
-    pub map_voxels: usize,
-    /// Points of the held tiles.
-    pub map_points: usize,
-    /// Points of `P^*` registered (more are not used).
-    pub source_points: usize,
-}
-
-/// Why a localizer cannot be built.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum LocalizeError {
-    /// The map's voxel size is not the configuration's: build the map at the configuration's,
-    /// or configure the map's.
-    VoxelSize,
-    /// The map is in another frame than the one asked for.
-    Frame,
-    /// The tiles within reach can number more than [`MAX_TILES_HELD`]: build the map with
-    /// larger tiles (or a smaller reach).
-    TileSize,
-    /// A capacity is zero or the storage is shorter than [`Localizer::words`].
-    Storage,
-    /// A setting is out of range (a share outside `0..=1`, a distance not positive).
-    Settings,
-}
-
-impl core::fmt::Display for LocalizeError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
-            Self::VoxelSize => "the map's voxel size differs from the configuration's",
-            Self::Frame => "the map is in another frame than the one asked for",
-            Self::TileSize => "the map's tiles are too small for the reach (too many to hold)",
-            Self::Storage => "a capacity is zero or the storage is too short",
-            Self::Settings => "a localization setting is out of range",
-        })
     }
 }
 
@@ -477,84 +388,6 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         }
         self.search = Some(search);
     }
-
-    /// Registers `source` to the prior map from `from` with gate `gate`: the pose, the
-    /// inlier share there and the conditioning.
-    fn register<E: Executor>(
-        &mut self,
-        exec: &E,
-        source: &[[T; 3]],
-        from: &Pose<T>,
-        gate: T,
-    ) -> (Pose<T>, T, Option<T>) {
-        let cfg = &self.config;
-        let map_words = self.layout.words();
-        let words = self.storage.as_mut();
-        let Some((map_part, work)) = words
-            .get_mut(..Self::words(&self.caps))
-            .map(|w| w.split_at_mut(map_words))
-        else {
-            return (*from, T::zero(), None);
-        };
-        let Ok(view) = MapView::<T, P>::of(&self.map, &self.layout, map_part) else {
-            return (*from, T::zero(), None);
-        };
-        let params = IcpParams {
-            convergence_criterion: cfg.convergence_criterion,
-            max_iterations: cfg.max_iterations,
-            budget: cfg.work_budget,
-            planes: false,
-            prior: None,
-            stop_on_cycle: false,
-        };
-        let kernel = cfg.kernel_scale * gate / T::of(3.0);
-        let icp = align_points_to_map(exec, source, work, &view, from, gate, kernel, &params);
-        let pose = icp.pose;
-        let finite = pose.translation.vector.iter().all(|v| v.is_finite())
-            && pose.rotation.coords.iter().all(|v| v.is_finite());
-        if !finite || source.is_empty() {
-            return (*from, T::zero(), None);
-        }
-        let n = source.len();
-        let origin = Point::from(pose.translation.vector);
-        let obs = observability(&view, moved_points::<T>(work, n, false), n, &origin, gate);
-        let (level, structure) = inliers(&view, source, &pose, self.settings.inlier_distance);
-        let off_level = n - level;
-        let share = if off_level == 0 {
-            T::zero()
-        } else {
-            T::of(structure as f64 / off_level as f64)
-        };
-        (pose, share, obs)
-    }
-}
-
-/// Of `source` moved by `pose`, the points within `near` of a map point on level ground (a
-/// voxel whose spread is less than 5 % vertical) and those within `near` of any other map
-/// point. Level ground matches whatever the horizontal error, so only the others tell a right
-/// pose from a wrong one.
-fn inliers<T: Real, P: PointCodec<T>>(
-    view: &MapView<'_, T, P>,
-    source: &[[T; 3]],
-    pose: &Pose<T>,
-    near: T,
-) -> (usize, usize) {
-    let (mut level, mut structure) = (0, 0);
-    for p in source {
-        let q = pose * Point::new(p[0], p[1], p[2]);
-        let Some((m, _)) = view.closest_neighbor(&q, near) else {
-            continue;
-        };
-        let flat = view
-            .voxel_covariance(&m)
-            .is_some_and(|(k, c)| k >= 3 && c[(2, 2)] < T::of(0.05) * c.trace());
-        if flat {
-            level += 1;
-        } else {
-            structure += 1;
-        }
-    }
-    (level, structure)
 }
 
 /// Write access to the prior map at the start of `storage`.

@@ -1,4 +1,5 @@
 use super::*;
+use crate::geometry::Point;
 use crate::local_map::{Exact, LocalMap};
 use crate::prior_map::{encode_map, Header, TileKey, HEADER_LEN, INDEX_ENTRY_LEN};
 use crate::registration::Sequential;
@@ -207,7 +208,10 @@ fn a_start_five_metres_and_twenty_degrees_off_is_found_and_never_called_localize
         .count();
     let first = states.iter().position(|s| s.0 == State::Localized);
     let last = states.last().unwrap();
-    std::println!("kidnapped: localized from frame {first:?}, {wrong} confident frames > 1 m off, last {last:?}");
+    std::println!(
+        "kidnapped: localized from frame {first:?}, {wrong} confident frames > 1 m off, \
+         last {last:?}"
+    );
     assert_eq!(wrong, 0, "{states:?}");
     assert!(
         first.is_some() && last.0 == State::Localized && last.1 < 0.1,

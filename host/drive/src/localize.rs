@@ -80,7 +80,8 @@ impl MapLocalizer {
         )
         .map_err(|e| {
             anyhow!(
-                "{}: {e} (map: voxel {} m, frame {:?}, tiles of {} m; run: voxel {} m, frame {frame:?})",
+                "{}: {e} (map: voxel {} m, frame {:?}, tiles of {} m; run: voxel {} m, \
+                 frame {frame:?})",
                 path.display(),
                 h.voxel_size,
                 h.frame_name(),
