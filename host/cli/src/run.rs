@@ -28,7 +28,7 @@ pub(crate) use record::{FrameRow, Record, RowKind};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use kiss_odom_core::Flag;
-use kiss_odom_drive::localize::{parse_pose, MapLocalizer};
+use kiss_odom_drive::localize::MapLocalizer;
 use kiss_odom_drive::{CapacityWarnings, Driver, Outcome, PriorWarnings, Step};
 use kiss_odom_io::write::outputs::Earlier;
 use kiss_odom_io::{self as io, Item, Selection, SweepInfo};
@@ -201,7 +201,7 @@ fn localizer(
              over the whole map"
         );
     };
-    let initial = parse_pose(pose).context("--initial-pose")?;
+    let initial = io::poses::parse_xyz_rpy(pose).context("--initial-pose")?;
     let frame = &settings.output.map_frame;
     let config = settings.core_config::<f64>()?;
     let source = driver.build().capacities.source_points;

@@ -7,32 +7,14 @@
 //! at most, each as full as the fullest tile, so it never drops.
 
 use crate::{Driver, Outcome, Step};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use kiss_odom_core::localize::{
     tiles_touched, Localizer, Located, PriorCapacities, Settings as LocalizeSettings,
 };
 use kiss_odom_core::prior_map::TileMap;
 use kiss_odom_core::{Config, Exact, Quantized, Sequential};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use nalgebra::Isometry3;
 use std::path::Path;
-
-/// A pose from `X,Y,Z,ROLL,PITCH,YAW` (metres, degrees; `R = Rz(yaw) Ry(pitch) Rx(roll)`).
-pub fn parse_pose(text: &str) -> Result<Isometry3<f64>> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|s| s.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| anyhow!("{text:?}: expected six numbers X,Y,Z,ROLL,PITCH,YAW"))?;
-    if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
-        bail!("{text:?}: expected six finite numbers X,Y,Z,ROLL,PITCH,YAW (m, degrees)");
-    }
-    let r =
-        UnitQuaternion::from_euler_angles(v[3].to_radians(), v[4].to_radians(), v[5].to_radians());
-    Ok(Isometry3::from_parts(
-        Translation3::new(v[0], v[1], v[2]),
-        r,
-    ))
-}
 
 /// The core's localizer over a map file the process keeps for its lifetime.
 pub struct MapLocalizer {
@@ -146,35 +128,5 @@ impl MapLocalizer {
     /// The map file.
     pub fn file(&self) -> &TileMap<'static> {
         self.loc.file()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_pose_is_six_finite_numbers_in_metres_and_degrees() {
-        let p = parse_pose("1, -2.5, 0.25, 0, 0, 90").unwrap();
-        assert_eq!(p.translation.vector.as_slice(), &[1.0, -2.5, 0.25]);
-        let x = p.rotation * nalgebra::Vector3::x();
-        assert!(
-            (x - nalgebra::Vector3::y()).norm() < 1e-12,
-            "yaw turns x to y"
-        );
-        let q = parse_pose("0,0,0,90,0,0").unwrap().rotation * nalgebra::Vector3::y();
-        assert!(
-            (q - nalgebra::Vector3::z()).norm() < 1e-12,
-            "roll turns y to z"
-        );
-        for bad in [
-            "1,2,3,4,5",
-            "1,2,3,4,5,6,7",
-            "1,2,x,4,5,6",
-            "1,2,3,4,5,inf",
-            "",
-        ] {
-            assert!(parse_pose(bad).is_err(), "{bad}");
-        }
     }
 }

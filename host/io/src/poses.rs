@@ -130,6 +130,27 @@ fn numbered_kitti_rows(text: &str, name: &str) -> Result<Vec<(usize, Rows)>> {
         .collect()
 }
 
+/// A pose from `X,Y,Z,ROLL,PITCH,YAW` (metres, degrees; `R = Rz(yaw) Ry(pitch) Rx(roll)`).
+pub fn parse_xyz_rpy(text: &str) -> Result<Isometry3<f64>> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("{text:?}: expected six numbers X,Y,Z,ROLL,PITCH,YAW"))?;
+    if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
+        bail!("{text:?}: expected six finite numbers X,Y,Z,ROLL,PITCH,YAW (m, degrees)");
+    }
+    let r = nalgebra::UnitQuaternion::from_euler_angles(
+        v[3].to_radians(),
+        v[4].to_radians(),
+        v[5].to_radians(),
+    );
+    Ok(Isometry3::from_parts(
+        nalgebra::Translation3::new(v[0], v[1], v[2]),
+        r,
+    ))
+}
+
 /// KITTI text of `poses`, one line each.
 pub fn format_kitti(poses: &[Isometry3<f64>]) -> String {
     let rows: Vec<Rows> = poses.iter().map(rows_from_isometry).collect();
@@ -347,5 +368,30 @@ mod tests {
         nan[3] = f64::NAN;
         assert!(isometry_from_rows(&nan).is_err());
         assert!(parse_kitti_rows("1 0 0 inf 0 1 0 0 0 0 1 0", "f").is_err());
+    }
+
+    #[test]
+    fn a_pose_is_six_finite_numbers_in_metres_and_degrees() {
+        let p = parse_xyz_rpy("1, -2.5, 0.25, 0, 0, 90").unwrap();
+        assert_eq!(p.translation.vector.as_slice(), &[1.0, -2.5, 0.25]);
+        let x = p.rotation * nalgebra::Vector3::x();
+        assert!(
+            (x - nalgebra::Vector3::y()).norm() < 1e-12,
+            "yaw turns x to y"
+        );
+        let q = parse_xyz_rpy("0,0,0,90,0,0").unwrap().rotation * nalgebra::Vector3::y();
+        assert!(
+            (q - nalgebra::Vector3::z()).norm() < 1e-12,
+            "roll turns y to z"
+        );
+        for bad in [
+            "1,2,3,4,5",
+            "1,2,3,4,5,6,7",
+            "1,2,x,4,5,6",
+            "1,2,3,4,5,inf",
+            "",
+        ] {
+            assert!(parse_xyz_rpy(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -11,7 +11,7 @@
 
 use crate::profile::Profile;
 use crate::trajectory::PoseM;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use serde::Serialize;
 
 /// Share of the scene's objects changed when none is asked for (`--changes`).
@@ -65,28 +65,6 @@ pub fn roll_pitch_yaw(pose: &PoseM) -> [f64; 3] {
     let pitch = libm::atan2(-r[(2, 0)], libm::hypot(r[(0, 0)], r[(1, 0)]));
     let roll = libm::atan2(r[(2, 1)], r[(2, 2)]);
     [roll, pitch, yaw]
-}
-
-/// Reads an initial pose line ([`crate::writer::initial_pose_line`]) back.
-pub fn parse_initial_pose(text: &str) -> Result<PoseM> {
-    let v: Vec<f64> = text
-        .trim()
-        .split(',')
-        .map(|f| f.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .context("initial pose: six comma-separated numbers")?;
-    let [x, y, z, roll, pitch, yaw] = v[..] else {
-        bail!(
-            "initial pose: six numbers X,Y,Z,ROLL,PITCH,YAW, not {}",
-            v.len()
-        );
-    };
-    let rotation =
-        crate::trajectory::rotation_zyx(roll.to_radians(), pitch.to_radians(), yaw.to_radians());
-    Ok(PoseM::from_parts(
-        nalgebra::Translation3::new(x, y, z),
-        rotation,
-    ))
 }
 
 #[cfg(test)]

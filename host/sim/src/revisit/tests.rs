@@ -283,7 +283,7 @@ fn initial_pose_txt_round_trips_to_frame_zeros_pose() {
     sequence::write(&request, &dir, &|| false, &mut |_| {}).unwrap();
     let text = std::fs::read_to_string(dir.join(INITIAL_POSE)).unwrap();
     assert_eq!(text.lines().count(), 1);
-    let pose = parse_initial_pose(&text).unwrap();
+    let pose = kiss_odom_io::poses::parse_xyz_rpy(&text).unwrap();
     let poses = std::fs::read_to_string(dir.join("poses.txt")).unwrap();
     let row: Vec<f64> = poses
         .lines()
