@@ -521,8 +521,25 @@ def capture_seeds():
 
 
 def prior_map_file(tiles, voxel=1.0, tile=20.0, per_voxel=4, frame=b"map"):
-    """A map file (core/src/prior_map.rs's format) of `tiles`: {(i, j): [(x, y, z) offsets]}."""
+    """A map file (core/src/prior_map.rs's format, version 2) of `tiles`: {(i, j): [(x, y, z)
+    offsets]}, each tile's points sorted by voxel (of the stored f32 point) and trimmed to
+    `per_voxel` a voxel, as `prior_map::arrange_tile` does."""
     import zlib
+    f32 = lambda v: struct.unpack("<f", struct.pack("<f", v))[0]
+
+    def arranged(i, j, pts):
+        def key(p):
+            x, y, z = (f32(c) for c in p)
+            return (math.floor((i * tile + x) / voxel), math.floor((j * tile + y) / voxel),
+                    math.floor(z / voxel))
+        out, runs = [], {}
+        for p in sorted(pts, key=lambda p: (key(p), *(f32(c) for c in p))):
+            runs[key(p)] = runs.get(key(p), 0) + 1
+            if runs[key(p)] <= per_voxel:
+                out.append(p)
+        return out
+
+    tiles = {k: arranged(*k, v) for k, v in tiles.items()}
     cap = max((len(p) for p in tiles.values()), default=1) or 1
     keys = sorted(tiles)
     index = b"".join(struct.pack("<iiI", i, j, len(tiles[(i, j)])) for i, j in keys)
@@ -532,7 +549,7 @@ def prior_map_file(tiles, voxel=1.0, tile=20.0, per_voxel=4, frame=b"map"):
         pts += bytes(12 * cap - len(pts))
         head = struct.pack("<iiI", i, j, len(tiles[(i, j)]))
         records += head + struct.pack("<I", zlib.crc32(head + pts)) + pts
-    h = b"KOMAP\0\0\0" + struct.pack("<II", 1, 0) + struct.pack("<dd", voxel, tile)
+    h = b"KOMAP\0\0\0" + struct.pack("<II", 2, 0) + struct.pack("<dd", voxel, tile)
     h += struct.pack("<IIII", per_voxel, cap, len(keys), zlib.crc32(index))
     h += frame.ljust(16, b"\0") + bytes(60)
     h += struct.pack("<I", zlib.crc32(h))

@@ -83,7 +83,7 @@ pub use deskew::{StampProblem, SweepRotation, SWEEP_KNOTS};
 pub use error::{ConfigError, FrameError};
 pub use geometry::{widen_pose, Point, Pose};
 pub use imu::{GyroPrior, ImuConfig, ImuSample, Prior};
-pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized};
+pub use local_map::{Exact, MapCapacity, MapView, PointCodec, Quantized, Voxels};
 pub use odometry::{FrameInput, Layout, Odometry, WhenFull};
 pub use registration::{Executor, Sequential};
 pub use report::{Dropped, Flag, FrameReport, HighWater, Status};

@@ -31,7 +31,7 @@ pub use codec::{Exact, PointCodec, Quantized};
 pub use evict::{EVICT_TO, RADIUS_BINS};
 pub use layout::MapLayout;
 pub use layout::BLOCK;
-pub use search::Nearest;
+pub use search::{Nearest, Voxels};
 pub(crate) use state::MapState;
 pub use state::{MapCapacity, UpdateStats};
 pub(crate) use update::MapMut;

@@ -25,8 +25,9 @@
 //!    the search); its answer is confirmed by `confirm_frames` good frames before the state says
 //!    localized again. [`Localizer::reseed`] takes a pose from the user instead.
 //!
-//! Storage: the prior map (its voxels and points) and ICP's work, in one run of words sized by
-//! [`Localizer::words`]; the tiles stay in the file's bytes.
+//! Storage: ICP's work, in words sized by [`Localizer::words`], and the held tiles' keys. The
+//! prior map is never copied: its tiles are read in place, from flash on a board, so the state
+//! does not grow with the map or the reach.
 
 mod fit;
 mod search;
@@ -40,12 +41,10 @@ pub use tiles::{tiles_touched, Loaded, MAX_TILES_HELD};
 use crate::config::Config;
 use crate::geometry::Pose;
 use crate::lie::renormalize;
-use crate::local_map::{MapLayout, MapMut, MapState, PointCodec};
 use crate::prior_map::TileMap;
 use crate::registration::{work_words, Executor};
 use crate::scalar::Real;
 use crate::storage::Storage;
-use core::marker::PhantomData;
 use search::Search;
 use tiles::Held;
 
@@ -93,22 +92,20 @@ pub struct Located<T: Real> {
     pub searched: u32,
     /// The search found the pose this frame.
     pub recovered: bool,
-    /// Voxels of the prior map held.
-    pub map_voxels: u32,
-    /// Points of the prior map held.
-    pub map_points: u32,
+    /// Tiles of the prior map held (damaged ones included).
+    pub held_tiles: u32,
+    /// Points of the prior map within reach (in the held tiles, read in place).
+    pub held_points: u32,
 }
 
 /// Localization in a prior map over storage it owns or borrows (see [`crate::storage`]).
-pub struct Localizer<'m, T: Real, P: PointCodec<T>, S: Storage> {
+pub struct Localizer<'m, T: Real, S: Storage> {
     file: TileMap<'m>,
     settings: Settings<T>,
     config: Config<T>,
     caps: PriorCapacities,
-    map: MapState<T>,
-    layout: MapLayout,
     storage: S,
-    held: Held,
+    held: Held<'m>,
     pose: Pose<T>,
     state: State,
     /// Good frames in a row.
@@ -120,19 +117,12 @@ pub struct Localizer<'m, T: Real, P: PointCodec<T>, S: Storage> {
     /// Frames in a row whose inlier share was below the good one.
     misfits: u32,
     search: Option<Search<T>>,
-    _codec: PhantomData<P>,
 }
 
-impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
+impl<'m, T: Real, S: Storage> Localizer<'m, T, S> {
     /// Words of storage for `caps`.
     pub const fn words(caps: &PriorCapacities) -> usize {
-        MapLayout::new(
-            caps.map_voxels,
-            caps.map_points,
-            core::mem::size_of::<P::Stored>(),
-        )
-        .words()
-            + work_words::<T>(caps.source_points, false)
+        work_words::<T>(caps.source_points, false)
     }
 
     /// A localizer in `file` (whose frame must be named `frame`) for an odometry configured
@@ -171,31 +161,14 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         if tiles_touched(held_reach, h.tile_size) > MAX_TILES_HELD {
             return Err(LocalizeError::TileSize);
         }
-        let layout = MapLayout::new(
-            caps.map_voxels,
-            caps.map_points,
-            core::mem::size_of::<P::Stored>(),
-        );
-        let words = storage.as_mut();
-        if caps.source_points == 0 || caps.map_points == 0 || words.len() < Self::words(&caps) {
+        if caps.source_points == 0 || storage.as_mut().len() < Self::words(&caps) {
             return Err(LocalizeError::Storage);
         }
-        let far = T::of(1e6);
-        let map = MapState::new(
-            config.voxel_size,
-            far,
-            h.points_per_voxel,
-            caps.map_voxels,
-            &layout,
-        )
-        .ok_or(LocalizeError::Storage)?;
-        let mut me = Self {
+        Ok(Self {
             file,
             settings,
             config: *config,
             caps,
-            map,
-            layout,
             storage,
             held: Held::new(),
             pose: initial,
@@ -205,12 +178,7 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
             fixed: false,
             misfits: 0,
             search: None,
-            _codec: PhantomData,
-        };
-        map_mut::<T, P>(&mut me.map, &me.layout, &mut me.storage)
-            .ok_or(LocalizeError::Storage)?
-            .clear();
-        Ok(me)
+        })
     }
 
     /// The pose in the map frame after the last frame.
@@ -228,7 +196,7 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         &self.file
     }
 
-    /// Bytes of the state: the prior map, ICP's work and the bookkeeping.
+    /// Bytes of the state: ICP's work and the bookkeeping (the held tiles' keys among it).
     pub fn state_bytes(&self) -> usize {
         8 * Self::words(&self.caps) + core::mem::size_of::<Self>()
     }
@@ -259,12 +227,7 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         renormalize(&mut predicted);
         let t = predicted.translation.vector;
         let reach = self.settings.reach.wide();
-        let loaded = match map_mut::<T, P>(&mut self.map, &self.layout, &mut self.storage) {
-            Some(mut m) => self
-                .held
-                .around(&self.file, &mut m, t.x.wide(), t.y.wide(), reach),
-            None => None,
-        };
+        let loaded = self.held.around(&self.file, t.x.wide(), t.y.wide(), reach);
         let mut out = Located {
             pose: predicted,
             state: State::Degraded,
@@ -274,8 +237,8 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
             loaded,
             searched: 0,
             recovered: false,
-            map_voxels: self.map.voxels() as u32,
-            map_points: self.map.points() as u32,
+            held_tiles: self.held.len() as u32,
+            held_points: self.held.points() as u32,
         };
         let step = motion.translation.vector.norm();
         let gate = (T::of(3.0) * sigma).max(self.settings.gate_floor);
@@ -388,16 +351,6 @@ impl<'m, T: Real, P: PointCodec<T>, S: Storage> Localizer<'m, T, P, S> {
         }
         self.search = Some(search);
     }
-}
-
-/// Write access to the prior map at the start of `storage`.
-fn map_mut<'a, T: Real, P: PointCodec<T>>(
-    map: &'a mut MapState<T>,
-    layout: &MapLayout,
-    storage: &'a mut impl Storage,
-) -> Option<MapMut<'a, T, P>> {
-    let words = storage.as_mut().get_mut(..layout.words())?;
-    MapMut::of(map, layout, words).ok()
 }
 
 #[cfg(test)]

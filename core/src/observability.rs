@@ -21,7 +21,7 @@
 
 use crate::geometry::Point;
 use crate::lie::hat;
-use crate::local_map::{MapView, PointCodec};
+use crate::local_map::Voxels;
 use crate::scalar::Real;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
@@ -34,8 +34,8 @@ pub const RING_SINE: f64 = 0.5;
 
 /// Observability ratio in `[0, 1]` of the `n` registered `points` (world frame) seen from
 /// `origin`, or `None` if no sample had a structured voxel nearby.
-pub fn observability<T: Real, P: PointCodec<T>>(
-    map: &MapView<'_, T, P>,
+pub fn observability<T: Real, M: Voxels<T>>(
+    map: &M,
     points: impl Iterator<Item = Point<T>>,
     n: usize,
     origin: &Point<T>,
@@ -58,8 +58,8 @@ struct Information<T: Real> {
 /// The information of the `n` `points` (world frame) seen from `origin`, sampled every
 /// `n / SAMPLES`-th point, from voxels holding at least 3 map points; `None` if no sample had
 /// such a voxel nearby.
-fn information<T: Real, P: PointCodec<T>>(
-    map: &MapView<'_, T, P>,
+fn information<T: Real, M: Voxels<T>>(
+    map: &M,
     points: impl Iterator<Item = Point<T>>,
     n: usize,
     origin: &Point<T>,

@@ -6,7 +6,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | header `0..8` | magic `KOMAP\0\0\0` |
-//! | `8..12` | version, `u32` (1) |
+//! | `8..12` | version, `u32` (2) |
 //! | `12..16` | zero |
 //! | `16..24` | voxel size `v` (m), `f64`: the map's points were kept at most `N` per voxel |
 //! | `24..32` | tile edge `s` (m), `f64`, a whole multiple of `v`, so each voxel is in one tile |
@@ -20,20 +20,30 @@
 //! | index, 12 bytes a tile | tile column `i`, row `j` (`i32`), points (`u32`); sorted by `(i, j)` |
 //! | records, `16 + 12 capacity` bytes each, in index order | `i`, `j`, points, CRC-32 of the record but these 4 bytes; then `capacity` points `x, y, z` (`f32`, from the tile's corner `(i s, j s, 0)`), unused ones zero |
 //!
-//! Tile `(i, j)` covers `[i s, (i + 1) s) x [j s, (j + 1) s)` of the map frame's `x, y`. The
-//! header and the index are checked when the file is opened ([`TileMap::open`]), a tile's CRC
-//! when it is read ([`TileMap::tile`]): a damaged tile is refused alone, the rest stays usable.
+//! Tile `(i, j)` covers `[i s, (i + 1) s) x [j s, (j + 1) s)` of the map frame's `x, y`. A
+//! point's voxel is `floor(p / v)` of its map-frame coordinates (`f64`: the corner plus the
+//! stored offset); a tile's points are sorted by voxel (`x`, then `y`, then `z`), at most `N` a
+//! voxel, and each voxel lies in its tile (`floor(key_x / (s / v)) = i`, alike for `j`). So a
+//! voxel's points are one run of its tile's record, found by a binary search in place: the map
+//! is never copied into memory.
+//!
+//! The header and the index are checked when the file is opened ([`TileMap::open`]), a tile's
+//! CRC and order when it is read ([`TileMap::tile`]): a damaged tile is refused alone, the rest
+//! stays usable.
 
 mod crc;
 
 pub use crc::{crc32, Crc32};
 
+use crate::geometry::Point;
+use crate::scalar::Real;
+use crate::voxel::{point_to_voxel, VoxelKey};
 use core::ops::Range;
 
 /// The first eight bytes of a map file.
 pub const MAGIC: [u8; 8] = *b"KOMAP\0\0\0";
 /// The format version this reader knows.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Header bytes.
 pub const HEADER_LEN: usize = 128;
 /// Index bytes per tile.
@@ -99,6 +109,9 @@ pub enum TileError {
     Missing,
     /// A point is not finite or lies outside its tile.
     Points,
+    /// The points are not sorted by voxel, a voxel holds more than `N` or lies in another
+    /// tile.
+    Order,
 }
 
 impl core::fmt::Display for MapError {
@@ -124,6 +137,7 @@ impl core::fmt::Display for TileError {
             Self::Mismatch => "the tile record disagrees with the index",
             Self::Missing => "no such tile in the index",
             Self::Points => "a tile point is not finite or lies outside its tile",
+            Self::Order => "a tile's points are not sorted by voxel, or a voxel is too full",
         })
     }
 }
@@ -180,6 +194,11 @@ impl Header {
         let mut f = [0u8; FRAME_LEN];
         f[..b.len()].copy_from_slice(b);
         Some(f)
+    }
+
+    /// Voxels along a tile's edge, `s / v` (a whole number, checked when the file is opened).
+    pub fn voxels_per_tile(&self) -> i32 {
+        libm::round(self.tile_size / self.voxel_size) as i32
     }
 
     /// Bytes of one tile record.
@@ -258,6 +277,58 @@ pub fn encode_record(key: TileKey, offsets: &[[f32; 3]], out: &mut [u8]) -> bool
     let crc = record_crc(out);
     out[12..16].copy_from_slice(&crc.to_le_bytes());
     true
+}
+
+/// Puts tile `key`'s points (offsets from its corner) in the order a record needs, in place:
+/// sorted by voxel and then by coordinates, at most `N` a voxel (the first by coordinates),
+/// without points that are not finite, leave the tile's square or whose voxel lies in another
+/// tile (within rounding of a tile edge). Returns how many are kept, at the front.
+pub fn arrange_tile(header: &Header, key: TileKey, offsets: &mut [[f32; 3]]) -> usize {
+    let s = header.tile_size as f32;
+    let ratio = header.voxels_per_tile();
+    let probe = Tile {
+        key,
+        corner: [
+            f64::from(key.i) * header.tile_size,
+            f64::from(key.j) * header.tile_size,
+        ],
+        voxel: header.voxel_size,
+        points: &[],
+    };
+    let voxel = |o: &[f32; 3]| {
+        let p = probe.at(*o);
+        point_to_voxel(&Point::new(p[0], p[1], p[2]), header.voxel_size)
+    };
+    let fits = |o: &[f32; 3]| {
+        let inside = (0.0..=s).contains(&o[0]) && (0.0..=s).contains(&o[1]) && o[2].is_finite();
+        let v = voxel(o);
+        inside && v[0].div_euclid(ratio) == key.i && v[1].div_euclid(ratio) == key.j
+    };
+    let mut kept = 0;
+    for k in 0..offsets.len() {
+        if fits(&offsets[k]) {
+            offsets.swap(kept, k);
+            kept += 1;
+        }
+    }
+    let live = &mut offsets[..kept];
+    live.sort_unstable_by(|a, b| {
+        let c = |k: usize| a[k].total_cmp(&b[k]);
+        voxel(a).cmp(&voxel(b)).then(c(0)).then(c(1)).then(c(2))
+    });
+    let (mut out, mut run) = (0, 0);
+    for k in 0..kept {
+        run = if k > 0 && voxel(&live[k]) == voxel(&live[k - 1]) {
+            run + 1
+        } else {
+            1
+        };
+        if run <= header.points_per_voxel {
+            live[out] = live[k];
+            out += 1;
+        }
+    }
+    out
 }
 
 /// Writes a whole map file into `out` (exactly [`Header::file_len`] bytes): `header` (its
@@ -433,16 +504,33 @@ impl<'a> TileMap<'a> {
                 f64::from(key.i) * self.header.tile_size,
                 f64::from(key.j) * self.header.tile_size,
             ],
+            voxel: self.header.voxel_size,
             points: &record[RECORD_HEAD_LEN..end],
         };
         let inside = tile
             .offsets()
             .all(|[x, y, z]| (0.0..=s).contains(&x) && (0.0..=s).contains(&y) && z.is_finite());
-        if inside {
-            Ok(tile)
-        } else {
-            Err(TileError::Points)
+        if !inside {
+            return Err(TileError::Points);
         }
+        let ratio = self.header.voxels_per_tile();
+        let mut run = (None, 0u32);
+        for k in 0..tile.len() {
+            let v = tile.voxel_at(k);
+            let home = TileKey {
+                i: v[0].div_euclid(ratio),
+                j: v[1].div_euclid(ratio),
+            };
+            run = match run {
+                (Some(last), n) if last == v => (Some(v), n + 1),
+                (Some(last), _) if last > v => return Err(TileError::Order),
+                _ => (Some(v), 1),
+            };
+            if home != key || run.1 > self.header.points_per_voxel {
+                return Err(TileError::Order);
+            }
+        }
+        Ok(tile)
     }
 }
 
@@ -452,6 +540,7 @@ pub struct Tile<'a> {
     /// Its place in the grid.
     pub key: TileKey,
     corner: [f64; 2],
+    voxel: f64,
     points: &'a [u8],
 }
 
@@ -468,13 +557,65 @@ impl Tile<'_> {
 
     /// The points in the map frame, in stored order.
     pub fn points(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
-        self.offsets().map(|[x, y, z]| {
-            [
-                self.corner[0] + f64::from(x),
-                self.corner[1] + f64::from(y),
-                f64::from(z),
-            ]
-        })
+        (0..self.len()).map(|k| self.point(k))
+    }
+
+    /// Point `k < len()` in the map frame.
+    #[inline]
+    pub fn point(&self, k: usize) -> [f64; 3] {
+        let p = &self.points[k * POINT_LEN..(k + 1) * POINT_LEN];
+        let c = |at: usize| f32::from_le_bytes([p[at], p[at + 1], p[at + 2], p[at + 3]]);
+        self.at([c(0), c(4), c(8)])
+    }
+
+    /// An offset from the tile's corner in the map frame.
+    #[inline]
+    fn at(&self, o: [f32; 3]) -> [f64; 3] {
+        [
+            self.corner[0] + f64::from(o[0]),
+            self.corner[1] + f64::from(o[1]),
+            f64::from(o[2]),
+        ]
+    }
+
+    /// The voxel of point `k < len()`.
+    #[inline]
+    pub fn voxel_at(&self, k: usize) -> VoxelKey {
+        let [x, y, z] = self.point(k);
+        point_to_voxel(&Point::new(x, y, z), self.voxel)
+    }
+
+    /// The points of voxel `key`, a range of indices (empty if it holds none): a binary
+    /// search, the record sorted by voxel.
+    pub fn voxel(&self, key: &VoxelKey) -> Range<usize> {
+        let (mut lo, mut hi) = (0, self.len());
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if self.voxel_cmp(mid, key).is_lt() {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        let mut end = lo;
+        while end < self.len() && self.voxel_cmp(end, key).is_eq() {
+            end += 1;
+        }
+        lo..end
+    }
+
+    /// The voxel of point `k` against `key`, as [`Self::voxel_at`] would compare, an axis at a
+    /// time (most points differ in `x` already).
+    #[inline]
+    fn voxel_cmp(&self, k: usize, key: &VoxelKey) -> core::cmp::Ordering {
+        let p = self.point(k);
+        for (c, want) in p.iter().zip(key) {
+            let o = (c / self.voxel).floor_i32().cmp(want);
+            if o.is_ne() {
+                return o;
+            }
+        }
+        core::cmp::Ordering::Equal
     }
 
     /// The points as stored: offsets from the tile's corner.

@@ -27,7 +27,7 @@ use system::{accumulate, upper};
 
 use crate::geometry::{Point, Pose};
 use crate::lie::se3_exp;
-use crate::local_map::{MapView, Nearest, PointCodec};
+use crate::local_map::{Nearest, Voxels};
 use crate::scalar::{sqrt_lt, Real};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
@@ -156,9 +156,9 @@ fn solve<T: Real>(sum: &[T; SYSTEM_LEN]) -> Option<Vector6<T>> {
 /// (it was moved; its kept answer is dropped, so it searches from scratch then).
 #[inline]
 #[allow(clippy::too_many_arguments)]
-fn correspond<T: Real, P: PointCodec<T>>(
+fn correspond<T: Real, M: Voxels<T>>(
     c: Parts<'_, T>,
-    map: &MapView<'_, T, P>,
+    map: &M,
     rot: &Matrix3<T>,
     tr: &Vector3<T>,
     max_distance: T,
@@ -233,13 +233,13 @@ fn correspond<T: Real, P: PointCodec<T>>(
 type Answer<T> = Option<(Point<T>, T)>;
 
 /// The closest map point to `moved` within `max_distance`, exactly as
-/// [`MapView::closest_neighbor`] gives it, for a point that moved from `before` and whose last
+/// [`Voxels::closest_neighbor`] gives it, for a point that moved from `before` and whose last
 /// search left `kept` (updated here); and the work it took (1 when it came from `kept`). If that
 /// would take more than `cap` work units: `Err` with the units spent before giving up.
 #[inline]
-fn closest_from<T: Real, P: PointCodec<T>>(
+fn closest_from<T: Real, M: Voxels<T>>(
     kept: &mut [T],
-    map: &MapView<'_, T, P>,
+    map: &M,
     before: &Vector3<T>,
     moved: &Vector3<T>,
     max_distance: T,
@@ -317,10 +317,10 @@ fn rerank<T: Real>(
 /// same way whichever thread runs which chunk), until all are done (`true`) or a round makes no
 /// progress (`false`). Without a budget one round does it all.
 #[allow(clippy::too_many_arguments)]
-fn run_iteration<T: Real, P: PointCodec<T>, E: Executor, C: WorkChunk<T>>(
+fn run_iteration<T: Real, M: Voxels<T>, E: Executor, C: WorkChunk<T>>(
     exec: &E,
     chunks: &mut [C],
-    map: &MapView<'_, T, P>,
+    map: &M,
     (rot, tr): &(Matrix3<T>, Vector3<T>),
     max_distance: T,
     kernel: T,
@@ -392,11 +392,11 @@ fn summed<T: Real, C: WorkChunk<T>>(chunks: &mut [C]) -> ([T; SYSTEM_LEN], T) {
 /// [`work_words`]`::<T>(source.len(), params.planes)` words (points beyond what fits are not
 /// used).
 #[allow(clippy::too_many_arguments)]
-pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
+pub fn align_points_to_map<T: Real, M: Voxels<T>, E: Executor>(
     exec: &E,
     source: &[[T; 3]],
     work: &mut [u64],
-    map: &MapView<'_, T, P>,
+    map: &M,
     initial_guess: &Pose<T>,
     max_distance: T,
     kernel: T,
@@ -423,16 +423,16 @@ pub fn align_points_to_map<T: Real, P: PointCodec<T>, E: Executor>(
 }
 
 /// One registration's inputs.
-struct Icp<'a, 'm, T: Real, P: PointCodec<T>, E> {
+struct Icp<'a, T: Real, M: Voxels<T>, E> {
     exec: &'a E,
-    map: &'a MapView<'m, T, P>,
+    map: &'a M,
     initial_guess: &'a Pose<T>,
     max_distance: T,
     kernel: T,
     params: &'a IcpParams<T>,
 }
 
-impl<T: Real, P: PointCodec<T>, E: Executor> Icp<'_, '_, T, P, E> {
+impl<T: Real, M: Voxels<T>, E: Executor> Icp<'_, T, M, E> {
     /// Gauss-Newton over the loaded `chunks` of `source`, into `out`.
     fn run<C: WorkChunk<T>>(&self, chunks: &mut [C], source: &[[T; 3]], out: &mut Alignment<T>) {
         let (initial_guess, params) = (self.initial_guess, self.params);

@@ -1,18 +1,14 @@
 //! The prior map file (`kiss_odom_core::prior_map`): any bytes are refused with a reason or
-//! opened; every tile of an opened map reads as finite points inside its square or is refused
-//! alone; a localizer on it answers a frame without panicking.
+//! opened; every tile of an opened map reads as finite points inside its square, each found by
+//! its voxel's search, or is refused alone; a localizer on it answers a frame without panicking.
 #![no_main]
 
 use kiss_odom_core::localize::{Localizer, PriorCapacities, Settings};
 use kiss_odom_core::prior_map::{TileMap, TileKey};
-use kiss_odom_core::{Config, Exact, Pose, Sequential};
+use kiss_odom_core::{Config, Pose, Sequential};
 use libfuzzer_sys::fuzz_target;
 
-const CAPS: PriorCapacities = PriorCapacities {
-    map_voxels: 4096,
-    map_points: 8192,
-    source_points: 64,
-};
+const CAPS: PriorCapacities = PriorCapacities { source_points: 64 };
 
 fuzz_target!(|data: &[u8]| {
     let Ok(map) = TileMap::open(data) else { return };
@@ -21,11 +17,14 @@ fuzz_target!(|data: &[u8]| {
         let (key, _) = map.entry(t).expect("an entry below len");
         assert_eq!(map.find(key), Some(t), "the index finds its own entries");
         if let Ok(tile) = map.tile(t) {
-            for p in tile.points() {
+            for (k, p) in tile.points().enumerate() {
                 assert!(p.iter().all(|v| v.is_finite()));
                 let at = TileKey::of(p[0], p[1], h.tile_size);
                 let near = (at.i - key.i).abs() <= 1 && (at.j - key.j).abs() <= 1;
                 assert!(near, "a point of tile {key:?} lies in {at:?}");
+                let run = tile.voxel(&tile.voxel_at(k));
+                assert!(run.contains(&k), "point {k} of tile {key:?} not in its voxel's run");
+                assert!(run.len() <= h.points_per_voxel as usize);
             }
         }
     }
@@ -34,9 +33,9 @@ fuzz_target!(|data: &[u8]| {
     if config.validate().is_err() {
         return;
     }
-    let mut words = vec![0u64; Localizer::<f64, Exact, &mut [u64]>::words(&CAPS)];
+    let mut words = vec![0u64; Localizer::<f64, &mut [u64]>::words(&CAPS)];
     let settings = Settings::for_config(&config);
-    let Ok(mut loc) = Localizer::<f64, Exact, _>::new(
+    let Ok(mut loc) = Localizer::<f64, _>::new(
         map,
         h.frame_name(),
         &config,

@@ -7,7 +7,10 @@
 //! margin) already rules out every point in it, either against the best so far or against the
 //! correspondence threshold, which the reference applies after the search anyway.
 //!
-//! [`MapView::nearest`] also reports a lower bound on the distance of every other candidate
+//! The search and the covariances read the map through [`Voxels`]: a local map ([`MapView`])
+//! or a prior map's tiles read in place (`crate::localize`) answer the same way.
+//!
+//! [`Voxels::nearest`] also reports a lower bound on the distance of every other candidate
 //! (visited points and skipped voxels alike) and the distance to the query's voxel faces. A
 //! query that then moves by `m` still has the same answer while the kept point is closer than
 //! every other bound less `m` (and, past a face, still among the 27 voxels): ICP moves its points
@@ -57,7 +60,7 @@ pub struct Nearest<T: Real> {
 }
 
 impl<T: Real> Nearest<T> {
-    /// The answer of [`MapView::closest_neighbor`]: the closest point if it lies within
+    /// The answer of [`Voxels::closest_neighbor`]: the closest point if it lies within
     /// `max_distance`.
     #[inline]
     pub fn within(&self, max_distance: T) -> Option<(Point<T>, T)> {
@@ -65,11 +68,26 @@ impl<T: Real> Nearest<T> {
     }
 }
 
-impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
+/// Read access to voxelized points: what the correspondence search and the covariances need.
+pub trait Voxels<T: Real>: Sync {
+    /// Where one voxel's points are.
+    type Slot: Copy;
+    /// Voxel size `v`.
+    fn voxel_size(&self) -> T;
+    /// Whether no voxel holds a point.
+    fn is_empty(&self) -> bool;
+    /// The voxel `key`, if it holds points.
+    fn find(&self, key: &VoxelKey) -> Option<Self::Slot>;
+    /// Points in the voxel at `slot`.
+    fn count(&self, slot: Self::Slot) -> u32;
+    /// Calls `f` on each point of the voxel at `slot`, in stored order, until it returns
+    /// `false`.
+    fn for_each_in(&self, slot: Self::Slot, f: impl FnMut(Point<T>) -> bool);
+
     /// The closest map point to `query` among the 27 surrounding voxels if its distance is
     /// below `max_distance`, with its squared distance.
     #[inline]
-    pub fn closest_neighbor(&self, query: &Point<T>, max_distance: T) -> Option<(Point<T>, T)> {
+    fn closest_neighbor(&self, query: &Point<T>, max_distance: T) -> Option<(Point<T>, T)> {
         self.nearest(query, max_distance, u32::MAX)
             .ok()
             .and_then(|n| n.within(max_distance))
@@ -80,7 +98,7 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
     /// If it would take more than `cap` work units (`Nearest::work`) it gives up before the
     /// unit that would pass `cap`: `Err` with the units spent.
     #[inline]
-    pub fn nearest(&self, query: &Point<T>, max_distance: T, cap: u32) -> Result<Nearest<T>, u32> {
+    fn nearest(&self, query: &Point<T>, max_distance: T, cap: u32) -> Result<Nearest<T>, u32> {
         let inf = T::max_value().unwrap_or(T::one() / T::zero());
         let mut out = Nearest {
             best: None,
@@ -91,10 +109,10 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
         if cap < 1 {
             return Err(0);
         }
-        if self.st.voxels == 0 {
+        if self.is_empty() {
             return Ok(out);
         }
-        let v = self.st.voxel_size;
+        let v = self.voxel_size();
         let key = point_to_voxel(query, v);
         let margin = v * T::of(1e-3);
         // Squared distance from the query to the slab of neighbour offsets -1, 0, +1, per axis,
@@ -154,7 +172,7 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
                     let Some(slot) = self.find(&nk) else {
                         continue;
                     };
-                    let points = u32::from(self.counts[slot]);
+                    let points = self.count(slot);
                     if points > cap - out.work {
                         return Err(out.work);
                     }
@@ -185,16 +203,11 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
         out.others = other2.sqrt_l();
         Ok(out)
     }
-}
 
-impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
     /// Number of points and their covariance in the 27 voxels around the voxel `key` (GenZ-ICP's
     /// neighbourhood), visited in `NEIGHBOUR_SHIFTS` order; `None` without any point.
-    pub fn neighbourhood_covariance(
-        &self,
-        key: &VoxelKey,
-    ) -> Option<(usize, nalgebra::Matrix3<T>)> {
-        let mut slots = [0usize; 27];
+    fn neighbourhood_covariance(&self, key: &VoxelKey) -> Option<(usize, nalgebra::Matrix3<T>)> {
+        let mut slots: [Option<Self::Slot>; 27] = [None; 27];
         let mut found = 0;
         for s in NEIGHBOUR_SHIFTS.iter() {
             let nk = [
@@ -203,25 +216,28 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
                 key[2].wrapping_add(s[2]),
             ];
             if let Some(slot) = self.find(&nk) {
-                slots[found] = slot;
+                slots[found] = Some(slot);
                 found += 1;
             }
         }
-        self.covariance_of(&slots[..found])
+        self.covariance_of(slots[..found].iter().flatten().copied())
     }
 
     /// Number of points and their covariance in the voxel holding `p`, if it exists.
-    pub fn voxel_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
-        let slot = self.find(&point_to_voxel(p, self.st.voxel_size))?;
-        self.covariance_of(&[slot])
+    fn voxel_covariance(&self, p: &Point<T>) -> Option<(usize, nalgebra::Matrix3<T>)> {
+        let slot = self.find(&point_to_voxel(p, self.voxel_size()))?;
+        self.covariance_of(core::iter::once(slot))
     }
 
     /// Number of points and their covariance (mean first, then the spread about it) over the
     /// voxels in `slots`, in that order; `None` without any point.
-    fn covariance_of(&self, slots: &[usize]) -> Option<(usize, nalgebra::Matrix3<T>)> {
+    fn covariance_of(
+        &self,
+        slots: impl Iterator<Item = Self::Slot> + Clone,
+    ) -> Option<(usize, nalgebra::Matrix3<T>)> {
         let mut n = 0usize;
         let mut mean = nalgebra::Vector3::zeros();
-        for &slot in slots {
+        for slot in slots.clone() {
             self.for_each_in(slot, |q| {
                 mean += q.coords;
                 n += 1;
@@ -233,7 +249,7 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
         }
         mean /= T::of(n as f64);
         let mut cov = nalgebra::Matrix3::zeros();
-        for &slot in slots {
+        for slot in slots {
             self.for_each_in(slot, |q| {
                 let d = q.coords - mean;
                 cov += d * d.transpose();
@@ -241,5 +257,29 @@ impl<T: Real, P: PointCodec<T>> MapView<'_, T, P> {
             });
         }
         Some((n, cov / T::of(n as f64)))
+    }
+}
+
+impl<T: Real, P: PointCodec<T>> Voxels<T> for MapView<'_, T, P> {
+    type Slot = usize;
+    #[inline]
+    fn voxel_size(&self) -> T {
+        MapView::voxel_size(self)
+    }
+    #[inline]
+    fn is_empty(&self) -> bool {
+        MapView::is_empty(self)
+    }
+    #[inline]
+    fn find(&self, key: &VoxelKey) -> Option<usize> {
+        MapView::find(self, key)
+    }
+    #[inline]
+    fn count(&self, slot: usize) -> u32 {
+        u32::from(self.counts[slot])
+    }
+    #[inline]
+    fn for_each_in(&self, slot: usize, f: impl FnMut(Point<T>) -> bool) {
+        MapView::for_each_in(self, slot, f);
     }
 }

@@ -3,13 +3,13 @@
 
 use super::Localizer;
 use crate::geometry::{Point, Pose};
-use crate::local_map::{MapView, PointCodec};
+use crate::local_map::Voxels;
 use crate::observability::observability;
 use crate::registration::{align_points_to_map, moved_points, Executor, IcpParams};
 use crate::scalar::Real;
 use crate::storage::Storage;
 
-impl<T: Real, P: PointCodec<T>, S: Storage> Localizer<'_, T, P, S> {
+impl<T: Real, S: Storage> Localizer<'_, T, S> {
     /// Registers `source` to the prior map from `from` with gate `gate`: the pose, the
     /// inlier share there and the conditioning.
     pub(super) fn register<E: Executor>(
@@ -20,15 +20,9 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Localizer<'_, T, P, S> {
         gate: T,
     ) -> (Pose<T>, T, Option<T>) {
         let cfg = &self.config;
-        let map_words = self.layout.words();
-        let words = self.storage.as_mut();
-        let Some((map_part, work)) = words
-            .get_mut(..Self::words(&self.caps))
-            .map(|w| w.split_at_mut(map_words))
-        else {
-            return (*from, T::zero(), None);
-        };
-        let Ok(view) = MapView::<T, P>::of(&self.map, &self.layout, map_part) else {
+        let h = self.file.header();
+        let view = self.held.voxels::<T>(h.voxel_size, h.voxels_per_tile());
+        let Some(work) = self.storage.as_mut().get_mut(..Self::words(&self.caps)) else {
             return (*from, T::zero(), None);
         };
         let params = IcpParams {
@@ -65,8 +59,8 @@ impl<T: Real, P: PointCodec<T>, S: Storage> Localizer<'_, T, P, S> {
 /// voxel whose spread is less than 5 % vertical) and those within `near` of any other map
 /// point. Level ground matches whatever the horizontal error, so only the others tell a right
 /// pose from a wrong one.
-fn inliers<T: Real, P: PointCodec<T>>(
-    view: &MapView<'_, T, P>,
+fn inliers<T: Real, V: Voxels<T>>(
+    view: &V,
     source: &[[T; 3]],
     pose: &Pose<T>,
     near: T,

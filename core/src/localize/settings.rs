@@ -53,14 +53,11 @@ impl<T: Real> Settings<T> {
     }
 }
 
-/// The prior map's room: what [`Localizer::words`](super::Localizer::words) sizes.
+/// The localizer's room: what [`Localizer::words`](super::Localizer::words) sizes. The prior
+/// map takes none: its tiles are read in place.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PriorCapacities {
-    /// Voxels of the held tiles.
-    pub map_voxels: usize,
-    /// Points of the held tiles.
-    pub map_points: usize,
     /// Points of `P^*` registered (more are not used).
     pub source_points: usize,
 }

@@ -1,7 +1,7 @@
 use super::*;
 use crate::geometry::Point;
 use crate::local_map::{Exact, LocalMap};
-use crate::prior_map::{encode_map, Header, TileKey, HEADER_LEN, INDEX_ENTRY_LEN};
+use crate::prior_map::{arrange_tile, encode_map, Header, TileKey, HEADER_LEN, INDEX_ENTRY_LEN};
 use crate::registration::Sequential;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -66,15 +66,19 @@ fn map_file(pts: &[[f64; 3]], frame: &str) -> Vec<u8> {
         let o = [(p.x - x0) as f32, (p.y - y0) as f32, p.z as f32];
         tiles.entry(key).or_default().push(o);
     });
-    let most = tiles.values().map(Vec::len).max().unwrap_or(1) as u32;
-    let h = Header {
+    let mut h = Header {
         voxel_size: 1.0,
         tile_size: TILE,
         points_per_voxel: 4,
-        tile_points: most,
+        tile_points: 0,
         tiles: tiles.len() as u32,
         frame: Header::frame_field(frame).unwrap(),
     };
+    for (key, pts) in tiles.iter_mut() {
+        let kept = arrange_tile(&h, *key, pts);
+        pts.truncate(kept);
+    }
+    h.tile_points = tiles.values().map(Vec::len).max().unwrap_or(1) as u32;
     let list: Vec<(TileKey, &[[f32; 3]])> = tiles.iter().map(|(k, v)| (*k, &v[..])).collect();
     let mut out = vec![0u8; h.file_len()];
     assert!(encode_map(&h, &list, &mut out));
@@ -106,8 +110,6 @@ fn config<T: Real>() -> Config<T> {
 }
 
 const CAPS: PriorCapacities = PriorCapacities {
-    map_voxels: 40_000,
-    map_points: 120_000,
     source_points: 4_000,
 };
 
@@ -135,9 +137,9 @@ fn run<T: Real>(bytes: &[u8], start: Pose<f64>, frames: usize) -> Vec<(State, f6
     let pts = yard();
     let file = TileMap::open(bytes).unwrap();
     let cfg = config::<T>();
-    let mut words = vec![0u64; Localizer::<T, Exact, &mut [u64]>::words(&CAPS)];
+    let mut words = vec![0u64; Localizer::<T, &mut [u64]>::words(&CAPS)];
     let settings = Settings::for_config(&cfg);
-    let mut loc = Localizer::<T, Exact, _>::new(
+    let mut loc = Localizer::<T, _>::new(
         file,
         "site",
         &cfg,
@@ -241,8 +243,8 @@ fn a_damaged_tile_is_skipped_and_counted_and_the_rest_still_localizes() {
     bytes[at] ^= 1;
     let file = TileMap::open(&bytes).unwrap();
     let cfg = config::<f64>();
-    let mut words = vec![0u64; Localizer::<f64, Exact, &mut [u64]>::words(&CAPS)];
-    let mut loc = Localizer::<f64, Exact, _>::new(
+    let mut words = vec![0u64; Localizer::<f64, &mut [u64]>::words(&CAPS)];
+    let mut loc = Localizer::<f64, _>::new(
         file,
         "site",
         &cfg,
@@ -266,9 +268,9 @@ fn a_damaged_tile_is_skipped_and_counted_and_the_rest_still_localizes() {
 fn a_map_of_another_voxel_size_or_frame_or_too_small_tiles_is_refused_naming_it() {
     let bytes = map_file(&[[0.0, 0.0, 0.0], [30.0, 30.0, 0.0]], "site");
     let file = TileMap::open(&bytes).unwrap();
-    let mut words = vec![0u64; Localizer::<f64, Exact, &mut [u64]>::words(&CAPS)];
+    let mut words = vec![0u64; Localizer::<f64, &mut [u64]>::words(&CAPS)];
     let build = |cfg: &Config<f64>, frame: &str, s: Settings<f64>, w: &mut [u64]| {
-        Localizer::<f64, Exact, _>::new(file, frame, cfg, s, CAPS, w, Pose::identity()).err()
+        Localizer::<f64, _>::new(file, frame, cfg, s, CAPS, w, Pose::identity()).err()
     };
     let cfg = config::<f64>();
     let s = Settings::for_config(&cfg);

@@ -1,35 +1,38 @@
-//! The tiles within reach of the pose, kept in the prior map's fixed storage.
+//! The tiles within reach of the pose, read in place from the map file, and the voxels they
+//! hold as the registration sees them ([`HeldVoxels`]).
 //!
 //! The tiles needed are those whose square comes within `reach` of the pose (in `x, y`). When
-//! one of them is not held, the map is cleared and filled again with every tile within
-//! `reach + s / 2`, in key order: the same pose gives the same map, bit for bit, whatever
-//! came before, and the robot can travel half a tile before the next load. A load's work is
-//! bounded by the tiles held at most times a record's points.
+//! one of them is not held, the held set becomes every tile within `reach + s / 2`, in key
+//! order: the same pose gives the same map whatever came before, and the robot can travel half
+//! a tile before the next load. A tile is checked (CRC, order) when it joins the set; tiles
+//! already held are kept without reading them again. Nothing is copied: a voxel's points are
+//! found by a binary search in its tile's record.
 
 use crate::geometry::Point;
-use crate::local_map::{MapMut, PointCodec};
-use crate::prior_map::{TileKey, TileMap};
+use crate::local_map::Voxels;
+use crate::prior_map::{Tile, TileKey, TileMap};
 use crate::scalar::Real;
+use crate::voxel::VoxelKey;
+use core::marker::PhantomData;
 
 /// Most tiles held at once.
 pub const MAX_TILES_HELD: usize = 64;
 
-/// The keys of the tiles held (sorted), damaged ones included so they are not read again.
+/// The tiles held, sorted by key; a damaged one is held as `None` so it is not read again.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Held {
+pub(super) struct Held<'m> {
     keys: [TileKey; MAX_TILES_HELD],
+    tiles: [Option<Tile<'m>>; MAX_TILES_HELD],
     len: usize,
 }
 
 /// What one load did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Loaded {
-    /// Tiles read into the map.
+    /// Tiles that joined the held set, checked.
     pub tiles: u32,
     /// Tiles refused for a damaged record (see [`crate::prior_map::TileError`]).
     pub damaged: u32,
-    /// Points the map had no room for.
-    pub dropped_points: u32,
 }
 
 /// Most tiles of edge `s` a disc of radius `r` can touch.
@@ -38,23 +41,33 @@ pub fn tiles_touched(r: f64, s: f64) -> usize {
     n * n
 }
 
-impl Held {
+impl<'m> Held<'m> {
     pub(super) const fn new() -> Self {
         Self {
             keys: [TileKey { i: 0, j: 0 }; MAX_TILES_HELD],
+            tiles: [None; MAX_TILES_HELD],
             len: 0,
         }
     }
 
-    fn holds(&self, key: TileKey) -> bool {
-        self.keys[..self.len].binary_search(&key).is_ok()
+    fn position(&self, key: TileKey) -> Option<usize> {
+        self.keys[..self.len].binary_search(&key).ok()
     }
 
-    /// Loads the tiles around `(x, y)` into `map` if one within `reach` is missing.
-    pub(super) fn around<T: Real, P: PointCodec<T>>(
+    /// Tiles held, damaged ones included.
+    pub(super) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Points held (of the tiles not damaged).
+    pub(super) fn points(&self) -> usize {
+        self.tiles[..self.len].iter().flatten().map(Tile::len).sum()
+    }
+
+    /// Holds the tiles around `(x, y)` if one within `reach` is missing.
+    pub(super) fn around(
         &mut self,
-        file: &TileMap<'_>,
-        map: &mut MapMut<'_, T, P>,
+        file: &TileMap<'m>,
         x: f64,
         y: f64,
         reach: f64,
@@ -62,11 +75,12 @@ impl Held {
         let s = file.header().tile_size;
         let mut missing = false;
         for_each_touched(x, y, reach, s, |key| {
-            missing |= !self.holds(key) && file.find(key).is_some();
+            missing |= self.position(key).is_none() && file.find(key).is_some();
         });
         if !missing {
             return None;
         }
+        let before = *self;
         self.len = 0;
         for_each_touched(x, y, reach + 0.5 * s, s, |key| {
             if file.find(key).is_some() && self.len < MAX_TILES_HELD {
@@ -75,23 +89,90 @@ impl Held {
             }
         });
         self.keys[..self.len].sort_unstable();
-        map.clear();
         let mut loaded = Loaded::default();
-        for key in &self.keys[..self.len] {
-            let Some(t) = file.find(*key) else { continue };
-            match file.tile(t) {
-                Ok(tile) => {
-                    let points = tile
-                        .points()
-                        .map(|p| Point::new(T::of(p[0]), T::of(p[1]), T::of(p[2])));
-                    let stats = map.add_points(points);
-                    loaded.tiles += 1;
-                    loaded.dropped_points += (stats.dropped_points + stats.dropped_voxels) as u32;
+        for k in 0..self.len {
+            let key = self.keys[k];
+            self.tiles[k] = match before.position(key) {
+                Some(b) => before.tiles[b],
+                None => {
+                    let tile = file.find(key).and_then(|t| file.tile(t).ok());
+                    match tile {
+                        Some(_) => loaded.tiles += 1,
+                        None => loaded.damaged += 1,
+                    }
+                    tile
                 }
-                Err(_) => loaded.damaged += 1,
-            }
+            };
         }
         Some(loaded)
+    }
+
+    /// The held tiles as voxels of size `v` (`ratio` voxels along a tile's edge).
+    pub(super) fn voxels<T: Real>(&self, v: f64, ratio: i32) -> HeldVoxels<'_, 'm, T> {
+        HeldVoxels {
+            held: self,
+            voxel_size: T::of(v),
+            ratio,
+            _t: PhantomData,
+        }
+    }
+}
+
+/// The held tiles' voxels: what the localizer registers to.
+pub(super) struct HeldVoxels<'h, 'm, T> {
+    held: &'h Held<'m>,
+    voxel_size: T,
+    ratio: i32,
+    _t: PhantomData<T>,
+}
+
+/// A voxel's points: its tile's place in the held set and their range in the record.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Run {
+    tile: u8,
+    start: u32,
+    end: u32,
+}
+
+impl<T: Real> Voxels<T> for HeldVoxels<'_, '_, T> {
+    type Slot = Run;
+
+    fn voxel_size(&self) -> T {
+        self.voxel_size
+    }
+
+    fn is_empty(&self) -> bool {
+        self.held.points() == 0
+    }
+
+    fn find(&self, key: &VoxelKey) -> Option<Run> {
+        let home = TileKey {
+            i: key[0].div_euclid(self.ratio),
+            j: key[1].div_euclid(self.ratio),
+        };
+        let t = self.held.position(home)?;
+        let range = self.held.tiles[t]?.voxel(key);
+        (!range.is_empty()).then_some(Run {
+            tile: t as u8,
+            start: range.start as u32,
+            end: range.end as u32,
+        })
+    }
+
+    fn count(&self, run: Run) -> u32 {
+        run.end - run.start
+    }
+
+    fn for_each_in(&self, run: Run, mut f: impl FnMut(Point<T>) -> bool) {
+        let Some(tile) = self.held.tiles[usize::from(run.tile)] else {
+            return;
+        };
+        for k in run.start as usize..run.end as usize {
+            let [x, y, z] = tile.point(k);
+            if !f(Point::new(T::of(x), T::of(y), T::of(z))) {
+                return;
+            }
+        }
     }
 }
 

@@ -15,7 +15,7 @@ fn header(tiles: u32) -> Header {
 
 /// Three tiles: one empty, one full, one of a point, at negative and positive keys.
 fn sample() -> (Header, Vec<u8>) {
-    let a = [[0.5f32, 1.25, -0.5], [49.9, 0.0, 2.0], [10.0, 20.0, 3.0]];
+    let a = [[0.5f32, 1.25, -0.5], [10.0, 20.0, 3.0], [49.9, 0.0, 2.0]];
     let b = [[1.0f32, 2.0, 3.0]];
     let tiles: [(TileKey, &[[f32; 3]]); 3] = [
         (TileKey { i: -2, j: 7 }, &a),
@@ -38,7 +38,7 @@ fn a_written_map_reads_back_tile_by_tile() {
     let t = map.find(TileKey { i: -2, j: 7 }).unwrap();
     let pts: Vec<[f64; 3]> = map.tile(t).unwrap().points().collect();
     assert_eq!(pts[0], [-100.0 + 0.5, 350.0 + 1.25, -0.5]);
-    assert_eq!(pts[1], [-100.0 + f64::from(49.9f32), 350.0, 2.0]);
+    assert_eq!(pts[2], [-100.0 + f64::from(49.9f32), 350.0, 2.0]);
     assert_eq!(pts.len(), 3);
     assert!(map
         .tile(map.find(TileKey { i: -2, j: 8 }).unwrap())
@@ -167,4 +167,62 @@ fn an_unsorted_index_and_out_of_range_fields_are_refused_naming_them() {
         assert_eq!(map.tile(1).unwrap_err(), TileError::Missing);
     }
     assert_eq!(Header::frame_field("caf\u{e9}"), None);
+}
+
+#[test]
+fn a_tile_out_of_voxel_order_or_too_full_is_refused_and_arranging_fixes_it() {
+    let h = Header {
+        points_per_voxel: 2,
+        tile_points: 6,
+        tiles: 1,
+        ..header(1)
+    };
+    let key = TileKey { i: -1, j: 2 };
+    let encode = |pts: &[[f32; 3]]| {
+        let mut out = vec![0u8; h.file_len()];
+        assert!(encode_map(&h, &[(key, pts)], &mut out));
+        out
+    };
+    // Voxels (-40, 110, 0) and (-50, 100, 0): out of order.
+    let unsorted = [[10.5f32, 10.5, 0.5], [0.5, 0.5, 0.5]];
+    let bytes = encode(&unsorted);
+    assert_eq!(
+        TileMap::open(&bytes).unwrap().tile(0).unwrap_err(),
+        TileError::Order
+    );
+    // Three points in one voxel where N is 2.
+    let crowded = [[0.1f32, 0.1, 0.1], [0.2, 0.2, 0.2], [0.3, 0.3, 0.3]];
+    let bytes = encode(&crowded);
+    assert_eq!(
+        TileMap::open(&bytes).unwrap().tile(0).unwrap_err(),
+        TileError::Order
+    );
+    // Arranged: sorted, the voxel trimmed to its first two by coordinates, the point outside
+    // the tile left out; each voxel's run found in place.
+    let mut pts = vec![
+        [10.5f32, 10.5, 0.5],
+        [0.3, 0.3, 0.3],
+        [60.0, 1.0, 1.0],
+        [0.1, 0.1, 0.1],
+        [0.2, 0.2, 0.2],
+        [0.5, 0.5, -0.5],
+    ];
+    let kept = arrange_tile(&h, key, &mut pts);
+    assert_eq!(kept, 4);
+    let bytes = encode(&pts[..kept]);
+    let map = TileMap::open(&bytes).unwrap();
+    let tile = map.tile(0).unwrap();
+    assert_eq!(tile.voxel(&[-50, 100, -1]), 0..1);
+    assert_eq!(tile.voxel(&[-50, 100, 0]), 1..3);
+    assert_eq!(
+        tile.point(1),
+        [
+            -50.0 + f64::from(0.1f32),
+            100.0 + f64::from(0.1f32),
+            f64::from(0.1f32)
+        ]
+    );
+    assert_eq!(tile.voxel(&[-40, 110, 0]), 3..4);
+    assert!(tile.voxel(&[-41, 110, 0]).is_empty());
+    assert!(tile.voxel(&[-30, 110, 0]).is_empty());
 }

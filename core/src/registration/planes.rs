@@ -25,7 +25,7 @@
 use super::system::SYSTEM_LEN;
 use crate::eigen::jacobi_eigen;
 use crate::geometry::Point;
-use crate::local_map::{MapView, PointCodec};
+use crate::local_map::Voxels;
 use crate::scalar::Real;
 use crate::voxel::{point_to_voxel, VoxelKey};
 use nalgebra::Vector3;
@@ -62,9 +62,9 @@ impl Cached {
     /// The normal of the map around `s` (see [`normal_at`]), from `cached` when `s` is in the
     /// voxel it was read for, else read and kept in `cached` (`CACHED` scalars).
     #[inline]
-    pub(super) fn normal<T: Real, P: PointCodec<T>>(
+    pub(super) fn normal<T: Real, M: Voxels<T>>(
         cached: &mut [T],
-        map: &MapView<'_, T, P>,
+        map: &M,
         s: &Point<T>,
     ) -> Option<Vector3<T>> {
         let voxel = point_to_voxel(s, map.voxel_size());
@@ -82,18 +82,12 @@ impl Cached {
 
 /// The unit normal of the map around `s` if it is planar (see the module doc).
 #[cfg(test)]
-pub(super) fn normal_at<T: Real, P: PointCodec<T>>(
-    map: &MapView<'_, T, P>,
-    s: &Point<T>,
-) -> Option<Vector3<T>> {
+pub(super) fn normal_at<T: Real, M: Voxels<T>>(map: &M, s: &Point<T>) -> Option<Vector3<T>> {
     normal_around(map, &point_to_voxel(s, map.voxel_size()))
 }
 
 /// The unit normal of the map in the 27 voxels around `voxel` if it is planar.
-fn normal_around<T: Real, P: PointCodec<T>>(
-    map: &MapView<'_, T, P>,
-    voxel: &VoxelKey,
-) -> Option<Vector3<T>> {
+fn normal_around<T: Real, M: Voxels<T>>(map: &M, voxel: &VoxelKey) -> Option<Vector3<T>> {
     let (n, cov) = map.neighbourhood_covariance(voxel)?;
     if n < MIN_POINTS {
         return None;

@@ -1,5 +1,5 @@
 use super::*;
-use crate::local_map::{Exact, LocalMap};
+use crate::local_map::{Exact, LocalMap, MapView, PointCodec};
 use crate::testutil::yard;
 use nalgebra::{Translation3, UnitQuaternion};
 use std::vec::Vec;

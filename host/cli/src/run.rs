@@ -141,11 +141,9 @@ pub(crate) fn execute_on(
         );
     }
     record.localizer_bytes = localizer.as_ref().map(MapLocalizer::state_bytes);
-    record.localizer_board_bytes = localizer.as_ref().map(|_| {
-        let (voxels, points) = record.prior_held;
-        let source = driver.build().capacities.source_points;
-        MapLocalizer::board_bytes(voxels as usize, points as usize, source)
-    });
+    record.localizer_board_bytes = localizer
+        .as_ref()
+        .map(|_| MapLocalizer::board_bytes(driver.build().capacities.source_points));
     // What the source found after its last frame (a sensor recording's packets refused after
     // the last sweep) is warned about and counted like a frame's findings.
     let trailer = dataset.frames.trailer();
@@ -401,7 +399,7 @@ fn frame_loop(
         if let Some(l) = &located {
             outcome.pose = l.pose;
             let held = &mut record.prior_held;
-            *held = (held.0.max(l.map_voxels), held.1.max(l.map_points));
+            *held = (held.0.max(l.held_tiles), held.1.max(l.held_points));
         }
         if let Some(w) = localizer.as_mut().and_then(|l| l.damaged_warning()) {
             warn(record, &bar, &w);

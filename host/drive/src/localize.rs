@@ -3,22 +3,19 @@
 //! on the odometry's registration cloud and its motion over the frame.
 //!
 //! The host localizes in `f64` whatever the odometry's scalar (the board runs the core's
-//! localizer in its own). The prior map's room is sized from the file: the tiles within reach
-//! at most, each as full as the fullest tile, so it never drops.
+//! localizer in its own). The prior map is read in place, as a board reads it from flash.
 
 use crate::{Driver, Outcome, Step};
 use anyhow::{anyhow, Context, Result};
-use kiss_odom_core::localize::{
-    tiles_touched, Localizer, Located, PriorCapacities, Settings as LocalizeSettings,
-};
+use kiss_odom_core::localize::{Localizer, Located, PriorCapacities, Settings as LocalizeSettings};
 use kiss_odom_core::prior_map::TileMap;
-use kiss_odom_core::{Config, Exact, Quantized, Sequential};
+use kiss_odom_core::{Config, Sequential};
 use nalgebra::Isometry3;
 use std::path::Path;
 
 /// The core's localizer over a map file the process keeps for its lifetime.
 pub struct MapLocalizer {
-    loc: Localizer<'static, f64, Exact, Box<[u64]>>,
+    loc: Localizer<'static, f64, Box<[u64]>>,
     /// Damaged tiles found so far (each load that met one counts it).
     pub damaged_tiles: u32,
     /// Whether the damaged tiles were warned about.
@@ -43,14 +40,10 @@ impl MapLocalizer {
         let file = TileMap::open(bytes).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         let h = *file.header();
         let settings = LocalizeSettings::for_config(config);
-        let held = tiles_touched(settings.reach + 0.5 * h.tile_size, h.tile_size).min(file.len());
-        let points = (held * h.tile_points as usize).max(1);
         let caps = PriorCapacities {
-            map_voxels: points,
-            map_points: points,
             source_points: source_points.max(1),
         };
-        let words = vec![0u64; Localizer::<f64, Exact, Box<[u64]>>::words(&caps)];
+        let words = vec![0u64; Localizer::<f64, Box<[u64]>>::words(&caps)];
         let loc = Localizer::new(
             file,
             frame,
@@ -112,17 +105,14 @@ impl MapLocalizer {
         self.loc.state_bytes()
     }
 
-    /// Bytes of the localizer's state on a board whose prior map holds exactly `voxels` voxels
-    /// and `points` points (f32, quantised map points) and `source_points` registration points:
-    /// what a run's most held tiles ask of a board, without margin.
-    pub fn board_bytes(voxels: usize, points: usize, source_points: usize) -> usize {
+    /// Bytes of the localizer's state on a board (f32) registering `source_points` points:
+    /// whatever the map and the tiles held, which stay in flash.
+    pub fn board_bytes(source_points: usize) -> usize {
         let caps = PriorCapacities {
-            map_voxels: voxels.max(1),
-            map_points: points.max(1),
             source_points: source_points.max(1),
         };
-        8 * Localizer::<f32, Quantized, Box<[u64]>>::words(&caps)
-            + std::mem::size_of::<Localizer<'static, f32, Quantized, Box<[u64]>>>()
+        8 * Localizer::<f32, Box<[u64]>>::words(&caps)
+            + std::mem::size_of::<Localizer<'static, f32, Box<[u64]>>>()
     }
 
     /// The map file.

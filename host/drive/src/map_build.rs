@@ -6,14 +6,15 @@
 //! that run's local map would, without its radius. The voxel map is the core's fixed-capacity
 //! `LocalMap`; it grows by doubling *before* a batch could fill it, never after a point was
 //! refused, so the kept points do not depend on the starting capacity. The kept points are
-//! grouped into tiles, sorted within a tile by voxel and coordinates (not by table slot, which
-//! depends on the capacity), and encoded as the file's bytes.
+//! grouped into tiles by voxel, arranged as a record needs (`prior_map::arrange_tile`: sorted
+//! by voxel and coordinates, not by table slot, which depends on the capacity) and encoded as
+//! the file's bytes.
 
 use anyhow::{bail, ensure, Context, Result};
-use kiss_odom_core::prior_map::{encode_map, Header, TileKey, MAX_TILES, MAX_TILE_POINTS};
-use kiss_odom_core::stages::{
-    point_to_voxel, LocalMap, Preprocessed, Preprocessor, VoxelKey, BLOCK,
+use kiss_odom_core::prior_map::{
+    arrange_tile, encode_map, Header, TileKey, MAX_TILES, MAX_TILE_POINTS,
 };
+use kiss_odom_core::stages::{point_to_voxel, LocalMap, Preprocessed, Preprocessor, BLOCK};
 use kiss_odom_core::{Config, Exact, Point, Pose};
 use std::collections::BTreeMap;
 
@@ -187,42 +188,42 @@ impl MapBuilder {
             "the map is empty: no point of the input was kept"
         );
         let (v, s) = (self.params.voxel_size, self.params.tile_size);
-        let mut tiles: BTreeMap<TileKey, Vec<(VoxelKey, [f64; 3])>> = BTreeMap::new();
+        let mut tiles: BTreeMap<TileKey, Vec<[f64; 3]>> = BTreeMap::new();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         self.map.view().for_each_point(|_, p| {
-            let key = TileKey::of(p.x, p.y, s);
-            tiles
-                .entry(key)
-                .or_default()
-                .push((point_to_voxel(&p, v), [p.x, p.y, p.z]));
+            // The tile of the point's voxel, so that each voxel lies in one tile.
+            let k = point_to_voxel(&p, v);
+            let r = (s / v).round() as i32;
+            let key = TileKey {
+                i: k[0].div_euclid(r),
+                j: k[1].div_euclid(r),
+            };
+            tiles.entry(key).or_default().push([p.x, p.y, p.z]);
             for (a, c) in [p.x, p.y].into_iter().enumerate() {
                 lo[a] = lo[a].min(c);
                 hi[a] = hi[a].max(c);
             }
         });
-        let most = tiles.values().map(Vec::len).max().unwrap_or(0);
-        ensure!(
-            most <= MAX_TILE_POINTS as usize,
-            "a tile holds {most} points, more than a file's {MAX_TILE_POINTS}: use smaller tiles"
-        );
         ensure!(
             tiles.len() <= MAX_TILES as usize,
             "{} tiles, more than a file's {MAX_TILES}: use larger tiles",
             tiles.len()
         );
+        let mut header = Header {
+            voxel_size: v,
+            tile_size: s,
+            points_per_voxel: self.params.points_per_voxel,
+            tile_points: 0,
+            tiles: tiles.len() as u32,
+            frame: self.frame,
+        };
         let offsets: Vec<(TileKey, Vec<[f32; 3]>)> = tiles
             .into_iter()
-            .map(|(key, mut pts)| {
-                pts.sort_by(|a, b| {
-                    a.0.cmp(&b.0).then_with(|| {
-                        let c = |k: usize| a.1[k].total_cmp(&b.1[k]);
-                        c(0).then(c(1)).then(c(2))
-                    })
-                });
+            .map(|(key, pts)| {
                 let corner = [f64::from(key.i) * s, f64::from(key.j) * s];
-                let off = pts
+                let mut off: Vec<[f32; 3]> = pts
                     .iter()
-                    .map(|(_, p)| {
+                    .map(|p| {
                         [
                             (p[0] - corner[0]) as f32,
                             (p[1] - corner[1]) as f32,
@@ -230,17 +231,19 @@ impl MapBuilder {
                         ]
                     })
                     .collect();
+                // Sorted by the voxel of the stored point (which rounding can move across a
+                // voxel face), at most N a voxel.
+                let kept = arrange_tile(&header, key, &mut off);
+                off.truncate(kept);
                 (key, off)
             })
             .collect();
-        let header = Header {
-            voxel_size: v,
-            tile_size: s,
-            points_per_voxel: self.params.points_per_voxel,
-            tile_points: most as u32,
-            tiles: offsets.len() as u32,
-            frame: self.frame,
-        };
+        let most = offsets.iter().map(|(_, o)| o.len()).max().unwrap_or(0);
+        ensure!(
+            most <= MAX_TILE_POINTS as usize,
+            "a tile holds {most} points, more than a file's {MAX_TILE_POINTS}: use smaller tiles"
+        );
+        header.tile_points = most.max(1) as u32;
         let refs: Vec<(TileKey, &[[f32; 3]])> =
             offsets.iter().map(|(k, o)| (*k, o.as_slice())).collect();
         let mut bytes = vec![0u8; header.file_len()];
@@ -249,7 +252,7 @@ impl MapBuilder {
         }
         let stats = MapStats {
             points_in: self.points_in,
-            points_kept: self.map.points(),
+            points_kept: offsets.iter().map(|(_, o)| o.len()).sum(),
             voxels: self.map.voxels(),
             tiles: offsets.len(),
             extent: [hi[0] - lo[0], hi[1] - lo[1]],

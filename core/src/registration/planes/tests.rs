@@ -1,6 +1,6 @@
 use super::*;
 use crate::geometry::Pose;
-use crate::local_map::{Exact, LocalMap};
+use crate::local_map::{Exact, LocalMap, MapView};
 use crate::registration::{align_points_to_map, work_words, IcpParams, Sequential};
 use std::vec::Vec;
 

@@ -117,14 +117,15 @@ pub struct LocalizationSummary {
     pub degraded: usize,
     /// Frames lost.
     pub lost: usize,
-    /// Bytes of the localizer's state (the prior map's tiles held and ICP's work).
+    /// Bytes of the localizer's state (ICP's work and the held tiles' keys; the map is read in
+    /// place).
     pub state_bytes: usize,
-    /// The most voxels of the prior map held at once (what a board's capacities must hold).
-    pub held_voxels: u32,
-    /// The most points of the prior map held at once.
+    /// The most tiles of the prior map held at once.
+    pub held_tiles: u32,
+    /// The most points of the prior map within reach at once (read in place, never copied).
     pub held_points: u32,
-    /// The localizer's bytes on a board holding exactly `held_voxels` and `held_points` (f32,
-    /// quantised map points, the run's registration cloud capacity): to size firmware from.
+    /// The localizer's bytes on a board (f32, the run's registration cloud capacity), whatever
+    /// the map's size: to size firmware from.
     pub board_bytes: usize,
 }
 
@@ -137,7 +138,7 @@ impl LocalizationSummary {
             degraded: count("degraded"),
             lost: count("lost"),
             state_bytes: record.localizer_bytes?,
-            held_voxels: record.prior_held.0,
+            held_tiles: record.prior_held.0,
             held_points: record.prior_held.1,
             board_bytes: record.localizer_board_bytes?,
         })

@@ -25,7 +25,7 @@ pub struct Record {
     pub sweeps: bool,
     /// With `--map`: the localizer's state bytes.
     pub localizer_bytes: Option<usize>,
-    /// With `--map`: the most voxels and points of the prior map held at once.
+    /// With `--map`: the most tiles and points of the prior map held at once.
     pub prior_held: (u32, u32),
     /// With `--map`: the localizer's bytes on a board holding exactly those (f32, quantised).
     pub localizer_board_bytes: Option<usize>,
