@@ -5,12 +5,13 @@
 # bits, so equal text is bit-identical; on a mismatch the largest pose difference is printed.
 #
 #   embedded/compare.sh [case...]     cases: thumbv7em thumbv7em-full thumbv7em-robust m7 m7-f64
-#                                            m7-tiny m7-imu m7-accurate m7-packets m7-far m7-mid360
+#                                            m7-tiny m7-imu m7-accurate m7-localize m7-packets
+#                                            m7-far m7-mid360
 #                                            aarch64 aarch64-small
 #                                            riscv32 riscv32-f64 riscv32-full
 #                                     (default: thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu
-#                                     m7-accurate m7-packets m7-far m7-mid360 aarch64 riscv32
-#                                     riscv32-f64)
+#                                     m7-accurate m7-localize m7-packets m7-far m7-mid360 aarch64
+#                                     riscv32 riscv32-f64)
 #
 # Outputs go to embedded/target/compare/<case>.{qemu,host}.txt. Exits 0 when all agree, 1 on
 # a mismatch or a failed run; prints "SKIP: ..." and exits 0 when QEMU could not be installed.
@@ -23,7 +24,7 @@ mkdir -p "$out"
 source "$here/qemu-or-skip.sh"
 
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu m7-accurate m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
+[ ${#cases[@]} -gt 0 ] || cases=(thumbv7em thumbv7em-robust m7-f64 m7-tiny m7-imu m7-accurate m7-localize m7-packets m7-far m7-mid360 aarch64 riscv32 riscv32-f64)
 
 failed=0
 for c in "${cases[@]}"; do
@@ -36,6 +37,7 @@ for c in "${cases[@]}"; do
     m7-tiny) target=m7; features="tiny" ;;
     m7-imu) target=m7; features="tiny,imu" ;;
     m7-accurate) target=m7; features="tiny,accurate" ;;
+    m7-localize) target=m7; features="tiny,localize" ;;
     m7-packets) target=m7; features="packets" ;;
     m7-far) target=m7; features="packets,far" ;;
     m7-mid360) target=m7; features="packets,mid360" ;;
@@ -68,7 +70,7 @@ for c in "${cases[@]}"; do
     failed=1
     continue
   fi
-  pick() { grep -E '^(config|input|frame|pose|imu) ' "$1"; }
+  pick() { grep -E '^(config|input|frame|pose|imu|localize) ' "$1"; }
   frames=$(grep -c '^pose ' "$out/$c.qemu.txt" || true)
   if [ "$frames" -gt 0 ] && diff <(pick "$out/$c.host.txt") <(pick "$out/$c.qemu.txt") > "$out/$c.diff"; then
     echo "PASS $c: $frames poses bit-identical to the host (qemu run $((mid - start)) s incl. build)"
@@ -80,7 +82,7 @@ for c in "${cases[@]}"; do
                printf "  frame %s max |pose difference| %.3e\n", $2, m }'
     failed=1
   fi
-  grep -E '^(size|cost|insns|memory|stack) ' "$out/$c.qemu.txt" | sed 's/^/  /'
+  grep -E '^(size|cost|cost_localize|insns|memory|memory_localize|stack) ' "$out/$c.qemu.txt" | sed 's/^/  /'
 done
 if [ "$failed" = 0 ]; then
   echo "compare: all cases bit-identical"

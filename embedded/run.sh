@@ -107,6 +107,23 @@ if [[ ",$features," == *",tiny,"* ]] || [[ ",$features," == *",imu,"* ]]; then
       --overwrite >&2 || { echo "error: cannot generate the VLP-16 sweeps" >&2; exit 96; }
   fi
   export KISS_EMBED_VLP16="$vlp"
+  # `localize`: the same drive revisited (the other way, the scene changed), localized in a
+  # map of the first drive built from its ground truth at Config::tiny's 50 m and 2 m voxels.
+  if [[ ",$features," == *",localize,"* ]]; then
+    revisit="${vlp}-revisit"
+    if [ ! -f "$revisit/sim.toml" ]; then
+      kiss_odom simulate --out "$revisit" --frames 40 "${sim[@]}" --revisit \
+        --seed 11 --beams 16 --columns 1800 --fov-up 15 --fov-down -15 --max-range 100 \
+        --overwrite >&2 || { echo "error: cannot generate the revisit" >&2; exit 96; }
+    fi
+    map="${KISS_EMBED_MAP:-$vlp/map-tiny.komap}"
+    if [ ! -f "$map" ]; then
+      kiss_odom map build "$vlp" --poses "$vlp/poses.txt" --max-range 50 \
+        --set mapping.voxel_size=2 --points-per-voxel 3 --out "$map" >&2 \
+        || { echo "error: cannot build the prior map" >&2; exit 96; }
+    fi
+    export KISS_EMBED_VLP16="$revisit" KISS_EMBED_MAP="$map"
+  fi
 fi
 # The packets profile embeds the UDP payloads of a generated VLP-16 recording (the same drive).
 # `far`: a suburban drive, 36 sweeps from the fifth, over which TINY's map fills at 100 m.
@@ -203,10 +220,15 @@ fi
 [ "$status" = 124 ] && echo "error: QEMU timed out after ${timeout_s}s" >&2
 
 if [ -n "$log" ]; then
-  # Marks come in pairs around each frame's register_frame call.
-  awk '/^mark:/{m[n++]=$2} /^insns:/{t=$2}
-       END{for(i=0;i+1<n;i+=2) printf "cost %d insns=%.0f counter=qemu-plugin\n", i/2, m[i+1]-m[i];
-           if (n >= 2) { s=0; for(i=0;i+1<n;i+=2) s+=m[i+1]-m[i]; printf "insns frames_total=%.0f counter=qemu-plugin\n", s }
+  # Marks come in pairs around each frame's register_frame call (with `localize`, a second
+  # pair around its localization: `cost_localize`).
+  loc=0; [[ ",$features," == *",localize,"* ]] && loc=1
+  awk -v loc="$loc" '/^mark:/{m[n++]=$2} /^insns:/{t=$2}
+       END{for(i=0;i+1<n;i+=2) { k=i/2; c=m[i+1]-m[i]
+             if (loc && k%2) { printf "cost_localize %d insns=%.0f counter=qemu-plugin\n", (k-1)/2, c; l+=c }
+             else { printf "cost %d insns=%.0f counter=qemu-plugin\n", loc ? k/2 : k, c; s+=c } }
+           if (n >= 2) printf "insns frames_total=%.0f counter=qemu-plugin\n", s
+           if (loc && n >= 4) printf "insns localize_total=%.0f counter=qemu-plugin\n", l
            if (t != "") printf "insns program_total=%.0f counter=qemu-plugin\n", t}' "$log"
   rm -f "$log"
 fi

@@ -36,6 +36,8 @@ compile_error!(
 );
 #[cfg(feature = "imu")]
 mod imu;
+#[cfg(feature = "localize")]
+mod localize;
 #[cfg(feature = "packets")]
 mod stream;
 mod workload;

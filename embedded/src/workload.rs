@@ -157,6 +157,10 @@ fn embedded_frames<S: kiss_odom_core::Storage>(
     let mut total: Option<u64> = Some(0);
     #[cfg(feature = "imu")]
     let mut imu = crate::imu::Imu::new();
+    #[cfg(feature = "localize")]
+    let Some(mut prior) = crate::localize::Prior::new(&config()) else {
+        return Err(EXIT_CONFIG_ERROR);
+    };
     for (i, f) in frames::FRAMES.iter().enumerate() {
         let pts = points(f);
         out!(
@@ -197,7 +201,11 @@ fn embedded_frames<S: kiss_odom_core::Storage>(
         let cost = t0.zip(t1).map(|(a, b)| b - a);
         total = total.zip(cost).map(|(a, b)| a + b);
         match result {
-            Ok(r) => emit_frame(i, f, &r, cost, counter),
+            Ok(r) => {
+                emit_frame(i, f, &r, cost, counter);
+                #[cfg(feature = "localize")]
+                prior.frame(odom, i, insns, counter);
+            }
             Err(e) => {
                 out!("error frame {}: {}", i, e);
                 return Err(EXIT_FRAME_ERROR);
