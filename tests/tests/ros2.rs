@@ -483,3 +483,89 @@ fn base_to_lidar_extrinsic_moves_the_poses_and_the_local_map_is_published_in_the
     assert_eq!(published.len(), expected.len());
     assert!(published == expected, "local map points differ");
 }
+
+/// A generated revisit recorded as a bag, played with `--lockstep` into a node localizing in a
+/// map of the first drive (`map_file`, `initial_pose`): its poses, in the map frame, are `run
+/// --map`'s bit for bit on the same bag, each cloud's line says its state, and the base's pose
+/// in the map frame goes out on `map_pose_topic`.
+#[test]
+fn a_node_with_a_prior_map_publishes_runs_map_frame_poses() {
+    let _lock = serial();
+    let data = tempfile::tempdir().unwrap();
+    let (a, b) = (data.path().join("a"), data.path().join("b"));
+    let map = data.path().join("site.komap");
+    let cli = |args: &[&str]| {
+        let argv = ["kiss-odom"].iter().chain(args).map(Into::into).collect();
+        let mut err = Vec::new();
+        let code = kiss_odom::cli::main_with(argv, &mut err);
+        assert_eq!(code, 0, "{args:?}: {}", String::from_utf8_lossy(&err));
+    };
+    let (a_s, b_s, map_s) = (
+        a.to_string_lossy(),
+        b.to_string_lossy(),
+        map.to_string_lossy(),
+    );
+    cli(&["simulate", "--out", &a_s, "--frames", "30", "--seed", "5"]);
+    let revisit = [
+        "--frames",
+        "30",
+        "--seed",
+        "5",
+        "--revisit",
+        "--format",
+        "bag",
+    ];
+    cli(&[&["simulate", "--out", &b_s][..], &revisit].concat());
+    let poses = a.join("poses.txt");
+    cli(&[
+        "map",
+        "build",
+        &a_s,
+        "--poses",
+        &poses.to_string_lossy(),
+        "--out",
+        &map_s,
+    ]);
+    let start = std::fs::read_to_string(b.join("initial_pose.txt")).unwrap();
+    let start = start.trim();
+    let bag = b.join("points.bag");
+
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(8);
+    let params = NodeParams {
+        map_file: map_s.to_string(),
+        initial_pose: start.to_string(),
+        ..NodeParams::default()
+    };
+    let node = start_node_with(d, dir.path(), Duration::ZERO, params);
+    let dp = dds::participant(d).unwrap();
+    let mut map_poses = dds::cloud_reader(&dp, "/kiss/map_pose").unwrap();
+    play(&node, &bag, d, &["--lockstep"]);
+    let stopped = node.stop_after(30);
+    assert_eq!(stopped.summary.registered, 30, "{}", stopped.err);
+    let run_dir = tempfile::tempdir().unwrap();
+    let bag_s = bag.to_string_lossy();
+    let expected = run_poses(
+        &[&bag_s, "--map", &map_s, "--initial-pose", start],
+        run_dir.path(),
+    );
+    assert_eq!(
+        stopped.poses, expected,
+        "node poses differ from run --map's"
+    );
+    let localized = stopped.out.matches(" map localized").count();
+    println!("{localized} of 30 clouds localized");
+    assert!(localized >= 25, "{}", stopped.out);
+    let mut received = 0;
+    while let Ok(Some(sample)) = map_poses.take_next_sample() {
+        let bytes = sample.into_value().0;
+        // The header's frame_id, a CDR string: its length with the zero, then "map\0".
+        assert!(
+            bytes.windows(8).any(|w| w == b"\x04\0\0\0map\0"),
+            "frame_id map"
+        );
+        received += 1;
+    }
+    println!("{received} map poses received");
+    assert!(received > 0, "no pose in the map frame published");
+}

@@ -56,6 +56,14 @@ pub struct Ros2Args {
     /// Publish the local map (every `local_map_period` seconds).
     #[arg(long)]
     pub(crate) local_map: bool,
+    /// Localize each cloud in this prior map (`map_file`): the base's pose in the map frame on
+    /// `map_pose_topic`, `map -> odometry frame` on /tf.
+    #[arg(long, requires = "initial_pose")]
+    pub(crate) map: Option<PathBuf>,
+    /// With --map: the sensor's pose in the map frame at the first cloud, X,Y,Z,ROLL,PITCH,YAW
+    /// (metres, degrees; `initial_pose`).
+    #[arg(long, requires = "map", allow_hyphen_values = true)]
+    pub(crate) initial_pose: Option<String>,
     /// Also write each published pose as a KITTI line to this file.
     #[arg(long)]
     pub poses: Option<PathBuf>,
@@ -203,6 +211,10 @@ pub(crate) fn resolve(args: &Ros2Args) -> Result<(Settings, params::NodeParams)>
     }
     if args.local_map {
         p.publish_local_map = true;
+    }
+    if let (Some(m), Some(pose)) = (&args.map, &args.initial_pose) {
+        p.map_file = m.to_string_lossy().into_owned();
+        p.initial_pose = pose.clone();
     }
     crate::args::apply(&mut settings, &args.pipeline, &args.core)?;
     p.validate()?;

@@ -3,7 +3,9 @@
 //! and what the node publishes from one registered cloud.
 
 use anyhow::Result;
+use kiss_odom_core::localize::Located;
 use kiss_odom_core::Status;
+use kiss_odom_drive::localize::MapLocalizer;
 use kiss_odom_drive::settings::Settings;
 use kiss_odom_drive::{Driver, OnEmpty, Step};
 use kiss_odom_io::Frame;
@@ -27,6 +29,8 @@ pub(crate) struct Registered {
     pub(crate) deskewed: bool,
     /// Seconds in the core's frame call.
     pub(crate) core_s: f64,
+    /// With a prior map: the cloud localized in it (the sensor's pose in the map frame).
+    pub(crate) located: Option<Located<f64>>,
 }
 
 /// The node's driver for `settings`.
@@ -37,13 +41,19 @@ pub(crate) fn driver(settings: &Settings) -> Result<Driver> {
 }
 
 /// Registers a cloud's frame (sensor frame, optional per-point times, and with the gyroscope
-/// prior on the IMU samples up to its sweep's end). `None` when no point was usable: the
-/// odometry is untouched, as if the cloud had never arrived.
-pub(crate) fn register(driver: &mut Driver, frame: &Frame) -> Result<Option<Registered>> {
+/// prior on the IMU samples up to its sweep's end), then localizes it in `map` if one is given.
+/// `None` when no point was usable: the odometry and the localizer are untouched, as if the
+/// cloud had never arrived.
+pub(crate) fn register(
+    driver: &mut Driver,
+    frame: &Frame,
+    map: Option<&mut MapLocalizer>,
+) -> Result<Option<Registered>> {
     let outcome = driver.register(frame)?;
     let Step::Registered(r) = &outcome.step else {
         return Ok(None);
     };
+    let located = map.map(|m| m.locate(driver, &outcome));
     Ok(Some(Registered {
         pose: outcome.pose,
         delta: driver.last_delta(),
@@ -52,6 +62,7 @@ pub(crate) fn register(driver: &mut Driver, frame: &Frame) -> Result<Option<Regi
         non_finite: r.dropped.non_finite,
         deskewed: r.deskewed,
         core_s: outcome.latency.as_secs_f64(),
+        located,
     }))
 }
 
@@ -102,7 +113,7 @@ mod tests {
                     points: pts.to_vec(),
                     ..Frame::default()
                 };
-                register(&mut d, &frame).unwrap()
+                register(&mut d, &frame, None).unwrap()
             };
             {
                 let first = reg(&room(0.0)).unwrap();

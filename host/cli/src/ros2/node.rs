@@ -21,6 +21,9 @@
 //!   angular = rotation vector / dt; covariance: see `covariances`.
 //! - `/tf`: `lidar_odom_frame -> base` (or its inverse with `invert_odom_tf`).
 //! - the local map in `lidar_odom_frame`, at most every `local_map_period` seconds.
+//! - with a prior map (`map_file`): the cloud localized in it (the core's localizer, as `run
+//!   --map`), the base's pose in the map frame on `map_pose_topic` and `map -> lidar_odom_frame`
+//!   on `/tf` (not with `invert_odom_tf`, whose odometry frame is the base's child).
 //!
 //! With a base-to-LiDAR extrinsic `E`, the base pose is `E L E^-1` for the LiDAR pose `L`
 //! (the odometry frame is the base frame at the first cloud), as kiss-icp's wrapper does.
@@ -37,9 +40,10 @@ use super::params::NodeParams;
 use super::watch::Watch;
 use crate::stats::percentile;
 use anyhow::{anyhow, Context, Result};
+use kiss_odom_drive::localize::MapLocalizer;
 use kiss_odom_drive::settings::Settings;
 use kiss_odom_drive::Driver;
-use kiss_odom_io::poses::format_kitti;
+use kiss_odom_io::poses::{format_kitti, parse_xyz_rpy};
 use kiss_odom_io::ros::imu_msg;
 use kiss_odom_io::ros::message::parse_cdr;
 use kiss_odom_io::ros::pointcloud2::{decode, frame_of};
@@ -47,7 +51,7 @@ use nalgebra::Isometry3;
 use rustdds::mio1::{Events, Interest, Poll, Token};
 use rustdds::StatusEvented;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
@@ -213,6 +217,17 @@ pub fn run(
                 )
             })
             .transpose()?,
+        map_pose: (!p.map_file.is_empty())
+            .then(|| {
+                dds::writer(
+                    &dp,
+                    &p.map_pose_topic,
+                    ODOMETRY_TYPE,
+                    &dds::reliable_qos(10),
+                )
+                .map(|w| (w, opts.settings.output.map_frame.clone()))
+            })
+            .transpose()?,
     };
     let mut poses = opts
         .poses
@@ -232,6 +247,13 @@ pub fn run(
             String::new()
         }
     )?;
+    if !p.map_file.is_empty() {
+        writeln!(
+            out,
+            "localizing in {} (frame {}), publishing {}",
+            p.map_file, opts.settings.output.map_frame, p.map_pose_topic
+        )?;
+    }
     if let Some(t) = imu_topic {
         writeln!(out, "gyroscope prior on, IMU samples from {t}")?;
     }
@@ -247,12 +269,14 @@ pub fn run(
     let mut summary = std::thread::scope(|scope| -> Result<Summary> {
         let receiver = scope.spawn(|| receive(clouds, imu, &mailbox, watch, stop));
         let result = engine::driver(&opts.settings).and_then(|mut driver| {
+            let mut map = open_map(p, &opts.settings, &driver)?;
             let cycle = Cycle {
                 min_period: opts.min_period,
                 stop,
                 imu: imu_topic
                     .map(|_| (&inbox, Duration::from_secs_f64(opts.settings.imu.max_gap))),
                 watch,
+                map: map.as_mut(),
             };
             work(
                 &mut driver,
@@ -281,6 +305,15 @@ pub fn run(
     }
     writeln!(out, "{}", summary.line())?;
     Ok(summary)
+}
+
+/// The localizer `map_file` asks for, if any (a map that cannot be used stops the node).
+fn open_map(p: &NodeParams, settings: &Settings, driver: &Driver) -> Result<Option<MapLocalizer>> {
+    if p.map_file.is_empty() {
+        return Ok(None);
+    }
+    let initial = parse_xyz_rpy(&p.initial_pose).context("initial_pose")?;
+    crate::run::open_map(Path::new(&p.map_file), initial, settings, driver).map(Some)
 }
 
 /// A reader and the ROS 2 topic it reads.
@@ -334,13 +367,15 @@ fn warn_imu(inbox: &ImuInbox, err: &mut dyn Write) -> u64 {
     errors.len() as u64
 }
 
-/// How often the worker may take a cloud, the flag that ends it, and with the prior on the IMU
-/// samples and how long a cloud may wait for those up to its end.
+/// How often the worker may take a cloud, the flag that ends it, with the prior on the IMU
+/// samples and how long a cloud may wait for those up to its end, and with a prior map its
+/// localizer.
 struct Cycle<'a> {
     min_period: Duration,
     stop: &'a AtomicBool,
     imu: Option<(&'a ImuInbox, Duration)>,
     watch: &'a Watch,
+    map: Option<&'a mut MapLocalizer>,
 }
 
 /// The worker loop: one registered or skipped cloud per mailbox delivery.
@@ -349,10 +384,11 @@ fn work(
     mailbox: &Mailbox,
     publish: &Publishers,
     mut poses: Option<&mut std::fs::File>,
-    cycle: Cycle,
+    mut cycle: Cycle,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<Summary> {
+    let mut localizer = cycle.map.take();
     let stop = cycle.stop;
     let mut next_take = Instant::now();
     let mut s = Summary::default();
@@ -409,7 +445,7 @@ fn work(
             if let Some((inbox, wait)) = cycle.imu {
                 frame.imu = inbox.take_for(frame.sweep_end(), wait);
             }
-            engine::register(driver, &frame)?
+            engine::register(driver, &frame, localizer.as_deref_mut())?
         };
         let Some(r) = registered else {
             s.empty += 1;
@@ -438,6 +474,13 @@ fn work(
         previous = Some(t);
         let frame_id = cloud.frame_id.clone();
         let base = publish.odometry(&r, dt, stamp, &frame_id)?;
+        let in_map = publish.localized(&r, &base, dt, stamp, &frame_id)?;
+        if let Some(w) = localizer
+            .as_deref_mut()
+            .and_then(MapLocalizer::damaged_warning)
+        {
+            warn(format!("stamp {}: {w}", cloud.stamp), &mut s);
+        }
         let map_due =
             last_map.is_none_or(|m| m.elapsed().as_secs_f64() >= publish.params.local_map_period);
         if publish.map.is_some() && map_due {
@@ -445,7 +488,7 @@ fn work(
             last_map = Some(Instant::now());
         }
         if let Some(f) = poses.as_deref_mut() {
-            f.write_all(format_kitti(&[base]).as_bytes())?;
+            f.write_all(format_kitti(&[in_map.unwrap_or(base)]).as_bytes())?;
             f.flush()?;
         }
         let latency = arrived.elapsed().as_secs_f64() * 1e3;
@@ -454,7 +497,7 @@ fn work(
         s.core_ms.push(r.core_s * 1e3);
         writeln!(
             out,
-            "frame {} stamp {} points {} latency {:.1} ms core {:.1} ms dropped {} status {}{}",
+            "frame {} stamp {} points {} latency {:.1} ms core {:.1} ms dropped {} status {}{}{}",
             s.registered - 1,
             cloud.stamp,
             r.input_points,
@@ -462,7 +505,10 @@ fn work(
             r.core_s * 1e3,
             mailbox.counts().1,
             r.status,
-            if r.deskewed { " deskewed" } else { "" }
+            if r.deskewed { " deskewed" } else { "" },
+            r.located
+                .map(|l| format!(" map {}", l.state.name()))
+                .unwrap_or_default()
         )?;
     }
     Ok(s)
@@ -476,6 +522,8 @@ struct Publishers {
     odom: Writer<Odometry>,
     tf: Option<Writer<TfMessage>>,
     map: Option<Writer<PointCloud2>>,
+    /// With a prior map: the base's pose in the map frame, named `map_frame`.
+    map_pose: Option<(Writer<Odometry>, String)>,
 }
 
 /// Pose and twist covariance (row-major 6x6, diagonal). The pose's diagonal is
@@ -519,6 +567,78 @@ impl Publishers {
         if let Some(w) = &self.map {
             watch.writer(&self.params.local_map_topic, w);
         }
+        if let Some((w, _)) = &self.map_pose {
+            watch.writer(&self.params.map_pose_topic, w);
+        }
+    }
+
+    /// The moving frame's name for a cloud in `cloud_frame`.
+    fn child_frame(&self, cloud_frame: &str) -> String {
+        if self.params.base_frame.is_empty() {
+            cloud_frame.to_string()
+        } else {
+            self.params.base_frame.clone()
+        }
+    }
+
+    /// With a prior map, publishes the base's pose in the map frame (the localized sensor pose
+    /// moved by the extrinsic) and, unless the odometry's transform is inverted, `map ->
+    /// lidar_odom_frame` (that pose times the odometry's `base` inverse); returns it.
+    fn localized(
+        &self,
+        r: &Registered,
+        base: &Isometry3<f64>,
+        dt: f64,
+        stamp: Time,
+        cloud_frame: &str,
+    ) -> Result<Option<Isometry3<f64>>> {
+        let (Some(l), Some((writer, map_frame))) = (&r.located, &self.map_pose) else {
+            return Ok(None);
+        };
+        let p = &self.params;
+        let in_map = match &self.extrinsic {
+            None => l.pose,
+            Some(e) => l.pose * e.inverse(),
+        };
+        let delta = match &self.extrinsic {
+            None => r.delta,
+            Some(e) => e * r.delta * e.inverse(),
+        };
+        let header = Header {
+            stamp,
+            frame_id: map_frame.clone(),
+        };
+        let (pose_cov, twist_cov) = covariances(p, dt);
+        let msg = Odometry {
+            header: header.clone(),
+            child_frame_id: self.child_frame(cloud_frame),
+            pose: PoseWithCovariance {
+                pose: Pose::of(&in_map),
+                covariance: pose_cov,
+            },
+            twist: TwistWithCovariance {
+                twist: twist_of(&delta, dt),
+                covariance: twist_cov,
+            },
+        };
+        writer
+            .write(msg, None)
+            .map_err(|e| anyhow!("publishing {}: {e:?}", p.map_pose_topic))?;
+        if let (Some(tf), false) = (&self.tf, p.invert_odom_tf) {
+            let t = TransformStamped {
+                header,
+                child_frame_id: p.lidar_odom_frame.clone(),
+                transform: Pose::of(&(in_map * base.inverse())),
+            };
+            tf.write(
+                TfMessage {
+                    transforms: vec![t],
+                },
+                None,
+            )
+            .map_err(|e| anyhow!("publishing /tf: {e:?}"))?;
+        }
+        Ok(Some(in_map))
     }
 
     /// Publishes the odometry and the transform; returns the base pose.
@@ -534,11 +654,7 @@ impl Publishers {
             None => (r.pose, r.delta),
             Some(e) => (e * r.pose * e.inverse(), e * r.delta * e.inverse()),
         };
-        let child = if p.base_frame.is_empty() {
-            cloud_frame.to_string()
-        } else {
-            p.base_frame.clone()
-        };
+        let child = self.child_frame(cloud_frame);
         let header = Header {
             stamp,
             frame_id: p.lidar_odom_frame.clone(),

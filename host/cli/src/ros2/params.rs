@@ -49,6 +49,14 @@ pub struct NodeParams {
     pub local_map_period: f64,
     /// Scan period (s) for the twist when consecutive stamps do not give one.
     pub scan_period: f64,
+    /// A prior map (`kiss-odom map build`) to localize each registered cloud in; empty: none.
+    /// Its frame is the settings' `output.map_frame`.
+    pub map_file: String,
+    /// The sensor's pose in the map frame at the first cloud, `X,Y,Z,ROLL,PITCH,YAW` (metres,
+    /// degrees), as `run --initial-pose`; needed with `map_file`.
+    pub initial_pose: String,
+    /// Topic of the base's pose in the map frame (`nav_msgs/Odometry`), with `map_file`.
+    pub map_pose_topic: String,
 }
 
 impl Default for NodeParams {
@@ -67,6 +75,9 @@ impl Default for NodeParams {
             local_map_topic: "/kiss/local_map".into(),
             local_map_period: 1.0,
             scan_period: 0.1,
+            map_file: String::new(),
+            initial_pose: String::new(),
+            map_pose_topic: "/kiss/map_pose".into(),
         }
     }
 }
@@ -107,6 +118,12 @@ impl NodeParams {
         }
         if self.lidar_odom_frame.is_empty() {
             bail!("lidar_odom_frame must not be empty");
+        }
+        if !self.map_file.is_empty() && self.initial_pose.is_empty() {
+            bail!(
+                "map_file needs initial_pose X,Y,Z,ROLL,PITCH,YAW: the start is not searched \
+                 for over the whole map"
+            );
         }
         self.extrinsic().map(|_| ())
     }
