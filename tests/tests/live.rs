@@ -499,3 +499,94 @@ fn live_refuses_an_input_port_from_set_or_from_the_settings_file() {
         );
     }
 }
+
+/// `live --map --initial-pose` localizes each sweep as `run --map` does: a generated VLP-16
+/// revisit's packets replayed at the recorded pace give `run`'s map-frame poses and states,
+/// byte for byte, in a map of the first drive.
+#[test]
+fn live_with_a_prior_map_gives_runs_map_frame_poses_byte_for_byte() {
+    let _serial = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, map) = (
+        dir.path().join("a"),
+        dir.path().join("b"),
+        dir.path().join("site.komap"),
+    );
+    let ok = |args: &[&str]| {
+        let o = bin().args(args).output().unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    let drive = ["--frames", "20", "--seed", "9", "--sensor", "vlp16"];
+    ok(&[&["simulate", "--out", s(&a)][..], &drive].concat());
+    ok(&[
+        &["simulate", "--out", s(&b), "--revisit", "--format", "pcap"][..],
+        &drive,
+    ]
+    .concat());
+    let tiny = ["--max-range", "50", "--set", "mapping.voxel_size=2"];
+    let poses = a.join("poses.txt");
+    ok(&[
+        &[
+            "map",
+            "build",
+            s(&a),
+            "--poses",
+            s(&poses),
+            "--out",
+            s(&map),
+        ][..],
+        &tiny,
+    ]
+    .concat());
+    let start = read(&b, "initial_pose.txt");
+    let with_map = [
+        &tiny[..],
+        &["--map", s(&map), "--initial-pose", start.trim()],
+    ]
+    .concat();
+    let pcap = b.join("packets.pcap");
+    let ran = dir.path().join("run");
+    ok(&[
+        &["run", s(&pcap), "--out", s(&ran), "--quiet"][..],
+        &with_map,
+    ]
+    .concat());
+    let lived = dir.path().join("live");
+    let addr = free_address();
+    let mut extra = vec!["--idle-timeout", "2"];
+    extra.extend(&with_map);
+    let child = live(&addr, &[], &lived, &extra);
+    replay(&pcap, &addr, "1");
+    let o = finish(child);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        summary(&lived)["packets"]["lost"],
+        0,
+        "no loss at 1x on loopback"
+    );
+    assert_eq!(
+        read(&lived, "poses_kitti.txt"),
+        read(&ran, "poses_kitti.txt")
+    );
+    let states = |d: &Path| -> Vec<String> {
+        let csv = read(d, "frames.csv");
+        let mut lines = csv.lines();
+        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let k = head.iter().position(|c| *c == "localization").unwrap();
+        lines
+            .map(|l| l.split(',').nth(k).unwrap().to_string())
+            .collect()
+    };
+    let (r, l) = (states(&ran), states(&lived));
+    assert_eq!(l, r, "localization states");
+    let localized = r.iter().filter(|s| *s == "localized").count();
+    println!(
+        "live --map: {localized} of {} sweeps localized, as run's",
+        r.len()
+    );
+    assert!(localized * 10 >= r.len() * 8, "{r:?}");
+}
