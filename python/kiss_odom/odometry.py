@@ -19,6 +19,12 @@ Input handling, each covered by a test in ``python/tests/test_bad_input.py``:
   non-finite or all equal are ignored: the frame is registered without deskewing, with the
   flag ``timestamps_ignored`` and the reason in ``last_report.stamp_problem``.
 
+Localization in a prior map (``map=`` and ``initial_pose=``, as ``kiss-odom run --map
+--initial-pose``): after each frame the odometry's registration cloud is registered to the map
+by the same localizer as ``run``'s, so ``map_pose`` is ``run``'s map-frame pose bit for bit;
+``last_pose`` and ``last_delta`` stay the odometry's own (its first frame at identity), as in
+kiss-icp.
+
 Threads: one ``KissICP`` may be shared by several Python threads. Its calls are serialised
 by a lock (a second thread's ``register_frame`` waits for the first to finish, with the GIL
 released meanwhile); frames still go one after the other, in the order the calls take the
@@ -28,10 +34,11 @@ lock. Separate objects run in parallel.
 from __future__ import annotations
 
 import json
+import os
 import threading
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Optional, Tuple
+from typing import Any, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -85,6 +92,13 @@ class FrameReport:
     gyro_bias: Optional[Tuple[float, float, float]] = None
     imu_residual: Optional[float] = None
     imu_disagreement: Optional[float] = None
+    #: With a prior map (``KissICP(map=...)``, else ``None``): ``"localized"``, ``"degraded"``
+    #: or ``"lost"``; of the registration cloud's points off level ground, the share within
+    #: half a voxel of a map point at the map-frame pose; how far registering to the map moved
+    #: the prediction (m). ``run --map``'s ``frames.csv`` columns (docs/maps.md).
+    localization: Optional[str] = None
+    map_inlier_share: Optional[float] = None
+    map_correction_m: Optional[float] = None
 
     @property
     def ok(self) -> bool:
@@ -134,6 +148,15 @@ class KissICP:
     on most runs measured, settings the config does not give take its values), the scalar
     (``"f64"``/``"f32"``), the map storage (``"exact"``/``"quantized"``), the capacities (``"full"``/``"small"``/dict) and the thread count. A bad setting is a
     ``ValueError`` naming it.
+
+    ``map`` (a path to a ``.komap`` file of ``kiss-odom map build``) with ``initial_pose`` (the
+    sensor at the end of the first sweep in the map frame: a 4x4 rigid transform, or the text
+    ``"X,Y,Z,ROLL,PITCH,YAW"`` of ``run --initial-pose``, m and degrees) localizes every frame
+    in that map: :attr:`map_pose` and ``last_report.localization``. The start is not searched
+    for, so one needs the other; a map this configuration cannot use (another voxel size or
+    frame than ``{"output": {"map_frame": ...}}``, default ``"map"``; a truncated or damaged
+    header) is a ``ValueError`` naming the reason. The map file's bytes stay in memory until
+    the process ends, as ``run``'s localizer keeps them.
     """
 
     def __init__(
@@ -145,7 +168,16 @@ class KissICP:
         map_storage: Optional[str] = None,
         capacities: Any = None,
         threads: Optional[int] = None,
+        map: Union[str, os.PathLike, None] = None,
+        initial_pose: Any = None,
     ):
+        if map is not None and initial_pose is None:
+            raise ValueError(
+                "map needs initial_pose (the sensor at the end of the first sweep in the map "
+                "frame): the start is not searched for over the whole map"
+            )
+        if initial_pose is not None and map is None:
+            raise ValueError("initial_pose is the start in a prior map: it needs map")
         self.settings = settings_from(
             config,
             preset=preset,
@@ -155,6 +187,8 @@ class KissICP:
             threads=threads,
         )
         self._odom = _native.Odometry.from_json(json.dumps(self.settings))
+        if map is not None:
+            self._odom.open_map(os.fspath(map), initial_pose)
         # Every call into `_odom` holds it (see the module doc, "Threads").
         self._lock = threading.Lock()
         # kiss-icp's pipeline reads its own config back (config.data.max_range, ...).
@@ -217,6 +251,13 @@ class KissICP:
             self._odom.set_last_delta(delta)
 
     @property
+    def map_pose(self) -> Optional[np.ndarray]:
+        """The last frame's pose in the prior map's frame, 4x4 (``None`` without a map or
+        before the first frame)."""
+        with self._lock:
+            return self._odom.map_pose()
+
+    @property
     def sigma(self) -> float:
         """The adaptive threshold's current sigma (m)."""
         with self._lock:
@@ -239,7 +280,8 @@ class KissICP:
             return self._odom.settings_toml()
 
     def reset(self) -> None:
-        """Back to a new odometry's state (empty map, identity pose)."""
+        """Back to a new odometry's state (empty map, identity pose); with a prior map, the
+        next frame is localized from ``initial_pose`` again (the map file is read again)."""
         with self._lock:
             self._odom.reset()
             self.last_report = None

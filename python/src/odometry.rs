@@ -4,9 +4,11 @@
 //! `kiss_odom.config` builds them from kiss-icp's configs, dicts and `config.toml` files), and
 //! the frames go through the same driver as `run`'s, so the same frames give the same poses,
 //! bit for bit, and the map grows as `run`'s does. The frame call copies the points out of
-//! numpy, then registers, deskews and downsamples with the GIL released.
+//! numpy, then registers, deskews and downsamples with the GIL released. With a prior map
+//! ([`crate::localize`]) each frame is then localized in it, as `run --map` does.
 
 use crate::convert;
+use crate::localize::Prior;
 use kiss_odom_core::{Flag, FrameReport, ImuSample, StampProblem};
 use kiss_odom_drive::growth::trim_buffer;
 use kiss_odom_drive::settings::{PresetName, Settings};
@@ -28,6 +30,8 @@ pub struct Odometry {
     deskewed: Vec<[f64; 3]>,
     /// The IMU samples `add_imu` gave since the last frame with timestamps.
     imu: Vec<ImuSample<f64>>,
+    /// The prior map the frames are localized in, if one was given.
+    prior: Option<Prior>,
 }
 
 fn value_error(e: anyhow::Error) -> PyErr {
@@ -135,7 +139,36 @@ impl Odometry {
             input: Vec::new(),
             deskewed: Vec::new(),
             imu: Vec::new(),
+            prior: None,
         })
+    }
+
+    /// Localizes the frames to come in the map at `path` (a `.komap` of `kiss-odom map
+    /// build`), starting at `initial_pose` (the sensor at the end of the first sweep, map
+    /// frame: 4x4 or `X,Y,Z,ROLL,PITCH,YAW` text). A map the run cannot use is a `ValueError`
+    /// naming the reason.
+    fn open_map(
+        &mut self,
+        path: std::path::PathBuf,
+        initial_pose: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        if self.driver.frames() > 0 {
+            return Err(PyValueError::new_err(
+                "the prior map is given before the first frame",
+            ));
+        }
+        let initial = crate::localize::initial_pose(initial_pose)?;
+        let prior =
+            Prior::open(path, &self.settings, &self.driver, initial).map_err(value_error)?;
+        self.prior = Some(prior);
+        Ok(())
+    }
+
+    /// The last frame's pose in the prior map's frame, 4x4 (`None` without a map or before
+    /// the first frame).
+    fn map_pose<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, numpy::PyArray2<f64>>>> {
+        let pose = self.prior.as_ref().and_then(Prior::pose);
+        pose.map(|p| matrix_of(py, p)).transpose()
     }
 
     /// Registers one scan: `(deskewed_frame, source, report)`. The report is a dict; for a
@@ -161,8 +194,13 @@ impl Odometry {
             None => Vec::new(),
         };
         let (driver, points, deskewed) = (&mut self.driver, &self.input, &mut self.deskewed);
-        let outcome = py
-            .detach(|| one_frame(driver, points, stamps.as_deref(), &samples, deskewed))
+        let prior = &mut self.prior;
+        let (outcome, located) = py
+            .detach(|| {
+                let outcome = one_frame(driver, points, stamps.as_deref(), &samples, deskewed)?;
+                let located = prior.as_mut().map(|p| p.locate(driver, &outcome));
+                anyhow::Ok((outcome, located))
+            })
             .map_err(|e| PyRuntimeError::new_err(kiss_odom_drive::one_line(&e)))?;
         let report = report_dict(py, outcome.report(), index, self.input.len())?;
         if let (Some(u), Some(_)) = (outcome.imu, &stamps) {
@@ -172,13 +210,16 @@ impl Odometry {
             report.set_item("imu_residual", u.residual)?;
             report.set_item("imu_disagreement", u.disagreement)?;
         }
-        let warnings: Vec<String> = [
+        let mut warnings: Vec<String> = [
             self.driver.imu_check_warning(false),
             self.driver.one_plane_warning(&outcome),
         ]
         .into_iter()
         .flatten()
         .collect();
+        if let (Some(p), Some(l)) = (self.prior.as_mut(), &located) {
+            p.report(l, &report, &mut warnings)?;
+        }
         report.set_item("warnings", warnings)?;
         let deskewed = convert::points_array_copy(py, &self.deskewed)?;
         let keep = self.driver.build().capacities.scan_points;
@@ -249,10 +290,15 @@ impl Odometry {
         self.driver.map_is_empty()
     }
 
-    /// Back to the state of a new odometry.
-    fn reset(&mut self) {
+    /// Back to the state of a new odometry; with a prior map, localized from the initial pose
+    /// again (the map is read again: an error if it can no longer be used).
+    fn reset(&mut self) -> PyResult<()> {
         self.driver.reset();
         self.imu.clear();
+        if let Some(p) = self.prior.as_mut() {
+            p.reset(&self.settings, &self.driver).map_err(value_error)?;
+        }
+        Ok(())
     }
 
     /// Frames registered or skipped so far.
@@ -305,6 +351,9 @@ fn default_settings_json(preset: Option<&str>) -> PyResult<String> {
     let mut v = serde_json::to_value(Settings::preset(preset)).map_err(err)?;
     // `config.toml` leaves the prior's section out while it is off; a dict may set it.
     v["imu"] = serde_json::to_value(kiss_odom_drive::Imu::default()).map_err(err)?;
+    // Of the outputs' section only the frame a prior map must be in concerns `KissICP`.
+    let frame = kiss_odom_drive::settings::Output::default().map_frame;
+    v["output"] = serde_json::json!({ "map_frame": frame });
     serde_json::to_string(&v).map_err(err)
 }
 
