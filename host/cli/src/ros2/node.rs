@@ -572,6 +572,35 @@ impl Publishers {
         }
     }
 
+    /// An odometry message: `child`'s `pose` in `header`'s frame, the twist of the base's last
+    /// motion over `dt`, the covariances of the parameters.
+    fn message(
+        &self,
+        header: Header,
+        child: String,
+        pose: &Isometry3<f64>,
+        r: &Registered,
+        dt: f64,
+    ) -> Odometry {
+        let delta = match &self.extrinsic {
+            None => r.delta,
+            Some(e) => e * r.delta * e.inverse(),
+        };
+        let (pose_cov, twist_cov) = covariances(&self.params, dt);
+        Odometry {
+            header,
+            child_frame_id: child,
+            pose: PoseWithCovariance {
+                pose: Pose::of(pose),
+                covariance: pose_cov,
+            },
+            twist: TwistWithCovariance {
+                twist: twist_of(&delta, dt),
+                covariance: twist_cov,
+            },
+        }
+    }
+
     /// The moving frame's name for a cloud in `cloud_frame`.
     fn child_frame(&self, cloud_frame: &str) -> String {
         if self.params.base_frame.is_empty() {
@@ -600,27 +629,12 @@ impl Publishers {
             None => l.pose,
             Some(e) => l.pose * e.inverse(),
         };
-        let delta = match &self.extrinsic {
-            None => r.delta,
-            Some(e) => e * r.delta * e.inverse(),
-        };
         let header = Header {
             stamp,
             frame_id: map_frame.clone(),
         };
-        let (pose_cov, twist_cov) = covariances(p, dt);
-        let msg = Odometry {
-            header: header.clone(),
-            child_frame_id: self.child_frame(cloud_frame),
-            pose: PoseWithCovariance {
-                pose: Pose::of(&in_map),
-                covariance: pose_cov,
-            },
-            twist: TwistWithCovariance {
-                twist: twist_of(&delta, dt),
-                covariance: twist_cov,
-            },
-        };
+        let child = self.child_frame(cloud_frame);
+        let msg = self.message(header.clone(), child, &in_map, r, dt);
         writer
             .write(msg, None)
             .map_err(|e| anyhow!("publishing {}: {e:?}", p.map_pose_topic))?;
@@ -650,28 +664,16 @@ impl Publishers {
         cloud_frame: &str,
     ) -> Result<Isometry3<f64>> {
         let p = &self.params;
-        let (pose, delta) = match &self.extrinsic {
-            None => (r.pose, r.delta),
-            Some(e) => (e * r.pose * e.inverse(), e * r.delta * e.inverse()),
+        let pose = match &self.extrinsic {
+            None => r.pose,
+            Some(e) => e * r.pose * e.inverse(),
         };
         let child = self.child_frame(cloud_frame);
         let header = Header {
             stamp,
             frame_id: p.lidar_odom_frame.clone(),
         };
-        let (pose_cov, twist_cov) = covariances(p, dt);
-        let msg = Odometry {
-            header: header.clone(),
-            child_frame_id: child.clone(),
-            pose: PoseWithCovariance {
-                pose: Pose::of(&pose),
-                covariance: pose_cov,
-            },
-            twist: TwistWithCovariance {
-                twist: twist_of(&delta, dt),
-                covariance: twist_cov,
-            },
-        };
+        let msg = self.message(header.clone(), child.clone(), &pose, r, dt);
         self.odom
             .write(msg, None)
             .map_err(|e| anyhow!("publishing {}: {e:?}", p.odom_topic))?;
