@@ -156,7 +156,7 @@ class KissICP:
     for, so one needs the other; a map this configuration cannot use (another voxel size or
     frame than ``{"output": {"map_frame": ...}}``, default ``"map"``; a truncated or damaged
     header) is a ``ValueError`` naming the reason. The map file's bytes stay in memory until
-    the process ends, as ``run``'s localizer keeps them.
+    the process ends, once per distinct file content whatever the number of objects.
     """
 
     def __init__(
@@ -281,7 +281,7 @@ class KissICP:
 
     def reset(self) -> None:
         """Back to a new odometry's state (empty map, identity pose); with a prior map, the
-        next frame is localized from ``initial_pose`` again (the map file is read again)."""
+        next frame is localized from ``initial_pose`` again."""
         with self._lock:
             self._odom.reset()
             self.last_report = None

@@ -13,12 +13,11 @@ use nalgebra::Isometry3;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A prior map and the localizer in it, with what `reset` needs to start again.
 pub struct Prior {
     localizer: MapLocalizer,
-    path: PathBuf,
     initial: Isometry3<f64>,
     /// The last frame's pose in the map frame (`None` before the first frame).
     pose: Option<Isometry3<f64>>,
@@ -35,19 +34,6 @@ pub fn initial_pose(obj: &Bound<'_, PyAny>) -> PyResult<Isometry3<f64>> {
     }
 }
 
-/// `run --map`'s localizer for `driver`, built with `settings`, starting at `initial`.
-fn open(
-    path: &Path,
-    settings: &Settings,
-    driver: &Driver,
-    initial: Isometry3<f64>,
-) -> anyhow::Result<MapLocalizer> {
-    let frame = &settings.output.map_frame;
-    let config = settings.core_config::<f64>()?;
-    let source = driver.build().capacities.source_points;
-    MapLocalizer::open(path, frame, &config, source, initial)
-}
-
 impl Prior {
     /// Opens the map at `path`; a map the run cannot use (unreadable, damaged header or
     /// index, another voxel size or frame) is an error naming the reason.
@@ -58,20 +44,16 @@ impl Prior {
         initial: Isometry3<f64>,
     ) -> anyhow::Result<Self> {
         Ok(Self {
-            localizer: open(&path, settings, driver, initial)?,
-            path,
+            localizer: MapLocalizer::for_driver(&path, settings, driver, initial)?,
             initial,
             pose: None,
         })
     }
 
-    /// Starts again at the initial pose, as a new localizer. `MapLocalizer` has no reseed, so
-    /// the map is opened again: its file is read again, and like every map it opens, kept
-    /// until the process ends (a host run holds one map).
-    pub fn reset(&mut self, settings: &Settings, driver: &Driver) -> anyhow::Result<()> {
-        self.localizer = open(&self.path, settings, driver, self.initial)?;
+    /// Starts again at the initial pose, as a new localizer does.
+    pub fn reset(&mut self) {
+        self.localizer.reseed(self.initial);
         self.pose = None;
-        Ok(())
     }
 
     /// Localizes the frame `outcome` answered (no Python object is touched: it runs with the

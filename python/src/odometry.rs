@@ -291,14 +291,13 @@ impl Odometry {
     }
 
     /// Back to the state of a new odometry; with a prior map, localized from the initial pose
-    /// again (the map is read again: an error if it can no longer be used).
-    fn reset(&mut self) -> PyResult<()> {
+    /// again.
+    fn reset(&mut self) {
         self.driver.reset();
         self.imu.clear();
         if let Some(p) = self.prior.as_mut() {
-            p.reset(&self.settings, &self.driver).map_err(value_error)?;
+            p.reset();
         }
-        Ok(())
     }
 
     /// Frames registered or skipped so far.

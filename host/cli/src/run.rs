@@ -200,21 +200,7 @@ fn localizer(
         );
     };
     let initial = io::poses::parse_xyz_rpy(pose).context("--initial-pose")?;
-    open_map(path, initial, settings, driver).map(Some)
-}
-
-/// The localizer in the map at `path` for `driver`'s odometry, starting at `initial` (the
-/// sensor's pose in the map frame, which must be `output.map_frame`).
-pub(crate) fn open_map(
-    path: &Path,
-    initial: nalgebra::Isometry3<f64>,
-    settings: &kiss_odom_drive::settings::Settings,
-    driver: &Driver,
-) -> Result<MapLocalizer> {
-    let frame = &settings.output.map_frame;
-    let config = settings.core_config::<f64>()?;
-    let source = driver.build().capacities.source_points;
-    MapLocalizer::open(path, frame, &config, source, initial)
+    MapLocalizer::for_driver(path, settings, driver, initial).map(Some)
 }
 
 /// The files this run reads, which no output of it may replace: the dataset, `--calibration`,

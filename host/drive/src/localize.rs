@@ -5,6 +5,7 @@
 //! The host localizes in `f64` whatever the odometry's scalar (the board runs the core's
 //! localizer in its own). The prior map is read in place, as a board reads it from flash.
 
+use crate::settings::Settings;
 use crate::{Driver, Outcome, Step};
 use anyhow::{anyhow, Context, Result};
 use kiss_odom_core::localize::{Localizer, Located, PriorCapacities, Settings as LocalizeSettings};
@@ -12,6 +13,22 @@ use kiss_odom_core::prior_map::TileMap;
 use kiss_odom_core::{Config, Sequential};
 use nalgebra::Isometry3;
 use std::path::Path;
+use std::sync::Mutex;
+
+/// The map files this process read, each kept once for its lifetime: a localizer reads its map
+/// in place, and another on the same bytes (a Python object made again) shares them.
+static MAPS: Mutex<Vec<&'static [u8]>> = Mutex::new(Vec::new());
+
+/// `bytes`, kept for the process's lifetime (one copy per distinct content).
+fn keep(bytes: Vec<u8>) -> &'static [u8] {
+    let mut maps = MAPS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(m) = maps.iter().find(|m| ***m == bytes[..]) {
+        return m;
+    }
+    let m: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+    maps.push(m);
+    m
+}
 
 /// The core's localizer over a map file the process keeps for its lifetime.
 pub struct MapLocalizer {
@@ -35,8 +52,7 @@ impl MapLocalizer {
     ) -> Result<Self> {
         let bytes = std::fs::read(path)
             .with_context(|| format!("{}: cannot read the map", path.display()))?;
-        // The map lives as long as the process (a host run holds one map).
-        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        let bytes = keep(bytes);
         let file = TileMap::open(bytes).map_err(|e| anyhow!("{}: {e}", path.display()))?;
         let h = *file.header();
         let settings = LocalizeSettings::for_config(config);
@@ -69,6 +85,25 @@ impl MapLocalizer {
             damaged_tiles: 0,
             damaged_said: false,
         })
+    }
+
+    /// The localizer in the map at `path` for `driver`'s odometry, built with `settings` (in
+    /// `output.map_frame`), starting at `initial` (the sensor's pose in the map frame): what
+    /// `run --map`, the ROS 2 node and Python open.
+    pub fn for_driver(
+        path: &Path,
+        settings: &Settings,
+        driver: &Driver,
+        initial: Isometry3<f64>,
+    ) -> Result<Self> {
+        let config = settings.core_config::<f64>()?;
+        let source = driver.build().capacities.source_points;
+        Self::open(path, &settings.output.map_frame, &config, source, initial)
+    }
+
+    /// Starts again from `pose` (map frame), degraded until confirmed.
+    pub fn reseed(&mut self, pose: Isometry3<f64>) {
+        self.loc.reseed(pose);
     }
 
     /// Localizes the frame `outcome` answered: a registered frame by its registration cloud,

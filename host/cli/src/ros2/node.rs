@@ -313,7 +313,7 @@ fn open_map(p: &NodeParams, settings: &Settings, driver: &Driver) -> Result<Opti
         return Ok(None);
     }
     let initial = parse_xyz_rpy(&p.initial_pose).context("initial_pose")?;
-    crate::run::open_map(Path::new(&p.map_file), initial, settings, driver).map(Some)
+    MapLocalizer::for_driver(Path::new(&p.map_file), settings, driver, initial).map(Some)
 }
 
 /// A reader and the ROS 2 topic it reads.
