@@ -13,7 +13,8 @@ Accepted by :func:`settings_from` (and so by :class:`kiss_odom.KissICP`):
   ``max_range`` is a ``ValueError`` where kiss-icp resets it to 0 with a printed warning);
 - a ``config.toml`` path as ``kiss-odom run`` writes it;
 - a dict with any of the sections ``data``, ``mapping``, ``adaptive_threshold``,
-  ``registration`` (kiss-icp's keys and ours), ``capacities`` and ``runtime``.
+  ``registration`` (kiss-icp's keys and ours), ``capacities``, ``runtime`` and ``output``
+  (its ``map_frame``: the frame a prior map must be in).
 
 kiss-icp keys map as: ``registration.max_num_threads`` -> ``runtime.threads``; ``out_dir`` is
 kiss-icp's pipeline's and is ignored; ``adaptive_threshold.fixed_threshold`` is refused (the
