@@ -94,10 +94,12 @@ class FrameReport:
     imu_disagreement: Optional[float] = None
     #: With a prior map (``KissICP(map=...)``, else ``None``): ``"localized"``, ``"degraded"``
     #: or ``"lost"``; of the registration cloud's points off level ground, the share within
-    #: half a voxel of a map point at the map-frame pose; how far registering to the map moved
-    #: the prediction (m). ``run --map``'s ``frames.csv`` columns (docs/maps.md).
+    #: half a voxel of a map point at the map-frame pose; the registration's observability
+    #: ratio; how far registering to the map moved the prediction (m). ``run --map``'s
+    #: ``frames.csv`` columns (docs/maps.md).
     localization: Optional[str] = None
     map_inlier_share: Optional[float] = None
+    map_observability: Optional[float] = None
     map_correction_m: Optional[float] = None
 
     @property

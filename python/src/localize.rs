@@ -74,6 +74,7 @@ impl Prior {
     ) -> PyResult<()> {
         report.set_item("localization", located.state.name())?;
         report.set_item("map_inlier_share", located.inlier_share)?;
+        report.set_item("map_observability", located.observability)?;
         report.set_item("map_correction_m", located.correction)?;
         warnings.extend(self.localizer.damaged_warning());
         Ok(())

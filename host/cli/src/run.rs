@@ -406,6 +406,7 @@ fn frame_loop(
         if let (Some(l), Some(row)) = (&located, record.rows.last_mut()) {
             row.localization = Some(l.state.name());
             row.map_inlier_share = Some(l.inlier_share);
+            row.map_observability = l.observability;
             row.map_correction_m = Some(l.correction);
         }
         if !observers.is_empty() {

@@ -149,6 +149,9 @@ pub struct FrameRow {
     /// With `--map`: the share of the registration cloud off level ground that lies on the
     /// prior map at the pose.
     pub map_inlier_share: Option<f64>,
+    /// With `--map`: the registration's conditioning, its observability ratio (empty when
+    /// nothing was measured).
+    pub map_observability: Option<f64>,
     /// With `--map`: how far registering to the prior map moved the predicted pose (m).
     pub map_correction_m: Option<f64>,
     /// The core's flags, written as one column each.
@@ -210,6 +213,7 @@ impl FrameRow {
             imu_disagreement: o.imu.and_then(|u| u.disagreement),
             localization: None,
             map_inlier_share: None,
+            map_observability: None,
             map_correction_m: None,
             status: o.status().unwrap_or_default(),
         }
