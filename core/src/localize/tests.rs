@@ -131,14 +131,26 @@ fn to<T: Real>(p: &Pose<f64>) -> Pose<T> {
     )
 }
 
-/// Runs `frames` frames 0.5 m apart with an odometry that overestimates the motion by 3 % and
-/// turns 0.3 degrees a frame too far, from `start`; the states and position errors.
+/// Runs `frames` frames 0.5 m apart in the yard with an odometry that overestimates the
+/// motion by 3 % and turns 0.3 degrees a frame too far, from `start`; the states and position
+/// errors.
 fn run<T: Real>(bytes: &[u8], start: Pose<f64>, frames: usize) -> Vec<(State, f64)> {
-    let pts = yard();
+    run_in::<T>(&yard(), bytes, start, frames, |_| {})
+}
+
+/// [`run`] in the scene `pts`, the settings changed by `tweak`.
+fn run_in<T: Real>(
+    pts: &[[f64; 3]],
+    bytes: &[u8],
+    start: Pose<f64>,
+    frames: usize,
+    tweak: impl Fn(&mut Settings<T>),
+) -> Vec<(State, f64)> {
     let file = TileMap::open(bytes).unwrap();
     let cfg = config::<T>();
     let mut words = vec![0u64; Localizer::<T, &mut [u64]>::words(&CAPS)];
-    let settings = Settings::for_config(&cfg);
+    let mut settings = Settings::for_config(&cfg);
+    tweak(&mut settings);
     let mut loc = Localizer::<T, _>::new(
         file,
         "site",
@@ -158,7 +170,7 @@ fn run<T: Real>(bytes: &[u8], start: Pose<f64>, frames: usize) -> Vec<(State, f6
             Vector3::new(0.0, 0.0, true_motion.rotation.angle() + 0.3f64.to_radians()),
         );
         let motion = if k == 0 { Pose::identity() } else { biased };
-        let source: Vec<[T; 3]> = scan(&pts, &truth(s1))
+        let source: Vec<[T; 3]> = scan(pts, &truth(s1))
             .iter()
             .map(|p| [T::of(p[0]), T::of(p[1]), T::of(p[2])])
             .collect();
@@ -219,6 +231,34 @@ fn a_start_five_metres_and_twenty_degrees_off_is_found_and_never_called_localize
         first.is_some() && last.0 == State::Localized && last.1 < 0.1,
         "{states:?}"
     );
+}
+
+/// An open field: ground and a few poles 12 m apart. The ground outweighs the poles in the
+/// conditioning, so no frame is confirmed, but the poles fit: the pose is held, never lost.
+#[test]
+#[cfg_attr(miri, ignore)]
+fn an_open_field_that_fits_is_never_lost_nor_confirmed() {
+    let mut field: Vec<[f64; 3]> = yard().into_iter().filter(|p| p[2] < -1.7).collect();
+    for (i, j) in (-5..6).flat_map(|i| (-5..6).map(move |j| (i, j))) {
+        let (cx, cy) = (12.0 * f64::from(i) + 3.0, 12.0 * f64::from(j) - 4.0);
+        for k in 0..8 {
+            let a = f64::from(k) * core::f64::consts::TAU / 8.0;
+            for h in 0..20 {
+                field.push([
+                    cx + 0.2 * a.cos(),
+                    cy + 0.2 * a.sin(),
+                    -1.8 + 0.25 * f64::from(h),
+                ]);
+            }
+        }
+    }
+    let bytes = map_file(&field, "site");
+    // Lost after 5 m without a fix instead of 50, within the run's 20 m.
+    let states = run_in::<f64>(&field, &bytes, truth(0.0), 40, |s| s.lost_after_m = 5.0);
+    let worst = states.iter().map(|s| s.1).fold(0.0, f64::max);
+    std::println!("open field: worst error {worst:.3} m (limit 0.5), states {states:?}");
+    assert!(states.iter().all(|s| s.0 == State::Degraded), "{states:?}");
+    assert!(worst < 0.5);
 }
 
 #[test]
