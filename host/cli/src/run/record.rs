@@ -334,7 +334,7 @@ mod tests {
             let bit = |f: &Flag| if set.contains(f) { ",1" } else { ",0" };
             Flag::ALL.iter().map(bit).collect()
         };
-        let unflagged = format!(",,,,false,false,,,,,,,,,,{}", cells(&[]));
+        let unflagged = format!(",,,,false,false,,,,,,,,,,,{}", cells(&[]));
         assert!(first.ends_with(&unflagged), "{first}\n{unflagged}");
         let second = lines.next().unwrap();
         let flagged = cells(&[Flag::Degenerate, Flag::Capacity]);
