@@ -13,7 +13,6 @@ use crate::local_map::Voxels;
 use crate::prior_map::{Tile, TileKey, TileMap};
 use crate::scalar::Real;
 use crate::voxel::VoxelKey;
-use core::marker::PhantomData;
 
 /// Most tiles held at once.
 pub const MAX_TILES_HELD: usize = 64;
@@ -113,7 +112,6 @@ impl<'m> Held<'m> {
             held: self,
             voxel_size: T::of(v),
             ratio,
-            _t: PhantomData,
         }
     }
 }
@@ -123,7 +121,6 @@ pub(super) struct HeldVoxels<'h, 'm, T> {
     held: &'h Held<'m>,
     voxel_size: T,
     ratio: i32,
-    _t: PhantomData<T>,
 }
 
 /// A voxel's points: its tile's place in the held set and their range in the record.

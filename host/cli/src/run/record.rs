@@ -27,7 +27,7 @@ pub struct Record {
     pub localizer_bytes: Option<usize>,
     /// With `--map`: the most tiles and points of the prior map held at once.
     pub prior_held: (u32, u32),
-    /// With `--map`: the localizer's bytes on a board holding exactly those (f32, quantised).
+    /// With `--map`: the localizer's bytes on a board (f32), whatever the map.
     pub localizer_board_bytes: Option<usize>,
 }
 
