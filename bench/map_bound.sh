@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
 # Reproduces BENCHMARKS.md section 13, "The host's map never evicts" and "Capacities that
 # fill": the host's default (growing) run on every shared recording, every generated profile
-# (500 frames) and a long forest drive that grows the map past 4x the starting capacities
-# (no eviction, poses within the crosscheck's tolerance of kiss-icp 1.3.0 on every frame, the
-# state's bytes beside kiss-icp's peak RSS), then SMALL and TINY, which fill, against kiss-icp
-# 1.3.0 at r_max and at the radius the map shrank to.
+# (500 frames) and a long forest drive whose map grows several times past the starting
+# capacities (no eviction, poses within the crosscheck's tolerance of kiss-icp 1.3.0 on every
+# frame, the state's bytes beside kiss-icp's peak RSS), then SMALL and TINY, which fill,
+# against kiss-icp 1.3.0 at r_max and at the radius the map shrank to.
 #
 #   KISS_ODOM_PYTHON=target/refvenv/bin/python bash bench/map_bound.sh
 #
-# FOREST_FRAMES (default 2000) sets the forest drive's length; 0 leaves it out. OLD=path/to/
-# kiss-odom adds a column for another build in the second table. The generated drives go to
-# $GEN (default target/bench/map-bound; seeds 41 and 42, never tuned on; made if missing); the
-# reference comes from $KISS_ODOM_PYTHON (a venv from tests/reference/requirements.txt).
+# FOREST_FRAMES (default 1000, about 1 km) sets the forest drive's length; 0 leaves it out.
+# OLD=path/to/kiss-odom adds a column for another build in the second table. The generated
+# drives go to $GEN (default target/bench/map-bound; seeds 41, 42 and for the forest 43, never
+# tuned on; the forest's densities were set on seed 41; made if missing); the reference comes
+# from $KISS_ODOM_PYTHON (a venv from tests/reference/requirements.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p kiss-odom --features dev
@@ -20,24 +21,26 @@ export KISS_ODOM_DEV=target/release/kiss-odom-dev
 GEN=${GEN:-target/bench/map-bound}
 PY=${KISS_ODOM_PYTHON:?a venv with kiss-icp 1.3.0}
 DATA=../shared/data
-FOREST_FRAMES=${FOREST_FRAMES:-2000}
+FOREST_FRAMES=${FOREST_FRAMES:-1000}
 mkdir -p "$GEN"
-gen() { # name profile frames seed [sensor]
+gen() { # name profile frames seed [simulate flags...]
   [ -f "$GEN/$1/poses.txt" ] || $B simulate --profile "$2" --frames "$3" --seed "$4" \
-    ${5:+--sensor $5} --out "$GEN/$1" --overwrite >/dev/null
+    "${@:5}" --out "$GEN/$1" --overwrite >/dev/null
 }
 PROFILES=()
 for p in urban corridor fast plane tunnel field handheld drone; do
   gen "$p-500-s41" "$p" 500 41
   PROFILES+=("$GEN/$p-500-s41")
 done
-gen suburban-vlp16-500-s41 suburban 500 41 vlp16
-gen urban-vlp16-500-s41 urban 500 41 vlp16
-gen suburban-vlp16-1000-s42 suburban 1000 42 vlp16
+gen suburban-vlp16-500-s41 suburban 500 41 --sensor vlp16
+gen urban-vlp16-500-s41 urban 500 41 --sensor vlp16
+gen suburban-vlp16-1000-s42 suburban 1000 42 --sensor vlp16
 PROFILES+=("$GEN/suburban-vlp16-500-s41" "$GEN/suburban-vlp16-1000-s42")
 if [ "$FOREST_FRAMES" -gt 0 ]; then
-  gen "forest-$FOREST_FRAMES-s41" forest "$FOREST_FRAMES" 41
-  PROFILES+=("$GEN/forest-$FOREST_FRAMES-s41")
+  # An OS0-128's geometry: 128 beams over 90 degrees see the canopy overhead.
+  gen "forest-$FOREST_FRAMES-s43" forest "$FOREST_FRAMES" 43 --beams 128 --columns 2048 \
+    --fov-up 45 --fov-down -45
+  PROFILES+=("$GEN/forest-$FOREST_FRAMES-s43")
 fi
 K=$DATA/kitti-mini/sequences
 S=$DATA/sensors

@@ -5,8 +5,9 @@
 //! along the x axis (floor, walls, ceiling: nothing varies along the axis) and `plane` a lone
 //! ground plane; both are degenerate on purpose. `tunnel` and `field` add sparse structure to
 //! them (see `sparse`): weakly observable, as real tunnels and fields are. `suburban` lines long
-//! streets with rows of houses, yards and trees out to 100 m (see `suburb`), `warehouse` aisles
-//! between rows of racks under a ceiling (see `warehouse`). Objects are kept as [`Group`]s, which
+//! streets with rows of houses, yards and trees out to 100 m (see `suburb`), `forest` a road
+//! through woods, hillsides and overpasses (see `forest`), `warehouse` aisles between rows of
+//! racks under a ceiling (see `warehouse`). Objects are kept as [`Group`]s, which
 //! a revisit moves, turns or removes ([`changes`]).
 
 use crate::profile::Profile;
@@ -20,6 +21,7 @@ use streets::{City, GROUND};
 pub use streets::{Group, GroupKind};
 
 pub mod changes;
+mod forest;
 mod sparse;
 mod streets;
 mod suburb;
@@ -75,6 +77,7 @@ pub fn layout(profile: Profile, seed: u64, route: &Route) -> Layout {
             (vec![ground], city.generate())
         }
         Profile::Suburban => (vec![ground], city.suburb()),
+        Profile::Forest => (vec![ground], city.forest()),
         Profile::Warehouse => (vec![ground, ceiling], city.warehouse()),
     };
     Layout {
@@ -87,7 +90,6 @@ pub fn layout(profile: Profile, seed: u64, route: &Route) -> Layout {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shapes::Shape;
     use crate::trajectory::Trajectory;
     use streets::{Footprint, RouteIndex};
 
@@ -102,12 +104,7 @@ mod tests {
             let mut low = 0;
             for solid in scene.solids() {
                 // Objects entirely above 4 m (lamp arms, canopies) may overhang the road.
-                let bottom = match solid.shape {
-                    Shape::Box { centre, half, .. } => centre.z - half.z,
-                    Shape::Cylinder { z, .. } => z[0],
-                    Shape::Sphere { centre, radius } => centre.z - radius,
-                };
-                if bottom > 4.0 {
+                if solid.shape.heights()[0] > 4.0 {
                     continue;
                 }
                 low += 1;

@@ -38,6 +38,11 @@ pub enum Profile {
     /// tall, with gaps) under an 8 m ceiling, cross aisles every 20-40 m, driven at 1.5-3 m/s
     /// with right-angle turns.
     Warehouse,
+    /// A road through dense woodland out past 100 m (crowns and shrubs as foliage volumes),
+    /// hillsides rising beside it to plateaus, and overpasses on piers with sloping ramps,
+    /// driven at 30-43 km/h on `suburban`'s roads: a map fills its `r_max` ball in depth,
+    /// many times what streets give.
+    Forest,
 }
 
 impl Profile {

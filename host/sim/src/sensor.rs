@@ -340,6 +340,7 @@ mod tests {
             Profile::Tunnel,
             Profile::Field,
             Profile::Suburban,
+            Profile::Forest,
             Profile::Handheld,
             Profile::Drone,
         ] {

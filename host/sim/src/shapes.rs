@@ -1,5 +1,6 @@
-//! Analytic solids the scene is built from: infinite planes, yaw-rotated boxes, vertical capped
-//! cylinders and spheres, each with a ray intersection and a distance to its surface.
+//! Analytic solids the scene is built from: infinite planes, boxes (turned about the vertical,
+//! and tilted about their own long axis for slopes and ramps), vertical capped cylinders and
+//! spheres, each with a ray intersection and a distance to its surface.
 //!
 //! Rays are unit-direction half-lines cast from outside every solid (the route keeps clear of
 //! them); a ray starting inside returns its exit point rather than nothing.
@@ -21,7 +22,8 @@ pub struct Plane {
 /// A solid of the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
-    /// A box rotated about the vertical through its centre (build with [`Shape::yawed_box`]).
+    /// A box rotated about the vertical through its centre, then tilted about its own x axis
+    /// (build with [`Shape::yawed_box`] or [`Shape::tilted_box`]).
     Box {
         /// Centre (m).
         centre: Point3<f64>,
@@ -29,6 +31,8 @@ pub enum Shape {
         half: Vector3<f64>,
         /// `(cos yaw, sin yaw)` of its rotation about z.
         rot: [f64; 2],
+        /// `(cos, sin)` of its tilt about its own x axis: `(1, 0)` stands it level.
+        tilt: [f64; 2],
     },
     /// A vertical cylinder with flat caps from `z0` to `z1`.
     Cylinder {
@@ -45,6 +49,18 @@ pub enum Shape {
         centre: Point3<f64>,
         /// Radius (m).
         radius: f64,
+    },
+    /// Foliage filling an upright ellipsoid, seen as a turbid medium (Beer-Lambert): a ray
+    /// entering it stops after a distance drawn from an exponential law of mean `free_path`,
+    /// or passes through. The draw is a pure function of the ray, so a scene stays
+    /// deterministic; returns lie throughout the crown, as leaves give them.
+    Foliage {
+        /// Centre (m).
+        centre: Point3<f64>,
+        /// Semi-axes along x, y, z (m).
+        axes: Vector3<f64>,
+        /// Mean free path of a ray inside (m).
+        free_path: f64,
     },
 }
 
@@ -86,10 +102,33 @@ impl Plane {
     }
 }
 
-/// Rotates `v` by `-yaw` about z (world to box frame), given `(cos yaw, sin yaw)`.
+/// The uniform draw in `(0, 1]` of a ray `o + t d` through foliage centred at `c`.
+fn foliage_draw(o: &Point3<f64>, d: &Vector3<f64>, c: &Point3<f64>) -> f64 {
+    let bits = [o.x, o.y, o.z, d.x, d.y, d.z, c.x, c.y, c.z].map(f64::to_bits);
+    let h = crate::rng::key(&bits);
+    ((h >> 11) + 1) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// World to box frame: rotates `v` by `-yaw` about z, given `rot = (cos yaw, sin yaw)`, then by
+/// minus the tilt about x (a level box skips the tilt, so its arithmetic is the yaw's alone).
 #[inline]
-fn unrotate(v: &Vector3<f64>, c: f64, s: f64) -> Vector3<f64> {
-    Vector3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z)
+fn unrotate(v: &Vector3<f64>, [c, s]: [f64; 2], [ct, st]: [f64; 2]) -> Vector3<f64> {
+    let u = Vector3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z);
+    if st == 0.0 {
+        return u;
+    }
+    Vector3::new(u.x, ct * u.y + st * u.z, -st * u.y + ct * u.z)
+}
+
+/// Box frame to world: the inverse of [`unrotate`].
+#[inline]
+fn rotate(v: &Vector3<f64>, [c, s]: [f64; 2], [ct, st]: [f64; 2]) -> Vector3<f64> {
+    let u = if st == 0.0 {
+        *v
+    } else {
+        Vector3::new(v.x, ct * v.y - st * v.z, st * v.y + ct * v.z)
+    };
+    Vector3::new(c * u.x - s * u.y, s * u.x + c * u.y, u.z)
 }
 
 /// Signed distance of a point to an axis-aligned box, from `|q| - half`.
@@ -103,20 +142,49 @@ fn box_sdf(q: &Vector3<f64>, half: &Vector3<f64>) -> f64 {
 impl Shape {
     /// A box with centre, half extents and rotation `yaw` (rad) about z.
     pub fn yawed_box(centre: Point3<f64>, half: Vector3<f64>, yaw: f64) -> Self {
+        Self::tilted_box(centre, half, yaw, 0.0)
+    }
+
+    /// A box with centre, half extents, rotation `yaw` (rad) about z and then `tilt` (rad) about
+    /// its own x axis: a positive tilt raises its `+y` side, so its top face is a slope.
+    pub fn tilted_box(centre: Point3<f64>, half: Vector3<f64>, yaw: f64, tilt: f64) -> Self {
         Shape::Box {
             centre,
             half,
             rot: [libm::cos(yaw), libm::sin(yaw)],
+            tilt: [libm::cos(tilt), libm::sin(tilt)],
+        }
+    }
+
+    /// The lowest and highest heights of the solid (m).
+    pub fn heights(&self) -> [f64; 2] {
+        match *self {
+            Shape::Box {
+                centre, half, tilt, ..
+            } => {
+                let e = (tilt[1] * half.y).abs() + (tilt[0] * half.z).abs();
+                [centre.z - e, centre.z + e]
+            }
+            Shape::Cylinder { z, .. } => z,
+            Shape::Sphere { centre, radius } => [centre.z - radius, centre.z + radius],
+            Shape::Foliage { centre, axes, .. } => [centre.z - axes.z, centre.z + axes.z],
         }
     }
 
     /// The xy bounding rectangle `[xmin, ymin, xmax, ymax]`.
     pub fn footprint(&self) -> [f64; 4] {
         match *self {
-            Shape::Box { centre, half, rot } => {
+            Shape::Box {
+                centre,
+                half,
+                rot,
+                tilt,
+            } => {
                 let [c, s] = rot;
-                let ex = (c * half.x).abs() + (s * half.y).abs();
-                let ey = (s * half.x).abs() + (c * half.y).abs();
+                // The tilted box's extent across its x axis, seen from above.
+                let hy = (tilt[0] * half.y).abs() + (tilt[1] * half.z).abs();
+                let ex = (c * half.x).abs() + (s * hy).abs();
+                let ey = (s * half.x).abs() + (c * hy).abs();
                 [centre.x - ex, centre.y - ey, centre.x + ex, centre.y + ey]
             }
             Shape::Cylinder { centre, radius, .. } => [
@@ -131,16 +199,26 @@ impl Shape {
                 centre.x + radius,
                 centre.y + radius,
             ],
+            Shape::Foliage { centre, axes, .. } => [
+                centre.x - axes.x,
+                centre.y - axes.y,
+                centre.x + axes.x,
+                centre.y + axes.y,
+            ],
         }
     }
 
     /// First intersection of the ray `o + t d` (unit `d`) with `t` in `(0, t_max)`.
     pub fn hit(&self, o: &Point3<f64>, d: &Vector3<f64>, t_max: f64) -> Option<RayHit> {
         match *self {
-            Shape::Box { centre, half, rot } => {
-                let [c, s] = rot;
-                let lo = unrotate(&(o - centre), c, s);
-                let ld = unrotate(d, c, s);
+            Shape::Box {
+                centre,
+                half,
+                rot,
+                tilt,
+            } => {
+                let lo = unrotate(&(o - centre), rot, tilt);
+                let ld = unrotate(d, rot, tilt);
                 let (mut near, mut far) = (f64::NEG_INFINITY, f64::INFINITY);
                 let (mut near_axis, mut far_axis) = (0, 0);
                 for i in 0..3 {
@@ -177,9 +255,10 @@ impl Shape {
                 }
                 let mut n = Vector3::zeros();
                 n[axis] = 1.0;
-                // Back to world: rotate by +yaw.
-                let normal = Vector3::new(c * n.x - s * n.y, s * n.x + c * n.y, n.z);
-                Some(RayHit { t, normal })
+                Some(RayHit {
+                    t,
+                    normal: rotate(&n, rot, tilt),
+                })
             }
             Shape::Cylinder { centre, radius, z } => {
                 let mut best: Option<RayHit> = None;
@@ -237,16 +316,36 @@ impl Shape {
                     normal: (f + t * d) / radius,
                 })
             }
+            Shape::Foliage {
+                centre,
+                axes,
+                free_path,
+            } => {
+                // The unit sphere in coordinates scaled by the semi-axes.
+                let q = (o - centre).component_div(&axes);
+                let v = d.component_div(&axes);
+                let (a, b, c) = (v.norm_squared(), q.dot(&v), q.norm_squared() - 1.0);
+                let disc = b * b - a * c;
+                if disc < 0.0 {
+                    return None;
+                }
+                let root = disc.sqrt();
+                let (enter, exit) = (((-b - root) / a).max(T_EPS), (-b + root) / a);
+                let t = enter - free_path * libm::log(foliage_draw(o, d, &centre));
+                (t < exit && t < t_max).then_some(RayHit { t, normal: -d })
+            }
         }
     }
 
     /// Unsigned distance from `p` to the solid's surface (m).
     pub fn distance(&self, p: &Point3<f64>) -> f64 {
         match *self {
-            Shape::Box { centre, half, rot } => {
-                let [c, s] = rot;
-                box_sdf(&unrotate(&(p - centre), c, s), &half).abs()
-            }
+            Shape::Box {
+                centre,
+                half,
+                rot,
+                tilt,
+            } => box_sdf(&unrotate(&(p - centre), rot, tilt), &half).abs(),
             Shape::Cylinder { centre, radius, z } => {
                 // The 2D box distance in (radial, height).
                 let e = [
@@ -257,6 +356,17 @@ impl Shape {
                 (outside + e[0].max(e[1]).min(0.0)).abs()
             }
             Shape::Sphere { centre, radius } => ((p - centre).norm() - radius).abs(),
+            // Distance to the volume (0 inside it), in the ellipsoid's scaled metric: an upper
+            // bound outside, exact on the axes.
+            Shape::Foliage { centre, axes, .. } => {
+                let q = (p - centre).component_div(&axes);
+                let n = q.norm();
+                if n <= 1.0 {
+                    0.0
+                } else {
+                    ((p - centre) * (1.0 - 1.0 / n)).norm()
+                }
+            }
         }
     }
 }
@@ -291,6 +401,76 @@ mod tests {
         assert!(aligned
             .hit(&p(0.0, 0.0, 1.0), &-Vector3::x(), 100.0)
             .is_none());
+    }
+
+    #[test]
+    fn a_tilted_box_is_a_slope_rising_on_its_plus_y_side() {
+        // A slab 20 m wide across, 1 m thick, tilted 20 degrees and turned 90 degrees: its own
+        // +y is world -x, so its top face climbs towards -x at tan(20 deg).
+        let (tilt, yaw) = (20f64.to_radians(), core::f64::consts::FRAC_PI_2);
+        let slab = Shape::tilted_box(p(0.0, 0.0, 0.0), Vector3::new(30.0, 10.0, 0.5), yaw, tilt);
+        let top = |x: f64| {
+            let h = slab.hit(&p(x, 3.0, 50.0), &-Vector3::z(), 100.0).unwrap();
+            (50.0 - h.t, h.normal)
+        };
+        let (z0, n) = top(0.0);
+        let (z1, _) = top(-4.0);
+        let expected = 0.5 / tilt.cos();
+        assert!((z0 - expected).abs() < 1e-12, "{z0} {expected}");
+        assert!((z1 - z0 - 4.0 * tilt.tan()).abs() < 1e-12, "{z1} {z0}");
+        assert!((n.z.abs() - tilt.cos()).abs() < 1e-12 && n.y.abs() < 1e-12);
+        assert_eq!(slab.heights()[1], 10.0 * tilt.sin() + 0.5 * tilt.cos());
+        let f = slab.footprint();
+        let across = 10.0 * tilt.cos() + 0.5 * tilt.sin();
+        assert!(
+            (f[2] - across).abs() < 1e-12 && (f[3] - 30.0).abs() < 1e-12,
+            "{f:?}"
+        );
+    }
+
+    #[test]
+    fn foliage_stops_rays_at_exponential_depths_inside_it() {
+        // A crown 4 m across and deep with a 2 m free path: rays along its axis stop inside at a
+        // mean depth of 2 m (truncated by its 8 m chord), and the share through is e^-4.
+        let crown = Shape::Foliage {
+            centre: p(20.0, 0.0, 5.0),
+            axes: Vector3::new(4.0, 4.0, 3.0),
+            free_path: 2.0,
+        };
+        let (mut inside, mut through, mut depth) = (0, 0, 0.0);
+        for i in 0..20_000 {
+            let o = p(0.0, 1e-6 * i as f64, 5.0);
+            match crown.hit(&o, &Vector3::x(), 100.0) {
+                Some(h) => {
+                    assert!(
+                        h.t > 16.0
+                            && h.t < 24.0
+                            && crown.distance(&(o + h.t * Vector3::x())) == 0.0
+                    );
+                    assert_eq!(
+                        crown.hit(&o, &Vector3::x(), 100.0),
+                        Some(h),
+                        "deterministic"
+                    );
+                    inside += 1;
+                    depth += h.t - 16.0;
+                }
+                None => through += 1,
+            }
+        }
+        let mean = depth / inside as f64;
+        // A mean of 2 m truncated at 8 m: 2 - 8 e^-4 / (1 - e^-4).
+        let expected = 2.0 - 8.0 * (-4f64).exp() / (1.0 - (-4f64).exp());
+        let share = through as f64 / 20_000.0;
+        println!(
+            "mean depth {mean:.3} m (expected {expected:.3}), through {share:.4} ({:.4})",
+            (-4f64).exp()
+        );
+        assert!((mean - expected).abs() < 0.05 && (share - (-4f64).exp()).abs() < 0.005);
+        assert!(crown.hit(&p(0.0, 5.0, 5.0), &Vector3::x(), 100.0).is_none());
+        assert!(crown.hit(&p(0.0, 0.0, 5.0), &Vector3::x(), 16.0).is_none());
+        assert_eq!(crown.heights(), [2.0, 8.0]);
+        assert_eq!(crown.distance(&p(20.0, 0.0, 10.0)), 2.0);
     }
 
     #[test]
@@ -329,6 +509,7 @@ mod tests {
     fn every_hit_lies_on_the_surface_by_the_distance_function() {
         let shapes = [
             Shape::yawed_box(p(3.0, -2.0, 1.5), Vector3::new(2.0, 1.0, 1.5), 0.7),
+            Shape::tilted_box(p(-3.0, -5.0, 1.0), Vector3::new(3.0, 4.0, 0.5), -0.4, 0.35),
             Shape::Cylinder {
                 centre: [-4.0, 1.0],
                 radius: 0.3,

@@ -197,7 +197,7 @@ impl Route {
                     b.straight(rng.range(40.0, 180.0));
                 }
             }
-            Profile::Suburban => {
+            Profile::Suburban | Profile::Forest => {
                 // Long streets joined by turns laid out, as in town, for the speed there.
                 b.straight(ROUTE_BEFORE_START + rng.range(100.0, 300.0));
                 while b.s < end {
@@ -575,6 +575,11 @@ impl MotionParams {
             },
             Profile::Warehouse => Self {
                 speed: (1.5, 3.0),
+                ..car
+            },
+            Profile::Forest => Self {
+                speed: (8.0, 12.0),
+                launch_tau: 2.0,
                 ..car
             },
             Profile::Suburban => Self {

@@ -164,12 +164,7 @@ fn shuffle(v: &mut [usize], rng: &mut Stream) {
 }
 
 fn low(s: &Solid) -> bool {
-    let bottom = match s.shape {
-        Shape::Box { centre, half, .. } => centre.z - half.z,
-        Shape::Cylinder { z, .. } => z[0],
-        Shape::Sphere { centre, radius } => centre.z - radius,
-    };
-    bottom < OVERHEAD
+    s.shape.heights()[0] < OVERHEAD
 }
 
 fn fp(s: &Solid) -> Footprint {
@@ -182,7 +177,7 @@ fn transform(solids: &[Solid], change: Change, heading: f64) -> Option<Vec<Solid
     let (pivot, axis) = match solids.first()?.shape {
         Shape::Box { centre, rot, .. } => ([centre.x, centre.y], rot),
         Shape::Cylinder { centre, .. } => (centre, [libm::cos(heading), libm::sin(heading)]),
-        Shape::Sphere { centre, .. } => (
+        Shape::Sphere { centre, .. } | Shape::Foliage { centre, .. } => (
             [centre.x, centre.y],
             [libm::cos(heading), libm::sin(heading)],
         ),
@@ -203,11 +198,17 @@ fn transform(solids: &[Solid], change: Change, heading: f64) -> Option<Vec<Solid
         .iter()
         .map(|s| {
             let shape = match s.shape {
-                Shape::Box { centre, half, rot } => {
+                Shape::Box {
+                    centre,
+                    half,
+                    rot,
+                    tilt,
+                } => {
                     let c = map([centre.x, centre.y]);
                     Shape::Box {
                         centre: Point3::new(c[0], c[1], centre.z),
                         half,
+                        tilt,
                         rot: [
                             rot[0] * turn[0] - rot[1] * turn[1],
                             rot[1] * turn[0] + rot[0] * turn[1],
@@ -224,6 +225,18 @@ fn transform(solids: &[Solid], change: Change, heading: f64) -> Option<Vec<Solid
                     Shape::Sphere {
                         centre: Point3::new(c[0], c[1], centre.z),
                         radius,
+                    }
+                }
+                Shape::Foliage {
+                    centre,
+                    axes,
+                    free_path,
+                } => {
+                    let c = map([centre.x, centre.y]);
+                    Shape::Foliage {
+                        centre: Point3::new(c[0], c[1], centre.z),
+                        axes,
+                        free_path,
                     }
                 }
             };

@@ -52,11 +52,20 @@ impl Footprint {
     /// The footprint of `shape` seen from above.
     pub(super) fn of(shape: &Shape) -> Self {
         match *shape {
-            Shape::Box { centre, half, rot } => {
-                Footprint::Rect([centre.x, centre.y], [half.x, half.y], rot)
+            Shape::Box {
+                centre,
+                half,
+                rot,
+                tilt,
+            } => {
+                let across = (tilt[0] * half.y).abs() + (tilt[1] * half.z).abs();
+                Footprint::Rect([centre.x, centre.y], [half.x, across], rot)
             }
             Shape::Cylinder { centre, radius, .. } => Footprint::Disc(centre, radius),
             Shape::Sphere { centre, radius } => Footprint::Disc([centre.x, centre.y], radius),
+            Shape::Foliage { centre, axes, .. } => {
+                Footprint::Disc([centre.x, centre.y], axes.x.max(axes.y))
+            }
         }
     }
 

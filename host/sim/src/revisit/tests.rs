@@ -150,10 +150,16 @@ fn changes_of_0_3_change_that_share_of_the_objects() {
 /// Whether `p` is within `margin` of the inside of `shape`.
 fn near_inside(shape: &Shape, p: &Point3<f64>, margin: f64) -> bool {
     match *shape {
-        Shape::Box { centre, half, rot } => {
+        Shape::Box {
+            centre,
+            half,
+            rot,
+            tilt: [ct, st],
+        } => {
             let d = p - centre;
             let (lx, ly) = (rot[0] * d.x + rot[1] * d.y, -rot[1] * d.x + rot[0] * d.y);
-            lx.abs() < half.x + margin && ly.abs() < half.y + margin && d.z.abs() < half.z + margin
+            let (ly, lz) = (ct * ly + st * d.z, -st * ly + ct * d.z);
+            lx.abs() < half.x + margin && ly.abs() < half.y + margin && lz.abs() < half.z + margin
         }
         Shape::Cylinder { centre, radius, z } => {
             (p.x - centre[0]).hypot(p.y - centre[1]) < radius + margin
@@ -161,6 +167,7 @@ fn near_inside(shape: &Shape, p: &Point3<f64>, margin: f64) -> bool {
                 && p.z < z[1] + margin
         }
         Shape::Sphere { centre, radius } => (p - centre).norm() < radius + margin,
+        Shape::Foliage { .. } => shape.distance(p) < margin,
     }
 }
 
