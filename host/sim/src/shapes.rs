@@ -109,6 +109,12 @@ fn foliage_draw(o: &Point3<f64>, d: &Vector3<f64>, c: &Point3<f64>) -> f64 {
     ((h >> 11) + 1) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
+/// A box's half extents seen from above, along its own x axis and across it: a tilt of
+/// `(cos, sin)` about x widens it by its thickness.
+pub fn plan_half(half: &Vector3<f64>, [ct, st]: [f64; 2]) -> [f64; 2] {
+    [half.x, (ct * half.y).abs() + (st * half.z).abs()]
+}
+
 /// World to box frame: rotates `v` by `-yaw` about z, given `rot = (cos yaw, sin yaw)`, then by
 /// minus the tilt about x (a level box skips the tilt, so its arithmetic is the yaw's alone).
 #[inline]
@@ -181,10 +187,9 @@ impl Shape {
                 tilt,
             } => {
                 let [c, s] = rot;
-                // The tilted box's extent across its x axis, seen from above.
-                let hy = (tilt[0] * half.y).abs() + (tilt[1] * half.z).abs();
-                let ex = (c * half.x).abs() + (s * hy).abs();
-                let ey = (s * half.x).abs() + (c * hy).abs();
+                let [hx, hy] = plan_half(&half, tilt);
+                let ex = (c * hx).abs() + (s * hy).abs();
+                let ey = (s * hx).abs() + (c * hy).abs();
                 [centre.x - ex, centre.y - ey, centre.x + ex, centre.y + ey]
             }
             Shape::Cylinder { centre, radius, .. } => [

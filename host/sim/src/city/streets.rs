@@ -5,7 +5,7 @@
 
 use crate::rng::{Purpose, Stream};
 use crate::scene::Solid;
-use crate::shapes::Shape;
+use crate::shapes::{plan_half, Shape};
 use crate::trajectory::Route;
 use nalgebra::{Point3, Vector3};
 use std::ops::Range;
@@ -57,10 +57,7 @@ impl Footprint {
                 half,
                 rot,
                 tilt,
-            } => {
-                let across = (tilt[0] * half.y).abs() + (tilt[1] * half.z).abs();
-                Footprint::Rect([centre.x, centre.y], [half.x, across], rot)
-            }
+            } => Footprint::Rect([centre.x, centre.y], plan_half(&half, tilt), rot),
             Shape::Cylinder { centre, radius, .. } => Footprint::Disc(centre, radius),
             Shape::Sphere { centre, radius } => Footprint::Disc([centre.x, centre.y], radius),
             Shape::Foliage { centre, axes, .. } => {
