@@ -15,9 +15,9 @@
 //! 5. judge it ([`State`]): a good share and conditioning moves the pose to the registration;
 //!    a fair share moves it too (in a long aisle the map measures the pose across it, not
 //!    along), degraded; else the pose is the prediction, degraded, until `lost_after_m` metres
-//!    or `lost_after_frames` frames have passed without a fix (a good share counts whatever
-//!    the conditioning: an open field's ground outweighs its poles there, which does not
-//!    confirm the pose but keeps it from drifting): lost. A pose not yet confirmed
+//!    or `lost_after_frames` frames have passed without a fix (a good share at a quarter of the
+//!    conditioning counts; below it, as in an open field, the share fits whatever the pose and
+//!    vouches for nothing): lost. A pose not yet confirmed
 //!    by a good registration (the start, a reseed, the search's answer) is lost after
 //!    `confirm_frames` frames in a row whose share is not good.
 //!    Lost runs the bounded search (`search`) around the dead-reckoned pose, a few starts per
@@ -285,10 +285,11 @@ impl<'m, T: Real, S: Storage> Localizer<'m, T, S> {
         if share >= s.fair_share {
             out.pose = pose;
         }
-        // A good fit the map conditions weakly (an open field, whose ground outweighs its
-        // poles in the conditioning) keeps the pose from drifting away: no confirmation, but
-        // no time lost either. The share counts structure only, so it still fits.
-        if share >= s.good_share && obs.is_some() {
+        // A good fit the map conditions fairly keeps the pose from drifting away: no
+        // confirmation, but no time lost either. Below a quarter of the conditioning (an open
+        // field's ground and far poles) the share fits metres off as well as on the pose.
+        let weak = s.min_observability * T::of(0.25);
+        if share >= s.good_share && obs.is_some_and(|o| o >= weak) {
             self.since_fix = (T::zero(), 0);
         } else {
             self.since_fix = (self.since_fix.0 + step, self.since_fix.1.saturating_add(1));

@@ -234,10 +234,11 @@ fn a_start_five_metres_and_twenty_degrees_off_is_found_and_never_called_localize
 }
 
 /// An open field: ground and a few poles 12 m apart. The ground outweighs the poles in the
-/// conditioning, so no frame is confirmed, but the poles fit: the pose is held, never lost.
+/// conditioning, so a good share there vouches for nothing: no frame is confirmed, and once
+/// the run has gone `lost_after_m` without a fix it is lost, however well the share looks.
 #[test]
 #[cfg_attr(miri, ignore)]
-fn an_open_field_that_fits_is_never_lost_nor_confirmed() {
+fn an_open_field_is_never_confirmed_and_lost_after_the_distance_without_a_fix() {
     let mut field: Vec<[f64; 3]> = yard().into_iter().filter(|p| p[2] < -1.7).collect();
     for (i, j) in (-5..6).flat_map(|i| (-5..6).map(move |j| (i, j))) {
         let (cx, cy) = (12.0 * f64::from(i) + 3.0, 12.0 * f64::from(j) - 4.0);
@@ -253,12 +254,19 @@ fn an_open_field_that_fits_is_never_lost_nor_confirmed() {
         }
     }
     let bytes = map_file(&field, "site");
-    // Lost after 5 m without a fix instead of 50, within the run's 20 m.
+    // Lost after 5 m without a fix instead of 50: frames are 0.5 m apart, 40 of them.
     let states = run_in::<f64>(&field, &bytes, truth(0.0), 40, |s| s.lost_after_m = 5.0);
-    let worst = states.iter().map(|s| s.1).fold(0.0, f64::max);
-    std::println!("open field: worst error {worst:.3} m (limit 0.5), states {states:?}");
-    assert!(states.iter().all(|s| s.0 == State::Degraded), "{states:?}");
-    assert!(worst < 0.5);
+    std::println!("open field: states {states:?}");
+    assert!(states.iter().all(|s| s.0 != State::Localized), "{states:?}");
+    let first_lost = states.iter().position(|s| s.0 == State::Lost);
+    // 5 m at 0.5 m a frame: the eleventh frame at the latest (the first has no step).
+    assert!(
+        first_lost.is_some_and(|k| (9..=11).contains(&k)),
+        "{first_lost:?}"
+    );
+    assert!(states[..first_lost.unwrap_or(0)]
+        .iter()
+        .all(|s| s.0 == State::Degraded));
 }
 
 #[test]
