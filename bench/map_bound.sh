@@ -28,7 +28,7 @@ gen() { # name profile frames seed [simulate flags...]
     "${@:5}" --out "$GEN/$1" --overwrite >/dev/null
 }
 PROFILES=()
-for p in urban corridor fast plane tunnel field handheld drone; do
+for p in urban corridor fast plane tunnel field handheld drone warehouse; do
   gen "$p-500-s41" "$p" 500 41
   PROFILES+=("$GEN/$p-500-s41")
 done
