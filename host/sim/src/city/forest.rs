@@ -119,17 +119,17 @@ impl City<'_> {
                 grade: libm::tan(self.rng.range(10f64, 28.0).to_radians()),
             };
             s += length + self.rng.range(30.0, 150.0);
+            let rise = hill.grade * hill.run;
+            // One metre longer than the step, so a bend leaves no gap between slabs.
+            let half = 0.5 * SLAB + 1.0;
+            let plateau = 0.5 * (WOOD_DEPTH + 5.0 - hill.foot - hill.run);
             let mut a = hill.s[0];
             let mut placed = false;
             while a < hill.s[1] {
                 let mid = a + 0.5 * SLAB;
                 let (foot, psi) = self.offset(mid, side * hill.foot);
                 let rises = psi + side * FRAC_PI_2;
-                let rise = hill.grade * hill.run;
-                // One metre longer than the step, so a bend leaves no gap between slabs.
-                let half = 0.5 * SLAB + 1.0;
                 placed |= self.add_slope(foot, rises, hill.run, rise, half, 0.3);
-                let plateau = 0.5 * (WOOD_DEPTH + 5.0 - hill.foot - hill.run);
                 if plateau > 0.0 {
                     let (c, _) = self.offset(mid, side * (hill.foot + hill.run + plateau));
                     let top = [half, plateau, 0.5 * rise];
