@@ -221,3 +221,25 @@ fn two_sensors_on_one_port_decode_one_and_report_the_other() {
         "{w}"
     );
 }
+
+/// A spinning Robosense's MSOP packets say nothing of the model (the RS-16, RS-32 and Bpearl
+/// send alike): without `--sensor` the refusal says so and names the models to choose from,
+/// rather than that nothing was found.
+#[test]
+fn robosense_packets_without_a_model_are_refused_naming_the_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rs.pcap");
+    let msop = Datagram {
+        time_ns: 1_000,
+        source: "192.168.1.200:6699".parse().unwrap(),
+        port: 6699,
+        payload: vec![0x55; kiss_odom_sensors::robosense::wire::LEN],
+    };
+    pcap::write(&path, &[msop.clone(), msop], 9000).unwrap();
+    let e = err(&path, &SensorOptions::default());
+    println!("{e}");
+    assert!(
+        e.contains("rs.pcap") && e.contains("spinning Robosense") && e.contains("--sensor rs16"),
+        "{e}"
+    );
+}

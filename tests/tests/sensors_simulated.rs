@@ -45,7 +45,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 17] = [
+const CASES: [Case; 19] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -105,6 +105,13 @@ const CASES: [Case; 17] = [
         azimuth_rad: 0.0,
         clock_origin_s: PacketSensor::Helios.clock_origin_s(),
     },
+    // The VLP-32C's packets, its lasers from the calibration written beside.
+    Case {
+        sensor: "vlp32ab",
+        unit_m: 0.004,
+        azimuth_rad: 0.011 * std::f64::consts::PI / 180.0,
+        clock_origin_s: 0,
+    },
     Case {
         sensor: "hdl64e-s3",
         unit_m: 0.0,
@@ -155,6 +162,13 @@ const CASES: [Case; 17] = [
         azimuth_rad: 0.0,
         clock_origin_s: PacketSensor::At128.clock_origin_s(),
     },
+    // Each return cast along the pitch and yaw its packet writes, the truth at its range.
+    Case {
+        sensor: "m1",
+        unit_m: 0.0,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::M1.clock_origin_s(),
+    },
 ];
 
 impl Case {
@@ -166,15 +180,17 @@ impl Case {
         self.unit_m / 2.0 + r * self.azimuth_rad + SLACK_M
     }
     /// Whether the simulator casts along the very ray the decoder computes (the Hesai
-    /// sensors: block azimuth and channel angles, or the AT128's mirror-frame correction).
+    /// sensors: block azimuth and channel angles, or the AT128's mirror-frame correction; the
+    /// RS-M1: the pitch and yaw its packets carry).
     fn exact_rays(&self) -> bool {
-        self.sensor == "xt32" || self.needs_angles()
+        matches!(self.sensor, "xt32" | "m1") || self.needs_angles()
     }
     /// Whether `run` finds the recording and cuts its sweeps as the simulator does with no
     /// options: Livox frames by port, packet length and the decoder's default 0.1 s; the XT32
-    /// by its packets, sweeps by azimuth coverage.
+    /// by its packets, sweeps by azimuth coverage; the RS-M1 by its packets, frames by their
+    /// sequence numbers.
     fn found_as_is(&self) -> bool {
-        matches!(self.sensor, "mid360" | "xt32" | "avia")
+        matches!(self.sensor, "mid360" | "xt32" | "avia" | "m1")
     }
     /// Whether `run` finds the recording by its packets and needs the angle correction file
     /// `simulate` wrote beside it (the Hesai sensors but the XT32).
@@ -193,6 +209,7 @@ impl Case {
     fn new_family(&self) -> Option<SensorKind> {
         match self.sensor {
             "helios" => Some(SensorKind::Helios),
+            "vlp32ab" => Some(SensorKind::Vlp32ab),
             "hdl64e-s3" => Some(SensorKind::Hdl64eS3),
             "vls128" => Some(SensorKind::Vls128),
             _ => None,
@@ -567,15 +584,15 @@ fn run_on_a_generated_pcap_tracks_as_well_as_on_the_direct_points() {
     }
 }
 
-/// `run` on the generated packets of the Robosense Helios, the HDL-64E S3 and the VLS-128
-/// tracks the fast drive as well as on the simulator's direct points: KITTI translation error
+/// `run` on the generated packets of the models named with `--sensor` (the Robosense Helios,
+/// the VLP-32A/B, the HDL-64E S3 and the VLS-128) tracks the fast drive as well as on the simulator's direct points: KITTI translation error
 /// within 10 % (deskewed; 100 sweeps, ~150 m).
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "heavy: cargo test --release --test workspace sensors_simulated::"
 )]
-fn run_on_generated_helios_hdl64e_and_vls128_pcaps_tracks_as_on_the_direct_points() {
+fn run_on_generated_pcaps_of_named_models_tracks_as_on_the_direct_points() {
     for case in CASES.iter().filter(|c| c.new_family().is_some()) {
         let dir = tmp(&format!("{}-run", case.sensor));
         let d = dir.path();

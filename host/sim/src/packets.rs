@@ -24,6 +24,7 @@ mod at128;
 mod avia;
 mod hesai128;
 mod hesai_fixed;
+mod m1;
 mod mid360;
 mod mid360_imu;
 mod ouster_imu;
@@ -54,6 +55,11 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "vlp32c"))]
     #[serde(rename = "vlp32c")]
     Vlp32c,
+    /// Velodyne VLP-32A/B: the VLP-32C's packets and firing times with its own product byte,
+    /// strongest return, 4 mm ranges (calibration YAML beside).
+    #[cfg_attr(feature = "clap", value(name = "vlp32ab"))]
+    #[serde(rename = "vlp32ab")]
+    Vlp32ab,
     /// Ouster OS1-64, 1024 columns, profile RNG19_RFL8_SIG16_NIR16 (metadata JSON beside).
     #[cfg_attr(feature = "clap", value(name = "os1-64"))]
     #[serde(rename = "os1-64")]
@@ -108,6 +114,12 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "ruby"))]
     #[serde(rename = "ruby")]
     Ruby,
+    /// Robosense RS-M1 (MEMS): MSOP packets of 25 blocks of five returns, each with its own
+    /// pitch and yaw, a raster of 126 lines over 120 x 25 degrees, 5 mm ranges, 10 Hz frames
+    /// of 630 packets numbered from 1.
+    #[cfg_attr(feature = "clap", value(name = "m1"))]
+    #[serde(rename = "m1")]
+    M1,
     /// Velodyne HDL-64E S3: upper and lower blocks of 32 lasers, strongest return, 2 mm
     /// ranges (calibration YAML beside).
     #[cfg_attr(feature = "clap", value(name = "hdl64e-s3"))]
@@ -269,6 +281,7 @@ impl PacketSensor {
     fn model(self) -> Model {
         match self {
             Self::Vlp32c => Model::Vlp32c,
+            Self::Vlp32ab => Model::Vlp32ab,
             Self::Hdl64e => Model::Hdl64eS3,
             Self::Hdl64eS2 => Model::Hdl64eS2,
             Self::Vls128 => Model::Vls128,
@@ -276,11 +289,14 @@ impl PacketSensor {
         }
     }
 
-    /// The Velodyne calibration file a HDL-64E or VLS-128 needs (the ROS YAML), to write
+    /// The Velodyne calibration file a VLP-32A/B, HDL-64E or VLS-128 needs (the ROS YAML), to write
     /// beside the capture as [`crate::capture::CALIBRATION_NAME`]; `None` for the others.
     pub fn calibration_file(self) -> Option<String> {
-        matches!(self, Self::Hdl64e | Self::Hdl64eS2 | Self::Vls128)
-            .then(|| velodyne_wide::yaml(&velodyne_wide::calibration(self.model())))
+        matches!(
+            self,
+            Self::Vlp32ab | Self::Hdl64e | Self::Hdl64eS2 | Self::Vls128
+        )
+        .then(|| velodyne_wide::yaml(&velodyne_wide::calibration(self.model())))
     }
 
     /// A Livox sensor's point timing (the Mid-360's for the sensors that have none).
@@ -304,6 +320,8 @@ impl PacketSensor {
             Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
             Self::At128 if rate_hz == at128::RATE_HZ => Ok(rate_hz),
             Self::At128 => Err("an AT128 runs at 10 frames a second (--rate-hz)".into()),
+            Self::M1 if rate_hz == m1::RATE_HZ => Ok(rate_hz),
+            Self::M1 => Err("an RS-M1 runs at 10 frames a second (--rate-hz)".into()),
             s if s.hesai_fixed() && rate_hz == hesai_fixed::RATE_HZ => Ok(rate_hz),
             s if s.hesai_fixed() => {
                 Err("the simulated Hesai sensors run at 10 Hz (--rate-hz)".into())
@@ -372,7 +390,8 @@ impl PacketSensor {
             | Self::Bpearl
             | Self::Helios
             | Self::Helios16p
-            | Self::Ruby => xt32::CLOCK_ORIGIN_S,
+            | Self::Ruby
+            | Self::M1 => xt32::CLOCK_ORIGIN_S,
             s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
@@ -391,6 +410,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
             s if s.hesai_fixed() => per_period(hesai_fixed::packet_ns(sensor)),
             PacketSensor::At128 => at128::PACKETS_PER_FRAME,
+            PacketSensor::M1 => m1::PACKETS_PER_FRAME,
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
             s if s.robosense().is_some() => {
                 let model = s.robosense().unwrap_or(RobosenseModel::Helios);
@@ -451,6 +471,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
             s if s.hesai_fixed() => hesai_fixed::last_offset(s, last),
             PacketSensor::At128 => at128::last_offset(last),
+            PacketSensor::M1 => m1::last_offset(last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
                 self.packet_offset(last) + self.model.firing_time_s(n, 31)
@@ -489,6 +510,7 @@ impl<'a> PacketSim<'a> {
                 }
                 s if s.hesai_fixed() => self.hesai_fixed_packet(p),
                 PacketSensor::At128 => self.at128_packet(p),
+                PacketSensor::M1 => self.m1_packet(p),
                 _ => self.velodyne_packet(p),
             })
             .collect();

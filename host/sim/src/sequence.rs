@@ -225,8 +225,8 @@ pub fn params_of(request: &Request) -> Result<SimParams> {
     }
     if request.format == Format::Pcap && request.sensor.is_none() {
         bail!(
-            "--format pcap needs --sensor (vlp16, vlp32c, os1-64, mid360, xt32, avia, qt128, \
-             ot128, xt16, xt32m, pandar40p, pandar64 or qt64)"
+            "--format pcap needs --sensor: a sensor whose packets the simulator writes (see \
+             simulate --help)"
         );
     }
     let ros = matches!(request.format, Format::Bag | Format::Mcap | Format::Db3);

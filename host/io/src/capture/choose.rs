@@ -28,6 +28,8 @@ pub struct Survey {
     /// Hesai models of the packets on port 2368, by their first bytes
     /// ([`hesai::identify`]).
     hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
+    /// Robosense RS-M1 packets (their length and first bytes), on any port.
+    m1: u64,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
     records: usize,
@@ -45,6 +47,9 @@ impl Survey {
                 if let (VELODYNE_PORT, Some(model)) = (d.port, hesai::identify(&d.payload)) {
                     self.hesai.entry(model.name()).or_insert((model, 0)).1 += 1;
                 }
+                let m1 = robosense::m1::LEN == d.payload.len()
+                    && d.payload.starts_with(&robosense::m1::ID);
+                self.m1 += u64::from(m1);
             }
             Record::Damaged { port, .. } => {
                 self.damaged.insert(*port);
@@ -189,12 +194,7 @@ pub fn decode_beside(
             return robosense_decoder(path, capture, opts, (model, device));
         }
         if opts.sensor == SensorKind::M1 {
-            let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
-            let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
-            let name = "Robosense RS-M1".to_string();
-            let all = [Unused::Calibration, Unused::CutAngle, Unused::FramePeriod];
-            let notes = unused(opts, "a Robosense RS-M1", &all)?;
-            return Ok(sweeps(path, capture, dec, opts, (port, name, notes)));
+            return m1_decoder(path, capture, opts);
         }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = hesai_model(opts.sensor);
@@ -216,6 +216,9 @@ pub fn decode_beside(
             if auto && hesai.is_none() && s.seen.keys().any(is_livox2) {
                 return livox_decoder(path, capture, opts, livox::Model::Mid360, None);
             }
+            if auto && hesai.is_none() && s.m1 > 0 {
+                return m1_decoder(path, capture, opts);
+            }
             if !data && hesai.is_none() {
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
                     bail!(
@@ -224,9 +227,18 @@ pub fn decode_beside(
                         path.display()
                     );
                 }
+                if s.seen.keys().any(|(_, len)| *len == robosense::wire::LEN) {
+                    bail!(
+                        "{}: {}-byte packets look like a spinning Robosense's, whose models \
+                         send alike: name it (--sensor rs16, rs32, bpearl, helios, helios16p \
+                         or ruby)",
+                        path.display(),
+                        robosense::wire::LEN
+                    );
+                }
                 bail!(
-                    "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368) or Livox \
-                     (ports 56001, 56301) data packets; {}",
+                    "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368), Livox (ports \
+                     56001, 56301) or Robosense RS-M1 (55 AA 5A A5) data packets; {}",
                     path.display(),
                     describe(&s)
                 );
@@ -343,6 +355,20 @@ fn livox_decoder(
         opts,
         (port, name.to_string(), notes),
     ))
+}
+
+/// A Robosense RS-M1 recording: MSOP packets on port 6699 unless `input.port` says.
+fn m1_decoder(
+    path: &Path,
+    capture: Box<dyn DatagramSource>,
+    opts: &SensorOptions,
+) -> Result<PcapSweeps> {
+    let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
+    let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
+    let name = "Robosense RS-M1".to_string();
+    let all = [Unused::Calibration, Unused::CutAngle, Unused::FramePeriod];
+    let notes = unused(opts, "a Robosense RS-M1", &all)?;
+    Ok(sweeps(path, capture, dec, opts, (port, name, notes)))
 }
 
 /// The Robosense model `--sensor` names.

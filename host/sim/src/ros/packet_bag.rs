@@ -39,6 +39,7 @@ impl Driver {
         Some(match sensor {
             PacketSensor::Vlp16
             | PacketSensor::Vlp32c
+            | PacketSensor::Vlp32ab
             | PacketSensor::Hdl64e
             | PacketSensor::Hdl64eS2
             | PacketSensor::Vls128 => Self::Velodyne,
@@ -59,7 +60,8 @@ impl Driver {
             | PacketSensor::Rs32
             | PacketSensor::Bpearl
             | PacketSensor::Helios16p
-            | PacketSensor::Ruby => return None,
+            | PacketSensor::Ruby
+            | PacketSensor::M1 => return None,
         })
     }
 
