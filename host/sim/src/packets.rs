@@ -43,7 +43,8 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// A sensor whose packets the simulator writes.
+/// A sensor whose packets the simulator writes. A sensor's place in this list keys the noise of
+/// its rays (`PacketSim::cast`): new sensors go last, so the others' recordings stay the same.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum PacketSensor {
@@ -55,11 +56,6 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "vlp32c"))]
     #[serde(rename = "vlp32c")]
     Vlp32c,
-    /// Velodyne VLP-32A/B: the VLP-32C's packets and firing times with its own product byte,
-    /// strongest return, 4 mm ranges (calibration YAML beside).
-    #[cfg_attr(feature = "clap", value(name = "vlp32ab"))]
-    #[serde(rename = "vlp32ab")]
-    Vlp32ab,
     /// Ouster OS1-64, 1024 columns, profile RNG19_RFL8_SIG16_NIR16 (metadata JSON beside).
     #[cfg_attr(feature = "clap", value(name = "os1-64"))]
     #[serde(rename = "os1-64")]
@@ -114,12 +110,6 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "ruby"))]
     #[serde(rename = "ruby")]
     Ruby,
-    /// Robosense RS-M1 (MEMS): MSOP packets of 25 blocks of five returns, each with its own
-    /// pitch and yaw, a raster of 126 lines over 120 x 25 degrees, 5 mm ranges, 10 Hz frames
-    /// of 630 packets numbered from 1.
-    #[cfg_attr(feature = "clap", value(name = "m1"))]
-    #[serde(rename = "m1")]
-    M1,
     /// Velodyne HDL-64E S3: upper and lower blocks of 32 lasers, strongest return, 2 mm
     /// ranges (calibration YAML beside).
     #[cfg_attr(feature = "clap", value(name = "hdl64e-s3"))]
@@ -164,6 +154,17 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "at128"))]
     #[serde(rename = "at128")]
     At128,
+    /// Velodyne VLP-32A/B: the VLP-32C's packets and firing times with its own product byte,
+    /// strongest return, 4 mm ranges (calibration YAML beside).
+    #[cfg_attr(feature = "clap", value(name = "vlp32ab"))]
+    #[serde(rename = "vlp32ab")]
+    Vlp32ab,
+    /// Robosense RS-M1 (MEMS): MSOP packets of 25 blocks of five returns, each with its own
+    /// pitch and yaw, a raster of 126 lines over 120 x 25 degrees, 5 mm ranges, 10 Hz frames
+    /// of 630 packets numbered from 1.
+    #[cfg_attr(feature = "clap", value(name = "m1"))]
+    #[serde(rename = "m1")]
+    M1,
 }
 
 impl PacketSensor {
