@@ -97,3 +97,73 @@ fn ouster_imu_packets_in_a_simulated_pcap_give_the_prior_its_samples() {
 fn mid360_imu_packets_in_a_simulated_pcap_give_the_prior_its_samples() {
     prior_from_the_pcap("mid360", "handheld", "42");
 }
+
+/// A change to an angular rate as a sensor's packets carry it (f32).
+type Rate = dyn Fn(f32) -> f32;
+
+/// The pcap `from` with each Mid-360 IMU datagram's angular rates changed by `f` (its CRC
+/// resealed, as a sensor that sends them wrong would), written to `to`.
+fn rewrite_gyro(from: &Path, to: &Path, f: &Rate) {
+    use kiss_odom_io::capture::pcap;
+    use kiss_odom_sensors::livox::sdk2::{crc32, field, IMU};
+    let mut datagrams: Vec<_> = pcap::open(from).unwrap().map(|d| d.unwrap()).collect();
+    let mut changed = 0;
+    for d in datagrams
+        .iter_mut()
+        .filter(|d| d.payload.get(field::DATA_TYPE) == Some(&IMU))
+    {
+        let b = &mut d.payload;
+        for at in (field::DATA..field::DATA + 12).step_by(4) {
+            let v = f32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+            b[at..at + 4].copy_from_slice(&f(v).to_le_bytes());
+        }
+        let crc = crc32(&b[field::TIMESTAMP.start..]);
+        b[field::CRC32].copy_from_slice(&crc.to_le_bytes());
+        changed += 1;
+    }
+    assert!(changed > 100, "{changed} IMU datagrams");
+    pcap::write(to, &datagrams, 9000).unwrap();
+}
+
+/// A Mid-360 whose IMU packets give the gyroscope in deg/s, or 1e30 rad/s: `--imu auto` stops
+/// using it within the first second, names the cause, and the run stays within 10 % of the
+/// LiDAR-only one's ATE.
+#[test]
+fn a_wrong_mid360_gyroscope_in_its_packets_is_refused_within_a_second() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sim = tmp.path().join("mid360");
+    simulate(&sim, "mid360", "handheld", "43");
+    let off = run(&sim.join("packets.pcap"), &tmp.path().join("off"), &[]);
+    let (ate_off, _) = errors(off.ok(), &sim);
+    let degrees = |v: f32| v.to_degrees();
+    let huge = |_: f32| 1e30_f32;
+    let variants: [(&str, &Rate, &str); 2] = [
+        ("degs", &degrees, "degrees per second"),
+        ("1e30", &huge, "beyond 35 rad/s"),
+    ];
+    for (name, f, cause) in variants {
+        let pcap = tmp.path().join(format!("{name}.pcap"));
+        rewrite_gyro(&sim.join("packets.pcap"), &pcap, f);
+        let r = run(&pcap, &tmp.path().join(name), &["--imu", "auto"]);
+        r.ok();
+        let states = r.column("imu_prior");
+        let first = states
+            .iter()
+            .position(|s| s != "first" && s != "used")
+            .unwrap_or(usize::MAX);
+        let (ate, _) = errors(&r, &sim);
+        let warning = r.warnings().first().copied().unwrap_or("(none)");
+        println!(
+            "{name}: prior not used from frame {first} ({}), ATE {ate:.4} m against {ate_off:.4} \
+             m with --imu off (tolerance +10 %); warning: {warning}",
+            states.get(first).map_or("-", String::as_str)
+        );
+        assert!(first <= 10, "{name}: {states:?}");
+        assert!(
+            states[first..].iter().all(|s| s != "used"),
+            "{name}: {states:?}"
+        );
+        r.warning_with(&["gyroscope", cause]);
+        assert!(ate <= 1.1 * ate_off, "{name}: ATE {ate} m, off {ate_off} m");
+    }
+}

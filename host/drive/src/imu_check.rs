@@ -62,6 +62,8 @@ pub struct Measured {
 pub enum Cause {
     /// Rates about 57.3 times ICP's: degrees per second.
     Degrees,
+    /// Rates beyond any gyroscope's range on every frame, not 57.3 times ICP's: corrupt data.
+    BeyondRange,
     /// No rotation while ICP turns.
     Dead,
     /// One axis (0 x, 1 y, 2 z, LiDAR axes) turning the other way.
@@ -80,6 +82,11 @@ impl Cause {
             Self::Degrees => "its rates are about 57.3 times ICP's: a gyroscope in degrees per \
                               second, where rad/s is expected"
                 .into(),
+            Self::BeyondRange => format!(
+                "its rates are beyond {FULL_SCALE} rad/s on every frame, more than any \
+                 gyroscope measures, and not 57.3 times ICP's: corrupt data, or a scale other \
+                 than rad/s or deg/s"
+            ),
             Self::Dead => "it measures no rotation while ICP turns: a dead gyroscope".into(),
             Self::FlippedAxis(a) => format!(
                 "its {} axis (LiDAR axes) turned opposite to ICP's: a flipped axis in the data \
@@ -138,8 +145,9 @@ pub const CAUSE_FRAMES: usize = 5;
 /// The likely cause of a disagreement, read from frames registered without the gyroscope
 /// (its rotation over each taken from the mean rate, which does not wrap past half a turn):
 /// no rotation while ICP turns; rotations along ICP's (a correlation above 0.3) but 30-120
-/// times as large (deg/s: 57.3); one or two axes whose rotations run against ICP's over the
-/// frames (a correlation below -0.3 on an axis that turned); else unknown. ICP's rotations on these frames lag and
+/// times as large (deg/s: 57.3); else, mean rates beyond [`FULL_SCALE`] on every frame; one or
+/// two axes whose rotations run against ICP's over the frames (a correlation below -0.3 on an
+/// axis that turned); else unknown. ICP's rotations on these frames lag and
 /// err (their prediction came from a frame that followed the wrong prior), but keep their
 /// signs and rough size: hence sums over the frames, not a frame's agreement.
 pub fn cause(frames: &[Measured]) -> Cause {
@@ -159,6 +167,9 @@ pub fn cause(frames: &[Measured]) -> Cause {
     let correlation = both / (gyro * turned).sqrt();
     if correlation > 0.3 && (30.0..120.0).contains(&(gyro / turned).sqrt()) {
         return Cause::Degrees;
+    }
+    if !frames.iter().any(|m| m.rate.norm() <= FULL_SCALE) {
+        return Cause::BeyondRange;
     }
     let against: Vec<usize> = (0..3)
         .filter(|&i| {

@@ -164,6 +164,13 @@ fn each_wrong_gyroscope_disagrees_and_is_named() {
     }
     assert!(wrapped[2].gyro.norm() < 0.5 * (wrapped[2].rate * 0.1).norm());
     assert_eq!(cause(&wrapped), Cause::Degrees);
+    // Rates of 1e30 rad/s (or 1e3 times ICP's): beyond any gyroscope, and not deg/s.
+    for read in [|_: Vector3<f64>| Vector3::repeat(1e30), |g| g * 1e3] {
+        let huge = after(read, r, true);
+        assert_eq!(cause(&huge), Cause::BeyondRange, "{huge:?}");
+    }
+    // Deg/s on a slow turn stays below full scale: not beyond range.
+    assert_ne!(cause(&after(|g| g * 57.2958, r, true)), Cause::BeyondRange);
     // Frames that barely turn tell nothing; no frame neither.
     assert_eq!(
         cause(&after(|g| g * 57.2958, r * 0.1, false)[..2]),
@@ -172,6 +179,7 @@ fn each_wrong_gyroscope_disagrees_and_is_named() {
     assert_eq!(cause(&[]), Cause::Unknown);
     // Every description names something.
     assert!(Cause::Degrees.describe().contains("57.3"));
+    assert!(Cause::BeyondRange.describe().contains("beyond 35 rad/s"));
 }
 
 #[test]
