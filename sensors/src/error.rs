@@ -32,6 +32,29 @@ pub enum PacketError {
         /// The length of its points and header.
         expected: u16,
     },
+    /// A Livox packet whose data type and point count (SDK 2: `dot_num`; SDK 1: the data type's)
+    /// take another length than the packet has, where the packet's length is one its format
+    /// allows (SDK 2: its length field agrees with it; SDK 1: another data type's): the data
+    /// type or `dot_num` is corrupted. Skip it.
+    PointsLength {
+        /// The data type byte.
+        data_type: u8,
+        /// The points that data type and `dot_num` announce.
+        points: u16,
+        /// The packet's length (SDK 2: its length field and datagram).
+        len: u16,
+    },
+    /// A Hesai header whose flags announce another optional part (the UDP sequence number,
+    /// the functional safety part, the signature, a channel's extra bytes) than the packet
+    /// holds: its length is one another flags byte announces. Corrupted; skip it.
+    HeaderFlags {
+        /// The header's flags byte.
+        flags: u8,
+        /// The length those flags announce.
+        announced: u16,
+        /// The packet's length.
+        len: u16,
+    },
     /// A Livox SDK 2 IMU packet whose `dot_num` is not 1 (an IMU packet holds one sample):
     /// corrupted. Skip it.
     ImuPoints {
@@ -41,7 +64,8 @@ pub enum PacketError {
     /// A Livox SDK 2 point packet whose `time_interval` is 0: its points' times (and the
     /// packet's period, by which losses are counted) are unknown. Skip it.
     PointInterval,
-    /// A Velodyne data block does not start with its `0xFFEE` flag: corrupted. Skip it.
+    /// A data block does not start with its flag (bytes `FF EE`; a Velodyne bank's `FF DD`,
+    /// `FF CC`, `FF BB`; the RS-Ruby's `FE`) nor with another model's: corrupted. Skip it.
     BlockFlag,
     /// A Velodyne, Hesai or Robosense azimuth at or above 360.00 degrees: corrupted. Skip it.
     Azimuth,
@@ -74,7 +98,8 @@ pub enum PacketError {
     /// the right model.
     Header,
     /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
-    /// Hesai one is none of the model's six modes.
+    /// Hesai or RS-M1 one is none of the model's modes. Also after the first packet fixed the
+    /// mode: a byte no mode has is corrupted, not another sensor's. Skip it.
     UnknownReturnMode,
     /// A Hesai header's return count is not 1 or 2, or contradicts the return-mode byte (a
     /// count of 1 with a dual mode, or one above the model's most with the mode): corrupted.
@@ -120,8 +145,8 @@ pub enum PacketError {
     /// returns across packets): set the sensor to a single return mode.
     DualNotDecoded,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
-    /// or an Ouster column whose measurement id is beyond the frame): two sensors on one
-    /// port. Filter by source address, or give each sensor its own port.
+    /// another model's block flags): two sensors on one port. Filter by source address, or
+    /// give each sensor its own port.
     OtherSensor,
     /// An Ouster packet whose type is not lidar data, or a Livox packet of a data type that
     /// is not points (IMU) or not decoded: skip it.
@@ -129,6 +154,15 @@ pub enum PacketError {
     /// The Ouster packet's initialisation id or serial number differs from the metadata's:
     /// the metadata JSON belongs to another sensor. Give the JSON saved with this recording.
     MetadataMismatch,
+    /// An Ouster column whose measurement id is not below the metadata's `columns_per_frame`:
+    /// the metadata is of another `lidar_mode` (or the column header is corrupted). Give the
+    /// metadata saved with this recording.
+    MeasurementId {
+        /// The column's measurement id.
+        id: u16,
+        /// The metadata's `columns_per_frame`.
+        columns: u16,
+    },
     /// An Ouster column the packet marks valid lies outside the metadata's `column_window`:
     /// the sensor sends columns the metadata says it does not. Give the metadata saved with
     /// this recording.
@@ -162,11 +196,36 @@ impl core::fmt::Display for PacketError {
                     "header length field {stated} where its points take {expected} bytes"
                 )
             }
+            Self::PointsLength {
+                data_type,
+                points,
+                len,
+            } => {
+                return write!(
+                    f,
+                    "data type {data_type} with {points} points takes another length than the \
+                     packet's {len} bytes (a data type or dot_num not the packet's)"
+                )
+            }
+            Self::HeaderFlags {
+                flags,
+                announced,
+                len,
+            } => {
+                return write!(
+                    f,
+                    "header flags {flags:#04X} announce a {announced}-byte packet, not the \
+                     packet's {len} bytes"
+                )
+            }
             Self::ImuPoints { dot_num } => {
                 return write!(f, "an IMU packet whose dot_num is {dot_num}, not 1")
             }
             Self::PointInterval => "time_interval 0: its points' times are unknown",
-            Self::BlockFlag => "a data block without its 0xFFEE flag",
+            Self::BlockFlag => {
+                "a data block without its block flag (FF EE, a Velodyne bank's FF DD/CC/BB, the \
+                 RS-Ruby's FE)"
+            }
             Self::Azimuth => "an azimuth of 360 degrees or more",
             Self::MirrorFrame => "an azimuth outside every mirror frame of the angle correction",
             Self::Timestamp => "a timestamp of one hour or more (microseconds past the hour)",
@@ -228,6 +287,13 @@ impl core::fmt::Display for PacketError {
             Self::OtherSensor => "packet of another sensor than the sweep's",
             Self::PacketType => "not a point data packet (IMU, status, or a data type not decoded)",
             Self::MetadataMismatch => "initialisation id or serial differs from the metadata",
+            Self::MeasurementId { id, columns } => {
+                return write!(
+                    f,
+                    "column measurement id {id} beyond the metadata's {columns} columns_per_frame \
+                     (metadata of another lidar_mode)"
+                )
+            }
             Self::ColumnWindow => {
                 "a valid column outside the metadata's column_window (metadata of another \
                  configuration)"

@@ -128,8 +128,10 @@ pub struct SweepStats {
     pub azimuth_jumps: u32,
     /// Packets refused as malformed (see `last_error`).
     pub bad_packets: u32,
-    /// Packets refused as coming from another sensor ([`PacketError::OtherSensor`],
-    /// [`PacketError::MetadataMismatch`]).
+    /// Packets refused as coming from another sensor ([`PacketError::OtherSensor`]) or, for
+    /// Ouster, contradicting the metadata ([`PacketError::MetadataMismatch`],
+    /// [`PacketError::MeasurementId`], [`PacketError::ColumnWindow`],
+    /// [`PacketError::ColumnRate`]).
     pub other_sensor: u32,
     /// The last refusal's reason.
     pub last_error: Option<PacketError>,
@@ -148,6 +150,7 @@ impl SweepStats {
             }
             PacketError::OtherSensor
             | PacketError::MetadataMismatch
+            | PacketError::MeasurementId { .. }
             | PacketError::ColumnWindow
             | PacketError::ColumnRate => self.other_sensor = self.other_sensor.saturating_add(1),
             _ => self.bad_packets = self.bad_packets.saturating_add(1),

@@ -3,36 +3,15 @@
 //! that are the mirror frames; and what it refuses. Also the return-mode rules the fixed-layout
 //! models share with it: the header's return count, and the XT32M's triple return.
 
-use kiss_odom_sensors::hesai::wire_fixed::{AT128_SEQUENCE, PANDARAT128, PANDARXT32M};
+use kiss_odom_sensors::hesai::wire_fixed::PANDARAT128;
 use kiss_odom_sensors::hesai::{self, At128Correction, Calibration, Firing, Model};
 use kiss_odom_sensors::{Decode, PacketError, Pushed, Return, SweepEnd};
 mod common;
+#[path = "common/hesai_fixed.rs"]
+mod fixed_layout;
 
 use common::{feed, with, Log};
-
-/// Seconds since the epoch in the packets: 2024-01-01 00:00:00 UTC.
-const EPOCH_S: u64 = 1_704_067_200;
-const DEG: u32 = 25_600;
-
-/// Three frames from 20, 140 and 260 degrees of motor; channel `c` at azimuth `-2.4` or
-/// `0.65` degrees (even, odd), elevation `12.9 - 0.2 c`; adjustments that vary with the motor
-/// angle; resolution 2.
-fn correction() -> At128Correction {
-    let mut c = At128Correction::empty();
-    c.frames = 3;
-    c.start[..3].copy_from_slice(&[20 * DEG, 140 * DEG, 260 * DEG]);
-    c.end[..3].copy_from_slice(&[140 * DEG, 260 * DEG, 20 * DEG]);
-    for ch in 0..128 {
-        c.azimuth[ch] = if ch % 2 == 0 { -61_440 } else { 16_640 };
-        c.elevation[ch] = 330_240 - 5_120 * ch as i32;
-        for i in 0..180 {
-            c.azimuth_adjust[ch][i] = ((i * 7 + ch) % 41) as i8 - 20;
-            c.elevation_adjust[ch][i] = ((i * 3 + ch) % 11) as i8 - 5;
-        }
-    }
-    c.adjust_unit = 2;
-    c
-}
+use fixed_layout::{correction, decoder, fixed, packet, Spec, DEG, EPOCH_S};
 
 /// The direction of channel `ch` at motor angle `motor` (units) in frame `frame`, degrees:
 /// the correction's formula, written out here.
@@ -47,67 +26,6 @@ fn expected_deg(c: &At128Correction, motor: u32, frame: usize, ch: usize) -> (f6
         (2 * into - i64::from(c.azimuth[ch])) as f64 / f64::from(DEG) + lerp(&c.azimuth_adjust[ch]);
     let el = f64::from(c.elevation[ch]) / f64::from(DEG) + lerp(&c.elevation_adjust[ch]);
     (az, el)
-}
-
-struct Spec {
-    /// Motor angle of block 0 (units) and the step to block 1.
-    motor: u32,
-    step: u32,
-    /// Microseconds after `EPOCH_S`.
-    us: u64,
-    mode: u8,
-    returns: u8,
-    sequence: u32,
-}
-
-impl Spec {
-    fn new(motor: u32, us: u64, sequence: u32) -> Self {
-        Self {
-            motor,
-            step: 1_280,
-            us,
-            mode: 0x37,
-            returns: 1,
-            sequence,
-        }
-    }
-}
-
-/// A packet whose channel `c` returns `(1000 + c) x 4 mm` in block 0 and `(2000 + c) x 4 mm`
-/// in block 1, except channel 9, which returns nothing.
-fn packet(s: &Spec) -> Vec<u8> {
-    let f = &PANDARAT128;
-    let mut b = vec![0u8; f.default_len()];
-    b[..12].copy_from_slice(&[0xEE, 0xFF, 4, 3, 0, 0, 128, 2, 0, 4, s.returns, 1]);
-    for k in 0..2 {
-        let at = f.block_at(k);
-        let motor = s.motor + s.step * k as u32;
-        b[at..at + 2].copy_from_slice(&((motor >> 8) as u16).to_le_bytes());
-        b[at + 2] = motor as u8;
-        for c in 0..128 {
-            let d: u16 = if c == 9 {
-                0
-            } else {
-                (1000 * (k + 1) + c) as u16
-            };
-            let u = at + 3 + 4 * c;
-            b[u..u + 2].copy_from_slice(&d.to_le_bytes());
-            b[u + 2] = c as u8;
-        }
-    }
-    let tail = f.tail_at();
-    b[tail + f.motor..tail + f.motor + 2].copy_from_slice(&200u16.to_le_bytes());
-    let (sec, us) = (EPOCH_S + s.us / 1_000_000, (s.us % 1_000_000) as u32);
-    b[tail + f.micros..tail + f.micros + 4].copy_from_slice(&us.to_le_bytes());
-    b[tail + f.return_mode] = s.mode;
-    b[tail + f.date + 1..tail + f.date + 6].copy_from_slice(&sec.to_be_bytes()[3..]);
-    let q = tail + AT128_SEQUENCE;
-    b[q..q + 4].copy_from_slice(&s.sequence.to_le_bytes());
-    b
-}
-
-fn decoder() -> hesai::Decoder<hesai::MirrorAngles> {
-    hesai::Decoder::at128(&correction()).unwrap()
 }
 
 #[test]
@@ -248,31 +166,6 @@ fn an_at128_needs_its_correction_and_a_correction_is_checked() {
     assert!(hesai::Decoder::at128(&bad).is_err());
 }
 
-/// An XT32M packet (six blocks of 32 channels) of return mode `mode`, header count `count`,
-/// turning at 600 rpm: 0.18 degree from firing to firing.
-fn xt32m(mode: u8, count: u8) -> Vec<u8> {
-    let f = &PANDARXT32M;
-    let returns = match mode {
-        0x3D => 3,
-        0x39 | 0x3B | 0x3C => 2,
-        _ => 1,
-    };
-    let mut b = vec![0u8; f.default_len()];
-    b[..12].copy_from_slice(&[0xEE, 0xFF, 6, 1, 0, 0, 32, 6, 1, 5, count, 1]);
-    for k in 0..6 {
-        let at = f.block_at(k);
-        b[at..at + 2].copy_from_slice(&(1000 + 18 * (k as u16 / returns)).to_le_bytes());
-        for c in 0..32 {
-            b[at + 2 + 4 * c..at + 4 + 4 * c].copy_from_slice(&(500 + k as u16).to_le_bytes());
-        }
-    }
-    let tail = f.tail_at();
-    b[tail + f.return_mode] = mode;
-    b[tail + f.motor..tail + f.motor + 2].copy_from_slice(&600u16.to_le_bytes());
-    b[tail + f.date..tail + f.date + 6].copy_from_slice(&[124, 1, 1, 0, 0, 0]);
-    b
-}
-
 #[test]
 fn the_xt32ms_triple_return_is_refused_as_such_and_its_header_counts_its_most() {
     let decoder = || {
@@ -286,19 +179,29 @@ fn the_xt32ms_triple_return_is_refused_as_such_and_its_header_counts_its_most() 
         .unwrap()
     };
     assert_eq!(
-        decoder().push(&xt32m(0x3D, 3), &mut Log::default()),
+        decoder().push(&fixed(Model::Xt32m, 0x3D, 3), &mut Log::default()),
         Err(PacketError::TripleReturn)
     );
     assert!(PacketError::TripleReturn
         .to_string()
         .contains("triple return (0x3D)"));
     // Its recorded capture: dual (0x3C) with a header count of 3, the most it sends.
-    assert!(feed(&mut decoder(), &xt32m(0x3C, 3), &mut Log::default()).is_ok());
-    assert!(feed(&mut decoder(), &xt32m(0x37, 3), &mut Log::default()).is_ok());
+    assert!(feed(
+        &mut decoder(),
+        &fixed(Model::Xt32m, 0x3C, 3),
+        &mut Log::default()
+    )
+    .is_ok());
+    assert!(feed(
+        &mut decoder(),
+        &fixed(Model::Xt32m, 0x37, 3),
+        &mut Log::default()
+    )
+    .is_ok());
     // More than it can send, or fewer than the mode's: a damaged header.
     for (mode, count) in [(0x3C, 4), (0x3C, 1)] {
         assert_eq!(
-            decoder().push(&xt32m(mode, count), &mut Log::default()),
+            decoder().push(&fixed(Model::Xt32m, mode, count), &mut Log::default()),
             Err(PacketError::ReturnCount { count, mode }),
             "{mode:#x} {count}"
         );

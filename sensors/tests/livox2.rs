@@ -1,9 +1,12 @@
 //! The Livox SDK 2 decoder (Mid-360, HAP) on synthetic packets: every data type's geometry,
 //! per-point times from the packet's own interval, frames by time, the CRC, and how IMU,
-//! lost, late and malformed packets are counted.
+//! lost, late and malformed packets are counted. And each header field of an SDK 1 and an
+//! SDK 2 packet corrupted alone: refused naming that field.
 
-use kiss_odom_sensors::livox::{self, sdk2, Model};
+use kiss_odom_sensors::livox::{self, sdk1, sdk2, Model};
 mod common;
+#[path = "common/livox_sdk1.rs"]
+mod sdk1_packets;
 
 use common::{feed, with, Log};
 use kiss_odom_sensors::{Decode, PacketError, Pushed, Return, SweepEnd};
@@ -325,5 +328,85 @@ fn the_last_frame_is_complete_when_its_packets_reach_its_end() {
         // Packets 21..: the second frame, from 10.08 ms; the 42nd's points end at 20.16 ms.
         assert_eq!(log.ends.len(), 2);
         assert_eq!(log.ends[1].end, end, "{packets} packets");
+    }
+}
+
+#[test]
+fn each_corrupted_header_field_is_refused_by_its_own_name() {
+    use PacketError::*;
+    // A Horizon (SDK 1) or a Mid-360 (SDK 2) decoder, fresh or after a good packet.
+    let refusal = |model: Model, after: bool, bytes: &[u8]| {
+        let mut dec = livox::Decoder::new(livox::Config {
+            model,
+            ..livox::Config::default()
+        })
+        .unwrap();
+        let mut log = Log::default();
+        let good = match model {
+            Model::Mid360 => packet(1, T0),
+            _ => sdk1_packets::packet(2, T0),
+        };
+        if after {
+            feed(&mut dec, &good, &mut log).unwrap();
+        }
+        dec.push(bytes, &mut log)
+    };
+    let (one, two) = (Model::Horizon, Model::Mid360);
+    let (fresh, after) = (false, true);
+    let g1 = sdk1_packets::packet(2, T0 + 400_000);
+    let g2 = packet(1, T0 + 480_000);
+    let s1 = |at: usize, v: u8| with(&g1, at, v);
+    let s2 = |at: usize, v: u8| with(&g2, at, v);
+    let s2_16 = |at: usize, v: u16| {
+        let mut b = g2.clone();
+        b[at..at + 2].copy_from_slice(&v.to_le_bytes());
+        b
+    };
+    let (f1, f2) = (sdk1::field::DATA_TYPE, sdk2::field::DATA_TYPE);
+    let mut gps = with(&g1, sdk1::field::TIMESTAMP_TYPE, 3);
+    gps[10..14].copy_from_slice(&[24, 13, 17, 15]);
+    let imu = sdk1_packets::packet(sdk1::IMU, T0 + 400_000);
+    let points = |data_type, points, len| PointsLength {
+        data_type,
+        points,
+        len,
+    };
+    let length_field = LengthField {
+        stated: 1381,
+        expected: 1380,
+    };
+    // (protocol, field, packet, after a good one, refusal, what its text names)
+    #[rustfmt::skip]
+    let rows = vec![
+        (one, "version", s1(sdk1::field::VERSION, 1), fresh, Version, "protocol version"),
+        (one, "data type", s1(f1, 9), fresh, PacketType, "data type"),
+        // Another data type's length: the data type byte is what is wrong.
+        (one, "data type", s1(f1, 0), fresh, points(0, 100, 1362), "data type 0"),
+        (one, "data type", s1(f1, sdk1::IMU), fresh, points(6, 1, 1362), "data type 6"),
+        (one, "length", g1[..1000].to_vec(), fresh, Truncated, "shorter"),
+        (one, "timestamp type", s1(8, 7), fresh, TimeType { kind: 7 }, "timestamp type 7"),
+        (one, "GPS month", gps, fresh, DateTime, "date"),
+        (one, "IMU data", imu, fresh, PacketType, "IMU"),
+        (one, "lidar id", s1(sdk1::field::LIDAR, 2), after, OtherSensor, "another sensor"),
+        (two, "version", s2(sdk2::field::VERSION, 5), fresh, Version, "protocol version"),
+        (two, "length", s2(1, 0x65), fresh, length_field, "length field 1381"),
+        // The length field and the datagram agree: dot_num or the data type is what is wrong.
+        (two, "dot_num", s2_16(5, 95), fresh, points(1, 95, 1380), "95 points"),
+        (two, "dot_num", s2_16(5, 95), after, points(1, 95, 1380), "dot_num"),
+        (two, "data type", s2(f2, 2), fresh, points(2, 96, 1380), "data type 2"),
+        (two, "data type", s2(f2, 9), fresh, PacketType, "data type"),
+        (two, "data type", s2(f2, sdk2::IMU), fresh, ImuPoints { dot_num: 96 }, "IMU packet"),
+        (two, "time type", sealed(s2(11, 3)), fresh, TimeType { kind: 3 }, "timestamp type 3"),
+        (two, "time_interval", s2_16(3, 0), fresh, PointInterval, "time_interval"),
+        (two, "timestamp", s2(28, 0x77), fresh, Checksum, "CRC"),
+    ];
+    for (model, name, bytes, after, want, names) in &rows {
+        let row = format!("{model:?} {name} (after a good packet: {after})");
+        assert_eq!(refusal(*model, *after, bytes), Err(*want), "{row}");
+        let text = want.to_string();
+        assert!(
+            text.contains(names),
+            "{row}: \"{text}\" does not name {names}"
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! The Robosense decoder: angles from a DIFOP packet, points where the geometry puts them,
 //! and bad input (no angles, a malformed DIFOP, another model's packets, truncated packets,
-//! the RS-Ruby's dual return) refused with its reason and counted.
+//! the RS-Ruby's dual return) refused with its reason and counted; each field of an MSOP
+//! packet corrupted alone is refused naming that field.
 
 mod common;
 
@@ -203,4 +204,56 @@ fn an_angle_table_of_another_length_is_refused() {
         cut_angle_deg: None,
     });
     assert!(r.is_err());
+}
+
+#[test]
+fn each_corrupted_header_field_is_refused_by_its_own_name() {
+    use PacketError::*;
+    // A decoder of `model` with its DIFOP angles, as it takes the good packet.
+    let refusal = |model: Model, bytes: &[u8]| {
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        let single = match model {
+            Model::Ruby => 0x02,
+            Model::Helios => 0x04,
+            _ => 0x01,
+        };
+        let _ = feed(&mut dec, &difop(model, single), &mut log);
+        assert!(dec.calibrated());
+        assert!(feed(&mut dec, &msop(model, (10, 0), 1000, 1), &mut log).is_ok());
+        dec.push(bytes, &mut log)
+    };
+    let (rs32, helios, ruby) = (Model::Rs32, Model::Helios, Model::Ruby);
+    let set = |model: Model, at: usize, v: u8| with(&msop(model, (11, 0), 1000, 1), at, v);
+    // Block 2's flag, its azimuth's high byte, and the time stamp's (`Stamp`) fields.
+    let block = |model: Model| {
+        let l = model.layout();
+        l.header + 2 * l.block_len()
+    };
+    let azimuth = |model: Model| block(model) + model.layout().azimuth_at;
+    let stamp = |model: Model| model.layout().stamp.0;
+    let ruby_packet = msop(ruby, (11, 0), 1000, 1);
+    // (model, field, packet, refusal, what its text names)
+    #[rustfmt::skip]
+    let rows = vec![
+        (rs32, "length", msop(rs32, (11, 0), 1000, 1)[..1200].to_vec(), Truncated, "shorter"),
+        (rs32, "id", set(rs32, 3, 0x5A), StartBytes, "start bytes"),
+        (rs32, "block 2 flag", set(rs32, block(rs32) + 1, 0x12), BlockFlag, "block flag"),
+        (rs32, "azimuth", set(rs32, azimuth(rs32), 0x8D), Azimuth, "azimuth"),
+        (rs32, "month", set(rs32, stamp(rs32) + 1, 13), DateTime, "date"),
+        (helios, "block 2 flag", set(helios, block(helios), 0x00), BlockFlag, "block flag"),
+        (helios, "microseconds", set(helios, stamp(helios) + 7, 0x10), DateTime, "date"),
+        (ruby, "block 2 flag", set(ruby, block(ruby), 0xFD), BlockFlag, "block flag"),
+        // Another model's blocks (the Ruby's FE) where the Helios has FF EE: its packet.
+        (helios, "blocks", ruby_packet, OtherSensor, "another sensor"),
+    ];
+    for (model, name, bytes, want, names) in &rows {
+        let row = format!("{model:?} {name}");
+        assert_eq!(refusal(*model, bytes), Err(*want), "{row}");
+        let text = want.to_string();
+        assert!(
+            text.contains(names),
+            "{row}: \"{text}\" does not name {names}"
+        );
+    }
 }

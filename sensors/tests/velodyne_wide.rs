@@ -1,6 +1,7 @@
 //! The Velodyne models that need their calibration file (VLS-128, HDL-64E) on bad input: a
 //! missing or wrong calibration, packets of another model or return mode on the port, a
-//! truncated packet. Each is refused with its reason and counted, never decoded wrongly.
+//! truncated packet. Each is refused with its reason and counted, never decoded wrongly. And
+//! each field of a VLP-16's and a VLS-128's packet corrupted alone: refused naming that field.
 
 mod common;
 
@@ -155,4 +156,64 @@ fn truncated_and_corrupted_packets_are_refused_with_the_reason() {
     // The upper block's lasers are 0-31, the lower's 32-63: 64 rings a firing.
     let rings: std::collections::BTreeSet<u16> = log.points.iter().map(|p| p.3.ring).collect();
     assert_eq!(rings.len(), 64);
+}
+
+#[test]
+fn each_corrupted_header_field_is_refused_by_its_own_name() {
+    use PacketError::*;
+    // A VLP-16 found by its product byte, a VLS-128 given with its calibration; `after`: the
+    // corrupted packet follows a good one, which fixed the model and return mode.
+    let vlp16 = || Decoder::new(Config::default()).unwrap();
+    let vls128 = || Decoder::new(config(Model::Vls128)).unwrap();
+    let refusal = |model: Model, after: bool, bytes: &[u8]| {
+        let mut dec = if model == Model::Vlp16 {
+            vlp16()
+        } else {
+            vls128()
+        };
+        let mut log = Log::default();
+        if after {
+            feed(&mut dec, &packet(model, 1000, 100), &mut log).unwrap();
+        }
+        dec.push(bytes, &mut log)
+    };
+    let set = |model: Model, at: usize, v: u8| with(&packet(model, 3000, 500), at, v);
+    let (vlp, vls) = (Model::Vlp16, Model::Vls128);
+    let (mode, product) = (field::RETURN_MODE, field::PRODUCT);
+    let (fresh, after) = (false, true);
+    let late_hour = {
+        let mut b = packet(vlp, 3000, 500);
+        b[field::TIMESTAMP].copy_from_slice(&3_600_000_000u32.to_le_bytes());
+        b
+    };
+    // (model, field, packet, after a good one, refusal, what its text names)
+    #[rustfmt::skip]
+    let rows = vec![
+        (vlp, "length", packet(vlp, 3000, 500)[..1000].to_vec(), fresh, Truncated, "shorter"),
+        (vlp, "block 5 flag", set(vlp, 501, 0x12), fresh, BlockFlag, "block flag"),
+        (vlp, "block 5 flag", set(vlp, 501, 0x12), after, BlockFlag, "block flag"),
+        // Another bank's flag where the VLP-16 has its one bank: another model's packet.
+        (vlp, "block 5 flag", set(vlp, 501, 0xDD), after, OtherSensor, "another sensor"),
+        (vlp, "azimuth", set(vlp, 503, 0x99), fresh, Azimuth, "azimuth"),
+        (vlp, "timestamp", late_hour, fresh, Timestamp, "timestamp"),
+        (vlp, "product", set(vlp, product, 0x99), fresh, UnknownModel, "product byte"),
+        (vlp, "product", set(vlp, product, 0x99), after, UnknownModel, "product byte"),
+        // A model the byte names: another sensor's.
+        (vlp, "product", set(vlp, product, 0x28), after, OtherSensor, "another sensor"),
+        (vlp, "mode", set(vlp, mode, 0x3A), fresh, UnknownReturnMode, "return-mode"),
+        (vlp, "mode", set(vlp, mode, 0x3A), after, UnknownReturnMode, "return-mode"),
+        (vlp, "mode", set(vlp, mode, 0x39), after, OtherSensor, "another sensor"),
+        (vls, "block 2 flag", set(vls, 201, 0x12), after, BlockFlag, "block flag"),
+        (vls, "product", set(vls, product, 0x99), after, UnknownModel, "product byte"),
+        (vls, "mode", set(vls, mode, 0xFF), after, UnknownReturnMode, "return-mode"),
+    ];
+    for (model, name, bytes, after, want, names) in &rows {
+        let row = format!("{model:?} {name} (after a good packet: {after})");
+        assert_eq!(refusal(*model, *after, bytes), Err(*want), "{row}");
+        let text = want.to_string();
+        assert!(
+            text.contains(names),
+            "{row}: \"{text}\" does not name {names}"
+        );
+    }
 }

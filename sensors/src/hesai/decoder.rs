@@ -126,21 +126,20 @@ impl<A: Angles> Decoder<A> {
         self.mode.map(|(m, _)| m)
     }
 
-    /// The packet's return mode and its byte: the one the first packet decoded fixed, which
-    /// every packet's mode byte must repeat (else another sensor's) and its header's return
-    /// count fit (else the header is damaged).
+    /// The packet's return mode and its byte: one of the model's modes that its header's
+    /// return count fits (else the packet is damaged, whatever the sweep's mode), and the one
+    /// the first packet decoded fixed (else another sensor's).
     fn identify(&self, p: &View<'_>) -> Result<(ReturnMode, u8), PacketError> {
         let byte = p.return_mode();
-        let mode = match self.mode {
-            Some((mode, b)) if b == byte => mode,
-            Some(_) => return Err(PacketError::OtherSensor),
-            None if byte == TRIPLE_RETURN => return Err(PacketError::TripleReturn),
-            None => {
-                ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?
-            }
-        };
+        if byte == TRIPLE_RETURN {
+            return Err(PacketError::TripleReturn);
+        }
+        let mode = ReturnMode::from_byte(self.model, byte).ok_or(PacketError::UnknownReturnMode)?;
         p.returns_fit(self.model, mode)?;
-        Ok((mode, byte))
+        match self.mode {
+            Some((_, b)) if b != byte => Err(PacketError::OtherSensor),
+            _ => Ok((mode, byte)),
+        }
     }
 
     /// Abandons the open sweep's clock; true if a sweep was open and has ended.

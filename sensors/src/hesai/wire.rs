@@ -129,16 +129,18 @@ impl<'a> Packet<'a> {
         if layout != (field::CHANNELS as u8, field::BLOCKS as u8, 4) {
             return Err(PacketError::Header);
         }
-        let len = if p.flags() & FLAG_UDP_SEQUENCE != 0 {
-            field::LEN_WITH_SEQUENCE
+        let (len, other) = if p.flags() & FLAG_UDP_SEQUENCE != 0 {
+            (field::LEN_WITH_SEQUENCE, field::LEN)
         } else {
-            field::LEN
+            (field::LEN, field::LEN_WITH_SEQUENCE)
         };
-        if bytes.len() < len {
-            return Err(PacketError::Truncated);
-        }
-        if bytes.len() > len {
-            return Err(PacketError::Length);
+        if bytes.len() != len {
+            return Err(length_error(
+                p.flags(),
+                len,
+                bytes.len(),
+                bytes.len() == other,
+            ));
         }
         if !matches!(p.returns(), 1 | 2) {
             return Err(PacketError::ReturnCount {
@@ -202,6 +204,23 @@ impl<'a> Packet<'a> {
     pub fn unix_ns(&self) -> Option<u64> {
         let d = self.buf.get(field::DATE_TIME)?;
         utc_ns(d, u32_at(self.buf, field::MICROSECONDS.start))
+    }
+}
+
+/// Why a packet of `len` bytes is refused where its header `flags` announce `announced`:
+/// [`PacketError::HeaderFlags`] if `len` is a length the flags could announce (`other`: the
+/// flags are what is wrong), else [`PacketError::Truncated`] or [`PacketError::Length`].
+pub(super) fn length_error(flags: u8, announced: usize, len: usize, other: bool) -> PacketError {
+    if other {
+        PacketError::HeaderFlags {
+            flags,
+            announced: u16::try_from(announced).unwrap_or(u16::MAX),
+            len: u16::try_from(len).unwrap_or(u16::MAX),
+        }
+    } else if len < announced {
+        PacketError::Truncated
+    } else {
+        PacketError::Length
     }
 }
 

@@ -28,7 +28,7 @@
 //!           signature 32 bytes (when flagged)
 //! ```
 
-use super::wire::{byte, u16_at, u32_at, utc_ns, AZIMUTH_UNITS, START};
+use super::wire::{byte, length_error, u16_at, u32_at, utc_ns, AZIMUTH_UNITS, START};
 use crate::error::PacketError;
 
 /// Byte ranges and sizes shared by both protocols. The 12-byte header and a block's and a
@@ -250,15 +250,14 @@ impl<'a> Packet<'a> {
         if shape != (LASERS as u8, BLOCKS as u8, 4) {
             return Err(PacketError::Header);
         }
+        let flags = byte(bytes, field::FLAGS);
         let p = Self {
             buf: bytes,
-            layout: Layout::of(version, byte(bytes, field::FLAGS)),
+            layout: Layout::of(version, flags),
         };
-        if bytes.len() < p.layout.len {
-            return Err(PacketError::Truncated);
-        }
-        if bytes.len() > p.layout.len {
-            return Err(PacketError::Length);
+        if bytes.len() != p.layout.len {
+            let other = (0..=u8::MAX).any(|f| Layout::of(version, f).len == bytes.len());
+            return Err(length_error(flags, p.layout.len, bytes.len(), other));
         }
         if !p.crcs_hold() {
             return Err(PacketError::Checksum);

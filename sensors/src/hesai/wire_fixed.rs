@@ -22,7 +22,7 @@
 //! lasers at 2, blocks at 3 and the distance unit at 5. The 40P has no header: its distance
 //! unit is 4 mm (its manual; nebula's `get_dis_unit<Packet40P>`).
 
-use super::wire::{byte, u16_at, u32_at, utc_ns, AZIMUTH_UNITS, START};
+use super::wire::{byte, length_error, u16_at, u32_at, utc_ns, AZIMUTH_UNITS, START};
 use crate::error::PacketError;
 
 /// A packet's start bytes where it has a header.
@@ -229,12 +229,10 @@ impl<'a> Packet<'a> {
         if bytes.len() < f.header.max(2) {
             return Err(PacketError::Truncated);
         }
-        let start = if f.header == 0 {
-            BLOCK_START
-        } else {
-            HEADER_START
-        };
-        if bytes.get(..2) != Some(&start[..]) {
+        // The 40P has no header: its first bytes are block 0's flag, checked with the others'.
+        // A packet with a header's start bytes is another model's.
+        let start = bytes.get(..2) == Some(&HEADER_START[..]);
+        if start != (f.header > 0) {
             return Err(PacketError::StartBytes);
         }
         match f.header {
@@ -257,14 +255,15 @@ impl<'a> Packet<'a> {
         }
         let sequence = if f.header == 12 && !f.fine_azimuth {
             // Protocols 3.1 and 6.1: flags bit 0 announces the sequence number, as the XT32's.
-            let seq = byte(bytes, 11) & 1 != 0;
-            let len = f.fixed_len() + if seq { 4 } else { 0 };
+            let flags = byte(bytes, 11);
+            let seq = flags & 1 != 0;
+            let (len, other) = if seq {
+                (f.fixed_len() + 4, f.fixed_len())
+            } else {
+                (f.fixed_len(), f.fixed_len() + 4)
+            };
             if bytes.len() != len {
-                return Err(if bytes.len() < len {
-                    PacketError::Truncated
-                } else {
-                    PacketError::Length
-                });
+                return Err(length_error(flags, len, bytes.len(), bytes.len() == other));
             }
             seq
         } else {

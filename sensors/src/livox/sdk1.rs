@@ -95,13 +95,23 @@ impl<'a> Packet<'a> {
         if byte(bytes, field::VERSION) != VERSION {
             return Err(PacketError::Version);
         }
-        let (size, count) = layout(byte(bytes, field::DATA_TYPE)).ok_or(PacketError::PacketType)?;
+        let data_type = byte(bytes, field::DATA_TYPE);
+        let (size, count) = layout(data_type).ok_or(PacketError::PacketType)?;
         let len = field::DATA + size * count;
-        if bytes.len() < len {
-            return Err(PacketError::Truncated);
-        }
-        if bytes.len() > len {
-            return Err(PacketError::Length);
+        if bytes.len() != len {
+            // The length of another data type's packet: the data type byte is wrong.
+            if (0..=IMU).any(|t| packet_len(t) == Some(bytes.len())) {
+                return Err(PacketError::PointsLength {
+                    data_type,
+                    points: u16::try_from(count).unwrap_or(u16::MAX),
+                    len: u16::try_from(bytes.len()).unwrap_or(u16::MAX),
+                });
+            }
+            return Err(if bytes.len() < len {
+                PacketError::Truncated
+            } else {
+                PacketError::Length
+            });
         }
         let p = Self {
             buf: bytes,

@@ -142,6 +142,14 @@ impl<'a> Packet<'a> {
             return Err(PacketError::ImuPoints { dot_num });
         }
         if usize::from(stated) != len {
+            // The length field and the datagram agree: the data type or `dot_num` is wrong.
+            if usize::from(stated) == bytes.len() {
+                return Err(PacketError::PointsLength {
+                    data_type,
+                    points: dot_num,
+                    len: stated,
+                });
+            }
             return Err(PacketError::LengthField {
                 stated,
                 expected: u16::try_from(len).unwrap_or(u16::MAX),

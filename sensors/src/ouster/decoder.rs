@@ -198,8 +198,11 @@ impl Decoder {
         }
         // A measurement id beyond the frame: the metadata's mode is not the sensor's.
         let columns = (0..self.layout.columns).map(|i| p.column(i));
-        if columns.clone().any(|c| c.measurement_id() >= self.width) {
-            return Err(PacketError::MetadataMismatch);
+        if let Some(c) = columns.clone().find(|c| c.measurement_id() >= self.width) {
+            return Err(PacketError::MeasurementId {
+                id: c.measurement_id(),
+                columns: self.width,
+            });
         }
         self.check_columns(&p)?;
         let fid = p.frame_id();

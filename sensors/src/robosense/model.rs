@@ -152,6 +152,17 @@ impl Model {
         }
     }
 
+    /// Whether `packet` reads as this model's MSOP packet (its id and first block's flag) of
+    /// another layout than `other`: another Robosense model's packet.
+    pub(super) fn lays_out(self, packet: &[u8], other: Layout) -> bool {
+        let l = self.layout();
+        l != other
+            && packet.starts_with(l.id)
+            && packet
+                .get(l.header..)
+                .is_some_and(|b| b.starts_with(l.block_id))
+    }
+
     /// Metres per distance unit.
     pub fn distance_resolution_m(self) -> f64 {
         match self {

@@ -66,8 +66,9 @@ pub struct Msop<'a> {
 
 impl<'a> Msop<'a> {
     /// Checks length, the model's id and block flags, azimuths and the timestamp. A DIFOP
-    /// packet or another family's MSOP answers [`PacketError::StartBytes`]; a block flag not
-    /// the model's (another Robosense model on the port) [`PacketError::OtherSensor`].
+    /// packet or another family's MSOP answers [`PacketError::StartBytes`]; another Robosense
+    /// model's block flag (another model on the port) [`PacketError::OtherSensor`]; a flag no
+    /// model writes [`PacketError::BlockFlag`].
     pub fn new_checked(bytes: &'a [u8], model: Model) -> Result<Self, PacketError> {
         let buf = fixed(bytes)?;
         let l = model.layout();
@@ -78,7 +79,11 @@ impl<'a> Msop<'a> {
         for k in 0..l.blocks {
             let at = l.header + k * l.block_len();
             if buf.get(at..).is_none_or(|b| !b.starts_with(l.block_id)) {
-                return Err(PacketError::OtherSensor);
+                return Err(if Model::ALL.iter().any(|&m| m.lays_out(buf, l)) {
+                    PacketError::OtherSensor
+                } else {
+                    PacketError::BlockFlag
+                });
             }
             if p.azimuth(k) >= AZIMUTH_UNITS {
                 return Err(PacketError::Azimuth);

@@ -150,6 +150,17 @@ fn hdl64e_mode(p: &Packet<'_>) -> Mode {
     }
 }
 
+/// The mode a return-mode byte names, `None` for a byte no model writes.
+fn mode_of(byte: u8, product: u8) -> Option<Mode> {
+    match (single_return(byte), byte) {
+        (Some(r), _) => Some(Mode::Single(r)),
+        (None, 0x39) => Some(Mode::Dual),
+        // Old HDL-32E firmware writes neither byte; it fires strongest-return only.
+        (None, 0) if product == 0 => Some(Mode::Single(Return::Strongest)),
+        _ => None,
+    }
+}
+
 /// Velodyne packets in, sweeps out (see the module doc of [`crate::velodyne`]).
 ///
 /// ```
@@ -281,13 +292,26 @@ impl Decoder {
         let product = p.product();
         let byte = p.return_mode();
         if let Some(s) = &self.sensor {
+            s.flags_match(p)?;
+            // Blocks laid out as the model's (not an HDL-64E's, whose two bytes are a status):
+            // a byte no model writes is corrupted, not another sensor's. Product 0 is old
+            // HDL-32E firmware's.
+            if s.model.has_mode_byte() {
+                let known = product == 0 || Model::from_product(product).is_some();
+                if product != s.product_byte && !known {
+                    return Err(PacketError::UnknownModel);
+                }
+                if byte != s.mode_byte && mode_of(byte, product).is_none() {
+                    return Err(PacketError::UnknownReturnMode);
+                }
+            }
             let bytes_match =
                 !s.model.has_mode_byte() || (product == s.product_byte && byte == s.mode_byte);
             let mode_match = s.model.has_mode_byte() || hdl64e_mode(p) == s.mode;
             if !(bytes_match && mode_match) {
                 return Err(PacketError::OtherSensor);
             }
-            return s.flags_match(p);
+            return Ok(());
         }
         // A configured model overrides the product byte (which some units get wrong).
         let model = match self.config_model {
@@ -295,13 +319,7 @@ impl Decoder {
             None => Model::from_product(product).ok_or(PacketError::UnknownModel)?,
         };
         let mode = if model.has_mode_byte() {
-            match (single_return(byte), byte) {
-                (Some(r), _) => Mode::Single(r),
-                (None, 0x39) => Mode::Dual,
-                // Old HDL-32E firmware writes neither byte; it fires strongest-return only.
-                (None, 0) if product == 0 => Mode::Single(Return::Strongest),
-                _ => return Err(PacketError::UnknownReturnMode),
-            }
+            mode_of(byte, product).ok_or(PacketError::UnknownReturnMode)?
         } else {
             hdl64e_mode(p)
         };
