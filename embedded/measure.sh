@@ -7,8 +7,8 @@
 # m7-imu m7-packets m7-packets-decode m7-mid360 m7-mid360-decode a53-full a53-small rv-small rv-small-f64
 # rv-full (default: all), and m7-hesai-MODEL-decode for MODEL xt32 xt16 xt32m pandar40p pandar64
 # qt64 at128 (not in the default list: `embedded/measure.sh $(embedded/measure.sh --hesai)`), and
-# m7-velodyne-MODEL-decode (hdl64e-s2 hdl64e-s3 vls128), m7-robosense-MODEL-decode (rs16 rs32
-# bpearl helios helios16p ruby): `embedded/
+# m7-velodyne-MODEL-decode (vlp32ab hdl64e-s2 hdl64e-s3 vls128), m7-robosense-MODEL-decode (rs16
+# rs32 bpearl helios helios16p ruby m1): `embedded/
 # measure.sh $(embedded/measure.sh --spinning)`.
 # m7-packets streams a generated VLP-16 recording packet by packet through the decoder and the
 # core, m7-mid360 a Livox Mid-360 one; the -decode cases run the decoder alone; all four add a
@@ -27,8 +27,8 @@ if [ "${1:-}" = --hesai ]; then
   echo
   exit 0
 fi
-velodyne=(hdl64e-s2 hdl64e-s3 vls128)
-robosense=(rs16 rs32 bpearl helios helios16p ruby)
+velodyne=(vlp32ab hdl64e-s2 hdl64e-s3 vls128)
+robosense=(rs16 rs32 bpearl helios helios16p ruby m1)
 if [ "${1:-}" = --spinning ]; then
   for m in "${velodyne[@]}"; do printf 'm7-velodyne-%s-decode ' "$m"; done
   for m in "${robosense[@]}"; do printf 'm7-robosense-%s-decode ' "$m"; done

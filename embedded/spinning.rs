@@ -1,8 +1,9 @@
-//! Build-script part for the `velodyne` and `robosense` features: a generated Velodyne HDL-64E
-//! or VLS-128, or Robosense spinning, recording (the model `KISS_EMBED_MODEL` names, as
+//! Build-script part for the `velodyne` and `robosense` features: a generated Velodyne VLP-32A/B,
+//! HDL-64E or VLS-128, or Robosense, recording (the model `KISS_EMBED_MODEL` names, as
 //! `kiss-odom simulate --sensor` names it), and the unit's angles `simulate` wrote with it, as
 //! constants in `frames.rs`: the Velodyne calibration YAML beside the pcap (`packets.yaml`) as
-//! `LASERS`, or the Robosense DIFOP packet of the pcap (port 7788) as `DIFOP`.
+//! `LASERS`, or the Robosense DIFOP packet of the pcap (port 7788) as `DIFOP` (the RS-M1's
+//! points carry their directions: nothing, and the `robosense_m1` cfg).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -36,6 +37,8 @@ impl Family {
     pub fn payload(&self) -> usize {
         match self {
             Self::Velodyne(_) => 1206,
+            // `kiss_odom_sensors::robosense::m1::LEN`: the RS-M1's MSOP packet.
+            Self::Robosense(m) if m == "m1" => 1210,
             Self::Robosense(_) => 1248,
         }
     }
@@ -62,6 +65,7 @@ impl Family {
 /// `rot_correction` with the sign flipped, as `kiss-odom-io` reads it).
 fn velodyne(dir: &Path, model: &str) -> String {
     let name = match model {
+        "vlp32ab" => "Vlp32ab",
         "hdl64e-s2" => "Hdl64eS2",
         "hdl64e-s3" => "Hdl64eS3",
         "vls128" => "Vls128",
@@ -117,6 +121,10 @@ fn velodyne(dir: &Path, model: &str) -> String {
 /// The Robosense model and the recording's DIFOP packet, from which the decoder takes the
 /// lasers' angles.
 fn robosense(model: &str, difop: Option<&[u8]>) -> String {
+    if model == "m1" {
+        println!("cargo:rustc-cfg=robosense_m1");
+        return String::new();
+    }
     let name = match model {
         "rs16" => "Rs16",
         "rs32" => "Rs32",
