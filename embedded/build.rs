@@ -338,7 +338,7 @@ fn packets(out: &std::path::Path) {
     println!("cargo:rerun-if-changed={}", pcap.display());
     let b = std::fs::read(&pcap).unwrap_or_else(|e| panic!("{}: {e}", pcap.display()));
     println!("cargo::rustc-check-cfg=cfg(hesai_at128)");
-    println!("cargo::rustc-check-cfg=cfg(robosense_m1)");
+    println!("cargo::rustc-check-cfg=cfg(robosense_solid)");
     println!("cargo:rerun-if-env-changed=KISS_EMBED_HESAI");
     const HEADERS: usize = 14 + 20 + 8;
     let hesai = env::var_os("CARGO_FEATURE_HESAI").map(|_| {

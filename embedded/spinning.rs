@@ -2,8 +2,8 @@
 //! HDL-64E or VLS-128, or Robosense, recording (the model `KISS_EMBED_MODEL` names, as
 //! `kiss-odom simulate --sensor` names it), and the unit's angles `simulate` wrote with it, as
 //! constants in `frames.rs`: the Velodyne calibration YAML beside the pcap (`packets.yaml`) as
-//! `LASERS`, or the Robosense DIFOP packet of the pcap (port 7788) as `DIFOP` (the RS-M1's
-//! points carry their directions: nothing, and the `robosense_m1` cfg).
+//! `LASERS`, or the Robosense DIFOP packet of the pcap (port 7788) as `DIFOP` (the RS-M1's and
+//! E1R's points carry their directions: `SOLID_MODEL` and the `robosense_solid` cfg).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -37,8 +37,9 @@ impl Family {
     pub fn payload(&self) -> usize {
         match self {
             Self::Velodyne(_) => 1206,
-            // `kiss_odom_sensors::robosense::m1::LEN`: the RS-M1's MSOP packet.
+            // `kiss_odom_sensors::robosense::solid::{M1_LEN, E1R_LEN}`: their MSOP packets.
             Self::Robosense(m) if m == "m1" => 1210,
+            Self::Robosense(m) if m == "e1r" => 1200,
             Self::Robosense(_) => 1248,
         }
     }
@@ -121,9 +122,16 @@ fn velodyne(dir: &Path, model: &str) -> String {
 /// The Robosense model and the recording's DIFOP packet, from which the decoder takes the
 /// lasers' angles.
 fn robosense(model: &str, difop: Option<&[u8]>) -> String {
-    if model == "m1" {
-        println!("cargo:rustc-cfg=robosense_m1");
-        return String::new();
+    if let Some(name) = [("m1", "M1"), ("e1r", "E1r")]
+        .iter()
+        .find_map(|(m, name)| (*m == model).then_some(name))
+    {
+        println!("cargo:rustc-cfg=robosense_solid");
+        return format!(
+            "/// The Robosense model whose returns carry their directions.\n\
+             pub const SOLID_MODEL: kiss_odom_sensors::robosense::solid::Model = \
+             kiss_odom_sensors::robosense::solid::Model::{name};\n"
+        );
     }
     let name = match model {
         "rs16" => "Rs16",

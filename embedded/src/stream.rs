@@ -146,15 +146,18 @@ fn decoder() -> Option<kiss_odom_sensors::velodyne::Decoder> {
     Decoder::new(config).ok()
 }
 
-/// The RS-M1 decoder: its points carry their directions, its frames are cut by sequence number.
-#[cfg(all(feature = "robosense", robosense_m1))]
-fn decoder() -> Option<kiss_odom_sensors::robosense::m1::Decoder> {
-    Some(kiss_odom_sensors::robosense::m1::Decoder::new())
+/// The RS-M1 or E1R decoder: its points carry their directions, its frames are cut by
+/// sequence number.
+#[cfg(all(feature = "robosense", robosense_solid))]
+fn decoder() -> Option<kiss_odom_sensors::robosense::solid::Decoder> {
+    Some(kiss_odom_sensors::robosense::solid::Decoder::new(
+        crate::frames::SOLID_MODEL,
+    ))
 }
 
 /// A Robosense decoder with the angles of the recording's DIFOP packet (`build.rs`); the
 /// simulator's sweeps start at azimuth 0.
-#[cfg(all(feature = "robosense", not(robosense_m1)))]
+#[cfg(all(feature = "robosense", not(robosense_solid)))]
 fn decoder() -> Option<kiss_odom_sensors::robosense::Decoder> {
     use crate::frames::{DIFOP, ROBOSENSE_MODEL};
     use kiss_odom_sensors::robosense::{wire::Difop, Calibration, Config, Decoder};

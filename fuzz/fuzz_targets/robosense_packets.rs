@@ -33,11 +33,13 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     if head & 0x80 != 0 {
-        feed_all(
-            &mut kiss_odom_sensors::robosense::m1::Decoder::new(),
-            rest,
-            1210,
-        );
+        use kiss_odom_sensors::robosense::solid::{Decoder, Model};
+        let model = if head & 0x40 != 0 {
+            Model::E1r
+        } else {
+            Model::M1
+        };
+        feed_all(&mut Decoder::new(model), rest, model.packet_len());
         return;
     }
     let model = Model::ALL[usize::from(head & 7) % Model::ALL.len()];

@@ -142,7 +142,8 @@ pub enum PacketError {
     /// strongest in three blocks): not decoded. Set the sensor to a single or dual return mode.
     TripleReturn,
     /// Dual-return packets of a model whose pairs are not decoded (the RS-Ruby's, which pair
-    /// returns across packets): set the sensor to a single return mode.
+    /// returns across packets; the E1R's, whose blocks say no return order): set the sensor
+    /// to a single return mode.
     DualNotDecoded,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
     /// another model's block flags): two sensors on one port. Filter by source address, or

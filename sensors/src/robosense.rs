@@ -12,13 +12,14 @@
 //! block iterators), kept exact rather than truncated to 0.01 degree as rs_driver does; its
 //! range is measured from the lens centre, which turns with the rotor (rs_driver's geometry).
 //! The RS-16, RS-32 and Bpearl send the same packet layout, so the model is the caller's to
-//! say. The MEMS RS-M1 sends points with their own directions ([`m1`]). Not decoded: the
-//! RS-Ruby's dual-return packets, and the solid-state E1R and Airy (their own packet families).
+//! say. The MEMS RS-M1 and the solid-state E1R send points with their own directions
+//! ([`solid`]). Not decoded: the RS-Ruby's and the E1R's dual-return packets, and the Airy (its
+//! own packet family).
 
 mod calibration;
 mod decoder;
-pub mod m1;
 mod model;
+pub mod solid;
 pub mod wire;
 
 pub use calibration::{Calibration, Config, Laser, MAX_ANGLE_DEG};

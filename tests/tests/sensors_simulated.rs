@@ -45,7 +45,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 19] = [
+const CASES: [Case; 20] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -169,6 +169,13 @@ const CASES: [Case; 19] = [
         azimuth_rad: 0.0,
         clock_origin_s: PacketSensor::M1.clock_origin_s(),
     },
+    // Each return cast along the vector its packet writes, the truth at its range.
+    Case {
+        sensor: "e1r",
+        unit_m: 0.0,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::E1r.clock_origin_s(),
+    },
 ];
 
 impl Case {
@@ -181,16 +188,16 @@ impl Case {
     }
     /// Whether the simulator casts along the very ray the decoder computes (the Hesai
     /// sensors: block azimuth and channel angles, or the AT128's mirror-frame correction; the
-    /// RS-M1: the pitch and yaw its packets carry).
+    /// RS-M1 and E1R: the direction its packets carry).
     fn exact_rays(&self) -> bool {
-        matches!(self.sensor, "xt32" | "m1") || self.needs_angles()
+        matches!(self.sensor, "xt32" | "m1" | "e1r") || self.needs_angles()
     }
     /// Whether `run` finds the recording and cuts its sweeps as the simulator does with no
     /// options: Livox frames by port, packet length and the decoder's default 0.1 s; the XT32
-    /// by its packets, sweeps by azimuth coverage; the RS-M1 by its packets, frames by their
-    /// sequence numbers.
+    /// by its packets, sweeps by azimuth coverage; the RS-M1 and E1R by their packets, frames
+    /// by their sequence numbers.
     fn found_as_is(&self) -> bool {
-        matches!(self.sensor, "mid360" | "xt32" | "avia" | "m1")
+        matches!(self.sensor, "mid360" | "xt32" | "avia" | "m1" | "e1r")
     }
     /// Whether `run` finds the recording by its packets and needs the angle correction file
     /// `simulate` wrote beside it (the Hesai sensors but the XT32).

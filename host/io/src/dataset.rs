@@ -361,6 +361,8 @@ pub enum SensorKind {
     Ruby,
     /// Robosense RS-M1 (MEMS; every point carries its direction).
     M1,
+    /// Robosense E1R (solid state; every point carries its direction).
+    E1r,
     /// Livox Horizon, Tele-15 or Avia (SDK 1; 240,000 firings a second).
     Livox,
     /// Livox Mid-40 or Mid-70 (SDK 1; 100,000 firings a second).

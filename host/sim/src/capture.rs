@@ -92,7 +92,7 @@ impl CaptureWriter {
             // A Livox SDK 1 sensor sends its points to the host's port 56001.
             PacketSensor::Avia => ((65000, 56001), (65000, 56001), [192, 168, 1, 150]),
             // Robosense: points to 6699, device information (DIFOP) to 7788.
-            s if s.robosense().is_some() || s == PacketSensor::M1 => {
+            s if s.robosense().is_some() || s.solid().is_some() => {
                 ((6699, 6699), (7788, 7788), [192, 168, 1, 200])
             }
             // Velodyne and Hesai.

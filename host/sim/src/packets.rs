@@ -24,11 +24,11 @@ mod at128;
 mod avia;
 mod hesai128;
 mod hesai_fixed;
-mod m1;
 mod mid360;
 mod mid360_imu;
 mod ouster_imu;
 mod robosense;
+mod solid;
 mod velodyne_wide;
 mod xt32;
 
@@ -37,6 +37,7 @@ use crate::rng::{key, Purpose, Stream};
 use crate::sensor::Frame;
 use crate::simulation::Simulation;
 use crate::trajectory::PoseM;
+use kiss_odom_sensors::robosense::solid::Model as Solid;
 use kiss_odom_sensors::robosense::Model as RobosenseModel;
 use kiss_odom_sensors::velodyne::{self, Calibration, Model};
 use nalgebra::{Point3, Vector3};
@@ -165,6 +166,12 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "m1"))]
     #[serde(rename = "m1")]
     M1,
+    /// Robosense E1R (solid state): MSOP packets of 96 blocks of one return with its
+    /// direction, 192 x 144 returns over 120 x 90 degrees, 5 mm ranges, 10 Hz frames of 288
+    /// packets numbered from 1.
+    #[cfg_attr(feature = "clap", value(name = "e1r"))]
+    #[serde(rename = "e1r")]
+    E1r,
 }
 
 impl PacketSensor {
@@ -274,6 +281,15 @@ impl PacketSensor {
         })
     }
 
+    /// The Robosense model whose returns carry their directions; `None` for the others.
+    pub fn solid(self) -> Option<Solid> {
+        match self {
+            Self::M1 => Some(Solid::M1),
+            Self::E1r => Some(Solid::E1r),
+            _ => None,
+        }
+    }
+
     /// Velodyne packet period (s), single return.
     fn velodyne_packet_s(model: Model) -> f64 {
         model.packet_us(false) * 1e-6
@@ -321,8 +337,10 @@ impl PacketSensor {
             Self::Qt128 | Self::Ot128 => Err("a QT128 or OT128 runs at 10 Hz (--rate-hz)".into()),
             Self::At128 if rate_hz == at128::RATE_HZ => Ok(rate_hz),
             Self::At128 => Err("an AT128 runs at 10 frames a second (--rate-hz)".into()),
-            Self::M1 if rate_hz == m1::RATE_HZ => Ok(rate_hz),
-            Self::M1 => Err("an RS-M1 runs at 10 frames a second (--rate-hz)".into()),
+            Self::M1 | Self::E1r if rate_hz == solid::RATE_HZ => Ok(rate_hz),
+            Self::M1 | Self::E1r => {
+                Err("an RS-M1 or E1R runs at 10 frames a second (--rate-hz)".into())
+            }
             s if s.hesai_fixed() && rate_hz == hesai_fixed::RATE_HZ => Ok(rate_hz),
             s if s.hesai_fixed() => {
                 Err("the simulated Hesai sensors run at 10 Hz (--rate-hz)".into())
@@ -392,7 +410,8 @@ impl PacketSensor {
             | Self::Helios
             | Self::Helios16p
             | Self::Ruby
-            | Self::M1 => xt32::CLOCK_ORIGIN_S,
+            | Self::M1
+            | Self::E1r => xt32::CLOCK_ORIGIN_S,
             s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,
             _ => 0,
         }
@@ -411,7 +430,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Qt128 | PacketSensor::Ot128 => per_period(hesai128::packet_ns(sensor)),
             s if s.hesai_fixed() => per_period(hesai_fixed::packet_ns(sensor)),
             PacketSensor::At128 => at128::PACKETS_PER_FRAME,
-            PacketSensor::M1 => m1::PACKETS_PER_FRAME,
+            s if s.solid().is_some() => solid::packets_per_frame(s.solid().unwrap_or(Solid::M1)),
             PacketSensor::Mid360 | PacketSensor::Avia => per_period(sensor.timing().packet_ns),
             s if s.robosense().is_some() => {
                 let model = s.robosense().unwrap_or(RobosenseModel::Helios);
@@ -472,7 +491,7 @@ impl<'a> PacketSim<'a> {
             PacketSensor::Qt128 | PacketSensor::Ot128 => self.hesai128_last_offset(last),
             s if s.hesai_fixed() => hesai_fixed::last_offset(s, last),
             PacketSensor::At128 => at128::last_offset(last),
-            PacketSensor::M1 => m1::last_offset(last),
+            s if s.solid().is_some() => solid::last_offset(s.solid().unwrap_or(Solid::M1), last),
             _ => {
                 let n = velodyne::wire::field::BLOCKS - 1;
                 self.packet_offset(last) + self.model.firing_time_s(n, 31)
@@ -511,7 +530,7 @@ impl<'a> PacketSim<'a> {
                 }
                 s if s.hesai_fixed() => self.hesai_fixed_packet(p),
                 PacketSensor::At128 => self.at128_packet(p),
-                PacketSensor::M1 => self.m1_packet(p),
+                s if s.solid().is_some() => self.solid_packet(s.solid().unwrap_or(Solid::M1), p),
                 _ => self.velodyne_packet(p),
             })
             .collect();

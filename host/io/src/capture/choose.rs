@@ -28,8 +28,8 @@ pub struct Survey {
     /// Hesai models of the packets on port 2368, by their first bytes
     /// ([`hesai::identify`]).
     hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
-    /// Robosense RS-M1 packets (their length and first bytes), on any port.
-    m1: u64,
+    /// Robosense RS-M1 or E1R packets (by their length and first bytes), on any port.
+    solid: BTreeMap<&'static str, (robosense::solid::Model, u64)>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
     records: usize,
@@ -47,9 +47,9 @@ impl Survey {
                 if let (VELODYNE_PORT, Some(model)) = (d.port, hesai::identify(&d.payload)) {
                     self.hesai.entry(model.name()).or_insert((model, 0)).1 += 1;
                 }
-                let m1 = robosense::m1::LEN == d.payload.len()
-                    && d.payload.starts_with(&robosense::m1::ID);
-                self.m1 += u64::from(m1);
+                if let Some(model) = robosense::solid::Model::of(&d.payload) {
+                    self.solid.entry(model.name()).or_insert((model, 0)).1 += 1;
+                }
             }
             Record::Damaged { port, .. } => {
                 self.damaged.insert(*port);
@@ -193,8 +193,8 @@ pub fn decode_beside(
         if let Some(model) = robosense_model(opts.sensor) {
             return robosense_decoder(path, capture, opts, (model, device));
         }
-        if opts.sensor == SensorKind::M1 {
-            return m1_decoder(path, capture, opts);
+        if let Some(model) = solid_model(opts.sensor) {
+            return solid_decoder(path, capture, opts, model);
         }
         let port = opts.port.unwrap_or(VELODYNE_PORT);
         let mut hesai = hesai_model(opts.sensor);
@@ -216,8 +216,9 @@ pub fn decode_beside(
             if auto && hesai.is_none() && s.seen.keys().any(is_livox2) {
                 return livox_decoder(path, capture, opts, livox::Model::Mid360, None);
             }
-            if auto && hesai.is_none() && s.m1 > 0 {
-                return m1_decoder(path, capture, opts);
+            let solid = s.solid.values().max_by_key(|(_, n)| *n).map(|(m, _)| *m);
+            if let (true, None, Some(model)) = (auto, hesai, solid) {
+                return solid_decoder(path, capture, opts, model);
             }
             if !data && hesai.is_none() {
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
@@ -238,7 +239,7 @@ pub fn decode_beside(
                 }
                 bail!(
                     "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368), Livox (ports \
-                     56001, 56301) or Robosense RS-M1 (55 AA 5A A5) data packets; {}",
+                     56001, 56301) or Robosense RS-M1 or E1R (55 AA 5A A5) data packets; {}",
                     path.display(),
                     describe(&s)
                 );
@@ -357,17 +358,27 @@ fn livox_decoder(
     ))
 }
 
-/// A Robosense RS-M1 recording: MSOP packets on port 6699 unless `input.port` says.
-fn m1_decoder(
+/// The Robosense model whose returns carry their directions that `--sensor` names.
+fn solid_model(kind: SensorKind) -> Option<robosense::solid::Model> {
+    match kind {
+        SensorKind::M1 => Some(robosense::solid::Model::M1),
+        SensorKind::E1r => Some(robosense::solid::Model::E1r),
+        _ => None,
+    }
+}
+
+/// A Robosense RS-M1 or E1R recording: MSOP packets on port 6699 unless `input.port` says.
+fn solid_decoder(
     path: &Path,
     capture: Box<dyn DatagramSource>,
     opts: &SensorOptions,
+    model: robosense::solid::Model,
 ) -> Result<PcapSweeps> {
     let port = opts.port.unwrap_or(robosense_calib::MSOP_PORT);
-    let dec = Decoder::RobosenseM1(Box::new(robosense::m1::Decoder::new()));
-    let name = "Robosense RS-M1".to_string();
+    let dec = Decoder::RobosenseSolid(Box::new(robosense::solid::Decoder::new(model)));
+    let name = format!("Robosense {}", model.name());
     let all = [Unused::Calibration, Unused::CutAngle, Unused::FramePeriod];
-    let notes = unused(opts, "a Robosense RS-M1", &all)?;
+    let notes = unused(opts, &format!("a Robosense {}", model.name()), &all)?;
     Ok(sweeps(path, capture, dec, opts, (port, name, notes)))
 }
 

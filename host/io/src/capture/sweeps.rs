@@ -165,7 +165,8 @@ impl PcapReport {
 pub(super) enum Decoder {
     Velodyne(Box<velodyne::Decoder>),
     Robosense(Box<robosense::Decoder>),
-    RobosenseM1(Box<robosense::m1::Decoder>),
+    /// The RS-M1 or E1R: each return its direction.
+    RobosenseSolid(Box<robosense::solid::Decoder>),
     Ouster(Box<ouster::Decoder>),
     Hesai(Box<hesai::Decoder>),
     /// The PandarAT128: its angles from the mirror-frame correction.
@@ -182,7 +183,7 @@ impl Decoder {
             r = match self {
                 Self::Velodyne(d) => d.push(bytes, sink),
                 Self::Robosense(d) => d.push(bytes, sink),
-                Self::RobosenseM1(d) => d.push(bytes, sink),
+                Self::RobosenseSolid(d) => d.push(bytes, sink),
                 Self::Ouster(d) => d.push(bytes, sink),
                 Self::Hesai(d) => d.push(bytes, sink),
                 Self::HesaiAt128(d) => d.push(bytes, sink),
@@ -198,7 +199,7 @@ impl Decoder {
         match self {
             Self::Velodyne(d) => d.finish(sink),
             Self::Robosense(d) => d.finish(sink),
-            Self::RobosenseM1(d) => d.finish(sink),
+            Self::RobosenseSolid(d) => d.finish(sink),
             Self::Ouster(d) => d.finish(sink),
             Self::Hesai(d) => d.finish(sink),
             Self::HesaiAt128(d) => d.finish(sink),
@@ -209,7 +210,7 @@ impl Decoder {
         match self {
             Self::Velodyne(d) => *d.between_sweeps(),
             Self::Robosense(d) => *d.between_sweeps(),
-            Self::RobosenseM1(d) => *d.between_sweeps(),
+            Self::RobosenseSolid(d) => *d.between_sweeps(),
             Self::Ouster(d) => *d.between_sweeps(),
             Self::Hesai(d) => *d.between_sweeps(),
             Self::HesaiAt128(d) => *d.between_sweeps(),
@@ -458,7 +459,7 @@ impl PcapSweeps {
         match &self.decoder {
             Decoder::Velodyne(_) => velodyne::wire::field::LEN,
             Decoder::Robosense(_) => robosense::wire::LEN,
-            Decoder::RobosenseM1(_) => robosense::m1::LEN,
+            Decoder::RobosenseSolid(d) => d.model().packet_len(),
             Decoder::Ouster(d) => d.layout().packet_len(),
             Decoder::Hesai(d) if d.model() == hesai::Model::Xt32 => {
                 hesai::wire::field::LEN_WITH_SEQUENCE

@@ -61,7 +61,8 @@ impl Driver {
             | PacketSensor::Bpearl
             | PacketSensor::Helios16p
             | PacketSensor::Ruby
-            | PacketSensor::M1 => return None,
+            | PacketSensor::M1
+            | PacketSensor::E1r => return None,
         })
     }
 
