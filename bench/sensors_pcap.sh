@@ -4,8 +4,8 @@
 # `kiss-odom run` on generated sensor recordings (packets) against the same run on the
 # simulator's direct point output (the exact points the packets were made from), deskew on and
 # off. VLP-16 and OS1-64 (and, with SPECS, the Mid-360, XT32, Avia, QT128, OT128, XT16, XT32M,
-# Pandar40P, Pandar64, QT64, AT128, Helios, HDL-64E S3 and VLS-128), urban and fast, 500 sweeps
-# each, seeds 1-3. Prints a markdown table of KITTI relative translation error and ATE against
+# Pandar40P, Pandar64, QT64, AT128, Helios, HDL-64E S3, VLS-128, RS-M1 and E1R), urban and fast,
+# 500 sweeps each, seeds 1-3. Prints a markdown table of KITTI relative translation error and ATE against
 # the simulator's ground truth, per drive and the mean over the seeds (a single drive's error is a random walk that the packets' range
 # quantisation, 1-2 mm, already perturbs: compare means).
 #
@@ -33,17 +33,25 @@ for spec in "${specs[@]}"; do
     case $1 in
       os1-64) src=(--calibration "$d/packets.json") ;;
       # Livox frames by time, found by port; the XT32 by its packets, sweeps by azimuth
-      # coverage: nothing to give.
-      mid360|avia|xt32) src=() ;;
+      # coverage; the RS-M1 and E1R by their packets, frames by sequence number: nothing
+      # to give.
+      mid360|avia|xt32|m1|e1r) src=() ;;
       # Found by their packets too, with the angle correction file written beside (the
       # AT128's: the .dat).
       qt128|ot128|xt16|xt32m|pandar40p|pandar64|qt64) src=(--calibration "$d/packets.csv") ;;
       at128) src=(--calibration "$d/packets.dat") ;;
+      # Named, as their packets do not say which model (the Velodynes with the calibration
+      # written beside; the Robosense angles are in the DIFOP packet), cut at 0 degrees.
+      vlp32ab|hdl64e-s2|hdl64e-s3|vls128)
+        src=(--sensor "$1" --calibration "$d/packets.yaml" --set input.cut_angle=0) ;;
+      rs16|rs32|bpearl|helios|helios16p|ruby) src=(--sensor "$1" --set input.cut_angle=0) ;;
       *) src=(--set input.cut_angle=0) ;;
     esac
     for deskew in deskew no-deskew; do
-      $B run "$d/packets.pcap" "${src[@]}" --"$deskew" --out "$d.pcap.$deskew" -q >/dev/null
-      $B run "$d" --"$deskew" --out "$d.direct.$deskew" -q >/dev/null
+      on=$([ "$deskew" = deskew ] && echo true || echo false)
+      $B run "$d/packets.pcap" "${src[@]}" --set data.deskew=$on --out "$d.pcap.$deskew" -q \
+        >/dev/null
+      $B run "$d" --set data.deskew=$on --out "$d.direct.$deskew" -q >/dev/null
       for kind in pcap direct; do
         m=$($B eval --json "$d.$kind.$deskew/poses_kitti.txt" "$d/poses.txt")
         printf '%s\t%s\t%s\t%s\t%s\n' "$1 $2" "$seed" "$deskew" "$kind" "$(tr -d '\n ' <<< "$m")" >> "$rows"

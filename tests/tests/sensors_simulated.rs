@@ -646,9 +646,10 @@ fn run_on_generated_pcaps_of_named_models_tracks_as_on_the_direct_points() {
             p / q
         );
         if case.sensor == "vls128" {
-            // Open: its packets decode to the exact points (the test above), yet this drive's
-            // pcap run errs 0.576 % against the direct points' 0.692 % (0.83); not held to the
-            // bound until the difference is explained.
+            // Its packets decode to the exact points (the test above), yet one 100-sweep drive's
+            // ratio swings 0.83-1.47 over seeds 1-5 on inputs equal to f32 rounding (this seed:
+            // 0.576 % against 0.692 %): not held to the bound here; the 500-sweep urban means of
+            // bench/sensors_pcap.sh are (BENCHMARKS section 7).
             println!("OPEN: vls128 pcap / direct {:.3}, not asserted", p / q);
             continue;
         }
