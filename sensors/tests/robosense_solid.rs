@@ -10,16 +10,23 @@ use common::{feed, with, Log};
 use kiss_odom_sensors::robosense::solid::{self, Decoder, Model};
 use kiss_odom_sensors::{Decode, PacketError, SweepEnd};
 
-/// Packet `seq` at `us` microseconds past 2024-01-01: block `k`, channel `c` at distance
-/// 10 m + c, pitch `k - 12` degrees, yaw `2 c` degrees, `k` us after the packet time.
-fn packet(seq: u16, us: u64, mode: u8) -> Vec<u8> {
-    let mut b = vec![0u8; solid::M1_LEN];
+/// A `model` packet's bytes with only its header: id, sequence number `seq`, return `mode`, a
+/// time `us` microseconds past 2024-01-01.
+fn header(model: Model, seq: u16, us: u64, mode: u8) -> Vec<u8> {
+    let mut b = vec![0u8; model.packet_len()];
     b[..4].copy_from_slice(&solid::ID);
     b[4..6].copy_from_slice(&seq.to_be_bytes());
     b[8] = mode;
     let t = 1_704_067_200_000_000 + us;
     b[10..16].copy_from_slice(&(t / 1_000_000).to_be_bytes()[2..]);
     b[16..20].copy_from_slice(&((t % 1_000_000) as u32).to_be_bytes());
+    b
+}
+
+/// Packet `seq` at `us` microseconds past 2024-01-01: block `k`, channel `c` at distance
+/// 10 m + c, pitch `k - 12` degrees, yaw `2 c` degrees, `k` us after the packet time.
+fn packet(seq: u16, us: u64, mode: u8) -> Vec<u8> {
+    let mut b = header(Model::M1, seq, us, mode);
     for k in 0..Model::M1.blocks() {
         let at = 32 + k * 47;
         b[at] = k as u8;
@@ -124,13 +131,7 @@ fn bad_input_is_refused_with_its_reason() {
 /// An E1R packet at `us` past 2024-01-01: block `k` one return at 20 m + k cm along the
 /// direction (cos a, sin a, 0.1) scaled to 32768ths, a = k degrees, 3 k us after the packet.
 fn e1r_packet(seq: u16, us: u64, mode: u8) -> Vec<u8> {
-    let mut b = vec![0u8; solid::E1R_LEN];
-    b[..4].copy_from_slice(&solid::ID);
-    b[4..6].copy_from_slice(&seq.to_be_bytes());
-    b[8] = mode;
-    let t = 1_704_067_200_000_000 + us;
-    b[10..16].copy_from_slice(&(t / 1_000_000).to_be_bytes()[2..]);
-    b[16..20].copy_from_slice(&((t % 1_000_000) as u32).to_be_bytes());
+    let mut b = header(Model::E1r, seq, us, mode);
     for k in 0..Model::E1r.blocks() {
         let at = 32 + k * 12;
         b[at..at + 2].copy_from_slice(&(3 * k as u16).to_be_bytes());

@@ -197,9 +197,8 @@ impl PacketSim<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::packets::xt32::tests::{sim, Points};
+    use crate::packets::xt32::tests::{decodes_to_the_truth, sim};
     use crate::packets::PacketSensor;
-    use kiss_odom_sensors::{Decode, Pushed};
 
     #[test]
     fn the_m1_raster_covers_the_field_line_by_line() {
@@ -259,45 +258,8 @@ mod tests {
             let ps = PacketSim::new(&sim, sensor);
             assert_eq!(ps.packets_per_sweep(), packets_per_frame(model));
             let mut dec = solid::Decoder::new(model);
-            let mut got = Points::default();
-            let sweeps: Vec<_> = (0..2).map(|k| ps.sweep(k)).collect();
-            for packet in sweeps.iter().flat_map(|s| &s.packets) {
-                let mut r = dec.push(&packet.payload, &mut got);
-                if r == Ok(Pushed::Again) {
-                    r = dec.push(&packet.payload, &mut got);
-                }
-                r.unwrap();
-            }
-            dec.finish(&mut got);
-            let truth: Vec<_> = sweeps.iter().flat_map(|s| s.frame.points.clone()).collect();
-            let stamps: Vec<_> = sweeps.iter().flat_map(|s| s.frame.stamps.clone()).collect();
-            assert!(truth.len() > 10_000, "{model:?}: {} points", truth.len());
-            assert_eq!(got.xyz.len(), truth.len(), "{model:?}");
-            assert_eq!(got.packets, [packets_per_frame(model) as u32; 2]);
-            let origin_ns = super::super::xt32::CLOCK_ORIGIN_S * 1_000_000_000;
-            let (mut worst, mut worst_ratio, mut worst_t, mut sweep) = (0f64, 0f64, 0f64, 0);
-            for (i, (p, q)) in got.xyz.iter().zip(&truth).enumerate() {
-                if i == sweeps[0].frame.points.len() {
-                    sweep = 1;
-                }
-                let d = (0..3)
-                    .map(|k| (p[k] - f64::from(q[k])).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                let r = (0..3).map(|k| p[k] * p[k]).sum::<f64>().sqrt();
-                worst = worst.max(d);
-                worst_ratio = worst_ratio.max(d / (r * f64::from(f32::EPSILON)).max(1e-9));
-                let t = (got.starts[sweep] as i64 - origin_ns) as f64 * 1e-9 + got.times[i];
-                worst_t = worst_t.max((t - stamps[i]).abs());
-            }
-            println!(
-                "{model:?}: {} points; worst |dxyz| {worst:.2e} m ({worst_ratio:.2} of the f32 \
-                 truth's resolution at its range, tolerance 1), worst |dt| {worst_t:.2e} s \
-                 (tolerance 1e-9 s)",
-                truth.len()
-            );
-            assert!(worst_ratio <= 1.0 && worst <= 1e-4, "{model:?}");
-            assert!(worst_t <= 1e-9, "{model:?}");
+            let n = decodes_to_the_truth(&ps, &mut dec, model.name());
+            assert!(n > 10_000, "{model:?}: {n} points");
         }
     }
 }

@@ -245,6 +245,56 @@ pub(super) mod tests {
         }
     }
 
+    /// Sweeps 0 and 1 of `ps` pushed through `dec`: the decoded points, checked against the
+    /// simulated ones one by one (as many, in order, `ps`'s packets a sweep, each within the
+    /// f32 truth's rounding at its range and 1 ns); returns how many.
+    pub(in crate::packets) fn decodes_to_the_truth<D: kiss_odom_sensors::Decode>(
+        ps: &PacketSim<'_>,
+        dec: &mut D,
+        what: &str,
+    ) -> usize {
+        let mut got = Points::default();
+        let sweeps: Vec<_> = (0..2).map(|k| ps.sweep(k)).collect();
+        for packet in sweeps.iter().flat_map(|s| &s.packets) {
+            let mut r = dec.push(&packet.payload, &mut got);
+            if r == Ok(kiss_odom_sensors::Pushed::Again) {
+                r = dec.push(&packet.payload, &mut got);
+            }
+            r.unwrap();
+        }
+        dec.finish(&mut got);
+        let truth: Vec<_> = sweeps.iter().flat_map(|s| s.frame.points.clone()).collect();
+        let stamps: Vec<_> = sweeps.iter().flat_map(|s| s.frame.stamps.clone()).collect();
+        assert!(!truth.is_empty(), "{what}: no points");
+        assert_eq!(got.xyz.len(), truth.len(), "{what}");
+        assert_eq!(got.packets, [ps.packets_per_sweep() as u32; 2], "{what}");
+        let origin_ns = CLOCK_ORIGIN_S * 1_000_000_000;
+        let (mut worst, mut worst_ratio, mut worst_t, mut sweep) = (0f64, 0f64, 0f64, 0);
+        for (i, (p, q)) in got.xyz.iter().zip(&truth).enumerate() {
+            if i == sweeps[0].frame.points.len() {
+                sweep = 1;
+            }
+            let d = (0..3)
+                .map(|k| (p[k] - f64::from(q[k])).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let r = (0..3).map(|k| p[k] * p[k]).sum::<f64>().sqrt();
+            worst = worst.max(d);
+            // The truth is f32: half a unit in the last place of the largest coordinate.
+            worst_ratio = worst_ratio.max(d / (r * f64::from(f32::EPSILON)).max(1e-9));
+            let t = (got.starts[sweep] as i64 - origin_ns) as f64 * 1e-9 + got.times[i];
+            worst_t = worst_t.max((t - stamps[i]).abs());
+        }
+        println!(
+            "{what}: {} points; worst |dxyz| {worst:.2e} m ({worst_ratio:.2} of the f32 truth's \
+             resolution at its range, tolerance 1), worst |dt| {worst_t:.2e} s (tolerance 1e-9 s)",
+            truth.len()
+        );
+        assert!(worst_ratio <= 1.0 && worst <= 1e-4, "{what}");
+        assert!(worst_t <= 1e-9, "{what}");
+        truth.len()
+    }
+
     /// A simulation of `sensor` at `rate_hz`, its sequence time starting at `start_time`.
     pub(in crate::packets) fn sim(
         sensor: PacketSensor,
