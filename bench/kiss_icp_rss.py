@@ -3,10 +3,12 @@
 streams them (one frame in memory at a time): prints the peak RSS in bytes. Used by
 bench/map_bound.py for the reference's column of "The host's map never evicts".
 
-    python bench/kiss_icp_rss.py FOLDER MAX_RANGE VOXEL_SIZE
+    python bench/kiss_icp_rss.py FOLDER MAX_RANGE VOXEL_SIZE [POSES_OUT]
 
 FOLDER: a generic (velodyne/*.bin float32 x y z i, optional timestamps/*.bin float64) or KITTI
-layout folder. Runs in the kiss-icp venv (tests/reference/requirements.txt).
+layout folder. POSES_OUT, if given, receives kiss-icp's pose of every frame (KITTI rows, full
+precision), so one streamed pass also gives the reference's trajectory on a recording too large
+for the in-memory crosscheck. Runs in the kiss-icp venv (tests/reference/requirements.txt).
 """
 
 import resource
@@ -25,6 +27,7 @@ def main():
     config.mapping.voxel_size = voxel
     config.registration.max_num_threads = 1
     odom = KissICP(config)
+    rows = []
     for scan in sorted((folder / "velodyne").glob("*.bin")):
         points = np.fromfile(scan, dtype=np.float32).reshape(-1, 4)[:, :3].astype(np.float64)
         stamps = folder / "timestamps" / scan.name
@@ -32,6 +35,9 @@ def main():
         if len(times) != len(points):
             times = np.array([])
         odom.register_frame(points, times)
+        rows.append(" ".join(repr(float(v)) for v in odom.last_pose[:3, :].reshape(-1)))
+    if len(sys.argv) > 4:
+        Path(sys.argv[4]).write_text("\n".join(rows) + "\n")
     print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
 
 
