@@ -23,16 +23,20 @@ use crate::sweep::{Assembly, Decode, PointMeta, Pushed, Return, SweepEnd, SweepS
 
 /// The MSOP packet's first bytes.
 pub const ID: [u8; 4] = [0x55, 0xAA, 0x5A, 0xA5];
-const SEQ: usize = 4;
-const RETURN_MODE: usize = 8;
-const STAMP: usize = 10;
-const BLOCKS_AT: usize = 32;
+/// Where the header's sequence number (u16), return-mode byte and UTC time (10 bytes) begin.
+pub const SEQ: usize = 4;
+/// See [`SEQ`].
+pub const RETURN_MODE: usize = 8;
+/// See [`SEQ`].
+pub const STAMP: usize = 10;
+/// Where the first block begins.
+pub const BLOCKS_AT: usize = 32;
 /// Metres per distance unit.
 pub const DISTANCE_RES_M: f64 = 0.005;
 /// Angle offset of the M1's pitch and yaw, hundredths of a degree.
 const ANGLE_OFFSET: i32 = 32768;
 /// The E1R's direction vector: 32768ths (rs_driver's `VECTOR_BASE`).
-const VECTOR_BASE: f64 = 32768.0;
+pub const VECTOR_BASE: f64 = 32768.0;
 /// A frame whose packets span more than this (sensor time) ends.
 pub const GAP_NS: u64 = 300_000_000;
 /// Bytes of an RS-M1 MSOP packet.
@@ -81,6 +85,13 @@ impl Model {
         match self {
             Self::M1 => 9,
             Self::E1r => 10,
+        }
+    }
+    /// Where a return's intensity byte lies in it.
+    pub const fn intensity_at(self) -> usize {
+        match self {
+            Self::M1 => 6,
+            Self::E1r => 8,
         }
     }
     /// Distance range, metres (rs_driver's `distance min`/`max`).
@@ -183,14 +194,8 @@ impl<'a> Packet<'a> {
     #[inline(always)]
     fn channel_of(&self, model: Model, k: usize, c: usize) -> (u16, u8) {
         let at = Self::channel_at(model, k, c);
-        let intensity = match model {
-            Model::M1 => 6,
-            Model::E1r => 8,
-        };
-        (
-            be16(self.buf, at),
-            self.buf.get(at + intensity).copied().unwrap_or(0),
-        )
+        let intensity = self.buf.get(at + model.intensity_at()).copied();
+        (be16(self.buf, at), intensity.unwrap_or(0))
     }
     #[inline(always)]
     fn point_of(&self, model: Model, k: usize, c: usize, d: u16) -> [f64; 3] {

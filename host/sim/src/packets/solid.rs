@@ -15,21 +15,15 @@
 //! computes from the range it writes (5 mm), so a decoder gets it back to rounding.
 
 use super::{Firing, Packet, PacketSim, Truth};
-use kiss_odom_sensors::robosense::solid::{self, Model};
+use kiss_odom_sensors::robosense::solid::{
+    self, Model, BLOCKS_AT, RETURN_MODE, SEQ, STAMP, VECTOR_BASE,
+};
 use nalgebra::Vector3;
 
 /// The frame rate: both run at 10 Hz.
 pub const RATE_HZ: f64 = 10.0;
-/// The header's bytes: sequence number, return mode, UTC time (rs_driver's MSOP headers).
-const SEQ: usize = 4;
-const RETURN_MODE: usize = 8;
-const STAMP: usize = 10;
-/// The first block.
-const BLOCKS_AT: usize = 32;
 /// Return mode: strongest.
 const STRONGEST: u8 = 0x04;
-/// The E1R's direction vector: 32768ths.
-const VECTOR_BASE: f64 = 32768.0;
 
 /// Packets a frame (single return, rs_driver's `decoder_RSM1.hpp`, `decoder_RSE1.hpp`).
 pub const fn packets_per_frame(model: Model) -> u64 {
@@ -174,8 +168,7 @@ impl PacketSim<'_> {
                     continue;
                 }
                 buf[at..at + 2].copy_from_slice(&(raw as u16).to_be_bytes());
-                let intensity_at = if model == Model::M1 { 6 } else { 8 };
-                buf[at + intensity_at] = libm::roundf(intensity * 255.0) as u8;
+                buf[at + model.intensity_at()] = libm::roundf(intensity * 255.0) as u8;
                 let q = per_unit * raw;
                 truth.push((
                     [q.x as f32, q.y as f32, q.z as f32, intensity],

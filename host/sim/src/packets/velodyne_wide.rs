@@ -172,9 +172,8 @@ impl PacketSim<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::packets::xt32::tests::{sim, Points};
+    use crate::packets::xt32::tests::{decodes_to_the_truth, sim};
     use crate::packets::PacketSensor;
-    use kiss_odom_sensors::{Decode, Pushed};
 
     #[test]
     fn generated_hdl64e_s2_s3_and_vls128_packets_decode_to_the_simulated_points() {
@@ -192,45 +191,7 @@ mod tests {
                 cut_angle_deg: Some(0.0),
             })
             .unwrap();
-            let mut got = Points::default();
-            let sweeps: Vec<_> = (0..2).map(|k| ps.sweep(k)).collect();
-            for packet in sweeps.iter().flat_map(|s| &s.packets) {
-                let mut r = dec.push(&packet.payload, &mut got);
-                if r == Ok(Pushed::Again) {
-                    r = dec.push(&packet.payload, &mut got);
-                }
-                r.unwrap();
-            }
-            dec.finish(&mut got);
-            let truth: Vec<_> = sweeps.iter().flat_map(|s| s.frame.points.clone()).collect();
-            let stamps: Vec<_> = sweeps.iter().flat_map(|s| s.frame.stamps.clone()).collect();
-            assert_eq!(got.xyz.len(), truth.len(), "{sensor:?}");
-            assert_eq!(
-                got.packets,
-                [ps.packets_per_sweep() as u32; 2],
-                "{sensor:?}"
-            );
-            let (mut worst, mut ratio, mut worst_t) = (0f64, 0f64, 0f64);
-            let first = sweeps[0].frame.points.len();
-            for (i, (p, q)) in got.xyz.iter().zip(&truth).enumerate() {
-                let d = (0..3)
-                    .map(|k| (p[k] - f64::from(q[k])).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                let r = (0..3).map(|k| p[k] * p[k]).sum::<f64>().sqrt();
-                worst = worst.max(d);
-                ratio = ratio.max(d / (r * f64::from(f32::EPSILON)).max(1e-9));
-                let start = got.starts[usize::from(i >= first)] as f64 * 1e-9;
-                worst_t = worst_t.max((start + got.times[i] - stamps[i]).abs());
-                let _ = i;
-            }
-            println!(
-                "{sensor:?}: {} points; worst |dxyz| {worst:.2e} m ({ratio:.2} of the f32 \
-                 truth's resolution at its range), worst |dt| {worst_t:.2e} s (tolerance 1e-9 s)",
-                truth.len()
-            );
-            assert!(ratio <= 1.0 && worst <= 1e-4, "{sensor:?}");
-            assert!(worst_t <= 1e-9, "{sensor:?}");
+            decodes_to_the_truth(&ps, &mut dec, &format!("{sensor:?}"));
         }
     }
 }

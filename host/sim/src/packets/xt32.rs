@@ -268,7 +268,7 @@ pub(super) mod tests {
         assert!(!truth.is_empty(), "{what}: no points");
         assert_eq!(got.xyz.len(), truth.len(), "{what}");
         assert_eq!(got.packets, [ps.packets_per_sweep() as u32; 2], "{what}");
-        let origin_ns = CLOCK_ORIGIN_S * 1_000_000_000;
+        let origin_ns = ps.sensor.clock_origin_s() * 1_000_000_000;
         let (mut worst, mut worst_ratio, mut worst_t, mut sweep) = (0f64, 0f64, 0f64, 0);
         for (i, (p, q)) in got.xyz.iter().zip(&truth).enumerate() {
             if i == sweeps[0].frame.points.len() {
