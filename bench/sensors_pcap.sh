@@ -44,7 +44,7 @@ for spec in "${specs[@]}"; do
       # written beside; the Robosense angles are in the DIFOP packet), cut at 0 degrees.
       vlp32ab|hdl64e-s2|hdl64e-s3|vls128)
         src=(--sensor "$1" --calibration "$d/packets.yaml" --set input.cut_angle=0) ;;
-      rs16|rs32|bpearl|helios|helios16p|ruby) src=(--sensor "$1" --set input.cut_angle=0) ;;
+      rs16|rs32|bpearl|helios|helios16p|ruby|airy) src=(--sensor "$1" --set input.cut_angle=0) ;;
       *) src=(--set input.cut_angle=0) ;;
     esac
     for deskew in deskew no-deskew; do

@@ -8,7 +8,7 @@
 # rv-full (default: all), and m7-hesai-MODEL-decode for MODEL xt32 xt16 xt32m pandar40p pandar64
 # qt64 at128 (not in the default list: `embedded/measure.sh $(embedded/measure.sh --hesai)`), and
 # m7-velodyne-MODEL-decode (vlp32ab hdl64e-s2 hdl64e-s3 vls128), m7-robosense-MODEL-decode (rs16
-# rs32 bpearl helios helios16p ruby m1 e1r): `embedded/
+# rs32 bpearl helios helios16p ruby airy m1 e1r): `embedded/
 # measure.sh $(embedded/measure.sh --spinning)`.
 # m7-packets streams a generated VLP-16 recording packet by packet through the decoder and the
 # core, m7-mid360 a Livox Mid-360 one; the -decode cases run the decoder alone; all four add a
@@ -28,7 +28,7 @@ if [ "${1:-}" = --hesai ]; then
   exit 0
 fi
 velodyne=(vlp32ab hdl64e-s2 hdl64e-s3 vls128)
-robosense=(rs16 rs32 bpearl helios helios16p ruby m1 e1r)
+robosense=(rs16 rs32 bpearl helios helios16p ruby airy m1 e1r)
 if [ "${1:-}" = --spinning ]; then
   for m in "${velodyne[@]}"; do printf 'm7-velodyne-%s-decode ' "$m"; done
   for m in "${robosense[@]}"; do printf 'm7-robosense-%s-decode ' "$m"; done

@@ -146,7 +146,7 @@ if [[ ",$features," == *",packets,"* ]]; then
       KISS_EMBED_FRAMES="${KISS_EMBED_FRAMES:-$frames}"
   elif [[ ",$features," == *",velodyne,"* ]] || [[ ",$features," == *",robosense,"* ]]; then
     # `velodyne`, `robosense`: the model KISS_EMBED_MODEL names (vlp32ab, hdl64e-s2, hdl64e-s3,
-    # vls128; rs16, rs32, bpearl, helios, helios16p, ruby, m1, e1r),
+    # vls128; rs16, rs32, bpearl, helios, helios16p, ruby, airy, m1, e1r),
     # sweeps 2-4 of a 6-sweep drive.
     sensor="${KISS_EMBED_MODEL:?KISS_EMBED_MODEL: the model (hdl64e-s3, vls128, helios...)}"
     pcapdir="${KISS_EMBED_PCAP:-$here/target/$sensor-pcap}"; sim=(--frames 6)

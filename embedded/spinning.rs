@@ -140,6 +140,7 @@ fn robosense(model: &str, difop: Option<&[u8]>) -> String {
         "helios" => "Helios",
         "helios16p" => "Helios16p",
         "ruby" => "Ruby",
+        "airy" => "Airy",
         m => panic!("KISS_EMBED_MODEL={m}: not a Robosense model the simulator writes"),
     };
     let difop = difop.expect("no DIFOP packet (port 7788) in the Robosense pcap");

@@ -9,7 +9,7 @@
 mod sensor_sink;
 
 use kiss_odom_sensors::heapless;
-use kiss_odom_sensors::robosense::{Calibration, Config, Decoder, Laser, Model};
+use kiss_odom_sensors::robosense::{AiryInstall, Calibration, Config, Decoder, Laser, Model};
 use kiss_odom_sensors::Decode;
 use libfuzzer_sys::fuzz_target;
 
@@ -52,7 +52,11 @@ fuzz_target!(|data: &[u8]| {
             };
             let _ = lasers.push(laser);
         }
-        Calibration { lasers, dual: None }
+        Calibration {
+            lasers,
+            dual: None,
+            install: AiryInstall::from_byte((head >> 5) & 3),
+        }
     });
     let cut = (head & 16 != 0).then_some(f64::from((head >> 5) & 3) * 90.0);
     let mut dec = Decoder::new(Config {

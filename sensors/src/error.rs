@@ -93,8 +93,9 @@ pub enum PacketError {
     /// The Velodyne factory byte names a model this crate does not decode (or none, as old
     /// HDL-32E firmware): give the model in [`crate::velodyne::Config::model`].
     UnknownModel,
-    /// A Hesai header whose laser count, block count or distance unit is not the model's
-    /// (another Hesai model on the port, or corrupted). Skip it; if every packet says so, give
+    /// A Hesai header whose laser count, block count or distance unit is not the model's, or
+    /// an RS-Airy header of another channel mode than 96 (another model on the port, or
+    /// corrupted). Skip it; if every packet says so, give
     /// the right model.
     Header,
     /// The Velodyne return-mode byte is not strongest (0x37), last (0x38) or dual (0x39); the
@@ -141,9 +142,8 @@ pub enum PacketError {
     /// The Hesai return-mode byte is triple return (0x3D, the XT32M's first, last and
     /// strongest in three blocks): not decoded. Set the sensor to a single or dual return mode.
     TripleReturn,
-    /// Dual-return packets of a model whose pairs are not decoded (the RS-Ruby's, which pair
-    /// returns across packets; the E1R's, whose blocks say no return order): set the sensor
-    /// to a single return mode.
+    /// Dual-return packets of a model whose pairs are not decoded (the E1R's, whose blocks
+    /// say no return order): set the sensor to a single return mode.
     DualNotDecoded,
     /// The packet comes from another sensor than the sweep's (another model or return mode,
     /// another model's block flags): two sensors on one port. Filter by source address, or

@@ -1,5 +1,5 @@
-//! Robosense RS-LiDAR-16, RS-LiDAR-32, RS-Bpearl, RS-Helios (5515 and 16P) and RS-Ruby:
-//! MSOP packets to timed points, sweeps cut by azimuth.
+//! Robosense RS-LiDAR-16, RS-LiDAR-32, RS-Bpearl, RS-Helios (5515 and 16P), RS-Ruby and
+//! RS-Airy: MSOP packets to timed points, sweeps cut by azimuth.
 //!
 //! A Robosense unit sends its points in MSOP packets (port 6699) and its device information,
 //! with every laser's vertical and horizontal angle, in DIFOP packets (port 7788, once a
@@ -13,8 +13,10 @@
 //! range is measured from the lens centre, which turns with the rotor (rs_driver's geometry).
 //! The RS-16, RS-32 and Bpearl send the same packet layout, so the model is the caller's to
 //! say. The MEMS RS-M1 and the solid-state E1R send points with their own directions
-//! ([`solid`]). Not decoded: the RS-Ruby's and the E1R's dual-return packets, and the Airy (its
-//! own packet family).
+//! ([`solid`]). The RS-Airy fills a firing's 96 lasers in two blocks (four in dual return)
+//! and says its return mode in each packet; its 48- and 192-channel modes are refused
+//! ([`crate::PacketError::Header`]). The RS-Ruby's dual-return packets hold one and a half
+//! firings, their blocks paired as AAB or ABB. Not decoded: the E1R's dual-return packets.
 
 mod calibration;
 mod decoder;
@@ -24,4 +26,7 @@ pub mod wire;
 
 pub use calibration::{Calibration, Config, Laser, MAX_ANGLE_DEG};
 pub use decoder::{Decoder, GAP_NS};
-pub use model::{Difop as DifopLayout, Layout, Model, Stamp, MAX_LASERS};
+pub use model::{
+    AiryInstall, Difop as DifopLayout, Layout, Model, Stamp, AIRY_96, AIRY_CHANNEL_MODE,
+    AIRY_DATA_TYPE, AIRY_INSTALL, AIRY_RETURN_MODE, MAX_LASERS,
+};

@@ -1,12 +1,16 @@
 //! The Robosense decoder: angles from a DIFOP packet, points where the geometry puts them,
 //! and bad input (no angles, a malformed DIFOP, another model's packets, truncated packets,
-//! the RS-Ruby's dual return) refused with its reason and counted; each field of an MSOP
-//! packet corrupted alone is refused naming that field.
+//! a dual-return packet of another mode) refused with its reason and counted; each field of an MSOP
+//! packet corrupted alone is refused naming that field; the RS-Airy's two blocks a firing,
+//! firing tables and in-packet return mode.
 
 mod common;
 
 use common::{feed, with, Log};
-use kiss_odom_sensors::robosense::{wire, Calibration, Config, Decoder, Model};
+use kiss_odom_sensors::robosense::{
+    wire, AiryInstall, Calibration, Config, Decoder, Model, AIRY_96, AIRY_CHANNEL_MODE,
+    AIRY_DATA_TYPE, AIRY_INSTALL, AIRY_RETURN_MODE,
+};
 use kiss_odom_sensors::{Decode, PacketError, Return};
 
 /// Laser `i`'s elevation in the test's DIFOP packets, hundredths of a degree: rising with `i`
@@ -59,6 +63,10 @@ fn msop(model: Model, (s, us): (u64, u32), az: u16, per: usize) -> Vec<u8> {
         b[at..at + 6].copy_from_slice(&[24, 1, 1, 0, 0, s as u8]);
         b[at + 6..at + 8].copy_from_slice(&((us / 1000) as u16).to_be_bytes());
         b[at + 8..at + 10].copy_from_slice(&((us % 1000) as u16).to_be_bytes());
+    }
+    if model == Model::Airy {
+        b[AIRY_CHANNEL_MODE] = AIRY_96;
+        b[AIRY_RETURN_MODE] = if per == 4 { 0x03 } else { 0x01 };
     }
     let raw = (10.0 / model.distance_resolution_m()) as u16;
     for k in 0..l.blocks {
@@ -174,7 +182,7 @@ fn bad_input_is_refused_with_its_reason() {
 }
 
 #[test]
-fn dual_return_pairs_give_strongest_and_second_and_the_rubys_are_refused() {
+fn dual_return_pairs_give_strongest_and_second() {
     let mut dec = decoder(Model::Rs32);
     let mut log = Log::default();
     let _ = feed(&mut dec, &difop(Model::Rs32, 0x00), &mut log);
@@ -183,12 +191,81 @@ fn dual_return_pairs_give_strongest_and_second_and_the_rubys_are_refused() {
     let strongest = log.points.iter().filter(|p| p.3.ret == Return::Strongest);
     assert_eq!(strongest.count(), 6 * 32);
     assert_eq!(log.points.len(), 12 * 32);
-    let mut dec = decoder(Model::Ruby);
-    let _ = feed(&mut dec, &difop(Model::Ruby, 0x03), &mut log);
-    let p = msop(Model::Ruby, (1000, 0), 1000, 2);
+}
+
+/// A dual-return RS-Ruby packet of firings at `first` and `first + 20` (0.01 degree): AAB
+/// (the first firing's two returns, the second's first) or ABB.
+fn ruby_dual(us: u32, first: u16, aab: bool) -> Vec<u8> {
+    let mut p = msop(Model::Ruby, (1000, us), first, 1);
+    let l = Model::Ruby.layout();
+    let azimuths = if aab {
+        [first, first, first + 20]
+    } else {
+        [first, first + 20, first + 20]
+    };
+    for (k, a) in azimuths.iter().enumerate() {
+        let at = l.header + k * l.block_len() + l.azimuth_at;
+        p[at..at + 2].copy_from_slice(&a.to_be_bytes());
+    }
+    p
+}
+
+#[test]
+fn the_rubys_dual_return_packets_pair_blocks_across_packets_as_rs_driver() {
+    let model = Model::Ruby;
+    for told in [true, false] {
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        // Told by the DIFOP packet (0x03), or found by the packets' azimuths (an angle file).
+        let d = difop(model, if told { 0x03 } else { 0x02 });
+        let _ = feed(&mut dec, &d, &mut log);
+        if !told {
+            dec = Decoder::new(Config {
+                model,
+                calibration: Some(Calibration {
+                    dual: None,
+                    ..Calibration::from_difop(model, &wire::Difop::new_checked(&d).unwrap())
+                        .unwrap()
+                }),
+                cut_angle_deg: None,
+            })
+            .unwrap();
+        }
+        // Firings F0 F1 | F1 F2 | F3 F4 ...: AAB at t, ABB one firing (55.55 us) later, the
+        // next AAB two firings after that.
+        let packets = [
+            ruby_dual(0, 1000, true),
+            ruby_dual(56, 1020, false),
+            ruby_dual(167, 1060, true),
+        ];
+        for p in &packets {
+            feed(&mut dec, p, &mut log).unwrap();
+        }
+        dec.finish(&mut log);
+        let s = log.ends.last().unwrap();
+        assert_eq!((s.packets, s.lost_packets), (3, 0), "told {told}");
+        let n = |ret: Return| log.points.iter().filter(|p| p.3.ret == ret).count();
+        // 9 blocks: firings F0-F3 both returns (8 blocks), F4 its first.
+        assert_eq!(
+            (n(Return::Strongest), n(Return::Second)),
+            (5 * 128, 4 * 128)
+        );
+        // F1's second return (the ABB's A) is F1's column, at F1's azimuth.
+        let f1: Vec<_> = log.points.iter().filter(|p| p.3.column == 1).collect();
+        assert_eq!(f1.len(), 2 * 128, "told {told}");
+        // Columns F0-F4.
+        let columns: std::collections::BTreeSet<_> =
+            log.points.iter().map(|p| p.3.column).collect();
+        assert_eq!(columns.into_iter().collect::<Vec<_>>(), vec![0, 1, 2, 3, 4]);
+    }
+    // A packet that pairs no blocks under dual return: another return mode's.
+    let mut dec = decoder(model);
+    let mut log = Log::default();
+    let _ = feed(&mut dec, &difop(model, 0x03), &mut log);
+    let single = msop(model, (1000, 0), 1000, 1);
     assert_eq!(
-        feed(&mut dec, &p, &mut log),
-        Err(PacketError::DualNotDecoded)
+        feed(&mut dec, &single, &mut log),
+        Err(PacketError::OtherSensor)
     );
 }
 
@@ -197,6 +274,7 @@ fn an_angle_table_of_another_length_is_refused() {
     let c = Calibration {
         lasers: Default::default(),
         dual: None,
+        install: AiryInstall::default(),
     };
     let r = Decoder::new(Config {
         model: Model::Rs16,
@@ -220,11 +298,15 @@ fn each_corrupted_header_field_is_refused_by_its_own_name() {
         };
         let _ = feed(&mut dec, &difop(model, single), &mut log);
         assert!(dec.calibrated());
-        assert!(feed(&mut dec, &msop(model, (10, 0), 1000, 1), &mut log).is_ok());
+        let per = model.halves();
+        assert!(feed(&mut dec, &msop(model, (10, 0), 1000, per), &mut log).is_ok());
         dec.push(bytes, &mut log)
     };
-    let (rs32, helios, ruby) = (Model::Rs32, Model::Helios, Model::Ruby);
-    let set = |model: Model, at: usize, v: u8| with(&msop(model, (11, 0), 1000, 1), at, v);
+    let (rs32, helios, ruby, airy) = (Model::Rs32, Model::Helios, Model::Ruby, Model::Airy);
+    let set = |model: Model, at: usize, v: u8| {
+        let per = model.halves();
+        with(&msop(model, (11, 0), 1000, per), at, v)
+    };
     // Block 2's flag, its azimuth's high byte, and the time stamp's (`Stamp`) fields.
     let block = |model: Model| {
         let l = model.layout();
@@ -246,6 +328,13 @@ fn each_corrupted_header_field_is_refused_by_its_own_name() {
         (ruby, "block 2 flag", set(ruby, block(ruby), 0xFD), BlockFlag, "block flag"),
         // Another model's blocks (the Ruby's FE) where the Helios has FF EE: its packet.
         (helios, "blocks", ruby_packet, OtherSensor, "another sensor"),
+        // The Airy and the Helios share the id and the first block: the later blocks tell.
+        (helios, "Airy blocks", msop(airy, (11, 0), 1000, 2), OtherSensor, "another sensor"),
+        (airy, "Helios blocks", msop(helios, (11, 0), 1000, 1), OtherSensor, "another sensor"),
+        (airy, "block 2 flag", set(airy, block(airy) + 1, 0x12), BlockFlag, "block flag"),
+        (airy, "channel mode", set(airy, AIRY_CHANNEL_MODE, 0x01), Header, "laser count"),
+        (airy, "data type", set(airy, AIRY_DATA_TYPE, 0x01), PacketType, "not a point data"),
+        (airy, "return mode", set(airy, AIRY_RETURN_MODE, 0x03), OtherSensor, "another sensor"),
     ];
     for (model, name, bytes, want, names) in &rows {
         let row = format!("{model:?} {name}");
@@ -255,5 +344,79 @@ fn each_corrupted_header_field_is_refused_by_its_own_name() {
             text.contains(names),
             "{row}: \"{text}\" does not name {names}"
         );
+    }
+}
+
+#[test]
+fn the_airy_fills_a_firing_from_two_blocks_at_its_install_modes_times() {
+    let model = Model::Airy;
+    // The DIFOP's install mode picks the table: the first laser of the second group of eight
+    // (channel 8) fires 5.712 us into the firing mounted normally, 11.424 on its side and
+    // 7.616 as the Airy M (also without a mode: 0xFF); laser 56, block 1's channel 8, is of
+    // the eighth group: 50.456, 71.400 and 61.880 us.
+    let table = [
+        (0u8, 5.712, 50.456),
+        (1, 11.424, 71.4),
+        (2, 7.616, 61.88),
+        (0xFF, 7.616, 61.88),
+    ];
+    for (install, want_us, want_56) in table {
+        let mut dec = decoder(model);
+        let mut log = Log::default();
+        let _ = feed(
+            &mut dec,
+            &with(&difop(model, 0), AIRY_INSTALL, install),
+            &mut log,
+        );
+        feed(&mut dec, &msop(model, (10, 0), 1000, 2), &mut log).unwrap();
+        dec.finish(&mut log);
+        assert_eq!(log.points.len(), 8 * 48);
+        // Laser 8 (ring 8: elevations rise with the laser) of the first firing, and laser
+        // 56.
+        let at = |ring: u16| {
+            let p = log
+                .points
+                .iter()
+                .find(|p| p.3.ring == ring && p.3.column == 0);
+            p.map(|p| p.2 * 1e6).unwrap()
+        };
+        let (t0, t8, t56) = (at(0), at(8), at(56));
+        assert!(
+            (t8 - t0 - want_us).abs() < 1e-6,
+            "mode {install}: {}",
+            t8 - t0
+        );
+        assert!(
+            (t56 - t0 - want_56).abs() < 1e-6,
+            "mode {install}: {}",
+            t56 - t0
+        );
+    }
+}
+
+#[test]
+fn the_airys_dual_return_packets_give_two_returns_a_firing_and_its_feature_bits_are_not_range() {
+    let model = Model::Airy;
+    let mut dec = decoder(model);
+    let mut log = Log::default();
+    let _ = feed(&mut dec, &difop(model, 0), &mut log);
+    // Two firings of four blocks; every distance with its two feature bits set.
+    let mut p = msop(model, (10, 0), 1000, 4);
+    let l = model.layout();
+    for k in 0..l.blocks {
+        for c in 0..l.channels {
+            p[l.header + k * l.block_len() + l.azimuth_at + 2 + 3 * c] |= 0xC0;
+        }
+    }
+    feed(&mut dec, &p, &mut log).unwrap();
+    dec.finish(&mut log);
+    assert_eq!(log.points.len(), 8 * 48);
+    let second = log.points.iter().filter(|p| p.3.ret == Return::Second);
+    assert_eq!(second.count(), 2 * 96);
+    let (rx, _) = model.lens_m();
+    for (_, p, _, m) in &log.points {
+        let v = (f64::from(elevation(model, usize::from(m.ring))) * 0.01).to_radians();
+        let rho = p[0].hypot(p[1]);
+        assert!((rho - (10.0 * v.cos() + rx)).abs() < 1e-3, "{p:?}");
     }
 }

@@ -45,7 +45,7 @@ struct Case {
     clock_origin_s: i64,
 }
 
-const CASES: [Case; 20] = [
+const CASES: [Case; 21] = [
     Case {
         sensor: "vlp16",
         unit_m: 0.002,
@@ -104,6 +104,12 @@ const CASES: [Case; 20] = [
         unit_m: 0.0,
         azimuth_rad: 0.0,
         clock_origin_s: PacketSensor::Helios.clock_origin_s(),
+    },
+    Case {
+        sensor: "airy",
+        unit_m: 0.0,
+        azimuth_rad: 0.0,
+        clock_origin_s: PacketSensor::Airy.clock_origin_s(),
     },
     // The VLP-32C's packets, its lasers from the calibration written beside.
     Case {
@@ -216,6 +222,7 @@ impl Case {
     fn new_family(&self) -> Option<SensorKind> {
         match self.sensor {
             "helios" => Some(SensorKind::Helios),
+            "airy" => Some(SensorKind::Airy),
             "vlp32ab" => Some(SensorKind::Vlp32ab),
             "hdl64e-s3" => Some(SensorKind::Hdl64eS3),
             "vls128" => Some(SensorKind::Vls128),
@@ -224,7 +231,7 @@ impl Case {
     }
     fn options(&self, dir: &Path) -> SensorOptions {
         if let Some(sensor) = self.new_family() {
-            // The Helios's angles come in its DIFOP packet; the Velodynes' in packets.yaml.
+            // The Robosense angles come in the DIFOP packet; the Velodynes' in packets.yaml.
             let yaml = dir.join("packets.yaml");
             return SensorOptions {
                 sensor,
@@ -419,7 +426,9 @@ fn decode_and_compare(case: &Case, dir: &Path, frames: usize) -> Vec<Sweep> {
             worst.add(case, *p, *q, start + t - tq);
         }
     }
-    assert_eq!(report.refused.len(), 0, "{report:?}");
+    // Nothing refused, nothing said: a generated capture holds one sensor's packets (and the
+    // Robosense device packet, which is not another sensor's data).
+    assert_eq!(report.warnings(), Vec::<String>::new(), "{}", case.sensor);
     worst.check("kiss-odom-sensors", case);
     sweeps
 }
@@ -591,8 +600,8 @@ fn run_on_a_generated_pcap_tracks_as_well_as_on_the_direct_points() {
     }
 }
 
-/// `run` on the generated packets of the models named with `--sensor` (the Robosense Helios,
-/// the VLP-32A/B, the HDL-64E S3 and the VLS-128) tracks the fast drive as well as on the simulator's direct points: KITTI translation error
+/// `run` on the generated packets of the models named with `--sensor` (the Robosense Helios
+/// and Airy, the VLP-32A/B, the HDL-64E S3 and the VLS-128) tracks the fast drive as well as on the simulator's direct points: KITTI translation error
 /// within 10 % (deskewed; 100 sweeps, ~150 m).
 #[test]
 #[cfg_attr(

@@ -359,6 +359,9 @@ pub enum SensorKind {
     /// Robosense RS-Ruby / RS-LiDAR-128 (angles from the recording's DIFOP packets or
     /// --calibration).
     Ruby,
+    /// Robosense RS-Airy, 96-channel mode (angles from the recording's DIFOP packets or
+    /// --calibration).
+    Airy,
     /// Robosense RS-M1 (MEMS; every point carries its direction).
     M1,
     /// Robosense E1R (solid state; every point carries its direction).

@@ -172,6 +172,11 @@ pub enum PacketSensor {
     #[cfg_attr(feature = "clap", value(name = "e1r"))]
     #[serde(rename = "e1r")]
     E1r,
+    /// Robosense RS-Airy (96-channel mode): eight 48-channel blocks a packet, a firing's 96
+    /// lasers in two, 5 mm ranges to 60 m, single return, mounted normally.
+    #[cfg_attr(feature = "clap", value(name = "airy"))]
+    #[serde(rename = "airy")]
+    Airy,
 }
 
 impl PacketSensor {
@@ -258,13 +263,14 @@ pub struct PacketSim<'a> {
 
 impl PacketSensor {
     /// The Robosense sensors the simulator writes.
-    pub const ROBOSENSE: [Self; 6] = [
+    pub const ROBOSENSE: [Self; 7] = [
         Self::Rs16,
         Self::Rs32,
         Self::Bpearl,
         Self::Helios,
         Self::Helios16p,
         Self::Ruby,
+        Self::Airy,
     ];
 
     /// The Robosense model of a Robosense sensor; `None` for the others.
@@ -277,6 +283,7 @@ impl PacketSensor {
             Self::Helios => R::Helios,
             Self::Helios16p => R::Helios16p,
             Self::Ruby => R::Ruby,
+            Self::Airy => R::Airy,
             _ => return None,
         })
     }
@@ -410,6 +417,7 @@ impl PacketSensor {
             | Self::Helios
             | Self::Helios16p
             | Self::Ruby
+            | Self::Airy
             | Self::M1
             | Self::E1r => xt32::CLOCK_ORIGIN_S,
             s if s.hesai_fixed() => xt32::CLOCK_ORIGIN_S,

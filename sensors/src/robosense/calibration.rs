@@ -2,7 +2,7 @@
 //! vendor ships (one `vertical,horizontal` line in degrees a laser, rs_driver's
 //! `ChanAngles::loadFromFile`), which the host parses into the same numbers.
 
-use super::model::{Model, MAX_LASERS};
+use super::model::{AiryInstall, Model, AIRY_INSTALL, MAX_LASERS};
 use super::wire::Difop;
 use crate::error::ConfigError;
 
@@ -29,6 +29,9 @@ pub struct Calibration {
     /// 128-laser models show it by repeated block azimuths; the 16-laser ones are read as
     /// single return).
     pub dual: Option<bool>,
+    /// The RS-Airy's firing table, from its DIFOP packet's install mode (the default, the
+    /// Airy M's, from an angle file); the other models ignore it.
+    pub install: AiryInstall,
 }
 
 impl Calibration {
@@ -62,6 +65,7 @@ impl Calibration {
         let c = Self {
             lasers,
             dual: model.dual_mode(d.byte(at.return_mode)),
+            install: AiryInstall::from_byte(d.byte(AIRY_INSTALL)),
         };
         c.validate(model)?;
         Ok(c)

@@ -119,16 +119,26 @@ impl Decoder {
 
     /// Dual-return mode: known, or from the packet's azimuths (a dual packet repeats each
     /// firing's azimuth over its two blocks; a 16-laser model's single block holds both and
-    /// is read as single return). The RS-Ruby's dual-return packets (pairs across packets)
-    /// are not decoded.
+    /// is read as single return); the RS-Airy's packet says it, and one that says otherwise
+    /// than the first is another sensor's. A dual-return RS-Ruby packet pairs its blocks as
+    /// AAB or ABB ([`role`]); one that does neither is another return mode's.
     fn mode(&mut self, p: &Msop<'_>) -> Result<bool, PacketError> {
+        if self.model == Model::Airy {
+            let dual = p.airy_dual();
+            if *self.dual.get_or_insert(dual) != dual {
+                return Err(PacketError::OtherSensor);
+            }
+            return Ok(dual);
+        }
+        let ruby = self.model == Model::Ruby;
+        let abb = ruby && p.azimuth(1) == p.azimuth(2);
         let dual = *self.dual.get_or_insert_with(|| {
             self.model.layout().blocks > 1
                 && !self.model.two_sequences()
-                && p.azimuth(0) == p.azimuth(1)
+                && (p.azimuth(0) == p.azimuth(1) || abb)
         });
-        if dual && self.model == Model::Ruby {
-            return Err(PacketError::DualNotDecoded);
+        if dual && ruby && p.azimuth(0) != p.azimuth(1) && !abb {
+            return Err(PacketError::OtherSensor);
         }
         Ok(dual)
     }
@@ -197,43 +207,59 @@ impl Decoder {
     fn decode<S: SweepSink>(&mut self, p: &Msop<'_>, t: u64, dual: bool, sink: &mut S) {
         let m = self.model;
         let l = m.layout();
-        let per = m.blocks_per_firing(dual);
+        let install = self
+            .calibration
+            .as_ref()
+            .map(|c| c.install)
+            .unwrap_or_default();
         let block_us = m.block_us(dual);
         let (rx, rz) = m.lens_m();
         let res = m.distance_resolution_m();
         let (min, max) = m.range_m();
         let base_s = (t - self.sweep_start_us) as f64 * 1e-6;
-        let firings = l.blocks / per;
-        let mut elapsed_us = 0.0;
-        for f in 0..firings {
-            let block = f * per;
+        let role = |k: usize| role(m, p, dual, k);
+        let mut block = 0;
+        while block < l.blocks {
+            let (f, _) = role(block);
+            let end = (block + 1..l.blocks)
+                .find(|&k| role(k).0 != f)
+                .unwrap_or(l.blocks);
             let az0 = p.azimuth(block);
             // The rotation to the next firing's block; past the last firing, or across the
             // blind sector of a restricted field of view, the step before it.
-            let next = (f + 1 < firings).then(|| p.azimuth(block + per));
-            if let Some(n) = next {
-                let g = wrap(i32::from(n) - i32::from(az0));
+            if end < l.blocks {
+                let g = wrap(i32::from(p.azimuth(end)) - i32::from(az0));
                 if g <= BLIND_STEP {
                     self.gap = g;
                 }
             }
-            for k in 0..per {
-                let ret = match (dual, k) {
-                    (false, _) => Return::Strongest,
-                    (true, 0) => Return::Strongest,
-                    (true, _) => Return::Second,
+            // A firing whose first return the packet before held (the RS-Ruby's ABB) is
+            // that packet's last column.
+            let continued = block == 0 && role(0).1;
+            let column = if continued {
+                self.column.wrapping_sub(1)
+            } else {
+                self.column
+            };
+            let elapsed_us = f as f64 * block_us;
+            for k in block..end {
+                let ret = if role(k).1 {
+                    Return::Second
+                } else {
+                    Return::Strongest
                 };
+                let first = m.channel(k, 0);
                 for c in 0..l.channels {
-                    let (raw, intensity) = p.channel(block + k, c);
+                    let (raw, intensity) = p.channel(k, c);
                     let d = f64::from(raw) * res;
                     if raw == 0 || d < min || d > max {
                         continue;
                     }
-                    let laser = m.laser(c);
-                    let Some(beam) = self.beams.get(laser) else {
+                    let ch = first + c;
+                    let Some(beam) = self.beams.get(m.laser(ch)) else {
                         continue;
                     };
-                    let fire_us = m.firing_us(c, dual);
+                    let fire_us = m.firing_us(ch, dual, install);
                     let ret = if dual && m.two_sequences() && c >= 16 {
                         Return::Second
                     } else {
@@ -245,17 +271,39 @@ impl Decoder {
                     let time = base_s + (elapsed_us + fire_us) * 1e-6;
                     let meta = PointMeta {
                         ring: beam.ring,
-                        column: self.column,
+                        column,
                         ret,
                         intensity: u16::from(intensity),
                     };
                     self.asm.push(sink, xyz, time, meta);
                 }
             }
-            elapsed_us += block_us;
-            self.column = self.column.wrapping_add(1);
+            if !continued {
+                self.column = self.column.wrapping_add(1);
+            }
+            block = end;
         }
     }
+}
+
+/// Block `k`'s firing in the packet, and whether the block holds that firing's second return
+/// (rs_driver's block iterators). A firing's blocks hold its first return's
+/// [`Model::halves`], then its second's. A dual-return RS-Ruby packet holds one and a half
+/// firings (`ABDualReturnBlockIterator`): its blocks pair as AAB (the B the first return of a
+/// firing the next packet ends) or ABB (the A the second return of the last packet's).
+fn role(m: Model, p: &Msop<'_>, dual: bool, k: usize) -> (usize, bool) {
+    if dual && m == Model::Ruby {
+        return match (p.azimuth(0) == p.azimuth(1), k) {
+            (true, 0) => (0, false),
+            (true, 1) => (0, true),
+            (true, _) => (1, false),
+            (false, 0) => (0, true),
+            (false, 1) => (1, false),
+            (false, _) => (1, true),
+        };
+    }
+    let per = m.blocks_per_firing(dual);
+    (k / per, k % per >= m.halves())
 }
 
 /// A return at range `d` (m) along azimuth `az` (hundredths of a degree, before the laser's

@@ -25,6 +25,45 @@ pub enum Model {
     Helios16p,
     /// RS-Ruby (RS-LiDAR-128): three 128-channel blocks a packet.
     Ruby,
+    /// RS-Airy (96 lasers, its 96-channel mode): eight blocks of 48 channels a packet, a
+    /// firing's lasers 0-47 in its even block and 48-95 in its odd one.
+    Airy,
+}
+
+/// The RS-Airy's firing table, which its DIFOP packet's install-mode byte picks (rs_driver
+/// `decoder_RSAIRY.hpp`, `decodeMsopPkt`): 0 mounted normally, 1 on its side, 2 the Airy M. A
+/// unit that does not say (0xFF), or angles from a file, fire as the Airy M: rs_driver's
+/// default table.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AiryInstall {
+    /// Install mode 0.
+    Normal,
+    /// Install mode 1.
+    Side,
+    /// Install mode 2, or not said.
+    #[default]
+    AiryM,
+}
+
+impl AiryInstall {
+    /// The install-mode byte's table.
+    pub fn from_byte(b: u8) -> Self {
+        match b {
+            0 => Self::Normal,
+            1 => Self::Side,
+            _ => Self::AiryM,
+        }
+    }
+
+    /// The byte a DIFOP packet writes for it.
+    pub fn byte(self) -> u8 {
+        match self {
+            Self::Normal => 0,
+            Self::Side => 1,
+            Self::AiryM => 2,
+        }
+    }
 }
 
 /// How the packet stamps its time.
@@ -86,16 +125,39 @@ const BPEARL_FIRING: [f64; 32] = [
 const HELIOS_FIRING_US: f64 = 1.73;
 /// Ruby: groups of four every 3.236 us, channels 64-127 with 0-63.
 const RUBY_FIRING_US: f64 = 3.236;
+/// RS-Airy: its 96 lasers fire in 12 groups of eight (`firing_tss_normal`, `_side`,
+/// `_airy_m`); the group's time, us.
+const AIRY_NORMAL: [f64; 12] = [
+    0.0, 5.712, 12.376, 19.040, 25.704, 33.320, 41.888, 50.456, 59.024, 70.448, 81.872, 93.296,
+];
+const AIRY_SIDE: [f64; 12] = [
+    0.0, 11.424, 22.848, 34.272, 45.696, 54.264, 62.832, 71.400, 79.016, 85.680, 92.344, 99.008,
+];
+const AIRY_M: [f64; 12] = [
+    0.0, 7.616, 16.184, 24.752, 33.320, 42.840, 52.360, 61.880, 71.400, 79.968, 88.536, 97.104,
+];
+/// RS-Airy: MSOP header bytes (`RSAIRYHeader`): the data type (0 for points), the return
+/// mode (0x03 dual), the channel mode (0x02 the 96-channel mode decoded here).
+pub const AIRY_DATA_TYPE: usize = 16;
+/// See [`AIRY_DATA_TYPE`].
+pub const AIRY_RETURN_MODE: usize = 17;
+/// See [`AIRY_DATA_TYPE`].
+pub const AIRY_CHANNEL_MODE: usize = 32;
+/// The RS-Airy's channel-mode byte for 96 channels.
+pub const AIRY_96: u8 = 0x02;
+/// The RS-Airy's DIFOP install-mode byte (`RSAIRYDifopPkt::install_mode`).
+pub const AIRY_INSTALL: usize = 289;
 
 impl Model {
     /// Every supported model.
-    pub const ALL: [Self; 6] = [
+    pub const ALL: [Self; 7] = [
         Self::Rs16,
         Self::Rs32,
         Self::Bpearl,
         Self::Helios,
         Self::Helios16p,
         Self::Ruby,
+        Self::Airy,
     ];
 
     /// The name Robosense gives the model.
@@ -107,6 +169,7 @@ impl Model {
             Self::Helios => "RS-Helios",
             Self::Helios16p => "RS-Helios-16P",
             Self::Ruby => "RS-Ruby",
+            Self::Airy => "RS-Airy",
         }
     }
 
@@ -116,6 +179,7 @@ impl Model {
             Self::Rs16 | Self::Helios16p => 16,
             Self::Rs32 | Self::Bpearl | Self::Helios => 32,
             Self::Ruby => 128,
+            Self::Airy => 96,
         }
     }
 
@@ -149,18 +213,27 @@ impl Model {
                 azimuth_at: 2,
                 channels: 128,
             },
+            // `RSAIRYMsopPkt`: the Helios's header, id, stamp and block flags; 8 blocks of 48
+            // channels, 22 tail bytes.
+            Self::Airy => Layout {
+                blocks: 8,
+                channels: 48,
+                ..Self::Helios.layout()
+            },
         }
     }
 
-    /// Whether `packet` reads as this model's MSOP packet (its id and first block's flag) of
+    /// Whether `packet` reads as this model's MSOP packet (its id and every block's flag) of
     /// another layout than `other`: another Robosense model's packet.
     pub(super) fn lays_out(self, packet: &[u8], other: Layout) -> bool {
         let l = self.layout();
         l != other
             && packet.starts_with(l.id)
-            && packet
-                .get(l.header..)
-                .is_some_and(|b| b.starts_with(l.block_id))
+            && (0..l.blocks).all(|k| {
+                packet
+                    .get(l.header + k * l.block_len()..)
+                    .is_some_and(|b| b.starts_with(l.block_id))
+            })
     }
 
     /// Metres per distance unit.
@@ -168,6 +241,15 @@ impl Model {
         match self {
             Self::Helios | Self::Helios16p => 0.0025,
             _ => 0.005,
+        }
+    }
+
+    /// The distance field's bits that are the distance (the RS-Airy's top two are a feature
+    /// flag, rs_driver's `& 0x3FFF`).
+    pub fn distance_mask(self) -> u16 {
+        match self {
+            Self::Airy => 0x3FFF,
+            _ => u16::MAX,
         }
     }
 
@@ -179,13 +261,15 @@ impl Model {
             Self::Bpearl => (0.1, 150.0),
             Self::Helios | Self::Helios16p => (0.1, 180.0),
             Self::Ruby => (0.4, 250.0),
+            Self::Airy => (0.1, 60.0),
         }
     }
 
-    /// The lens centre's offset from the sensor axis along the beam's azimuth (RX) and its
-    /// height (RZ), metres.
+    /// The lens centre's offset from the sensor axis along the beam's azimuth (RX; the
+    /// RS-Airy's `sqrt(RX^2 + RY^2)`, as rs_driver) and its height (RZ), metres.
     pub fn lens_m(self) -> (f64, f64) {
         match self {
+            Self::Airy => (libm::sqrt(0.0075 * 0.0075 + 0.00664 * 0.00664), 0.04532),
             Self::Rs16 => (0.03825, 0.0),
             Self::Rs32 => (0.03997, 0.0),
             Self::Bpearl => (0.01473, 0.09427),
@@ -201,6 +285,7 @@ impl Model {
             Self::Rs32 | Self::Bpearl => 55.52,
             Self::Helios | Self::Helios16p => 55.56,
             Self::Ruby => 55.55,
+            Self::Airy => 111.08,
         }
     }
 
@@ -210,9 +295,24 @@ impl Model {
         matches!(self, Self::Rs16 | Self::Helios16p)
     }
 
-    /// Channel `c`'s firing time after its block's first firing, microseconds. In dual-return
-    /// mode the 16-laser models' channel `c` is laser `c % 16`'s return of one sequence.
-    pub fn firing_us(self, c: usize, dual: bool) -> f64 {
+    /// Blocks one firing's lasers fill (the RS-Airy's 96 in two blocks of 48).
+    pub fn halves(self) -> usize {
+        match self {
+            Self::Airy => 2,
+            _ => 1,
+        }
+    }
+
+    /// Channel `c` of the `k`-th block of a firing's return, numbered over the firing's
+    /// blocks: the RS-Airy's odd blocks hold channels 48-95.
+    pub fn channel(self, k: usize, c: usize) -> usize {
+        (k % self.halves()) * self.layout().channels + c
+    }
+
+    /// Channel `c`'s (see [`Self::channel`]) firing time after its block's first firing,
+    /// microseconds. In dual-return mode the 16-laser models' channel `c` is laser `c % 16`'s
+    /// return of one sequence. `install` picks the RS-Airy's table; the others ignore it.
+    pub fn firing_us(self, c: usize, dual: bool, install: AiryInstall) -> f64 {
         let c = if self.two_sequences() && dual {
             c % 16
         } else {
@@ -224,6 +324,14 @@ impl Model {
             Self::Bpearl => BPEARL_FIRING.get(c).copied().unwrap_or(0.0),
             Self::Helios | Self::Helios16p => HELIOS_FIRING_US * c as f64,
             Self::Ruby => RUBY_FIRING_US * ((c % 64) / 4) as f64,
+            Self::Airy => {
+                let table = match install {
+                    AiryInstall::Normal => &AIRY_NORMAL,
+                    AiryInstall::Side => &AIRY_SIDE,
+                    AiryInstall::AiryM => &AIRY_M,
+                };
+                table.get(c / 8).copied().unwrap_or(0.0)
+            }
         }
     }
 
@@ -237,23 +345,24 @@ impl Model {
         }
     }
 
-    /// Blocks a firing holds (2 in dual-return mode, where a block holds each return, except
-    /// the 16-laser models whose block holds both).
+    /// Blocks a firing holds: its [`Self::halves`], twice in dual-return mode, where blocks
+    /// hold each return (the 16-laser models' block holds both).
     pub fn blocks_per_firing(self, dual: bool) -> usize {
         if dual && !self.two_sequences() {
-            2
+            2 * self.halves()
         } else {
-            1
+            self.halves()
         }
     }
 
-    /// Time from one MSOP packet to the next, microseconds.
+    /// Time from one MSOP packet to the next, microseconds (on average: the RS-Ruby's
+    /// dual-return packets hold one and a half firings).
     pub fn packet_us(self, dual: bool) -> f64 {
-        let firings = self.layout().blocks / self.blocks_per_firing(dual);
-        self.block_us(dual) * firings as f64
+        let firings = self.layout().blocks as f64 / self.blocks_per_firing(dual) as f64;
+        self.block_us(dual) * firings
     }
 
-    /// The laser a channel of a block is.
+    /// The laser a channel (see [`Self::channel`]) is.
     pub fn laser(self, c: usize) -> usize {
         c % self.lasers()
     }
@@ -274,6 +383,11 @@ impl Model {
                 horizontal: Some(852),
                 return_mode: 300,
             },
+            Self::Airy => Difop {
+                vertical: 468,
+                horizontal: Some(756),
+                return_mode: 300,
+            },
             _ => Difop {
                 vertical: 468,
                 horizontal: Some(564),
@@ -282,9 +396,11 @@ impl Model {
         }
     }
 
-    /// The DIFOP return-mode byte's meaning: `Some(true)` dual, `Some(false)` single.
+    /// The DIFOP return-mode byte's meaning: `Some(true)` dual, `Some(false)` single (the
+    /// RS-Airy says it in each MSOP packet instead, [`AIRY_RETURN_MODE`]: `None`).
     pub fn dual_mode(self, byte: u8) -> Option<bool> {
         match (self, byte) {
+            (Self::Airy, _) => None,
             // Ruby: 0x03 dual, 0x01 last, 0x02 strongest.
             (Self::Ruby, 0x03) => Some(true),
             (Self::Ruby, 0x01 | 0x02) => Some(false),

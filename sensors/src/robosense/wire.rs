@@ -3,18 +3,22 @@
 //!
 //! ```text
 //! MSOP   header (42 bytes; RS-Ruby 80) | blocks | tail
-//!          id 55 AA 05 0A 5A A5 50 A0 (RS-16, RS-32, Bpearl) or 55 AA 05 5A (Helios, Ruby)
+//!          id 55 AA 05 0A 5A A5 50 A0 (RS-16, RS-32, Bpearl) or 55 AA 05 5A (Helios, Ruby,
+//!          Airy)
 //!          timestamp at 20 (Ruby: 10), 10 bytes: YMD (RS-16, RS-32, Bpearl) or UTC s + us
+//!          Airy: data type at 16 (0: points), return mode at 17 (0x03 dual), channel mode
+//!          at 32 (0x02: 96)
 //!        block: flag FF EE (Ruby: FE, return id) | azimuth u16 (0.01 deg) |
 //!               channels x (distance u16 in the model's unit, intensity u8)
-//! DIFOP  id A5 FF 00 5A 11 11 55 55 | rpm u16 at 8 | return mode at 300 |
+//! DIFOP  id A5 FF 00 5A 11 11 55 55 | rpm u16 at 8 | Airy install mode at 289 |
+//!        return mode at 300 |
 //!        angles at 468: (sign u8, value u16 in 0.01 deg) a laser, vertical then horizontal
 //!        (RS-16: 16 vertical values of 3 bytes in 0.0001 deg at 1165, lasers 0-7 negative)
 //! ```
 //! (rs_driver `decoder.hpp` `RSMsopHeaderV1`/`V2`, `basic_attr.hpp`, and the per-model packet
 //! structs; the layout per model is [`super::Model::layout`].)
 
-use super::model::{Model, Stamp};
+use super::model::{Model, Stamp, AIRY_96, AIRY_CHANNEL_MODE, AIRY_DATA_TYPE, AIRY_RETURN_MODE};
 use crate::error::PacketError;
 use crate::time::days_from_civil_checked;
 
@@ -62,6 +66,8 @@ fn fixed(bytes: &[u8]) -> Result<&[u8; LEN], PacketError> {
 pub struct Msop<'a> {
     buf: &'a [u8; LEN],
     model: Model,
+    /// The model's [`Model::distance_mask`].
+    mask: u16,
 }
 
 impl<'a> Msop<'a> {
@@ -75,7 +81,11 @@ impl<'a> Msop<'a> {
         if !buf.starts_with(l.id) {
             return Err(PacketError::StartBytes);
         }
-        let p = Self { buf, model };
+        let p = Self {
+            buf,
+            model,
+            mask: model.distance_mask(),
+        };
         for k in 0..l.blocks {
             let at = l.header + k * l.block_len();
             if buf.get(at..).is_none_or(|b| !b.starts_with(l.block_id)) {
@@ -90,7 +100,20 @@ impl<'a> Msop<'a> {
             }
         }
         p.time_us().ok_or(PacketError::DateTime)?;
+        if model == Model::Airy {
+            if buf[AIRY_DATA_TYPE] != 0 {
+                return Err(PacketError::PacketType);
+            }
+            if buf[AIRY_CHANNEL_MODE] != AIRY_96 {
+                return Err(PacketError::Header);
+            }
+        }
         Ok(p)
+    }
+
+    /// The RS-Airy's return-mode byte: dual return (0x03) or not.
+    pub fn airy_dual(&self) -> bool {
+        self.buf[AIRY_RETURN_MODE] == 0x03
     }
 
     fn block_at(&self, k: usize) -> usize {
@@ -103,11 +126,12 @@ impl<'a> Msop<'a> {
         be16(self.buf, self.block_at(k) + self.model.layout().azimuth_at)
     }
 
-    /// Block `k`, channel `c`: raw distance and intensity.
+    /// Block `k`, channel `c`: raw distance (its distance bits, [`Model::distance_mask`]) and
+    /// intensity.
     pub fn channel(&self, k: usize, c: usize) -> (u16, u8) {
         let at = self.block_at(k) + self.model.layout().azimuth_at + 2 + 3 * c;
         (
-            be16(self.buf, at),
+            be16(self.buf, at) & self.mask,
             self.buf.get(at + 2).copied().unwrap_or(0),
         )
     }

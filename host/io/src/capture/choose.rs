@@ -231,8 +231,8 @@ pub fn decode_beside(
                 if s.seen.keys().any(|(_, len)| *len == robosense::wire::LEN) {
                     bail!(
                         "{}: {}-byte packets look like a spinning Robosense's, whose models \
-                         send alike: name it (--sensor rs16, rs32, bpearl, helios, helios16p \
-                         or ruby)",
+                         send alike: name it (--sensor rs16, rs32, bpearl, helios, helios16p, \
+                         ruby or airy)",
                         path.display(),
                         robosense::wire::LEN
                     );
@@ -391,6 +391,7 @@ fn robosense_model(kind: SensorKind) -> Option<robosense::Model> {
         SensorKind::Helios => robosense::Model::Helios,
         SensorKind::Helios16p => robosense::Model::Helios16p,
         SensorKind::Ruby => robosense::Model::Ruby,
+        SensorKind::Airy => robosense::Model::Airy,
         _ => return None,
     })
 }

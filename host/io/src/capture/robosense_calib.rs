@@ -38,7 +38,13 @@ pub fn parse_csv(text: &str, model: Model) -> Result<Calibration> {
             );
         }
     }
-    let c = Calibration { lasers, dual: None };
+    // An angle file does not say the RS-Airy's install mode: its firing table is rs_driver's
+    // default.
+    let c = Calibration {
+        lasers,
+        dual: None,
+        install: Default::default(),
+    };
     if c.lasers.len() != model.lasers() {
         bail!(
             "{} lasers, where a {} has {}",

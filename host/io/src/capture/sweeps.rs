@@ -503,9 +503,11 @@ impl PcapSweeps {
         if port != r.port {
             *r.other_ports.entry(port).or_insert(0) += 1;
             // Another sensor's data packets: of this one's length, or of a family whose
-            // packets name it (a second Livox unit sends to another port, in other lengths).
+            // packets name it (a second Livox unit sends to another port, in other lengths);
+            // not a Robosense unit's device packets (DIFOP), of its data packets' length.
             let data = |d: &Datagram| {
-                d.payload.len() == data_len || identify::family_of(&d.payload).is_some()
+                (d.payload.len() == data_len || identify::family_of(&d.payload).is_some())
+                    && !d.payload.starts_with(&robosense::wire::DIFOP_ID)
             };
             if matches!(&record, Record::Datagram(d) if data(d)) {
                 *r.data_elsewhere.entry(port).or_insert(0) += 1;

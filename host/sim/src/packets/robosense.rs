@@ -1,10 +1,12 @@
 //! The Robosense spinning models as the simulator fires them (RS-LiDAR-16, RS-LiDAR-32,
-//! RS-Bpearl, RS-Helios, RS-Helios-16P, RS-Ruby): MSOP packets of the model's blocks (port
-//! 6699) and a DIFOP packet with the unit's angles (port 7788).
+//! RS-Bpearl, RS-Helios, RS-Helios-16P, RS-Ruby, RS-Airy): MSOP packets of the model's blocks
+//! (port 6699) and a DIFOP packet with the unit's angles (port 7788; the Airy's mounted
+//! normally).
 //!
 //! Laser `i` looks [`vertical_deg`] up and [`horizontal_deg`] along the rotation from its
 //! block's azimuth (angles in whole hundredths of a degree, as the DIFOP packet writes them).
-//! Blocks and channels fire at the model's times (rs_driver's, `Model::firing_us`); the
+//! Firings (the Airy's two blocks each) and channels fire at the model's times (rs_driver's,
+//! `Model::firing_us`); the
 //! packet stamps its first firing in whole microseconds (a UTC count, or the RS-16, RS-32 and
 //! Bpearl's calendar date). Each laser is cast from the lens centre (off the axis, turning
 //! with the rotor) along the azimuth the decoders interpolate from the packet's quantised
@@ -15,7 +17,12 @@
 //! simulator's sweeps.
 
 use super::{Firing, Packet, PacketSim, Truth};
-use kiss_odom_sensors::robosense::{wire, Model, Stamp};
+use kiss_odom_sensors::robosense::{
+    wire, AiryInstall, Model, Stamp, AIRY_96, AIRY_CHANNEL_MODE, AIRY_INSTALL, AIRY_RETURN_MODE,
+};
+
+/// How the simulated Airy is mounted (its DIFOP packet says so).
+const INSTALL: AiryInstall = AiryInstall::Normal;
 use nalgebra::Vector3;
 
 /// The return-mode byte of the DIFOP packet for single strongest return.
@@ -35,6 +42,8 @@ pub fn vertical_deg(model: Model, i: usize) -> f64 {
         Model::Rs32 | Model::Ruby => (-25.0, 15.0),
         Model::Bpearl => (0.0, 89.0),
         Model::Helios => (-55.0, 15.0),
+        // 90 degrees (the Airy's field), tilted to see the ground.
+        Model::Airy => (-45.0, 45.0),
     };
     let n = (model.lasers() - 1) as f64;
     libm::round((low + (high - low) * i as f64 / n) * 100.0) / 100.0
@@ -63,6 +72,9 @@ pub fn difop(model: Model, rate_hz: f64) -> Vec<u8> {
     b[wire::DIFOP_RPM..wire::DIFOP_RPM + 2].copy_from_slice(&rpm.to_be_bytes());
     let at = model.difop();
     b[at.return_mode] = strongest(model);
+    if model == Model::Airy {
+        b[AIRY_INSTALL] = INSTALL.byte();
+    }
     let entry = |b: &mut [u8], at: usize, deg: f64| {
         let v = libm::round(deg * 100.0) as i32;
         b[at] = u8::from(v < 0);
@@ -128,9 +140,14 @@ fn civil_from_days(z: i64) -> (i64, u8, u8) {
 
 /// The latest firing of a block after its first, us.
 fn last_firing_us(model: Model) -> f64 {
-    (0..model.layout().channels)
-        .map(|c| model.firing_us(c, false))
+    (0..model.halves() * model.layout().channels)
+        .map(|c| model.firing_us(c, false, INSTALL))
         .fold(0.0, f64::max)
+}
+
+/// Firings a packet holds.
+fn firings(model: Model) -> usize {
+    model.layout().blocks / model.blocks_per_firing(false)
 }
 
 impl PacketSim<'_> {
@@ -147,14 +164,14 @@ impl PacketSim<'_> {
     /// Trajectory time of packet `p`'s last firing.
     pub(super) fn robosense_last_offset(&self, p: u64) -> f64 {
         let model = self.robosense_model();
-        let blocks = model.layout().blocks;
+        let f = firings(model);
         self.robosense_stamp(p)
-            + ((blocks - 1) as f64 * model.block_us(false) + last_firing_us(model)) * 1e-6
+            + ((f - 1) as f64 * model.block_us(false) + last_firing_us(model)) * 1e-6
     }
 
     /// Rotor azimuth at trajectory time `t`, hundredths of a degree (unwrapped).
     fn robosense_rotor(&self, t: f64) -> f64 {
-        let blocks = self.robosense_model().layout().blocks as f64;
+        let blocks = firings(self.robosense_model()) as f64;
         let block = 36000.0 / (self.per_sweep as f64 * blocks);
         1.5 * block + 36000.0 * t * self.sim.params().sensor.rate_hz
     }
@@ -167,14 +184,19 @@ impl PacketSim<'_> {
         let unit = model.distance_resolution_m();
         let (min, max) = model.range_m();
         let t0 = self.robosense_stamp(p);
-        let az: Vec<u16> = (0..l.blocks)
-            .map(|k| {
-                let a = libm::round(self.robosense_rotor(t0 + k as f64 * block_us * 1e-6));
+        let per = model.blocks_per_firing(false);
+        let az: Vec<u16> = (0..firings(model))
+            .map(|f| {
+                let a = libm::round(self.robosense_rotor(t0 + f as f64 * block_us * 1e-6));
                 (a as i64).rem_euclid(36000) as u16
             })
             .collect();
         let mut buf = vec![0u8; wire::LEN];
         buf[..l.id.len()].copy_from_slice(l.id);
+        if model == Model::Airy {
+            buf[AIRY_CHANNEL_MODE] = AIRY_96;
+            buf[AIRY_RETURN_MODE] = 0x01;
+        }
         let start_us = libm::round(self.sim.params().start_time * 1e6) as i64;
         let unix_us =
             super::xt32::CLOCK_ORIGIN_S * 1_000_000 + start_us + libm::round(t0 * 1e6) as i64;
@@ -183,18 +205,20 @@ impl PacketSim<'_> {
         let mut truth = Vec::new();
         let mut gap = 0.0;
         for k in 0..l.blocks {
+            let f = k / per;
             let b = l.header + k * l.block_len();
             buf[b..b + l.block_id.len()].copy_from_slice(l.block_id);
-            buf[b + l.azimuth_at..b + l.azimuth_at + 2].copy_from_slice(&az[k].to_be_bytes());
-            if let Some(next) = az.get(k + 1) {
-                gap = f64::from((i32::from(*next) - i32::from(az[k])).rem_euclid(36000));
+            buf[b + l.azimuth_at..b + l.azimuth_at + 2].copy_from_slice(&az[f].to_be_bytes());
+            if let Some(next) = az.get(f + 1) {
+                gap = f64::from((i32::from(*next) - i32::from(az[f])).rem_euclid(36000));
             }
             for c in 0..l.channels {
-                let fire = model.firing_us(c, false);
-                let laser = model.laser(c);
-                let offset = t0 + (k as f64 * block_us + fire) * 1e-6;
+                let ch = model.channel(k, c);
+                let fire = model.firing_us(ch, false, INSTALL);
+                let laser = model.laser(ch);
+                let offset = t0 + (f as f64 * block_us + fire) * 1e-6;
                 // The decoders' azimuth, and the ray from the lens centre.
-                let a = f64::from(az[k]) + gap * fire / block_us;
+                let a = f64::from(az[f]) + gap * fire / block_us;
                 let rotor = (a * 0.01).to_radians();
                 let theta = rotor + horizontal_deg(model, laser).to_radians();
                 let v = vertical_deg(model, laser).to_radians();
@@ -266,7 +290,8 @@ mod tests {
         let difop = difop(model, rate);
         let calibration =
             Calibration::from_difop(model, &Difop::new_checked(&difop).unwrap()).unwrap();
-        assert_eq!(calibration.dual, Some(false));
+        // The Airy says its return mode in each MSOP packet instead.
+        assert_eq!(calibration.dual, (model != Model::Airy).then_some(false));
         let mut dec = Decoder::new(Config {
             model,
             calibration: Some(calibration),

@@ -61,6 +61,7 @@ impl Driver {
             | PacketSensor::Bpearl
             | PacketSensor::Helios16p
             | PacketSensor::Ruby
+            | PacketSensor::Airy
             | PacketSensor::M1
             | PacketSensor::E1r => return None,
         })
