@@ -420,3 +420,14 @@ fn the_airys_dual_return_packets_give_two_returns_a_firing_and_its_feature_bits_
         assert!((rho - (10.0 * v.cos() + rx)).abs() < 1e-3, "{p:?}");
     }
 }
+
+#[test]
+fn only_the_models_of_a_layout_of_their_own_are_told_by_their_packets() {
+    for model in Model::ALL {
+        let p = msop(model, (10, 0), 1000, model.halves());
+        let unique = matches!(model, Model::Ruby | Model::Airy);
+        assert_eq!(wire::model_of(&p), unique.then_some(model), "{model:?}");
+        assert_eq!(wire::model_of(&p[..1200]), None);
+    }
+    assert_eq!(wire::model_of(&difop(Model::Airy, 0)), None);
+}

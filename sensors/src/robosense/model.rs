@@ -223,12 +223,17 @@ impl Model {
         }
     }
 
-    /// Whether `packet` reads as this model's MSOP packet (its id and every block's flag) of
-    /// another layout than `other`: another Robosense model's packet.
+    /// Whether `packet` reads as this model's MSOP packet of another layout than `other`:
+    /// another Robosense model's packet.
     pub(super) fn lays_out(self, packet: &[u8], other: Layout) -> bool {
+        self.layout() != other && self.writes(packet)
+    }
+
+    /// Whether `packet` has this model's MSOP id and every block's flag where its layout puts
+    /// them.
+    pub(super) fn writes(self, packet: &[u8]) -> bool {
         let l = self.layout();
-        l != other
-            && packet.starts_with(l.id)
+        packet.starts_with(l.id)
             && (0..l.blocks).all(|k| {
                 packet
                     .get(l.header + k * l.block_len()..)

@@ -53,6 +53,20 @@ pub(super) fn utc_us(t: &[u8]) -> Option<u64> {
     t.checked_mul(1000).map(|_| t)
 }
 
+/// The model whose MSOP packet `bytes` is, when no other model writes that layout (the
+/// RS-Ruby's and the RS-Airy's); `None` for the others (the RS-16, RS-32 and Bpearl send
+/// alike, as do the Helios and Helios-16P) and for anything else.
+pub fn model_of(bytes: &[u8]) -> Option<Model> {
+    if bytes.len() != LEN {
+        return None;
+    }
+    let mut writers = Model::ALL.iter().filter(|m| m.writes(bytes));
+    match (writers.next(), writers.next()) {
+        (Some(&m), None) => Some(m),
+        _ => None,
+    }
+}
+
 fn fixed(bytes: &[u8]) -> Result<&[u8; LEN], PacketError> {
     match bytes.try_into() {
         Ok(b) => Ok(b),

@@ -30,6 +30,9 @@ pub struct Survey {
     hesai: BTreeMap<&'static str, (hesai::Model, u64)>,
     /// Robosense RS-M1 or E1R packets (by their length and first bytes), on any port.
     solid: BTreeMap<&'static str, (robosense::solid::Model, u64)>,
+    /// Spinning Robosense packets of a layout only one model writes (the RS-Ruby's, the
+    /// RS-Airy's; [`robosense::wire::model_of`]), on any port.
+    robosense: BTreeMap<&'static str, (robosense::Model, u64)>,
     damaged: BTreeSet<u16>,
     notes: Vec<String>,
     records: usize,
@@ -49,6 +52,9 @@ impl Survey {
                 }
                 if let Some(model) = robosense::solid::Model::of(&d.payload) {
                     self.solid.entry(model.name()).or_insert((model, 0)).1 += 1;
+                }
+                if let Some(model) = robosense::wire::model_of(&d.payload) {
+                    self.robosense.entry(model.name()).or_insert((model, 0)).1 += 1;
                 }
             }
             Record::Damaged { port, .. } => {
@@ -220,6 +226,14 @@ pub fn decode_beside(
             if let (true, None, Some(model)) = (auto, hesai, solid) {
                 return solid_decoder(path, capture, opts, model);
             }
+            let spinning = s
+                .robosense
+                .values()
+                .max_by_key(|(_, n)| *n)
+                .map(|(m, _)| *m);
+            if let (true, None, Some(model)) = (auto, hesai, spinning) {
+                return robosense_decoder(path, capture, opts, (model, device));
+            }
             if !data && hesai.is_none() {
                 if s.seen.keys().any(|(p, _)| *p == OUSTER_PORT) {
                     bail!(
@@ -231,15 +245,16 @@ pub fn decode_beside(
                 if s.seen.keys().any(|(_, len)| *len == robosense::wire::LEN) {
                     bail!(
                         "{}: {}-byte packets look like a spinning Robosense's, whose models \
-                         send alike: name it (--sensor rs16, rs32, bpearl, helios, helios16p, \
-                         ruby or airy)",
+                         send alike: name it (--sensor rs16, rs32, bpearl, helios or \
+                         helios16p; the Ruby and Airy are found by their packets)",
                         path.display(),
                         robosense::wire::LEN
                     );
                 }
                 bail!(
                     "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368), Livox (ports \
-                     56001, 56301) or Robosense RS-M1 or E1R (55 AA 5A A5) data packets; {}",
+                     56001, 56301) or Robosense RS-M1, E1R (55 AA 5A A5), Ruby or Airy data \
+                     packets; {}",
                     path.display(),
                     describe(&s)
                 );
