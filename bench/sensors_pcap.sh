@@ -4,7 +4,7 @@
 # `kiss-odom run` on generated sensor recordings (packets) against the same run on the
 # simulator's direct point output (the exact points the packets were made from), deskew on and
 # off. VLP-16 and OS1-64 (and, with SPECS, the Mid-360, XT32, Avia, QT128, OT128, XT16, XT32M,
-# Pandar40P, Pandar64, QT64, AT128, Helios, HDL-64E S3, VLS-128, RS-M1 and E1R), urban and fast,
+# Pandar40P, Pandar64, QT64, AT128, Helios, Airy, HDL-64E S3, VLS-128, RS-M1 and E1R), urban and fast,
 # 500 sweeps each, seeds 1-3. Prints a markdown table of KITTI relative translation error and ATE against
 # the simulator's ground truth, per drive and the mean over the seeds (a single drive's error is a random walk that the packets' range
 # quantisation, 1-2 mm, already perturbs: compare means).
