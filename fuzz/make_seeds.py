@@ -380,6 +380,36 @@ def robosense_helios():
     return out
 
 
+def robosense_airy():
+    """An RS-Airy DIFOP packet (96 lasers, mounted normally), then two MSOP packets of eight
+    blocks of 48 channels (96-channel mode, single return)."""
+    difop = bytearray(1248)
+    difop[:8] = bytes([0xA5, 0xFF, 0x00, 0x5A, 0x11, 0x11, 0x55, 0x55])
+    difop[8:10] = (600).to_bytes(2, "big")
+    difop[289] = 0
+    for i in range(96):
+        v = round((-45 + 90 * i / 95) * 100)
+        difop[468 + 3 * i] = int(v < 0)
+        difop[469 + 3 * i : 471 + 3 * i] = abs(v).to_bytes(2, "big")
+    out = b"\0\0" + bytes(difop)
+    for n in range(2):
+        msop = bytearray(1248)
+        msop[:4] = bytes([0x55, 0xAA, 0x05, 0x5A])
+        msop[17] = 0x01
+        msop[20:26] = (1_704_067_200).to_bytes(6, "big")
+        msop[26:30] = (n * 444).to_bytes(4, "big")
+        msop[32] = 0x02
+        for k in range(8):
+            at = 42 + 148 * k
+            msop[at : at + 2] = b"\xff\xee"
+            msop[at + 2 : at + 4] = ((n * 4 + k // 2) * 40).to_bytes(2, "big")
+            for c in range(48):
+                msop[at + 4 + 3 * c : at + 6 + 3 * c] = (2000 + 37 * c).to_bytes(2, "big")
+                msop[at + 6 + 3 * c] = 100
+        out += b"\0\0" + bytes(msop)
+    return out
+
+
 def sensor_seeds():
     data = ROOT.parent / "shared" / "data" / "sensors" / "velodyne"
     packets = udp_payloads(data / "velodyne_vlp16.pcap", 2368)[:3]
@@ -398,6 +428,7 @@ def sensor_seeds():
            for p in vls]
     put("velodyne_wide_packets", "hdl64e-3-packets", bytes([1, 3]) + b"".join(b"\0\0" + p for p in hdl))
     put("robosense_packets", "helios-difop-msop", bytes([3]) + robosense_helios())
+    put("robosense_packets", "airy-difop-msop", bytes([6]) + robosense_airy())
     m1 = bytearray(1210)
     m1[:4] = bytes([0x55, 0xAA, 0x5A, 0xA5])
     m1[4:6] = (1).to_bytes(2, "big")

@@ -83,6 +83,23 @@ fn msop(model: Model, (s, us): (u64, u32), az: u16, per: usize) -> Vec<u8> {
     b
 }
 
+/// Block `k` of an MSOP packet of `model` with every channel at `metres`.
+fn set_range(p: &mut [u8], model: Model, k: usize, metres: f64) {
+    let l = model.layout();
+    let raw = (metres / model.distance_resolution_m()) as u16;
+    for c in 0..l.channels {
+        let at = l.header + k * l.block_len() + l.azimuth_at + 2 + 3 * c;
+        p[at..at + 2].copy_from_slice(&raw.to_be_bytes());
+    }
+}
+
+/// A point's horizontal distance from the sensor axis less the lens centre's offset: its
+/// range times the cosine of its laser's elevation.
+fn reach(model: Model, p: &[f64; 3], ring: u16) -> f64 {
+    let v = (f64::from(elevation(model, usize::from(ring))) * 0.01).to_radians();
+    (p[0].hypot(p[1]) - model.lens_m().0) / v.cos()
+}
+
 fn decoder(model: Model) -> Decoder {
     Decoder::new(Config {
         model,
@@ -186,11 +203,24 @@ fn dual_return_pairs_give_strongest_and_second() {
     let mut dec = decoder(Model::Rs32);
     let mut log = Log::default();
     let _ = feed(&mut dec, &difop(Model::Rs32, 0x00), &mut log);
-    feed(&mut dec, &msop(Model::Rs32, (10, 0), 1000, 2), &mut log).unwrap();
+    // Each firing's first block (its first return) at 10 m, its second at 20 m.
+    let mut p = msop(Model::Rs32, (10, 0), 1000, 2);
+    for k in (1..12).step_by(2) {
+        set_range(&mut p, Model::Rs32, k, 20.0);
+    }
+    feed(&mut dec, &p, &mut log).unwrap();
     dec.finish(&mut log);
+    assert_eq!(log.points.len(), 12 * 32);
+    for (_, p, _, m) in &log.points {
+        let want = if m.ret == Return::Strongest {
+            10.0
+        } else {
+            20.0
+        };
+        assert!((reach(Model::Rs32, p, m.ring) - want).abs() < 1e-6, "{m:?}");
+    }
     let strongest = log.points.iter().filter(|p| p.3.ret == Return::Strongest);
     assert_eq!(strongest.count(), 6 * 32);
-    assert_eq!(log.points.len(), 12 * 32);
 }
 
 /// A dual-return RS-Ruby packet of firings at `first` and `first + 20` (0.01 degree): AAB
@@ -400,9 +430,13 @@ fn the_airys_dual_return_packets_give_two_returns_a_firing_and_its_feature_bits_
     let mut dec = decoder(model);
     let mut log = Log::default();
     let _ = feed(&mut dec, &difop(model, 0), &mut log);
-    // Two firings of four blocks; every distance with its two feature bits set.
+    // Two firings of four blocks: the first return's two (lasers 0-47, 48-95) at 10 m, the
+    // second's at 20 m; every distance with its two feature bits set.
     let mut p = msop(model, (10, 0), 1000, 4);
     let l = model.layout();
+    for k in [2, 3, 6, 7] {
+        set_range(&mut p, model, k, 20.0);
+    }
     for k in 0..l.blocks {
         for c in 0..l.channels {
             p[l.header + k * l.block_len() + l.azimuth_at + 2 + 3 * c] |= 0xC0;
@@ -413,11 +447,33 @@ fn the_airys_dual_return_packets_give_two_returns_a_firing_and_its_feature_bits_
     assert_eq!(log.points.len(), 8 * 48);
     let second = log.points.iter().filter(|p| p.3.ret == Return::Second);
     assert_eq!(second.count(), 2 * 96);
-    let (rx, _) = model.lens_m();
+    // rs_driver's lens centre: RX 0.0075, RY 0.00664 (their hypotenuse along the rotor's
+    // azimuth), RZ 0.04532 m.
+    let (rxy, rz) = (0.0075f64.hypot(0.00664), 0.04532);
     for (_, p, _, m) in &log.points {
+        let d = if m.ret == Return::Strongest {
+            10.0
+        } else {
+            20.0
+        };
         let v = (f64::from(elevation(model, usize::from(m.ring))) * 0.01).to_radians();
-        let rho = p[0].hypot(p[1]);
-        assert!((rho - (10.0 * v.cos() + rx)).abs() < 1e-3, "{p:?}");
+        assert!(
+            (p[0].hypot(p[1]) - (d * v.cos() + rxy)).abs() < 1e-9,
+            "{p:?} {m:?}"
+        );
+        assert!((p[2] - (d * v.sin() + rz)).abs() < 1e-9, "{p:?} {m:?}");
+    }
+}
+
+#[test]
+fn models_have_names_of_their_own_and_the_airy_install_modes_read_back() {
+    let mut names: Vec<_> = Model::ALL.iter().map(|m| m.name()).collect();
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), Model::ALL.len());
+    assert!(names.iter().all(|n| n.starts_with("RS-")), "{names:?}");
+    for install in [AiryInstall::Normal, AiryInstall::Side, AiryInstall::AiryM] {
+        assert_eq!(AiryInstall::from_byte(install.byte()), install);
     }
 }
 
@@ -430,4 +486,74 @@ fn only_the_models_of_a_layout_of_their_own_are_told_by_their_packets() {
         assert_eq!(wire::model_of(&p[..1200]), None);
     }
     assert_eq!(wire::model_of(&difop(Model::Airy, 0)), None);
+}
+
+#[test]
+fn each_return_is_timed_and_turned_by_its_firing_as_rs_driver() {
+    // Two RS-Airy packets 444 us apart, firings every 0.2 degree from 10 degrees: a return
+    // of laser `r` in the sweep's `j`-th firing is at time `j`'s packet + its firing in the
+    // packet x 111.08 us + the normal table's time of its group of eight, and at the firing's
+    // azimuth plus the rotation to the next firing in proportion (the last firing: the step
+    // before).
+    const NORMAL_US: [f64; 12] = [
+        0.0, 5.712, 12.376, 19.040, 25.704, 33.320, 41.888, 50.456, 59.024, 70.448, 81.872, 93.296,
+    ];
+    let model = Model::Airy;
+    let mut dec = decoder(model);
+    let mut log = Log::default();
+    let _ = feed(&mut dec, &with(&difop(model, 0), AIRY_INSTALL, 0), &mut log);
+    for n in 0..2u16 {
+        let p = msop(model, (10, 444 * u32::from(n)), 1000 + 80 * n, 2);
+        feed(&mut dec, &p, &mut log).unwrap();
+    }
+    dec.finish(&mut log);
+    assert_eq!(log.points.len(), 2 * 8 * 48);
+    let (rx, _) = model.lens_m();
+    let mut worst: (f64, f64) = (0.0, 0.0);
+    for (_, p, t, m) in &log.points {
+        let (j, fire) = (usize::from(m.column), NORMAL_US[usize::from(m.ring) / 8]);
+        let want_t = ((j / 4) as f64 * 444.0 + (j % 4) as f64 * 111.08 + fire) * 1e-6;
+        let want_az = 1000.0 + 20.0 * j as f64 + 20.0 * fire / 111.08;
+        // No horizontal offsets: the beam and the lens centre turn with the rotor.
+        let v = (f64::from(elevation(model, usize::from(m.ring))) * 0.01).to_radians();
+        let rho = 10.0 * v.cos() + rx;
+        let az = (-p[1]).atan2(p[0]).to_degrees().rem_euclid(360.0) * 100.0;
+        assert!((p[0].hypot(p[1]) - rho).abs() < 1e-9);
+        worst.0 = worst.0.max((t - want_t).abs());
+        worst.1 = worst.1.max((az - want_az).abs());
+    }
+    println!(
+        "worst |dt| {:.1e} s, |d azimuth| {:.1e} (0.01 deg)",
+        worst.0, worst.1
+    );
+    assert!(worst.0 < 1e-12 && worst.1 < 1e-9, "{worst:?}");
+}
+
+#[test]
+fn without_a_difop_mode_dual_return_is_told_by_repeated_azimuths() {
+    // Angles from a file say no return mode: a Helios packet whose firings repeat their
+    // azimuth over two blocks is dual return, one that does not is single; an RS-16's
+    // repeated azimuths are its two sequences of one block each, single return.
+    for (model, per, seconds) in [
+        (Model::Helios, 2, 6 * 32),
+        (Model::Helios, 1, 0),
+        (Model::Rs16, 2, 0),
+    ] {
+        let d = difop(model, 0x04);
+        let angles = Calibration::from_difop(model, &wire::Difop::new_checked(&d).unwrap());
+        let mut dec = Decoder::new(Config {
+            model,
+            calibration: Some(Calibration {
+                dual: None,
+                ..angles.unwrap()
+            }),
+            cut_angle_deg: None,
+        })
+        .unwrap();
+        let mut log = Log::default();
+        feed(&mut dec, &msop(model, (10, 0), 1000, per), &mut log).unwrap();
+        dec.finish(&mut log);
+        let second = log.points.iter().filter(|p| p.3.ret == Return::Second);
+        assert_eq!(second.count(), seconds, "{model:?} {per}");
+    }
 }
