@@ -1,7 +1,7 @@
 //! KISS-ICP LiDAR odometry (Vizzo et al., RA-L 2023) for targets without an allocator.
 //!
 //! The crate is `#![no_std]`, links no `alloc` (unless the host opts into the `alloc` feature
-//! for [`Odometry::boxed`]), and never grows: every buffer lives in one run of `u64` words whose
+//! for `Odometry::boxed`), and never grows: every buffer lives in one run of `u64` words whose
 //! length a `const fn` computes from [`Capacities`] ([`Capacities::arena_words`]). The words can
 //! be borrowed (`&mut [u64]`), owned in place ([`Words`], const-constructible, so a `static` can
 //! hold them) or boxed on a host; see [`storage`].

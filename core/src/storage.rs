@@ -8,7 +8,7 @@
 //! - borrowed: `&mut [u64]` (a stack array, a slice of a `static`);
 //! - owned, fixed size: [`Words<N>`], const-constructible, so firmware can keep it in a `static`
 //!   (for example `static_cell::ConstStaticCell<Words<N>>`, then `take()` it once);
-//! - owned, boxed: `Box<[u64]>` or `Vec<u64>` on a host, with [`crate::Odometry::boxed`] behind
+//! - owned, boxed: `Box<[u64]>` or `Vec<u64>` on a host, with `Odometry::boxed` behind
 //!   the `alloc` feature, which a bare-metal build never enables.
 //!
 //! The words are `u64` so that every region starts 8-byte aligned; regions are viewed as typed

@@ -19,8 +19,9 @@ use std::path::PathBuf;
 pub struct Prior {
     localizer: MapLocalizer,
     initial: Isometry3<f64>,
-    /// The last frame's pose in the map frame (`None` before the first frame).
-    pose: Option<Isometry3<f64>>,
+    /// Whether a frame was localized since the map was opened or reset (before, the
+    /// localizer's pose is the initial one, which no frame has answered).
+    located: bool,
 }
 
 /// The start in the map frame: a 4x4 rigid transform, or `run --initial-pose`'s text
@@ -46,21 +47,21 @@ impl Prior {
         Ok(Self {
             localizer: MapLocalizer::for_driver(&path, settings, driver, initial)?,
             initial,
-            pose: None,
+            located: false,
         })
     }
 
     /// Starts again at the initial pose, as a new localizer does.
     pub fn reset(&mut self) {
         self.localizer.reseed(self.initial);
-        self.pose = None;
+        self.located = false;
     }
 
     /// Localizes the frame `outcome` answered (no Python object is touched: it runs with the
     /// GIL released).
     pub fn locate(&mut self, driver: &Driver, outcome: &Outcome) -> Located<f64> {
         let located = self.localizer.locate(driver, outcome);
-        self.pose = Some(located.pose);
+        self.located = true;
         located
     }
 
@@ -80,8 +81,9 @@ impl Prior {
         Ok(())
     }
 
-    /// The last frame's pose in the map frame.
+    /// The last frame's pose in the map frame (`None` before the first frame since the map
+    /// was opened or reset).
     pub fn pose(&self) -> Option<&Isometry3<f64>> {
-        self.pose.as_ref()
+        self.located.then(|| self.localizer.pose())
     }
 }

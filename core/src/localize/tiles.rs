@@ -79,22 +79,28 @@ impl<'m> Held<'m> {
         if !missing {
             return None;
         }
-        let before = *self;
-        self.len = 0;
+        // Each tile in the file with its index entry, looked up once; the keys are distinct,
+        // so sorting them is deterministic.
+        let mut found = [(TileKey { i: 0, j: 0 }, 0usize); MAX_TILES_HELD];
+        let mut n = 0;
         for_each_touched(x, y, reach + 0.5 * s, s, |key| {
-            if file.find(key).is_some() && self.len < MAX_TILES_HELD {
-                self.keys[self.len] = key;
-                self.len += 1;
+            if n < MAX_TILES_HELD {
+                if let Some(t) = file.find(key) {
+                    found[n] = (key, t);
+                    n += 1;
+                }
             }
         });
-        self.keys[..self.len].sort_unstable();
+        let found = &mut found[..n];
+        found.sort_unstable_by_key(|&(key, _)| key);
+        let before = *self;
         let mut loaded = Loaded::default();
-        for k in 0..self.len {
-            let key = self.keys[k];
+        for (k, &(key, t)) in found.iter().enumerate() {
+            self.keys[k] = key;
             self.tiles[k] = match before.position(key) {
                 Some(b) => before.tiles[b],
                 None => {
-                    let tile = file.find(key).and_then(|t| file.tile(t).ok());
+                    let tile = file.tile(t).ok();
                     match tile {
                         Some(_) => loaded.tiles += 1,
                         None => loaded.damaged += 1,
@@ -103,6 +109,7 @@ impl<'m> Held<'m> {
                 }
             };
         }
+        self.len = n;
         Some(loaded)
     }
 

@@ -423,7 +423,13 @@ impl Driver {
     /// The last registered frame's registration cloud (sensor frame, deskewed): what
     /// kiss-icp's `register_frame` returns as `source`.
     pub fn source_cloud(&self) -> Vec<[f64; 3]> {
-        self.engine.source()
+        let mut out = Vec::new();
+        self.engine.source_into(&mut out);
+        out
+    }
+    /// [`Self::source_cloud`] into `out`, whose memory is reused.
+    pub fn source_cloud_into(&self, out: &mut Vec<[f64; 3]>) {
+        self.engine.source_into(out);
     }
     /// The last registered frame's merge cloud (sensor frame, deskewed).
     pub fn merge_cloud(&self) -> Vec<[f64; 3]> {

@@ -119,8 +119,8 @@ pub(crate) trait Engine: Send + Sync {
     fn state_bytes_for(&self, caps: &Capacities) -> usize;
     /// Bytes of one stored map point.
     fn map_point_bytes(&self) -> usize;
-    /// The last frame's registration cloud (sensor frame).
-    fn source(&self) -> Vec<[f64; 3]>;
+    /// The last frame's registration cloud (sensor frame), into `out`.
+    fn source_into(&self, out: &mut Vec<[f64; 3]>);
     /// The last frame's merge cloud (sensor frame).
     fn merge_cloud(&self) -> Vec<[f64; 3]>;
     /// The local map's points (world frame).
@@ -438,8 +438,14 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
     fn map_point_bytes(&self) -> usize {
         core::mem::size_of::<P::Stored>()
     }
-    fn source(&self) -> Vec<[f64; 3]> {
-        wide(self.odom.source())
+    fn source_into(&self, out: &mut Vec<[f64; 3]>) {
+        out.clear();
+        out.extend(
+            self.odom
+                .source()
+                .iter()
+                .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
+        );
     }
     fn merge_cloud(&self) -> Vec<[f64; 3]> {
         wide(self.odom.merge_cloud())

@@ -33,6 +33,8 @@ fn keep(bytes: Vec<u8>) -> &'static [u8] {
 /// The core's localizer over a map file the process keeps for its lifetime.
 pub struct MapLocalizer {
     loc: Localizer<'static, f64, Box<[u64]>>,
+    /// The frame's registration cloud, its memory kept from frame to frame.
+    source: Vec<[f64; 3]>,
     /// Damaged tiles found so far (each load that met one counts it).
     pub damaged_tiles: u32,
     /// Whether the damaged tiles were warned about.
@@ -82,6 +84,7 @@ impl MapLocalizer {
         })?;
         Ok(Self {
             loc,
+            source: Vec::new(),
             damaged_tiles: 0,
             damaged_said: false,
         })
@@ -109,17 +112,26 @@ impl MapLocalizer {
     /// Localizes the frame `outcome` answered: a registered frame by its registration cloud,
     /// any other by the odometry's motion alone.
     pub fn locate(&mut self, driver: &Driver, outcome: &Outcome) -> Located<f64> {
-        let source = match outcome.step {
-            Step::Registered(_) => driver.source_cloud(),
-            _ => Vec::new(),
-        };
-        let located = self
-            .loc
-            .locate(&Sequential, &source, &driver.last_delta(), outcome.sigma);
+        match outcome.step {
+            Step::Registered(_) => driver.source_cloud_into(&mut self.source),
+            _ => self.source.clear(),
+        }
+        let located = self.loc.locate(
+            &Sequential,
+            &self.source,
+            &driver.last_delta(),
+            outcome.sigma,
+        );
         if let Some(l) = located.loaded {
             self.damaged_tiles += l.damaged;
         }
         located
+    }
+
+    /// The sensor's pose in the map frame: the last frame's, or the start's before the first
+    /// frame and after [`Self::reseed`].
+    pub fn pose(&self) -> &Isometry3<f64> {
+        self.loc.pose()
     }
 
     /// A warning, once, when a damaged tile was skipped.

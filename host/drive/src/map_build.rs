@@ -188,12 +188,20 @@ impl MapBuilder {
             "the map is empty: no point of the input was kept"
         );
         let (v, s) = (self.params.voxel_size, self.params.tile_size);
+        let mut header = Header {
+            voxel_size: v,
+            tile_size: s,
+            points_per_voxel: self.params.points_per_voxel,
+            tile_points: 0,
+            tiles: 0,
+            frame: self.frame,
+        };
+        let r = header.voxels_per_tile();
         let mut tiles: BTreeMap<TileKey, Vec<[f64; 3]>> = BTreeMap::new();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         self.map.view().for_each_point(|_, p| {
             // The tile of the point's voxel, so that each voxel lies in one tile.
             let k = point_to_voxel(&p, v);
-            let r = (s / v).round() as i32;
             let key = TileKey {
                 i: k[0].div_euclid(r),
                 j: k[1].div_euclid(r),
@@ -209,14 +217,7 @@ impl MapBuilder {
             "{} tiles, more than a file's {MAX_TILES}: use larger tiles",
             tiles.len()
         );
-        let mut header = Header {
-            voxel_size: v,
-            tile_size: s,
-            points_per_voxel: self.params.points_per_voxel,
-            tile_points: 0,
-            tiles: tiles.len() as u32,
-            frame: self.frame,
-        };
+        header.tiles = tiles.len() as u32;
         let offsets: Vec<(TileKey, Vec<[f32; 3]>)> = tiles
             .into_iter()
             .map(|(key, pts)| {
