@@ -170,6 +170,13 @@ pub fn decode_beside(
     let mut capture = capture;
     if let (SensorKind::Auto, Some(port)) = (opts.sensor, opts.port) {
         let (ahead, family) = read_ahead(capture, port);
+        let robosense_alike = ahead.held.iter().any(|r| match r {
+            Record::Datagram(d) => d.port == port && robosense_msop(&d.payload),
+            Record::Damaged { .. } => false,
+        });
+        if family.is_none() && robosense_alike {
+            return Err(robosense_unnamed(path));
+        }
         capture = Box::new(ahead);
         match family {
             Some(Family::Hesai(model)) => {
@@ -177,6 +184,12 @@ pub fn decode_beside(
             }
             Some(Family::Livox(model)) => {
                 return livox_decoder(path, capture, opts, model, Some(port));
+            }
+            Some(Family::Robosense(model)) => {
+                return robosense_decoder(path, capture, opts, (model, device));
+            }
+            Some(Family::RobosenseSolid(model)) => {
+                return solid_decoder(path, capture, opts, model);
             }
             Some(Family::Velodyne) | None => {}
         }
@@ -243,13 +256,7 @@ pub fn decode_beside(
                     );
                 }
                 if s.seen.keys().any(|(_, len)| *len == robosense::wire::LEN) {
-                    bail!(
-                        "{}: {}-byte packets look like a spinning Robosense's, whose models \
-                         send alike: name it (--sensor rs16, rs32, bpearl, helios or \
-                         helios16p; the Ruby and Airy are found by their packets)",
-                        path.display(),
-                        robosense::wire::LEN
-                    );
+                    return Err(robosense_unnamed(path));
                 }
                 bail!(
                     "{}: no Velodyne (1206 bytes), Hesai (EE FF on port 2368), Livox (ports \
@@ -290,6 +297,25 @@ pub fn decode_beside(
     };
     let notes = unused(opts, "a Velodyne", &[Unused::FramePeriod])?;
     Ok(sweeps(path, capture, decoder, opts, (port, sensor, notes)))
+}
+
+/// Whether `payload` is a spinning Robosense MSOP packet by its length and id.
+fn robosense_msop(payload: &[u8]) -> bool {
+    payload.len() == robosense::wire::LEN
+        && robosense::Model::ALL
+            .iter()
+            .any(|m| payload.starts_with(m.layout().id))
+}
+
+/// The refusal of spinning Robosense packets that do not say which model sent them.
+fn robosense_unnamed(path: &Path) -> anyhow::Error {
+    anyhow!(
+        "{}: {}-byte packets look like a spinning Robosense's, whose models send alike: name \
+         it (--sensor rs16, rs32, bpearl, helios or helios16p; the Ruby and Airy are found by \
+         their packets)",
+        path.display(),
+        robosense::wire::LEN
+    )
 }
 
 /// The Hesai model most packets on port 2368 come from ([`hesai::identify`]). Protocol 1.4 is

@@ -3,9 +3,11 @@
 //! packet, and how a recording's other ports are searched for a second sensor's packets. Each
 //! family's packets are recognised as its decoder checks them first: a Velodyne data packet's
 //! length and first block flag, a Hesai header ([`hesai::identify`]), a Livox packet's version
-//! byte with the length its data type (SDK 1) or its length field (SDK 2) gives.
+//! byte with the length its data type (SDK 1) or its length field (SDK 2) gives, a Robosense
+//! packet of a layout one model alone writes ([`robosense::wire::model_of`],
+//! [`robosense::solid::Model::of`]).
 
-use kiss_odom_sensors::{hesai, livox, velodyne};
+use kiss_odom_sensors::{hesai, livox, robosense, velodyne};
 
 /// A family of sensors whose packets name it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -16,6 +18,10 @@ pub enum Family {
     Hesai(hesai::Model),
     /// A Livox data packet: SDK 1 (taken for a Horizon, Tele-15 or Avia) or SDK 2 (Mid-360).
     Livox(livox::Model),
+    /// A spinning Robosense MSOP packet of a layout only this model writes (RS-Ruby, RS-Airy).
+    Robosense(robosense::Model),
+    /// A Robosense RS-M1 or E1R MSOP packet.
+    RobosenseSolid(robosense::solid::Model),
 }
 
 impl Family {
@@ -26,12 +32,15 @@ impl Family {
             Self::Hesai(m) => m.name(),
             Self::Livox(livox::Model::Mid360) => "Livox Mid-360/HAP",
             Self::Livox(_) => "Livox SDK 1 sensor (Mid-40/70, Horizon, Tele-15, Avia)",
+            Self::Robosense(m) => m.name(),
+            Self::RobosenseSolid(m) => m.name(),
         }
     }
 }
 
 /// The family whose packets begin like `bytes`, if any. Ouster packets need the sensor's
-/// metadata to be read at all and Robosense ones `--sensor`: neither is named here.
+/// metadata to be read at all, and the spinning Robosense models that send alike (RS-16,
+/// RS-32 and Bpearl; Helios and Helios-16P) `--sensor`: none of those is named here.
 pub fn family_of(bytes: &[u8]) -> Option<Family> {
     use livox::{sdk1, sdk2};
     let len = bytes.len();
@@ -59,7 +68,23 @@ pub fn family_of(bytes: &[u8]) -> Option<Family> {
     {
         return Some(Family::Livox(livox::Model::Mid360));
     }
-    None
+    if let Some(model) = robosense::solid::Model::of(bytes) {
+        return Some(Family::RobosenseSolid(model));
+    }
+    robosense::wire::model_of(bytes).map(Family::Robosense)
+}
+
+/// A spinning Robosense MSOP packet's frame, for tests: `model`'s id and every block's flag.
+#[cfg(test)]
+pub(super) fn robosense_frame(model: robosense::Model) -> Vec<u8> {
+    let l = model.layout();
+    let mut b = vec![0u8; robosense::wire::LEN];
+    b[..l.id.len()].copy_from_slice(l.id);
+    for k in 0..l.blocks {
+        let at = l.header + k * l.block_len();
+        b[at..at + l.block_id.len()].copy_from_slice(l.block_id);
+    }
+    b
 }
 
 #[cfg(test)]
@@ -92,5 +117,33 @@ mod tests {
         mid[1] ^= 1;
         assert_eq!(family_of(&mid), None);
         assert_eq!(family_of(&[]), None);
+    }
+
+    #[test]
+    fn robosense_packets_are_named_where_one_model_alone_writes_them() {
+        use robosense::{solid, Model};
+        let named: Vec<_> = Model::ALL
+            .iter()
+            .map(|&m| (m.name(), family_of(&robosense_frame(m))))
+            .collect();
+        println!("{named:?}");
+        for (m, family) in Model::ALL.iter().zip(&named) {
+            let alone = robosense::wire::model_of(&robosense_frame(*m)).is_some();
+            let want = alone.then_some(Family::Robosense(*m));
+            assert_eq!(family.1, want, "{}", m.name());
+        }
+        // The models that send alike are not named, the Ruby and the Airy are.
+        assert_eq!(named.iter().filter(|(_, f)| f.is_some()).count(), 2);
+        let mut airy = robosense_frame(Model::Airy);
+        assert_eq!(family_of(&airy).map(Family::name), Some("RS-Airy"));
+        airy.pop();
+        assert_eq!(family_of(&airy), None);
+        for m in [solid::Model::M1, solid::Model::E1r] {
+            let mut b = vec![0u8; m.packet_len()];
+            b[..4].copy_from_slice(&[0x55, 0xAA, 0x5A, 0xA5]);
+            assert_eq!(family_of(&b), Some(Family::RobosenseSolid(m)));
+            b[3] = 0;
+            assert_eq!(family_of(&b), None);
+        }
     }
 }

@@ -3,6 +3,7 @@
 //! a second Livox unit's SDK 2 packets on another, and a recording that ends inside a frame.
 
 use super::super::frames::SweepFrames;
+use super::super::identify::robosense_frame;
 use super::super::sweeps::{decode, DatagramSource, LIVOX2_PORT, LIVOX_PORT};
 use super::*;
 use crate::dataset::{FrameSource, Item};
@@ -201,4 +202,41 @@ fn auto_on_a_given_port_decodes_a_hesai_recording_as_its_model() {
     println!("{}: {} of {} decoded", r.sensor, r.decoded, r.on_port);
     assert_eq!(r.sensor, hesai::Model::Xt16.name());
     assert!(r.decoded > 0 && r.refused.is_empty(), "{:?}", r.refused);
+}
+
+#[test]
+fn auto_on_a_given_port_takes_a_robosense_its_packets_name() {
+    use kiss_odom_sensors::robosense::{self, solid};
+    let on_port = |payload: Vec<u8>| Datagram {
+        time_ns: T0,
+        source: "192.168.1.200:6699".parse().unwrap(),
+        port: 6699,
+        payload,
+    };
+    let opts = SensorOptions {
+        port: Some(6699),
+        ..SensorOptions::default()
+    };
+    let mut e1r = vec![0u8; solid::Model::E1r.packet_len()];
+    e1r[..4].copy_from_slice(&solid::ID);
+    let s = sweeps_of(vec![on_port(e1r)], &opts).unwrap();
+    println!("{}", s.report().sensor);
+    assert_eq!(s.report().sensor, "Robosense E1R");
+    // The Airy by its layout: the decoder asks for the laser angles the network did not bring.
+    let airy = robosense_frame(robosense::Model::Airy);
+    let e = sweeps_of(vec![on_port(airy)], &opts)
+        .err()
+        .unwrap()
+        .to_string();
+    println!("{e}");
+    assert!(e.contains("a RS-Airy needs its laser angles"), "{e}");
+    // A Helios's packets could be a Helios-16P's: refused naming the models, not read as a
+    // Velodyne's.
+    let helios = robosense_frame(robosense::Model::Helios);
+    let e = sweeps_of(vec![on_port(helios)], &opts)
+        .err()
+        .unwrap()
+        .to_string();
+    println!("{e}");
+    assert!(e.contains("look like a spinning Robosense's"), "{e}");
 }
