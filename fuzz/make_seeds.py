@@ -353,61 +353,49 @@ def ouster_packet(profile, beams, fid, first):
     return struct.pack("<HH", 1, fid) + bytes(28) + cols + bytes(32)
 
 
-def robosense_helios():
-    """A Helios DIFOP packet with its angles, then two MSOP packets of twelve blocks."""
+def robosense_capture(lasers, span, mode, shape, packet_us, azimuth, msop_bytes):
+    """A spinning Robosense DIFOP packet with `lasers` angles evenly over `span` degrees and
+    `mode` (byte, value), then two MSOP packets `packet_us` apart of `shape` (blocks,
+    channels), the block azimuths `azimuth(n, k)`, `msop_bytes` set in each."""
     difop = bytearray(1248)
     difop[:8] = bytes([0xA5, 0xFF, 0x00, 0x5A, 0x11, 0x11, 0x55, 0x55])
     difop[8:10] = (600).to_bytes(2, "big")
-    difop[300] = 0x04
-    for i in range(32):
-        v = round((-55 + 70 * i / 31) * 100)
+    difop[mode[0]] = mode[1]
+    for i in range(lasers):
+        v = round((span[0] + (span[1] - span[0]) * i / (lasers - 1)) * 100)
         difop[468 + 3 * i] = int(v < 0)
         difop[469 + 3 * i : 471 + 3 * i] = abs(v).to_bytes(2, "big")
     out = b"\0\0" + bytes(difop)
+    blocks, channels = shape
     for n in range(2):
         msop = bytearray(1248)
         msop[:4] = bytes([0x55, 0xAA, 0x05, 0x5A])
+        for at, v in msop_bytes.items():
+            msop[at] = v
         msop[20:26] = (1_704_067_200).to_bytes(6, "big")
-        msop[26:30] = (n * 667).to_bytes(4, "big")
-        for k in range(12):
-            at = 42 + 100 * k
+        msop[26:30] = (n * packet_us).to_bytes(4, "big")
+        for k in range(blocks):
+            at = 42 + (4 + 3 * channels) * k
             msop[at : at + 2] = b"\xff\xee"
-            msop[at + 2 : at + 4] = ((n * 12 + k) * 20).to_bytes(2, "big")
-            for c in range(32):
+            msop[at + 2 : at + 4] = azimuth(n, k).to_bytes(2, "big")
+            for c in range(channels):
                 msop[at + 4 + 3 * c : at + 6 + 3 * c] = (2000 + 37 * c).to_bytes(2, "big")
                 msop[at + 6 + 3 * c] = 100
         out += b"\0\0" + bytes(msop)
     return out
+
+
+def robosense_helios():
+    """A Helios DIFOP packet with its angles, then two MSOP packets of twelve blocks."""
+    return robosense_capture(32, (-55, 15), (300, 0x04), (12, 32), 667,
+                             lambda n, k: (n * 12 + k) * 20, {})
 
 
 def robosense_airy():
     """An RS-Airy DIFOP packet (96 lasers, mounted normally), then two MSOP packets of eight
     blocks of 48 channels (96-channel mode, single return)."""
-    difop = bytearray(1248)
-    difop[:8] = bytes([0xA5, 0xFF, 0x00, 0x5A, 0x11, 0x11, 0x55, 0x55])
-    difop[8:10] = (600).to_bytes(2, "big")
-    difop[289] = 0
-    for i in range(96):
-        v = round((-45 + 90 * i / 95) * 100)
-        difop[468 + 3 * i] = int(v < 0)
-        difop[469 + 3 * i : 471 + 3 * i] = abs(v).to_bytes(2, "big")
-    out = b"\0\0" + bytes(difop)
-    for n in range(2):
-        msop = bytearray(1248)
-        msop[:4] = bytes([0x55, 0xAA, 0x05, 0x5A])
-        msop[17] = 0x01
-        msop[20:26] = (1_704_067_200).to_bytes(6, "big")
-        msop[26:30] = (n * 444).to_bytes(4, "big")
-        msop[32] = 0x02
-        for k in range(8):
-            at = 42 + 148 * k
-            msop[at : at + 2] = b"\xff\xee"
-            msop[at + 2 : at + 4] = ((n * 4 + k // 2) * 40).to_bytes(2, "big")
-            for c in range(48):
-                msop[at + 4 + 3 * c : at + 6 + 3 * c] = (2000 + 37 * c).to_bytes(2, "big")
-                msop[at + 6 + 3 * c] = 100
-        out += b"\0\0" + bytes(msop)
-    return out
+    return robosense_capture(96, (-45, 45), (289, 0), (8, 48), 444,
+                             lambda n, k: (n * 4 + k // 2) * 40, {17: 0x01, 32: 0x02})
 
 
 def sensor_seeds():
