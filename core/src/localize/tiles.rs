@@ -199,6 +199,62 @@ fn for_each_touched(x: f64, y: f64, r: f64, s: f64, mut f: impl FnMut(TileKey)) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::prior_map::{encode_map, Header};
+    use std::vec::Vec;
+
+    /// A map of 9 x 9 tiles of 10 m, one point in each.
+    fn grid() -> Vec<u8> {
+        let keys: Vec<TileKey> = (0..9)
+            .flat_map(|i| (0..9).map(move |j| TileKey { i, j }))
+            .collect();
+        let point = [[1.5f32, 1.5, 0.0]];
+        let tiles: Vec<(TileKey, &[[f32; 3]])> = keys.iter().map(|k| (*k, &point[..])).collect();
+        let h = Header {
+            voxel_size: 1.0,
+            tile_size: 10.0,
+            points_per_voxel: 1,
+            tile_points: 1,
+            tiles: 81,
+            frame: Header::frame_field("map").unwrap(),
+        };
+        let mut out = std::vec![0u8; h.file_len()];
+        assert!(encode_map(&h, &tiles, &mut out));
+        out
+    }
+
+    #[test]
+    fn a_load_holds_every_tile_within_reach_and_half_a_tile_in_key_order() {
+        let bytes = grid();
+        let file = TileMap::open(&bytes).unwrap();
+        for (x, y, reach) in [(45.0, 45.0, 12.0), (31.0, 58.5, 9.0), (3.0, 88.0, 20.0)] {
+            let mut held = Held::new();
+            let loaded = held.around(&file, x, y, reach).unwrap();
+            // Every tile whose square comes within reach + s / 2 of (x, y), counted here
+            // from the squares themselves.
+            let want: Vec<TileKey> = (0..9)
+                .flat_map(|i| (0..9).map(move |j| TileKey { i, j }))
+                .filter(|k| {
+                    let (x0, y0) = (10.0 * f64::from(k.i), 10.0 * f64::from(k.j));
+                    let dx = (x0 - x).max(x - x0 - 10.0).max(0.0);
+                    let dy = (y0 - y).max(y - y0 - 10.0).max(0.0);
+                    dx.hypot(dy) <= reach + 5.0
+                })
+                .collect();
+            assert_eq!(
+                &held.keys[..held.len],
+                &want[..],
+                "({x}, {y}) reach {reach}"
+            );
+            assert_eq!((loaded.tiles, loaded.damaged), (want.len() as u32, 0));
+            assert_eq!(held.points(), want.len());
+            // Nothing within reach is missing: no second load.
+            assert!(held.around(&file, x, y, reach).is_none());
+        }
+        // All 81 tiles within reach: the first 64 met are held, no more.
+        let mut held = Held::new();
+        let loaded = held.around(&file, 45.0, 45.0, 80.0).unwrap();
+        assert_eq!((held.len, loaded.tiles), (MAX_TILES_HELD, 64));
+    }
 
     #[test]
     fn the_tiles_touched_are_those_within_reach_and_never_more_than_the_bound() {
