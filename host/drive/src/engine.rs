@@ -256,10 +256,19 @@ fn narrow_pose<T: Real>(p: &Isometry3<f64>) -> kiss_odom_core::Pose<T> {
 }
 
 fn wide<T: Real>(points: &[[T; 3]]) -> Vec<[f64; 3]> {
-    points
-        .iter()
-        .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()])
-        .collect()
+    let mut out = Vec::with_capacity(points.len());
+    wide_into(points, &mut out);
+    out
+}
+
+/// `points` in f64, into `out` (its memory reused).
+fn wide_into<T: Real>(points: &[[T; 3]], out: &mut Vec<[f64; 3]>) {
+    out.clear();
+    out.extend(
+        points
+            .iter()
+            .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
+    );
 }
 
 /// Bytes of state of a `T`, `P` odometry with capacities `caps`.
@@ -439,13 +448,7 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         core::mem::size_of::<P::Stored>()
     }
     fn source_into(&self, out: &mut Vec<[f64; 3]>) {
-        out.clear();
-        out.extend(
-            self.odom
-                .source()
-                .iter()
-                .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
-        );
+        wide_into(self.odom.source(), out);
     }
     fn merge_cloud(&self) -> Vec<[f64; 3]> {
         wide(self.odom.merge_cloud())
@@ -468,12 +471,7 @@ impl<T: HostScalar, P: PointCodec<T>> Engine for Core<T, P> {
         buf.clear();
         buf.resize(self.points.len(), [T::zero(); 3]);
         let kept = self.odom.deskewed_scan(&self.points, stamps, buf).kept;
-        out.clear();
-        out.extend(
-            buf[..kept]
-                .iter()
-                .map(|p| [p[0].wide(), p[1].wide(), p[2].wide()]),
-        );
+        wide_into(&buf[..kept], out);
         trim_buffer(&mut self.points, self.keep);
         trim_buffer(&mut self.deskewed, self.keep);
     }

@@ -170,11 +170,11 @@ pub fn decode_beside(
     let mut capture = capture;
     if let (SensorKind::Auto, Some(port)) = (opts.sensor, opts.port) {
         let (ahead, family) = read_ahead(capture, port);
-        let robosense_alike = ahead.held.iter().any(|r| match r {
+        let robosense_alike = |r: &Record| match r {
             Record::Datagram(d) => d.port == port && robosense_msop(&d.payload),
             Record::Damaged { .. } => false,
-        });
-        if family.is_none() && robosense_alike {
+        };
+        if family.is_none() && ahead.held.iter().any(robosense_alike) {
             return Err(robosense_unnamed(path));
         }
         capture = Box::new(ahead);

@@ -20,10 +20,10 @@ use super::{Firing, Packet, PacketSim, Truth};
 use kiss_odom_sensors::robosense::{
     wire, AiryInstall, Model, Stamp, AIRY_96, AIRY_CHANNEL_MODE, AIRY_INSTALL, AIRY_RETURN_MODE,
 };
+use nalgebra::Vector3;
 
 /// How the simulated Airy is mounted (its DIFOP packet says so).
 const INSTALL: AiryInstall = AiryInstall::Normal;
-use nalgebra::Vector3;
 
 /// The return-mode byte of the DIFOP packet for single strongest return.
 fn strongest(model: Model) -> u8 {
